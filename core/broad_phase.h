@@ -1,0 +1,13 @@
+#pragma once
+// Object-level broad phase: sort-and-sweep on x over per-object world AABBs.
+#include "core/aabb.h"
+
+#include <utility>
+#include <vector>
+
+namespace peelcd {
+
+// Pairs (i, j), i < j, whose boxes overlap (closed boxes), sorted lexicographically.
+std::vector<std::pair<std::size_t, std::size_t>> overlapping_pairs(const std::vector<Aabb>& boxes);
+
+}  // namespace peelcd

@@ -1,0 +1,18 @@
+#include "core/frame.h"
+
+#include <stdexcept>
+
+namespace peelcd {
+
+int tile_resolution(int budget, std::size_t roi_count) {
+  if (budget <= 0) throw std::invalid_argument("peelcd::tile_resolution(): budget must be positive");
+  int n = budget;
+  std::size_t per_side = 1;
+  while (per_side * per_side < roi_count && n > 16) {
+    per_side *= 2;
+    n /= 2;
+  }
+  return std::max(n, std::min(budget, 16));
+}
+
+}  // namespace peelcd

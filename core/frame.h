@@ -1,0 +1,51 @@
+#pragma once
+// Request and result of one frame of detection (see gl/pipeline.h for the function that runs it).
+#include "core/aabb.h"
+#include "core/id_map.h"
+#include "core/narrow_phase.h"
+
+#include <string>
+#include <vector>
+
+namespace peelcd {
+
+struct DetectOptions {
+  double theta = 0.0;  // view longitude, degrees
+  double phi = 0.0;    // view latitude, degrees
+  int resolution = 0;  // forced N x N tile per ROI; 0 = share the budget (tile_resolution())
+  int budget = 512;    // the frame's texture budget is budget x budget texels
+  IdMode ids = IdMode::paper;
+  double epsilon = 0.0;  // PCS depth threshold, world units; 0 = one texel of the ROI tile
+};
+
+// Side of each ROI's tile when `roi_count` ROIs share a budget x budget texture: the largest
+// power-of-two fraction of `budget` such that the tiles fit (1 ROI: budget; 2-4: budget/2; ...),
+// never below 16.
+int tile_resolution(int budget, std::size_t roi_count);
+
+struct PairResult {
+  std::size_t object_a = 0, object_b = 0;  // indices into the frame's objects, a < b
+  Aabb roi;                                // intersection of the two world AABBs
+  int resolution = 0;
+  double epsilon = 0.0;                    // world units
+  bool a_first = false;                    // A was peeled first (it was the farther one)
+  std::size_t triangles_drawn_a = 0, triangles_drawn_b = 0;
+  int layers = 0;                          // non-empty logical layers peeled
+  int passes = 0;                          // peel passes drawn (layers + the final empty one)
+  std::size_t pcs_count = 0;               // distinct ID pairs read back
+  std::size_t candidates = 0;              // distinct triangle pairs tested on the CPU
+  std::vector<Contact> colliding;          // sorted by (tri_a, tri_b)
+};
+
+struct Timings {  // milliseconds, as in the paper's tables
+  double aabb = 0, upload = 0, gpu = 0, readback = 0, cpu = 0, total = 0;
+};
+
+struct FrameResult {
+  std::vector<PairResult> pairs;  // one per overlapping AABB pair, sorted by (a, b)
+  Timings timings;
+  std::size_t gl_passes = 0;      // draw + compute passes issued this frame (0 without a ROI)
+  std::string renderer;           // GL_RENDERER of the context that ran it
+};
+
+}  // namespace peelcd

@@ -1,0 +1,46 @@
+#include "core/reference.h"
+
+#include "core/id_map.h"
+#include "core/narrow_phase.h"
+
+#include <CGAL/Box_intersection_d/Box_with_info_d.h>
+#include <CGAL/box_intersection_d.h>
+
+#include <algorithm>
+
+namespace peelcd {
+namespace {
+using Box = CGAL::Box_intersection_d::Box_with_info_d<double, 3, std::uint32_t>;
+
+std::vector<Box> triangle_boxes(const Mesh& m) {
+  std::vector<Box> boxes;
+  boxes.reserve(m.triangles.size());
+  for (std::uint32_t t = 0; t < m.triangles.size(); ++t) {
+    double lo[3], hi[3];
+    for (int k = 0; k < 3; ++k) {
+      lo[k] = hi[k] = m.vertices[m.triangles[t][0]][k];
+      for (int c = 1; c < 3; ++c) {
+        lo[k] = std::min(lo[k], m.vertices[m.triangles[t][c]][k]);
+        hi[k] = std::max(hi[k], m.vertices[m.triangles[t][c]][k]);
+      }
+    }
+    boxes.emplace_back(lo, hi, t);
+  }
+  return boxes;
+}
+}  // namespace
+
+std::vector<std::uint64_t> exact_colliding_pairs(const Mesh& a, const Mesh& b) {
+  std::vector<Box> ba = triangle_boxes(a), bb = triangle_boxes(b);
+  std::vector<std::uint64_t> out;
+  CGAL::box_intersection_d(ba.begin(), ba.end(), bb.begin(), bb.end(),
+                           [&](const Box& x, const Box& y) {
+                             if (triangles_intersect(corners(a, x.info()), corners(b, y.info())))
+                               out.push_back(pack_pair(x.info(), y.info()));
+                           });
+  std::sort(out.begin(), out.end());
+  out.erase(std::unique(out.begin(), out.end()), out.end());
+  return out;
+}
+
+}  // namespace peelcd

@@ -1,0 +1,393 @@
+#include "gl/pipeline.h"
+
+#include "core/broad_phase.h"
+#include "core/view.h"
+
+#include <glad/gl.h>
+
+#include <algorithm>
+#include <chrono>
+#include <cmath>
+#include <cstring>
+#include <sstream>
+
+namespace peelcd::shaders {
+extern const char* const peel_vert;
+extern const char* const peel_frag;
+extern const char* const pcs_comp;
+}  // namespace peelcd::shaders
+
+namespace peelcd::gl {
+namespace {
+
+using Clock = std::chrono::steady_clock;
+double ms_since(Clock::time_point t0) {
+  return std::chrono::duration<double, std::milli>(Clock::now() - t0).count();
+}
+
+// One corner of an uploaded triangle: ROI-local position and the corner's ID.
+struct GpuVertex {
+  float x, y, z;
+  std::uint32_t id;
+};
+static_assert(sizeof(GpuVertex) == 16, "vertex layout is 16 bytes");
+
+// Header of the PCS append buffer; matches PcsBuffer in shaders/pcs.comp.
+struct PcsHeader {
+  std::uint32_t count, capacity, pad0, pad1;
+};
+
+// Peel passes per ROI before giving up; each pass strictly increases every live texel's depth,
+// so only a scene with more than this many surfaces along one ray reaches it.
+constexpr int kMaxPasses = 4096;
+
+}  // namespace
+
+struct Pipeline::Impl {
+  Context& context;
+  GladGLContext gl{};
+  GLuint peel_program = 0, pcs_program = 0;
+  GLint u_clip = -1, u_box_lo = -1, u_box_hi = -1, u_has_prev = -1;
+  GLint u_eps = -1, u_k1_is_a = -1, u_res = -1;
+  GLuint vao = 0, vbo[2] = {0, 0};
+  std::size_t vbo_capacity[2] = {0, 0};  // in vertices
+  GLuint layer_tex[2] = {0, 0}, depth_rb = 0, fbo[2] = {0, 0};
+  int layer_size = 0;
+  GLuint query = 0, pcs_buffer = 0;
+  std::uint32_t pcs_capacity = 0;
+  std::size_t passes_this_frame = 0;
+  std::string renderer, version;
+  GLint max_texture = 0;
+
+  // Scratch reused across ROIs and frames (no allocation in steady state).
+  std::vector<GpuVertex> staging[2];
+  std::vector<IdPair> pcs;
+  std::vector<std::uint64_t> candidates;
+
+  explicit Impl(Context& ctx) : context(ctx) {
+    context.make_current();
+    const int version_loaded = gladLoadGLContextUserPtr(
+        &gl,
+        [](void* user, const char* name) -> GLADapiproc {
+          return reinterpret_cast<GLADapiproc>(static_cast<Context*>(user)->proc_address(name));
+        },
+        &context);
+    if (version_loaded == 0 || GLAD_VERSION_MAJOR(version_loaded) * 10 + GLAD_VERSION_MINOR(version_loaded) < 45)
+      throw GlError("peelcd::gl::Pipeline: the " + context.backend() +
+                    " context does not provide OpenGL 4.5 core");
+    renderer = reinterpret_cast<const char*>(gl.GetString(GL_RENDERER));
+    version = reinterpret_cast<const char*>(gl.GetString(GL_VERSION));
+    gl.GetIntegerv(GL_MAX_TEXTURE_SIZE, &max_texture);
+
+    peel_program = link({compile(GL_VERTEX_SHADER, shaders::peel_vert, "peel.vert"),
+                         compile(GL_FRAGMENT_SHADER, shaders::peel_frag, "peel.frag")},
+                        "peel");
+    pcs_program = link({compile(GL_COMPUTE_SHADER, shaders::pcs_comp, "pcs.comp")}, "pcs");
+    u_clip = gl.GetUniformLocation(peel_program, "clip_from_local");
+    u_box_lo = gl.GetUniformLocation(peel_program, "box_lo");
+    u_box_hi = gl.GetUniformLocation(peel_program, "box_hi");
+    u_has_prev = gl.GetUniformLocation(peel_program, "has_previous");
+    u_eps = gl.GetUniformLocation(pcs_program, "epsilon_window");
+    u_k1_is_a = gl.GetUniformLocation(pcs_program, "k1_is_a");
+    u_res = gl.GetUniformLocation(pcs_program, "resolution");
+
+    gl.CreateVertexArrays(1, &vao);
+    gl.EnableVertexArrayAttrib(vao, 0);
+    gl.VertexArrayAttribFormat(vao, 0, 3, GL_FLOAT, GL_FALSE, 0);
+    gl.VertexArrayAttribBinding(vao, 0, 0);
+    gl.EnableVertexArrayAttrib(vao, 1);
+    gl.VertexArrayAttribIFormat(vao, 1, 1, GL_UNSIGNED_INT, offsetof(GpuVertex, id));
+    gl.VertexArrayAttribBinding(vao, 1, 0);
+    gl.CreateBuffers(2, vbo);
+    gl.CreateQueries(GL_ANY_SAMPLES_PASSED, 1, &query);
+    gl.CreateBuffers(1, &pcs_buffer);
+    grow_pcs(1 << 16);
+    check("Pipeline setup");
+  }
+
+  ~Impl() {
+    context.make_current();
+    gl.DeleteProgram(peel_program);
+    gl.DeleteProgram(pcs_program);
+    gl.DeleteVertexArrays(1, &vao);
+    gl.DeleteBuffers(2, vbo);
+    gl.DeleteQueries(1, &query);
+    gl.DeleteBuffers(1, &pcs_buffer);
+    release_layers();
+  }
+
+  void check(const char* where) {
+    GLenum err = gl.GetError();
+    if (err == GL_NO_ERROR) return;
+    std::ostringstream msg;
+    msg << "peelcd::gl::Pipeline: GL error 0x" << std::hex << err << " after " << where;
+    while ((err = gl.GetError()) != GL_NO_ERROR) msg << ", 0x" << err;
+    throw GlError(msg.str());
+  }
+
+  GLuint compile(GLenum type, const char* src, const char* name) {
+    GLuint s = gl.CreateShader(type);
+    gl.ShaderSource(s, 1, &src, nullptr);
+    gl.CompileShader(s);
+    GLint ok = 0;
+    gl.GetShaderiv(s, GL_COMPILE_STATUS, &ok);
+    if (!ok) {
+      char log[4096] = {0};
+      gl.GetShaderInfoLog(s, sizeof log, nullptr, log);
+      gl.DeleteShader(s);
+      throw GlError(std::string("peelcd::gl::Pipeline: cannot compile shaders/") + name + ": " + log);
+    }
+    return s;
+  }
+
+  GLuint link(std::initializer_list<GLuint> stages, const char* name) {
+    GLuint p = gl.CreateProgram();
+    for (GLuint s : stages) gl.AttachShader(p, s);
+    gl.LinkProgram(p);
+    for (GLuint s : stages) gl.DeleteShader(s);
+    GLint ok = 0;
+    gl.GetProgramiv(p, GL_LINK_STATUS, &ok);
+    if (!ok) {
+      char log[4096] = {0};
+      gl.GetProgramInfoLog(p, sizeof log, nullptr, log);
+      gl.DeleteProgram(p);
+      throw GlError(std::string("peelcd::gl::Pipeline: cannot link the ") + name + " program: " + log);
+    }
+    return p;
+  }
+
+  void grow_pcs(std::uint32_t capacity) {
+    pcs_capacity = capacity;
+    gl.NamedBufferData(pcs_buffer, sizeof(PcsHeader) + std::size_t(capacity) * 8, nullptr, GL_DYNAMIC_READ);
+  }
+
+  void release_layers() {
+    if (!layer_size) return;
+    gl.DeleteFramebuffers(2, fbo);
+    gl.DeleteTextures(2, layer_tex);
+    gl.DeleteRenderbuffers(1, &depth_rb);
+    layer_size = 0;
+  }
+
+  // Two ping-pong layer textures (RG32UI: depth bits, ID + 1) sharing one depth buffer.
+  void ensure_layers(int n) {
+    if (n == layer_size) return;
+    release_layers();
+    gl.CreateTextures(GL_TEXTURE_2D, 2, layer_tex);
+    gl.CreateRenderbuffers(1, &depth_rb);
+    gl.NamedRenderbufferStorage(depth_rb, GL_DEPTH_COMPONENT32F, n, n);
+    gl.CreateFramebuffers(2, fbo);
+    for (int i = 0; i < 2; ++i) {
+      gl.TextureStorage2D(layer_tex[i], 1, GL_RG32UI, n, n);
+      gl.TextureParameteri(layer_tex[i], GL_TEXTURE_MIN_FILTER, GL_NEAREST);
+      gl.TextureParameteri(layer_tex[i], GL_TEXTURE_MAG_FILTER, GL_NEAREST);
+      gl.NamedFramebufferTexture(fbo[i], GL_COLOR_ATTACHMENT0, layer_tex[i], 0);
+      gl.NamedFramebufferRenderbuffer(fbo[i], GL_DEPTH_ATTACHMENT, GL_RENDERBUFFER, depth_rb);
+      if (gl.CheckNamedFramebufferStatus(fbo[i], GL_FRAMEBUFFER) != GL_FRAMEBUFFER_COMPLETE)
+        throw GlError("peelcd::gl::Pipeline: layer framebuffer of " + std::to_string(n) + "^2 is incomplete");
+    }
+    layer_size = n;
+    check("layer allocation");
+  }
+
+  // Gathers the triangles of `mesh` touching the ROI box into `out` (ROI-local floats).
+  // Returns the smallest depth along d of the gathered corners, clamped to the ROI.
+  double gather(const Mesh& mesh, const RoiView& view, IdMode ids, std::vector<GpuVertex>& out) {
+    out.clear();
+    double min_depth = view.half_depth;
+    const Aabb& box = view.box;
+    for (std::uint32_t t = 0; t < mesh.triangles.size(); ++t) {
+      const Tri& f = mesh.triangles[t];
+      const Vec3& a = mesh.vertices[f[0]];
+      const Vec3& b = mesh.vertices[f[1]];
+      const Vec3& c = mesh.vertices[f[2]];
+      const Vec3 lo = a.cwiseMin(b).cwiseMin(c), hi = a.cwiseMax(b).cwiseMax(c);
+      if ((hi.array() < box.lo.array()).any() || (lo.array() > box.hi.array()).any()) continue;
+      for (int k = 0; k < 3; ++k) {
+        const Vec3 local = mesh.vertices[f[k]] - view.center;  // double, then float
+        out.push_back({float(local.x()), float(local.y()), float(local.z()), corner_id(mesh, t, k, ids)});
+        min_depth = std::min(min_depth, std::max(-view.half_depth, local.dot(view.frame.d)));
+      }
+    }
+    return min_depth;
+  }
+
+  void upload(int slot) {
+    const std::size_t n = staging[slot].size();
+    if (n > vbo_capacity[slot]) {
+      vbo_capacity[slot] = std::max<std::size_t>(n, vbo_capacity[slot] * 3 / 2);
+      gl.NamedBufferData(vbo[slot], vbo_capacity[slot] * sizeof(GpuVertex), nullptr, GL_STREAM_DRAW);
+    }
+    gl.NamedBufferSubData(vbo[slot], 0, n * sizeof(GpuVertex), staging[slot].data());
+  }
+
+  // Peels one ROI; fills `pcs` with the ID pairs read back. Returns false if the PCS buffer
+  // overflowed (it has then been grown and the caller must peel again).
+  bool peel(const RoiView& view, double epsilon_world, int first_slot, PairResult& r, Timings& t) {
+    const auto t_gpu = Clock::now();
+    const int n = view.resolution;
+    ensure_layers(n);
+    const PcsHeader header{0, pcs_capacity, 0, 0};
+    gl.NamedBufferSubData(pcs_buffer, 0, sizeof header, &header);
+    gl.BindBufferBase(GL_SHADER_STORAGE_BUFFER, 0, pcs_buffer);
+
+    const std::array<float, 16> m = view.clip_from_local();
+    const Vec3 lo = view.box.lo - view.center, hi = view.box.hi - view.center;
+    gl.UseProgram(peel_program);
+    gl.UniformMatrix4fv(u_clip, 1, GL_FALSE, m.data());
+    gl.Uniform3f(u_box_lo, float(lo.x()), float(lo.y()), float(lo.z()));
+    gl.Uniform3f(u_box_hi, float(hi.x()), float(hi.y()), float(hi.z()));
+    gl.UseProgram(pcs_program);
+    gl.Uniform1f(u_eps, float(view.world_to_window_depth(epsilon_world)));
+    gl.Uniform1i(u_res, n);
+
+    gl.Viewport(0, 0, n, n);
+    gl.Enable(GL_DEPTH_TEST);
+    gl.DepthFunc(GL_LESS);
+    gl.Disable(GL_CULL_FACE);
+    gl.ProvokingVertex(GL_LAST_VERTEX_CONVENTION);
+    for (int i = 0; i < 6; ++i) gl.Enable(GL_CLIP_DISTANCE0 + i);
+    gl.BindVertexArray(vao);
+
+    const GLuint zero[4] = {0, 0, 0, 0};
+    const GLfloat far_depth = 1.0f;
+    r.layers = 0;
+    r.passes = 0;
+    for (int k = 0; k < kMaxPasses; ++k) {
+      const int cur = k & 1, prev = cur ^ 1;
+      const int slot = (first_slot + k) & 1;  // object drawn in this pass (0 = A, 1 = B)
+      gl.BindFramebuffer(GL_FRAMEBUFFER, fbo[cur]);
+      gl.ClearBufferuiv(GL_COLOR, 0, zero);
+      gl.ClearBufferfv(GL_DEPTH, 0, &far_depth);
+      gl.UseProgram(peel_program);
+      gl.Uniform1i(u_has_prev, k > 0);
+      gl.BindTextureUnit(0, layer_tex[prev]);
+      gl.VertexArrayVertexBuffer(vao, 0, vbo[slot], 0, sizeof(GpuVertex));
+      gl.BeginQuery(GL_ANY_SAMPLES_PASSED, query);
+      gl.DrawArrays(GL_TRIANGLES, 0, GLsizei(staging[slot].size()));
+      gl.EndQuery(GL_ANY_SAMPLES_PASSED);
+      ++r.passes;
+      ++passes_this_frame;
+      check("a peel pass");
+      GLuint any = 0;
+      gl.GetQueryObjectuiv(query, GL_QUERY_RESULT, &any);
+      if (!any) break;  // the whole ROI ended
+      ++r.layers;
+      if (k == 0) continue;
+      gl.UseProgram(pcs_program);
+      gl.Uniform1i(u_k1_is_a, slot == 0);
+      gl.BindTextureUnit(0, layer_tex[prev]);
+      gl.BindTextureUnit(1, layer_tex[cur]);
+      gl.DispatchCompute(GLuint((n + 7) / 8), GLuint((n + 7) / 8), 1);
+      ++passes_this_frame;
+      check("a PCS pass");
+    }
+    gl.BindFramebuffer(GL_FRAMEBUFFER, 0);
+    gl.MemoryBarrier(GL_BUFFER_UPDATE_BARRIER_BIT);
+    t.gpu += ms_since(t_gpu);
+
+    const auto t_read = Clock::now();
+    PcsHeader got{};
+    gl.GetNamedBufferSubData(pcs_buffer, 0, sizeof got, &got);
+    if (got.count > pcs_capacity) {
+      grow_pcs(got.count + got.count / 2);
+      t.readback += ms_since(t_read);
+      return false;
+    }
+    pcs.resize(got.count);
+    if (got.count)
+      gl.GetNamedBufferSubData(pcs_buffer, sizeof(PcsHeader), GLsizeiptr(got.count) * 8, pcs.data());
+    check("PCS readback");
+    t.readback += ms_since(t_read);
+    return true;
+  }
+};
+
+Pipeline::Pipeline(Context& context) : impl_(std::make_unique<Impl>(context)) {}
+Pipeline::~Pipeline() = default;
+std::string Pipeline::renderer() const { return impl_->renderer; }
+std::string Pipeline::version() const { return impl_->version; }
+int Pipeline::max_resolution() const { return impl_->max_texture; }
+
+FrameResult Pipeline::detect(const std::vector<Object>& objects, const DetectOptions& opt) {
+  Impl& s = *impl_;
+  if (opt.resolution < 0 || opt.resolution > s.max_texture)
+    throw std::invalid_argument("peelcd::gl::Pipeline::detect(): resolution " +
+                                std::to_string(opt.resolution) + " is outside 1.." +
+                                std::to_string(s.max_texture) + " (GL_MAX_TEXTURE_SIZE)");
+  if (opt.resolution == 0 && (opt.budget <= 0 || opt.budget > s.max_texture))
+    throw std::invalid_argument("peelcd::gl::Pipeline::detect(): budget " + std::to_string(opt.budget) +
+                                " is outside 1.." + std::to_string(s.max_texture));
+  if (!(opt.epsilon >= 0.0) || !std::isfinite(opt.epsilon))
+    throw std::invalid_argument("peelcd::gl::Pipeline::detect(): epsilon must be finite and >= 0 (0 = one texel)");
+
+  FrameResult out;
+  out.renderer = s.renderer;
+  s.passes_this_frame = 0;
+  const auto t_total = Clock::now();
+
+  auto t0 = Clock::now();
+  std::vector<Aabb> boxes;
+  boxes.reserve(objects.size());
+  for (const Object& o : objects) boxes.push_back(bounds(o.mesh));
+  const auto pairs = overlapping_pairs(boxes);
+  out.timings.aabb = ms_since(t0);
+
+  if (!pairs.empty()) s.context.make_current();
+  const int n = opt.resolution > 0 ? opt.resolution : tile_resolution(opt.budget, pairs.size());
+  const ViewFrame frame = view_frame(opt.theta, opt.phi);
+
+  for (const auto& [ia, ib] : pairs) {
+    PairResult r;
+    r.object_a = ia;
+    r.object_b = ib;
+    r.roi = intersection(boxes[ia], boxes[ib]);
+    r.resolution = n;
+    const Mesh& ma = objects[ia].mesh;
+    const Mesh& mb = objects[ib].mesh;
+    // Pad by a tiny fraction of the objects' size: a flat ROI (boxes touching) keeps a depth
+    // range and surfaces lying exactly on a ROI face are not clipped away by rounding.
+    const double scale = std::max(boxes[ia].extent().norm(), boxes[ib].extent().norm());
+    const RoiView view = make_roi_view(r.roi, frame, n, 1e-6 * scale + 1e-300);
+    r.epsilon = opt.epsilon > 0.0 ? opt.epsilon : view.texel();
+
+    t0 = Clock::now();
+    const double min_a = s.gather(ma, view, opt.ids, s.staging[0]);
+    const double min_b = s.gather(mb, view, opt.ids, s.staging[1]);
+    r.triangles_drawn_a = s.staging[0].size() / 3;
+    r.triangles_drawn_b = s.staging[1].size() / 3;
+    r.a_first = min_a > min_b;  // the farther object first; ties: B first
+    if (r.triangles_drawn_a == 0 || r.triangles_drawn_b == 0) {
+      out.timings.upload += ms_since(t0);
+      out.pairs.push_back(std::move(r));
+      continue;  // one object has nothing in the ROI: no contact possible, no GL work
+    }
+    s.upload(0);
+    s.upload(1);
+    out.timings.upload += ms_since(t0);
+
+    while (!s.peel(view, r.epsilon, r.a_first ? 0 : 1, r, out.timings)) {
+    }
+
+    t0 = Clock::now();
+    std::sort(s.pcs.begin(), s.pcs.end(), [](const IdPair& x, const IdPair& y) {
+      return x.a < y.a || (x.a == y.a && x.b < y.b);
+    });
+    s.pcs.erase(std::unique(s.pcs.begin(), s.pcs.end(),
+                            [](const IdPair& x, const IdPair& y) { return x.a == y.a && x.b == y.b; }),
+                s.pcs.end());
+    r.pcs_count = s.pcs.size();
+    const IdMap map_a(ma, opt.ids), map_b(mb, opt.ids);
+    s.candidates.clear();
+    expand_pcs(s.pcs, map_a, map_b, s.candidates);
+    r.candidates = s.candidates.size();
+    narrow_phase(ma, mb, s.candidates, r.colliding);
+    out.timings.cpu += ms_since(t0);
+    out.pairs.push_back(std::move(r));
+  }
+  out.gl_passes = s.passes_this_frame;
+  out.timings.total = ms_since(t_total);
+  return out;
+}
+
+}  // namespace peelcd::gl

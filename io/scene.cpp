@@ -1,0 +1,149 @@
+#include "io/scene.h"
+
+#include "io/error.h"
+#include "io/mesh_io.h"
+
+#include <nlohmann/json.hpp>
+
+#include <cmath>
+#include <filesystem>
+#include <fstream>
+#include <set>
+#include <sstream>
+
+namespace peelcd {
+namespace {
+
+using json = nlohmann::json;
+
+struct Ctx {
+  const std::string& path;
+  [[noreturn]] void fail(const std::string& where, const std::string& what) const {
+    throw InputError("peelcd::load_scene(): '" + path + "': " + where + ": " + what);
+  }
+  void only_keys(const json& j, const std::string& where, std::set<std::string> allowed) const {
+    if (!j.is_object()) fail(where, "must be an object");
+    for (const auto& [k, v] : j.items())
+      if (!allowed.count(k)) fail(where, "unknown key \"" + k + "\"");
+  }
+  double number(const json& j, const std::string& where) const {
+    if (!j.is_number()) fail(where, "must be a number");
+    const double v = j.get<double>();
+    if (!std::isfinite(v)) fail(where, "must be finite");
+    return v;
+  }
+  Vec3 vec3(const json& j, const std::string& where) const {
+    if (!j.is_array() || j.size() != 3) fail(where, "must be an array of 3 numbers");
+    return Vec3(number(j[0], where + "[0]"), number(j[1], where + "[1]"), number(j[2], where + "[2]"));
+  }
+  std::string string(const json& j, const std::string& where) const {
+    if (!j.is_string()) fail(where, "must be a string");
+    return j.get<std::string>();
+  }
+};
+
+}  // namespace
+
+Scene parse_scene(const std::string& text, const std::string& path, const std::string& base_dir) {
+  const Ctx c{path};
+  json root;
+  try {
+    root = json::parse(text);
+  } catch (const json::parse_error& e) {
+    throw InputError("peelcd::load_scene(): '" + path + "': malformed JSON: " + e.what());
+  }
+  c.only_keys(root, "the scene", {"objects", "view", "resolution", "budget", "ids", "epsilon"});
+  Scene scene;
+  scene.path = path;
+  if (!root.contains("objects")) c.fail("the scene", "missing key \"objects\"");
+  const json& objs = root["objects"];
+  if (!objs.is_array()) c.fail("objects", "must be an array");
+  for (std::size_t i = 0; i < objs.size(); ++i) {
+    const std::string where = "objects[" + std::to_string(i) + "]";
+    const json& o = objs[i];
+    c.only_keys(o, where, {"name", "mesh", "transform"});
+    SceneObject so;
+    so.name = o.contains("name") ? c.string(o["name"], where + ".name") : "object" + std::to_string(i);
+    if (!o.contains("mesh")) c.fail(where, "missing key \"mesh\"");
+    const std::string mesh = c.string(o["mesh"], where + ".mesh");
+    so.mesh_path = (std::filesystem::path(base_dir) / mesh).lexically_normal().string();
+    if (o.contains("transform")) {
+      const json& t = o["transform"];
+      const std::string tw = where + ".transform";
+      c.only_keys(t, tw, {"scale", "rotate", "translate"});
+      if (t.contains("scale")) {
+        so.transform.scale = c.number(t["scale"], tw + ".scale");
+        if (!(so.transform.scale > 0)) c.fail(tw + ".scale", "must be positive");
+      }
+      if (t.contains("rotate")) {
+        const json& r = t["rotate"];
+        c.only_keys(r, tw + ".rotate", {"axis", "degrees"});
+        if (r.contains("axis")) so.transform.axis = c.vec3(r["axis"], tw + ".rotate.axis");
+        if (r.contains("degrees")) so.transform.degrees = c.number(r["degrees"], tw + ".rotate.degrees");
+        if (so.transform.degrees != 0 && !(so.transform.axis.norm() > 0)) c.fail(tw + ".rotate.axis", "must not be zero");
+      }
+      if (t.contains("translate")) so.transform.translate = c.vec3(t["translate"], tw + ".translate");
+    }
+    scene.objects.push_back(std::move(so));
+  }
+  if (scene.objects.empty()) c.fail("objects", "must name at least one object");
+  DetectOptions& opt = scene.options;
+  if (root.contains("view")) {
+    const json& v = root["view"];
+    c.only_keys(v, "view", {"theta", "phi"});
+    if (v.contains("theta")) opt.theta = c.number(v["theta"], "view.theta");
+    if (v.contains("phi")) opt.phi = c.number(v["phi"], "view.phi");
+    if (opt.phi < -90 || opt.phi > 90) c.fail("view.phi", "must be within [-90, 90] degrees");
+  }
+  const auto positive_int = [&](const char* key, int& out, bool zero_ok) {
+    if (!root.contains(key)) return;
+    const json& j = root[key];
+    if (!j.is_number_integer()) c.fail(key, "must be an integer");
+    const long long v = j.get<long long>();
+    if (v < (zero_ok ? 0 : 1) || v > (1 << 20)) c.fail(key, zero_ok ? "must be >= 0 (0 = from the budget)" : "must be positive");
+    out = int(v);
+  };
+  positive_int("resolution", opt.resolution, true);
+  positive_int("budget", opt.budget, false);
+  if (root.contains("ids")) {
+    const std::string ids = c.string(root["ids"], "ids");
+    const auto mode = parse_id_mode(ids);
+    if (!mode) c.fail("ids", "unknown ID mode \"" + ids + "\" (expected paper or unique)");
+    opt.ids = *mode;
+  }
+  if (root.contains("epsilon")) {
+    opt.epsilon = c.number(root["epsilon"], "epsilon");
+    if (opt.epsilon < 0) c.fail("epsilon", "must be >= 0 (0 = one texel)");
+  }
+  return scene;
+}
+
+Scene load_scene(const std::string& path) {
+  namespace fs = std::filesystem;
+  std::error_code ec;
+  if (!fs::exists(path, ec)) throw InputError("peelcd::load_scene(): '" + path + "': no such file");
+  if (fs::is_directory(path, ec)) throw InputError("peelcd::load_scene(): '" + path + "': is a directory");
+  std::ifstream in(path);
+  if (!in) throw InputError("peelcd::load_scene(): '" + path + "': cannot open it");
+  std::stringstream ss;
+  ss << in.rdbuf();
+  return parse_scene(ss.str(), path, fs::path(path).parent_path().string());
+}
+
+std::vector<Object> load_objects(const Scene& scene) {
+  std::vector<Object> out;
+  for (const SceneObject& so : scene.objects) {
+    Object o;
+    o.name = so.name;
+    o.mesh = transformed(load_mesh(so.mesh_path), so.transform);
+    try {
+      validate_mesh(o.mesh, "'" + so.mesh_path + "'");
+    } catch (const std::invalid_argument& e) {
+      throw InputError(std::string("peelcd::load_objects(): ") + e.what());
+    }
+    out.push_back(std::move(o));
+  }
+  return out;
+}
+
+}  // namespace peelcd
