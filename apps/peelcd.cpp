@@ -23,7 +23,8 @@ constexpr int kExitBadInput = 2;
 struct DetectArgs {
   std::string scene;
   int res = -1;
-  std::string ids;
+  std::string ids, peel;
+  double slope = NAN;
   double theta = NAN, phi = NAN, epsilon = NAN;
   std::string json_out;
   int repeat = 1;
@@ -39,6 +40,15 @@ DetectOptions merged_options(const Scene& scene, const DetectArgs& a) {
     const auto m = parse_id_mode(a.ids);
     if (!m) throw InputError("peelcd detect: --ids: unknown ID mode \"" + a.ids + "\" (expected paper or unique)");
     o.ids = *m;
+  }
+  if (!a.peel.empty()) {
+    const auto m = parse_peel_mode(a.peel);
+    if (!m) throw InputError("peelcd detect: --peel: unknown peel mode \"" + a.peel + "\" (expected full or alternate)");
+    o.peel = *m;
+  }
+  if (!std::isnan(a.slope)) {
+    if (!(a.slope >= 0) || !std::isfinite(a.slope)) throw InputError("peelcd detect: --slope must be a number >= 0");
+    o.slope = a.slope;
   }
   if (!std::isnan(a.theta)) o.theta = a.theta;
   if (!std::isnan(a.phi)) {
@@ -102,7 +112,8 @@ int run_detect(const DetectArgs& a) {
 
   if (!a.quiet) {
     std::printf("peelcd detect: %s  (%zu objects, %s)\n", a.scene.c_str(), objects.size(), result.renderer.c_str());
-    std::printf("view theta=%g phi=%g  ids=%s\n", opt.theta, opt.phi, to_string(opt.ids));
+    std::printf("view theta=%g phi=%g  ids=%s  peel=%s  slope=%g\n", opt.theta, opt.phi, to_string(opt.ids),
+                to_string(opt.peel), opt.slope);
     if (result.pairs.empty()) std::printf("no overlapping bounding boxes: no GL work\n");
     for (const PairResult& p : result.pairs) {
       std::printf("%s x %s: ROI %dx%d, eps %.3g, drawn %zu+%zu tris, %d layers, %zu PCS, %zu candidates, %zu colliding\n",
@@ -151,6 +162,8 @@ int main(int argc, char** argv) {
   detect->add_option("scene", d.scene, "Scene JSON file")->required();
   detect->add_option("--res", d.res, "Forced N x N texture per ROI (default: share a 512^2 budget)");
   detect->add_option("--ids", d.ids, "Triangle ID mode: paper (last-vertex IDs, T(v) sets) or unique");
+  detect->add_option("--peel", d.peel, "Peel mode: full (every surface, default) or alternate (the paper's)");
+  detect->add_option("--slope", d.slope, "Slope-following epsilon, in texels (default 1; 0 = the paper's constant epsilon)");
   detect->add_option("--theta", d.theta, "View longitude, degrees");
   detect->add_option("--phi", d.phi, "View latitude, degrees, in [-90, 90]");
   detect->add_option("--epsilon", d.epsilon, "PCS depth threshold in world units (default: one texel)");

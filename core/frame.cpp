@@ -1,8 +1,17 @@
 #include "core/frame.h"
 
+#include <algorithm>
 #include <stdexcept>
 
 namespace peelcd {
+
+const char* to_string(PeelMode mode) { return mode == PeelMode::full ? "full" : "alternate"; }
+
+std::optional<PeelMode> parse_peel_mode(const std::string& text) {
+  if (text == "full") return PeelMode::full;
+  if (text == "alternate" || text == "paper") return PeelMode::alternate;
+  return std::nullopt;
+}
 
 int tile_resolution(int budget, std::size_t roi_count) {
   if (budget <= 0) throw std::invalid_argument("peelcd::tile_resolution(): budget must be positive");

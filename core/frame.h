@@ -4,10 +4,17 @@
 #include "core/id_map.h"
 #include "core/narrow_phase.h"
 
+#include <optional>
 #include <string>
 #include <vector>
 
 namespace peelcd {
+
+// How layers are peeled. alternate: the paper's alternate surface peeling (design.md 1.5);
+// full: every surface of both objects, every adjacent A-B couple tested (a superset).
+enum class PeelMode { alternate, full };
+const char* to_string(PeelMode mode);
+std::optional<PeelMode> parse_peel_mode(const std::string& text);
 
 struct DetectOptions {
   double theta = 0.0;  // view longitude, degrees
@@ -16,6 +23,11 @@ struct DetectOptions {
   int budget = 512;    // the frame's texture budget is budget x budget texels
   IdMode ids = IdMode::paper;
   double epsilon = 0.0;  // PCS depth threshold, world units; 0 = one texel of the ROI tile
+  PeelMode peel = PeelMode::full;
+  // Slope-following epsilon: a texel pair is a PCS when |dz| < epsilon + slope * (|dzdx_k+1 -
+  // dzdx_k| + |dzdy_k+1 - dzdy_k|), i.e. when the two surfaces' planes meet within `slope`
+  // texels of the texel centre. 0 = the paper's constant epsilon.
+  double slope = 1.0;
 };
 
 // Side of each ROI's tile when `roi_count` ROIs share a budget x budget texture: the largest

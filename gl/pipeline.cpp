@@ -47,8 +47,8 @@ struct Pipeline::Impl {
   Context& context;
   GladGLContext gl{};
   GLuint peel_program = 0, pcs_program = 0;
-  GLint u_clip = -1, u_box_lo = -1, u_box_hi = -1, u_has_prev = -1;
-  GLint u_eps = -1, u_k1_is_a = -1, u_res = -1;
+  GLint u_clip = -1, u_box_lo = -1, u_box_hi = -1, u_has_prev = -1, u_object = -1;
+  GLint u_eps = -1, u_slope = -1, u_res = -1;
   GLuint vao = 0, vbo[2] = {0, 0};
   std::size_t vbo_capacity[2] = {0, 0};  // in vertices
   GLuint layer_tex[2] = {0, 0}, depth_rb = 0, fbo[2] = {0, 0};
@@ -88,7 +88,8 @@ struct Pipeline::Impl {
     u_box_hi = gl.GetUniformLocation(peel_program, "box_hi");
     u_has_prev = gl.GetUniformLocation(peel_program, "has_previous");
     u_eps = gl.GetUniformLocation(pcs_program, "epsilon_window");
-    u_k1_is_a = gl.GetUniformLocation(pcs_program, "k1_is_a");
+    u_object = gl.GetUniformLocation(peel_program, "object_bit");
+    u_slope = gl.GetUniformLocation(pcs_program, "slope");
     u_res = gl.GetUniformLocation(pcs_program, "resolution");
 
     gl.CreateVertexArrays(1, &vao);
@@ -169,7 +170,7 @@ struct Pipeline::Impl {
     layer_size = 0;
   }
 
-  // Two ping-pong layer textures (RG32UI: depth bits, ID + 1) sharing one depth buffer.
+  // Two ping-pong layer textures (RGBA32UI, see shaders/peel.frag) sharing one depth buffer.
   void ensure_layers(int n) {
     if (n == layer_size) return;
     release_layers();
@@ -178,7 +179,7 @@ struct Pipeline::Impl {
     gl.NamedRenderbufferStorage(depth_rb, GL_DEPTH_COMPONENT32F, n, n);
     gl.CreateFramebuffers(2, fbo);
     for (int i = 0; i < 2; ++i) {
-      gl.TextureStorage2D(layer_tex[i], 1, GL_RG32UI, n, n);
+      gl.TextureStorage2D(layer_tex[i], 1, GL_RGBA32UI, n, n);
       gl.TextureParameteri(layer_tex[i], GL_TEXTURE_MIN_FILTER, GL_NEAREST);
       gl.TextureParameteri(layer_tex[i], GL_TEXTURE_MAG_FILTER, GL_NEAREST);
       gl.NamedFramebufferTexture(fbo[i], GL_COLOR_ATTACHMENT0, layer_tex[i], 0);
@@ -223,7 +224,8 @@ struct Pipeline::Impl {
 
   // Peels one ROI; fills `pcs` with the ID pairs read back. Returns false if the PCS buffer
   // overflowed (it has then been grown and the caller must peel again).
-  bool peel(const RoiView& view, double epsilon_world, int first_slot, PairResult& r, Timings& t) {
+  bool peel(const RoiView& view, double epsilon_world, const DetectOptions& opt, int first_slot,
+            PairResult& r, Timings& t) {
     const auto t_gpu = Clock::now();
     const int n = view.resolution;
     ensure_layers(n);
@@ -239,6 +241,7 @@ struct Pipeline::Impl {
     gl.Uniform3f(u_box_hi, float(hi.x()), float(hi.y()), float(hi.z()));
     gl.UseProgram(pcs_program);
     gl.Uniform1f(u_eps, float(view.world_to_window_depth(epsilon_world)));
+    gl.Uniform1f(u_slope, float(opt.slope));
     gl.Uniform1i(u_res, n);
 
     gl.Viewport(0, 0, n, n);
@@ -255,16 +258,21 @@ struct Pipeline::Impl {
     r.passes = 0;
     for (int k = 0; k < kMaxPasses; ++k) {
       const int cur = k & 1, prev = cur ^ 1;
-      const int slot = (first_slot + k) & 1;  // object drawn in this pass (0 = A, 1 = B)
       gl.BindFramebuffer(GL_FRAMEBUFFER, fbo[cur]);
       gl.ClearBufferuiv(GL_COLOR, 0, zero);
       gl.ClearBufferfv(GL_DEPTH, 0, &far_depth);
       gl.UseProgram(peel_program);
       gl.Uniform1i(u_has_prev, k > 0);
       gl.BindTextureUnit(0, layer_tex[prev]);
-      gl.VertexArrayVertexBuffer(vao, 0, vbo[slot], 0, sizeof(GpuVertex));
       gl.BeginQuery(GL_ANY_SAMPLES_PASSED, query);
-      gl.DrawArrays(GL_TRIANGLES, 0, GLsizei(staging[slot].size()));
+      for (int i = 0; i < 2; ++i) {
+        // Alternate: one object per pass, starting with `first_slot`. Full: both, every pass.
+        const int slot = opt.peel == PeelMode::full ? i : (first_slot + k) & 1;
+        if (opt.peel == PeelMode::alternate && i == 1) break;
+        gl.Uniform1ui(u_object, GLuint(slot));
+        gl.VertexArrayVertexBuffer(vao, 0, vbo[slot], 0, sizeof(GpuVertex));
+        gl.DrawArrays(GL_TRIANGLES, 0, GLsizei(staging[slot].size()));
+      }
       gl.EndQuery(GL_ANY_SAMPLES_PASSED);
       ++r.passes;
       ++passes_this_frame;
@@ -275,7 +283,6 @@ struct Pipeline::Impl {
       ++r.layers;
       if (k == 0) continue;
       gl.UseProgram(pcs_program);
-      gl.Uniform1i(u_k1_is_a, slot == 0);
       gl.BindTextureUnit(0, layer_tex[prev]);
       gl.BindTextureUnit(1, layer_tex[cur]);
       gl.DispatchCompute(GLuint((n + 7) / 8), GLuint((n + 7) / 8), 1);
@@ -318,6 +325,8 @@ FrameResult Pipeline::detect(const std::vector<Object>& objects, const DetectOpt
   if (opt.resolution == 0 && (opt.budget <= 0 || opt.budget > s.max_texture))
     throw std::invalid_argument("peelcd::gl::Pipeline::detect(): budget " + std::to_string(opt.budget) +
                                 " is outside 1.." + std::to_string(s.max_texture));
+  if (!(opt.slope >= 0.0) || !std::isfinite(opt.slope))
+    throw std::invalid_argument("peelcd::gl::Pipeline::detect(): slope must be finite and >= 0");
   if (!(opt.epsilon >= 0.0) || !std::isfinite(opt.epsilon))
     throw std::invalid_argument("peelcd::gl::Pipeline::detect(): epsilon must be finite and >= 0 (0 = one texel)");
 
@@ -366,7 +375,7 @@ FrameResult Pipeline::detect(const std::vector<Object>& objects, const DetectOpt
     s.upload(1);
     out.timings.upload += ms_since(t0);
 
-    while (!s.peel(view, r.epsilon, r.a_first ? 0 : 1, r, out.timings)) {
+    while (!s.peel(view, r.epsilon, opt, r.a_first ? 0 : 1, r, out.timings)) {
     }
 
     t0 = Clock::now();

@@ -52,7 +52,7 @@ Scene parse_scene(const std::string& text, const std::string& path, const std::s
   } catch (const json::parse_error& e) {
     throw InputError("peelcd::load_scene(): '" + path + "': malformed JSON: " + e.what());
   }
-  c.only_keys(root, "the scene", {"objects", "view", "resolution", "budget", "ids", "epsilon"});
+  c.only_keys(root, "the scene", {"objects", "view", "resolution", "budget", "ids", "epsilon", "peel", "slope"});
   Scene scene;
   scene.path = path;
   if (!root.contains("objects")) c.fail("the scene", "missing key \"objects\"");
@@ -114,6 +114,16 @@ Scene parse_scene(const std::string& text, const std::string& path, const std::s
   if (root.contains("epsilon")) {
     opt.epsilon = c.number(root["epsilon"], "epsilon");
     if (opt.epsilon < 0) c.fail("epsilon", "must be >= 0 (0 = one texel)");
+  }
+  if (root.contains("peel")) {
+    const std::string peel = c.string(root["peel"], "peel");
+    const auto mode = parse_peel_mode(peel);
+    if (!mode) c.fail("peel", "unknown peel mode \"" + peel + "\" (expected full or alternate)");
+    opt.peel = *mode;
+  }
+  if (root.contains("slope")) {
+    opt.slope = c.number(root["slope"], "slope");
+    if (opt.slope < 0) c.fail("slope", "must be >= 0 (0 = constant epsilon)");
   }
   return scene;
 }

@@ -4,7 +4,7 @@
 //                 "transform": {"scale": 2.5, "rotate": {"axis": [0,0,1], "degrees": 0},
 //                               "translate": [0.8, -0.5, 0]}}, ...],
 //    "view": {"theta": 0, "phi": 0}, "resolution": 0, "budget": 512,
-//    "ids": "paper", "epsilon": 0}
+//    "ids": "paper", "epsilon": 0, "peel": "full", "slope": 1}
 // Everything but "objects" (and each object's "mesh") has a default (core/frame.h). Unknown
 // keys, wrong types and impossible values are errors that name the file and the key.
 #include "core/frame.h"
