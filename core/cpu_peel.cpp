@@ -83,12 +83,19 @@ CpuPeelResult cpu_peel(const Mesh& a, const Mesh& b, const RoiView& view, IdMode
       }
     }
     r.layers = std::max(r.layers, int(layers.size()));
-    for (std::size_t k = 0; k + 1 < layers.size(); ++k) {
-      const Hit &x = layers[k], &y = layers[k + 1];
-      if (x.object == y.object) continue;
+    const auto test = [&](const Hit& x, const Hit& y) {
       const double spread = slope * (std::abs(x.gu - y.gu) + std::abs(x.gv - y.gv));
-      if (!(std::abs(y.depth - x.depth) < epsilon + spread)) continue;
-      r.pcs.push_back(x.object == 0 ? IdPair{x.id, y.id} : IdPair{y.id, x.id});
+      if (std::abs(y.depth - x.depth) < epsilon + spread)
+        r.pcs.push_back(x.object == 0 ? IdPair{x.id, y.id} : IdPair{y.id, x.id});
+    };
+    // Full mode also pairs the first surface of each same-object run with the first surface of
+    // the next run, which is what alternate peeling pairs (see shaders/pcs.comp).
+    std::size_t run_start = 0;
+    for (std::size_t k = 0; k + 1 < layers.size(); ++k) {
+      if (layers[k].object == layers[k + 1].object) continue;
+      test(layers[k], layers[k + 1]);
+      if (run_start != k) test(layers[run_start], layers[k + 1]);
+      run_start = k + 1;
     }
   }
   std::sort(r.pcs.begin(), r.pcs.end(), [](const IdPair& x, const IdPair& y) { return x.a < y.a || (x.a == y.a && x.b < y.b); });

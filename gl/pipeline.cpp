@@ -48,10 +48,10 @@ struct Pipeline::Impl {
   GladGLContext gl{};
   GLuint peel_program = 0, pcs_program = 0;
   GLint u_clip = -1, u_box_lo = -1, u_box_hi = -1, u_has_prev = -1, u_object = -1;
-  GLint u_eps = -1, u_slope = -1, u_res = -1;
+  GLint u_eps = -1, u_slope = -1, u_res = -1, u_track = -1;
   GLuint vao = 0, vbo[2] = {0, 0};
   std::size_t vbo_capacity[2] = {0, 0};  // in vertices
-  GLuint layer_tex[2] = {0, 0}, depth_rb = 0, fbo[2] = {0, 0};
+  GLuint layer_tex[2] = {0, 0}, run_tex = 0, depth_rb = 0, fbo[2] = {0, 0};
   int layer_size = 0;
   GLuint query = 0, pcs_buffer = 0;
   std::uint32_t pcs_capacity = 0;
@@ -91,6 +91,7 @@ struct Pipeline::Impl {
     u_object = gl.GetUniformLocation(peel_program, "object_bit");
     u_slope = gl.GetUniformLocation(pcs_program, "slope");
     u_res = gl.GetUniformLocation(pcs_program, "resolution");
+    u_track = gl.GetUniformLocation(pcs_program, "track_runs");
 
     gl.CreateVertexArrays(1, &vao);
     gl.EnableVertexArrayAttrib(vao, 0);
@@ -166,15 +167,19 @@ struct Pipeline::Impl {
     if (!layer_size) return;
     gl.DeleteFramebuffers(2, fbo);
     gl.DeleteTextures(2, layer_tex);
+    gl.DeleteTextures(1, &run_tex);
     gl.DeleteRenderbuffers(1, &depth_rb);
     layer_size = 0;
   }
 
-  // Two ping-pong layer textures (RGBA32UI, see shaders/peel.frag) sharing one depth buffer.
+  // Two ping-pong layer textures (RGBA32UI, see shaders/peel.frag) sharing one depth buffer,
+  // and the run-start texture of full peeling (shaders/pcs.comp).
   void ensure_layers(int n) {
     if (n == layer_size) return;
     release_layers();
     gl.CreateTextures(GL_TEXTURE_2D, 2, layer_tex);
+    gl.CreateTextures(GL_TEXTURE_2D, 1, &run_tex);
+    gl.TextureStorage2D(run_tex, 1, GL_RGBA32UI, n, n);
     gl.CreateRenderbuffers(1, &depth_rb);
     gl.NamedRenderbufferStorage(depth_rb, GL_DEPTH_COMPONENT32F, n, n);
     gl.CreateFramebuffers(2, fbo);
@@ -242,6 +247,11 @@ struct Pipeline::Impl {
     gl.UseProgram(pcs_program);
     gl.Uniform1f(u_eps, float(view.world_to_window_depth(epsilon_world)));
     gl.Uniform1f(u_slope, float(opt.slope));
+    gl.Uniform1i(u_track, opt.peel == PeelMode::full);
+    if (opt.peel == PeelMode::full) {
+      gl.ClearTexImage(run_tex, 0, GL_RGBA_INTEGER, GL_UNSIGNED_INT, nullptr);
+      gl.BindImageTexture(0, run_tex, 0, GL_FALSE, 0, GL_READ_WRITE, GL_RGBA32UI);
+    }
     gl.Uniform1i(u_res, n);
 
     gl.Viewport(0, 0, n, n);
@@ -286,6 +296,8 @@ struct Pipeline::Impl {
       gl.BindTextureUnit(0, layer_tex[prev]);
       gl.BindTextureUnit(1, layer_tex[cur]);
       gl.DispatchCompute(GLuint((n + 7) / 8), GLuint((n + 7) / 8), 1);
+      // The next dispatch reads run_start and appends to the same buffer.
+      gl.MemoryBarrier(GL_SHADER_IMAGE_ACCESS_BARRIER_BIT | GL_SHADER_STORAGE_BARRIER_BIT);
       ++passes_this_frame;
       check("a PCS pass");
     }
