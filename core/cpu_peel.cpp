@@ -98,8 +98,8 @@ CpuPeelResult cpu_peel(const Mesh& a, const Mesh& b, const RoiView& view, IdMode
       run_start = k + 1;
     }
   }
-  std::sort(r.pcs.begin(), r.pcs.end(), [](const IdPair& x, const IdPair& y) { return x.a < y.a || (x.a == y.a && x.b < y.b); });
-  r.pcs.erase(std::unique(r.pcs.begin(), r.pcs.end(), [](const IdPair& x, const IdPair& y) { return x.a == y.a && x.b == y.b; }), r.pcs.end());
+  std::sort(r.pcs.begin(), r.pcs.end());
+  r.pcs.erase(std::unique(r.pcs.begin(), r.pcs.end()), r.pcs.end());
   return r;
 }
 

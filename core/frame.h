@@ -45,6 +45,7 @@ struct PairResult {
   int layers = 0;                          // non-empty logical layers peeled
   int passes = 0;                          // peel passes drawn (layers + the final empty one)
   std::size_t pcs_count = 0;               // distinct ID pairs read back
+  std::vector<IdPair> pcs;                 // those pairs (ID of A, ID of B), sorted
   std::size_t candidates = 0;              // distinct triangle pairs tested on the CPU
   std::vector<Contact> colliding;          // sorted by (tri_a, tri_b)
 };

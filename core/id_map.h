@@ -44,6 +44,8 @@ class IdMap {
 struct IdPair {
   std::uint32_t a, b;
 };
+inline bool operator==(const IdPair& x, const IdPair& y) { return x.a == y.a && x.b == y.b; }
+inline bool operator<(const IdPair& x, const IdPair& y) { return x.a < y.a || (x.a == y.a && x.b < y.b); }
 
 inline std::uint64_t pack_pair(std::uint32_t a, std::uint32_t b) {
   return (std::uint64_t(a) << 32) | b;

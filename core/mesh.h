@@ -2,6 +2,7 @@
 // Triangle meshes and rigid transforms. Positions are double: geometry is exact-tested on the
 // CPU and only becomes float, in ROI-local coordinates, right before upload (gl/pipeline.cpp).
 #include <Eigen/Core>
+#include <Eigen/Geometry>
 #include <array>
 #include <cstdint>
 #include <string>

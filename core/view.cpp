@@ -2,6 +2,7 @@
 
 #include <Eigen/Geometry>
 #include <cmath>
+#include <limits>
 #include <stdexcept>
 
 namespace peelcd {
@@ -50,6 +51,13 @@ RoiView make_roi_view(const Aabb& roi, const ViewFrame& frame, int resolution, d
   if (!(view.half_uv > 0.0) || !(view.half_depth > 0.0))
     throw std::invalid_argument("peelcd::make_roi_view(): ROI has no extent; pass a positive margin");
   return view;
+}
+
+RoiView make_padded_roi_view(const Aabb& roi, const Aabb& a, const Aabb& b, const ViewFrame& frame, int resolution) {
+  const double scale = std::max(a.extent().norm(), b.extent().norm());
+  const double floor = 1e-6 * scale + std::numeric_limits<double>::min();
+  const RoiView tight = make_roi_view(roi, frame, resolution, floor);
+  return make_roi_view(roi, frame, resolution, floor + kRoiPadTexels * tight.texel());
 }
 
 }  // namespace peelcd

@@ -39,4 +39,14 @@ struct RoiView {
 // still has a depth range and clipping keeps surfaces lying on its faces.
 RoiView make_roi_view(const Aabb& roi, const ViewFrame& frame, int resolution, double margin);
 
+// Texels of padding around a ROI. A contact on the ROI boundary (two surfaces meeting at an
+// edge of the box) is only seen with the surfaces just outside the box, so the box is grown by
+// this many texels of the unpadded ROI's tile before clipping.
+constexpr double kRoiPadTexels = 2.0;
+
+// The view the pipeline peels: `roi` = intersection of boxes `a` and `b`, padded by
+// kRoiPadTexels texels, and by 1e-6 of the objects' size so that a ROI without extent (boxes
+// touching) keeps one.
+RoiView make_padded_roi_view(const Aabb& roi, const Aabb& a, const Aabb& b, const ViewFrame& frame, int resolution);
+
 }  // namespace peelcd

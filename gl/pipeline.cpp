@@ -366,10 +366,7 @@ FrameResult Pipeline::detect(const std::vector<Object>& objects, const DetectOpt
     r.resolution = n;
     const Mesh& ma = objects[ia].mesh;
     const Mesh& mb = objects[ib].mesh;
-    // Pad by a tiny fraction of the objects' size: a flat ROI (boxes touching) keeps a depth
-    // range and surfaces lying exactly on a ROI face are not clipped away by rounding.
-    const double scale = std::max(boxes[ia].extent().norm(), boxes[ib].extent().norm());
-    const RoiView view = make_roi_view(r.roi, frame, n, 1e-6 * scale + 1e-300);
+    const RoiView view = make_padded_roi_view(r.roi, boxes[ia], boxes[ib], frame, n);
     r.epsilon = opt.epsilon > 0.0 ? opt.epsilon : view.texel();
 
     t0 = Clock::now();
@@ -391,13 +388,10 @@ FrameResult Pipeline::detect(const std::vector<Object>& objects, const DetectOpt
     }
 
     t0 = Clock::now();
-    std::sort(s.pcs.begin(), s.pcs.end(), [](const IdPair& x, const IdPair& y) {
-      return x.a < y.a || (x.a == y.a && x.b < y.b);
-    });
-    s.pcs.erase(std::unique(s.pcs.begin(), s.pcs.end(),
-                            [](const IdPair& x, const IdPair& y) { return x.a == y.a && x.b == y.b; }),
-                s.pcs.end());
+    std::sort(s.pcs.begin(), s.pcs.end());
+    s.pcs.erase(std::unique(s.pcs.begin(), s.pcs.end()), s.pcs.end());
     r.pcs_count = s.pcs.size();
+    r.pcs.assign(s.pcs.begin(), s.pcs.end());
     const IdMap map_a(ma, opt.ids), map_b(mb, opt.ids);
     s.candidates.clear();
     expand_pcs(s.pcs, map_a, map_b, s.candidates);

@@ -1,0 +1,57 @@
+#include "core/id_map.h"
+
+#include <catch2/catch.hpp>
+
+using namespace peelcd;
+
+// A fan around vertex 0 (the paper's Fig. 7): four triangles, three of which end in vertex 0.
+//
+//        2 ---- 1
+//        | \  / |        triangles: {1,2,0} {2,3,0} {3,4,0} {0,4,1}
+//        |  0   |        last vertex: 0, 0, 0, 1
+//        | /  \ |
+//        3 ---- 4
+static Mesh fan() {
+  Mesh m;
+  m.vertices = {Vec3(0, 0, 0), Vec3(1, 1, 0), Vec3(-1, 1, 0), Vec3(-1, -1, 0), Vec3(1, -1, 0)};
+  m.triangles = {{1, 2, 0}, {2, 3, 0}, {3, 4, 0}, {0, 4, 1}};
+  return m;
+}
+
+TEST_CASE("paper IDs stand for T(v), the triangles whose last vertex is v", "[ids]") {
+  const Mesh m = fan();
+  const IdMap map(m, IdMode::paper);
+  CHECK(map.id_count() == 5);
+  CHECK(map.triangles(0) == std::vector<std::uint32_t>{0, 1, 2});
+  CHECK(map.triangles(1) == std::vector<std::uint32_t>{3});
+  CHECK(map.triangles(2).empty());
+  CHECK(corner_id(m, 3, 2, IdMode::paper) == 1);  // the provoking (last) corner
+}
+
+TEST_CASE("unique IDs stand for one triangle each", "[ids]") {
+  const Mesh m = fan();
+  const IdMap map(m, IdMode::unique);
+  CHECK(map.id_count() == 4);
+  for (std::uint32_t t = 0; t < 4; ++t) {
+    CHECK(map.triangles(t) == std::vector<std::uint32_t>{t});
+    for (int c = 0; c < 3; ++c) CHECK(corner_id(m, t, c, IdMode::unique) == t);
+  }
+}
+
+TEST_CASE("PCS expand to de-duplicated candidate pairs T(a) x T(b)", "[ids]") {
+  const Mesh m = fan();
+  const IdMap pa(m, IdMode::paper), ub(m, IdMode::unique);
+  std::vector<std::uint64_t> out;
+  expand_pcs({{0, 3}, {0, 3}, {1, 0}}, pa, ub, out);
+  const std::vector<std::uint64_t> expected = {pack_pair(0, 3), pack_pair(1, 3), pack_pair(2, 3), pack_pair(3, 0)};
+  CHECK(out == expected);
+  std::vector<std::uint64_t> bad;
+  CHECK_THROWS_AS(expand_pcs({{9, 0}}, pa, ub, bad), std::out_of_range);
+}
+
+TEST_CASE("ID modes parse from their names only", "[ids]") {
+  CHECK(parse_id_mode("paper") == IdMode::paper);
+  CHECK(parse_id_mode("unique") == IdMode::unique);
+  CHECK_FALSE(parse_id_mode("Paper").has_value());
+  CHECK_FALSE(parse_id_mode("").has_value());
+}

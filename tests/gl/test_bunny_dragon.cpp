@@ -1,0 +1,69 @@
+// The default scene (design.md section 4) at 256^2 with paper IDs, over several views: no false
+// contact ever, and the miss ratio of the default configuration under 15% in every view.
+#include "gl_fixture.h"
+#include "io/scene.h"
+
+#include <catch2/catch.hpp>
+
+#include <cstdio>
+
+using namespace peelcd;
+using namespace peelcd::test;
+
+namespace {
+const std::vector<Object>& scene() {
+  static const std::vector<Object> objects = load_objects(load_scene(std::string(PEELCD_FIXTURES) + "/scenes/bunny_dragon.json"));
+  return objects;
+}
+const std::vector<std::uint64_t>& exact() {
+  static const std::vector<std::uint64_t> pairs = exact_colliding_pairs(scene()[0].mesh, scene()[1].mesh);
+  return pairs;
+}
+const std::vector<std::pair<double, double>> kViews = {{0, 0}, {90, 0}, {45, 30}, {0, 90}, {200, -40}, {300, 60}, {150, -90}};
+}  // namespace
+
+TEST_CASE("bunny vs dragon: the exact reference finds design.md's 228 pairs", "[bunny_dragon]") {
+  CHECK(exact().size() == 228);
+}
+
+TEST_CASE("bunny vs dragon at 256^2, paper IDs: no false contact, miss ratio under 15% per view", "[bunny_dragon]") {
+  DetectOptions opt;  // default configuration: full peeling, slope-following epsilon
+  opt.resolution = 256;
+  opt.ids = IdMode::paper;
+  for (const auto& [theta, phi] : kViews) {
+    opt.theta = theta;
+    opt.phi = phi;
+    const FrameResult f = osmesa_pipeline().detect(scene(), opt);
+    REQUIRE(f.pairs.size() == 1);
+    const Score s = score(exact(), f.pairs[0].colliding);
+    std::printf("bunny-dragon 256 paper-ids full slope=1 theta=%5.1f phi=%5.1f: found %3zu/%zu miss %5.2f%% false %zu\n",
+                theta, phi, s.found, s.exact, 100 * s.miss_ratio(), s.false_contacts);
+    INFO("theta " << theta << " phi " << phi << " miss ratio " << s.miss_ratio());
+    CHECK(s.false_contacts == 0);
+    CHECK(s.miss_ratio() < 0.15);
+  }
+}
+
+TEST_CASE("bunny vs dragon: the paper's mode is reported, and full peeling's PCS contain it", "[bunny_dragon]") {
+  DetectOptions paper;
+  paper.resolution = 256;
+  paper.ids = IdMode::paper;
+  paper.peel = PeelMode::alternate;
+  paper.slope = 0.0;  // the paper: constant epsilon of one texel
+  for (const auto& [theta, phi] : kViews) {
+    paper.theta = theta;
+    paper.phi = phi;
+    DetectOptions full = paper;
+    full.peel = PeelMode::full;
+    const PairResult a = osmesa_pipeline().detect(scene(), paper).pairs.at(0);
+    const PairResult b = osmesa_pipeline().detect(scene(), full).pairs.at(0);
+    const Score sa = score(exact(), a.colliding), sb = score(exact(), b.colliding);
+    std::printf("bunny-dragon 256 paper-ids alternate slope=0 theta=%5.1f phi=%5.1f: miss %5.2f%%  (full: %5.2f%%)\n",
+                theta, phi, 100 * sa.miss_ratio(), 100 * sb.miss_ratio());
+    INFO("theta " << theta << " phi " << phi);
+    CHECK(sa.false_contacts == 0);
+    CHECK(sb.false_contacts == 0);
+    CHECK(std::includes(b.pcs.begin(), b.pcs.end(), a.pcs.begin(), a.pcs.end()));
+    CHECK(sb.found >= sa.found);
+  }
+}

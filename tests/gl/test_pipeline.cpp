@@ -1,0 +1,190 @@
+#include "core/primitives.h"
+#include "gl_fixture.h"
+
+#include <catch2/catch.hpp>
+
+using namespace peelcd;
+using namespace peelcd::test;
+
+namespace {
+
+std::vector<Object> two(const Mesh& a, const Mesh& b) { return {{"a", a}, {"b", b}}; }
+
+// Runs the pipeline and the CPU model of the image stage on the same ROI and options.
+struct Run {
+  PairResult gpu;
+  CpuPeelResult cpu;
+  Score score;
+  double texel = 0;
+  std::size_t missed_longer_than_a_texel = 0;  // misses an image-space method must not have
+  std::size_t pcs_differences = 0;             // |GPU PCS symmetric-difference CPU model PCS|
+};
+
+Run run(const Mesh& a, const Mesh& b, const DetectOptions& opt) {
+  const FrameResult f = osmesa_pipeline().detect(two(a, b), opt);
+  REQUIRE(f.pairs.size() == 1);
+  Run r;
+  r.gpu = f.pairs[0];
+  const RoiView view = make_padded_roi_view(r.gpu.roi, bounds(a), bounds(b), view_frame(opt.theta, opt.phi), r.gpu.resolution);
+  r.cpu = cpu_peel(a, b, view, opt.ids, r.gpu.epsilon, r.gpu.a_first, opt.peel, opt.slope);
+  const auto exact = exact_colliding_pairs(a, b);
+  r.score = score(exact, r.gpu.colliding);
+  r.texel = view.texel();
+  for (std::uint64_t e : exact) {
+    const bool found = std::any_of(r.gpu.colliding.begin(), r.gpu.colliding.end(),
+                                   [&](const Contact& c) { return pack_pair(c.tri_a, c.tri_b) == e; });
+    const auto [p, q] = intersection_segment(corners(a, pair_a(e)), corners(b, pair_b(e)));
+    if (!found && (p - q).norm() > r.texel) ++r.missed_longer_than_a_texel;
+  }
+  std::vector<IdPair> diff;
+  std::set_symmetric_difference(r.gpu.pcs.begin(), r.gpu.pcs.end(), r.cpu.pcs.begin(), r.cpu.pcs.end(),
+                                std::back_inserter(diff));
+  r.pcs_differences = diff.size();
+  return r;
+}
+
+}  // namespace
+
+// See tests/core/test_cpu_peel.cpp for the picture: B pokes through A's x = 1 face; every ray
+// through the ROI meets exactly two surfaces.
+TEST_CASE("OSMesa: two axis-aligned boxes crossing", "[gl]") {
+  const Mesh a = make_box(Vec3(0, 0, 0), Vec3(1, 1, 1));
+  const Mesh b = make_box(Vec3(0.5, 0.25, 0.25), Vec3(1.5, 0.75, 0.75));
+  DetectOptions opt;
+  opt.theta = 30;
+  opt.phi = 20;
+  opt.resolution = 128;
+  opt.ids = IdMode::unique;
+
+  SECTION("full peeling: entry and exit layers, PCS on the rim, every contact longer than a texel found") {
+    const Run r = run(a, b, opt);
+    // Two surfaces per ray inside the ROI, and near the rim a third: B's side just beyond A's
+    // face, in the ROI's padding (core/view.h, kRoiPadTexels).
+    CHECK(r.gpu.layers == 3);
+    CHECK(r.gpu.passes == 4);  // the layers and the empty pass that ends the ROI
+    CHECK(r.gpu.pcs == r.cpu.pcs);
+    for (const IdPair& p : r.gpu.pcs) {
+      CHECK((p.a == 10 || p.a == 11));  // A's x = 1 face (core/primitives.cpp)
+      CHECK(p.b < 8);                   // B's y and z faces
+    }
+    // B's 4 side faces (8 triangles) meet A's x = 1 face (2 triangles, diagonal y + z = 1) in
+    // 12 pairs, 4 of them touching at one point only (where B's rim meets A's diagonal).
+    CHECK(r.score.exact == 12);
+    CHECK(r.score.false_contacts == 0);
+    CHECK(r.missed_longer_than_a_texel == 0);
+    CHECK(r.score.missed <= 4);
+  }
+  SECTION("alternate peeling starts with A, the farther object, and misses what lies in front of it") {
+    opt.peel = PeelMode::alternate;
+    const Run r = run(a, b, opt);
+    CHECK(r.gpu.a_first);
+    CHECK(r.gpu.layers == r.cpu.layers);
+    CHECK(r.gpu.pcs == r.cpu.pcs);
+    CHECK(r.score.false_contacts == 0);
+    CHECK(r.score.found < r.score.exact);
+  }
+}
+
+TEST_CASE("OSMesa: a tilted plane through a sphere", "[gl]") {
+  const Mesh sphere = make_uv_sphere(Vec3(0, 0, 0), 1.0, 24, 48);
+  // Open grid through the sphere, tilted so its box is not flat: z = 0.1 + 0.2 x.
+  const Mesh plane = make_grid(Vec3(-1.5, -1.5, -0.2), Vec3(3, 0, 0.6), Vec3(0, 3, 0), 12, 12);
+  DetectOptions opt;
+  opt.theta = 20;
+  opt.phi = 50;
+  opt.resolution = 256;
+  for (PeelMode mode : {PeelMode::full, PeelMode::alternate}) {
+    opt.peel = mode;
+    const Run r = run(sphere, plane, opt);
+    INFO(to_string(mode) << ": found " << r.score.found << " of " << r.score.exact);
+    // The sphere's front cap, the plane, the back cap: 3 surfaces on most rays.
+    if (mode == PeelMode::full) CHECK(r.gpu.layers == 3);
+    CHECK(r.gpu.layers == r.cpu.layers);
+    // GL owns a texel centre on a shared edge to one triangle (the CPU model to both), and
+    // compares float depths (the CPU model doubles): a few PCS may differ, never more than 2%.
+    CHECK(r.pcs_differences <= r.gpu.pcs.size() / 50);
+    CHECK(r.score.exact > 0);
+    CHECK(r.score.false_contacts == 0);
+    if (mode == PeelMode::full) CHECK(r.missed_longer_than_a_texel == 0);
+  }
+}
+
+TEST_CASE("OSMesa: an open quad through a closed mesh", "[gl]") {
+  const Mesh ball = make_uv_sphere(Vec3(0.2, 0.1, 0.0), 0.8, 16, 32);
+  Mesh quad;  // two triangles, x from -2 to 2, slanted in y-z
+  quad.vertices = {Vec3(-2, -2, -0.5), Vec3(2, -2, -0.5), Vec3(2, 2, 0.7), Vec3(-2, 2, 0.7)};
+  quad.triangles = {{0, 1, 2}, {0, 2, 3}};
+  DetectOptions opt;
+  opt.theta = 75;
+  opt.phi = -30;
+  opt.resolution = 256;
+  const Run r = run(ball, quad, opt);
+  CHECK(r.gpu.triangles_drawn_b == 2);
+  CHECK(r.gpu.layers == 3);  // front of the ball, the quad, back of the ball
+  CHECK(r.pcs_differences <= r.gpu.pcs.size() / 50);  // see the sphere case for why
+  CHECK(r.score.exact > 0);
+  CHECK(r.score.false_contacts == 0);
+  CHECK(r.missed_longer_than_a_texel == 0);
+}
+
+TEST_CASE("OSMesa: no overlapping boxes means no GL work at all", "[gl]") {
+  const Mesh a = make_box(Vec3(0, 0, 0), Vec3(1, 1, 1));
+  const Mesh b = make_box(Vec3(2, 0, 0), Vec3(3, 1, 1));
+  const FrameResult f = osmesa_pipeline().detect(two(a, b), DetectOptions{});
+  CHECK(f.pairs.empty());
+  CHECK(f.gl_passes == 0);
+}
+
+TEST_CASE("OSMesa: overlapping boxes without contact peel but report nothing", "[gl]") {
+  // Two spheres whose boxes overlap at a corner while the surfaces stay apart (Fig. 2-b).
+  const Mesh a = make_uv_sphere(Vec3(0, 0, 0), 1.0, 12, 24);
+  const Mesh b = make_uv_sphere(Vec3(1.9, 1.9, 0), 1.0, 12, 24);
+  DetectOptions opt;
+  opt.resolution = 64;
+  const FrameResult f = osmesa_pipeline().detect(two(a, b), opt);
+  REQUIRE(f.pairs.size() == 1);
+  CHECK(f.pairs[0].colliding.empty());
+  CHECK(exact_colliding_pairs(a, b).empty());
+}
+
+TEST_CASE("OSMesa: repeated frames reuse GL objects and give identical answers", "[gl]") {
+  const Mesh a = make_uv_sphere(Vec3(0, 0, 0), 1.0, 16, 32);
+  const Mesh b = make_uv_sphere(Vec3(0.9, 0.4, 0.2), 0.7, 12, 24);
+  DetectOptions opt;
+  opt.theta = 10;
+  opt.phi = 5;
+  const FrameResult f1 = osmesa_pipeline().detect(two(a, b), opt);
+  opt.resolution = 64;  // a different tile size in between reallocates the layers
+  osmesa_pipeline().detect(two(a, b), opt);
+  opt.resolution = 0;
+  const FrameResult f2 = osmesa_pipeline().detect(two(a, b), opt);
+  REQUIRE(f1.pairs.size() == 1);
+  REQUIRE(f2.pairs.size() == 1);
+  CHECK(f1.pairs[0].resolution == 512);  // one ROI takes the whole budget
+  CHECK(f1.pairs[0].pcs == f2.pairs[0].pcs);
+  CHECK(f1.pairs[0].colliding.size() == f2.pairs[0].colliding.size());
+  CHECK_FALSE(f1.pairs[0].colliding.empty());
+}
+
+TEST_CASE("OSMesa: many ROIs share the texture budget", "[gl]") {
+  std::vector<Object> objects;
+  for (int i = 0; i < 6; ++i)  // a row of overlapping spheres: 5 ROIs
+    objects.push_back({"s" + std::to_string(i), make_uv_sphere(Vec3(1.5 * i, 0, 0), 1.0, 8, 16)});
+  const FrameResult f = osmesa_pipeline().detect(objects, DetectOptions{});
+  REQUIRE(f.pairs.size() == 5);
+  for (const PairResult& p : f.pairs) {
+    CHECK(p.resolution == 128);
+    CHECK(p.object_b == p.object_a + 1);
+    CHECK_FALSE(p.colliding.empty());
+  }
+}
+
+TEST_CASE("OSMesa: impossible options are refused with a clear error", "[gl]") {
+  const std::vector<Object> objs = two(make_box(Vec3(0, 0, 0), Vec3(1, 1, 1)), make_box(Vec3(0.5, 0, 0), Vec3(2, 1, 1)));
+  DetectOptions opt;
+  opt.resolution = osmesa_pipeline().max_resolution() + 1;
+  CHECK_THROWS_WITH(osmesa_pipeline().detect(objs, opt), Catch::Contains("GL_MAX_TEXTURE_SIZE"));
+  opt = DetectOptions{};
+  opt.epsilon = -1;
+  CHECK_THROWS_AS(osmesa_pipeline().detect(objs, opt), std::invalid_argument);
+}

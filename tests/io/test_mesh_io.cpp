@@ -1,0 +1,106 @@
+#include "io/error.h"
+#include "io/mesh_io.h"
+
+#include <catch2/catch.hpp>
+
+#include <filesystem>
+#include <fstream>
+
+using namespace peelcd;
+namespace fs = std::filesystem;
+
+namespace {
+
+// Writes `text` to a fresh file named `name` in a per-test temporary folder.
+std::string write_temp(const std::string& name, const std::string& text) {
+  const fs::path dir = fs::temp_directory_path() / "peelcd_test_io";
+  fs::create_directories(dir);
+  const fs::path p = dir / name;
+  std::ofstream(p, std::ios::binary) << text;
+  return p.string();
+}
+
+// Requires load_mesh(path) to throw an InputError whose message names the file and contains `what`.
+void require_input_error(const std::string& path, const std::string& what) {
+  try {
+    load_mesh(path);
+    FAIL("no error for " << path);
+  } catch (const InputError& e) {
+    const std::string msg = e.what();
+    INFO(msg);
+    CHECK(msg.find(path) != std::string::npos);
+    CHECK(msg.find(what) != std::string::npos);
+  }
+}
+
+const char* kTetraObj =
+    "v 0 0 0\nv 1 0 0\nv 0 1 0\nv 0 0 1\n"
+    "f 1 3 2\nf 1 2 4\nf 1 4 3\nf 2 3 4\n";
+
+}  // namespace
+
+TEST_CASE("OBJ: polygons are triangulated in place, triangle order is kept", "[io]") {
+  // Face 1 is a quad (-> triangles 0 and 1), face 2 a triangle (-> triangle 2).
+  const std::string p = write_temp("quad.obj", "v 0 0 0\nv 1 0 0\nv 1 1 0\nv 0 1 0\nv 5 5 5\nf 1 2 3 4\nf 2 5 3\n");
+  const Mesh m = load_mesh(p);
+  REQUIRE(m.triangles.size() == 3);
+  REQUIRE(m.vertices.size() == 5);
+  const auto pos = [&](std::uint32_t t, int c) { return m.vertices[m.triangles[t][c]]; };
+  // The last triangle is the file's second face, with its corners in order.
+  CHECK(pos(2, 0) == Vec3(1, 0, 0));
+  CHECK(pos(2, 1) == Vec3(5, 5, 5));
+  CHECK(pos(2, 2) == Vec3(1, 1, 0));
+  // The quad's two triangles only use the quad's corners.
+  for (std::uint32_t t = 0; t < 2; ++t)
+    for (int c = 0; c < 3; ++c) CHECK(pos(t, c).z() == 0.0);
+}
+
+TEST_CASE("OBJ, PLY, STL and OFF load the same tetrahedron with shared vertices", "[io]") {
+  const std::string ply =
+      "ply\nformat ascii 1.0\nelement vertex 4\nproperty float x\nproperty float y\nproperty float z\n"
+      "element face 4\nproperty list uchar int vertex_indices\nend_header\n"
+      "0 0 0\n1 0 0\n0 1 0\n0 0 1\n3 0 2 1\n3 0 1 3\n3 0 3 2\n3 1 2 3\n";
+  const std::string off = "OFF\n4 4 0\n0 0 0\n1 0 0\n0 1 0\n0 0 1\n3 0 2 1\n3 0 1 3\n3 0 3 2\n3 1 2 3\n";
+  std::string stl = "solid t\n";
+  const char* tris[4][3] = {{"0 0 0", "0 1 0", "1 0 0"}, {"0 0 0", "1 0 0", "0 0 1"},
+                            {"0 0 0", "0 0 1", "0 1 0"}, {"1 0 0", "0 1 0", "0 0 1"}};
+  for (auto& t : tris)
+    stl += std::string("facet normal 0 0 0\nouter loop\nvertex ") + t[0] + "\nvertex " + t[1] + "\nvertex " + t[2] +
+           "\nendloop\nendfacet\n";
+  stl += "endsolid t\n";
+  for (const auto& [name, text] : {std::pair<std::string, std::string>{"t.obj", kTetraObj}, {"t.ply", ply},
+                                   {"t.stl", stl}, {"t.off", off}}) {
+    INFO(name);
+    const Mesh m = load_mesh(write_temp(name, text));
+    CHECK(m.triangles.size() == 4);
+    CHECK(m.vertices.size() == 4);  // STL stores corners per face: welded back to 4
+    // Triangle 3 is the face opposite the origin in every file.
+    for (int c = 0; c < 3; ++c) CHECK(m.vertices[m.triangles[3][c]].sum() == 1.0);
+  }
+}
+
+TEST_CASE("the fixture meshes load with the sizes their provenance states", "[io]") {
+  const std::string dir = std::string(PEELCD_FIXTURES) + "/meshes/";
+  const Mesh bunny = load_mesh(dir + "bunny_3k.obj");
+  CHECK(bunny.triangles.size() == 3000);
+  CHECK(bunny.vertices.size() == 1502);
+  const Mesh dragon = load_mesh(dir + "dragon_3k.obj");
+  CHECK(dragon.triangles.size() == 3398);
+  CHECK(dragon.vertices.size() == 1699);
+  // Material switches (usemtl) split assimp's meshes; the triangles still come in file order.
+  const Mesh raptor = load_mesh(dir + "velociraptor.obj");
+  CHECK(raptor.triangles.size() == 1248);
+  CHECK(raptor.vertices.size() == 626);
+}
+
+TEST_CASE("bad mesh files give an error that names the file and the problem", "[io]") {
+  const fs::path dir = fs::temp_directory_path() / "peelcd_test_io";
+  fs::create_directories(dir / "a_folder.obj");
+  require_input_error((dir / "missing.obj").string(), "no such file");
+  require_input_error((dir / "a_folder.obj").string(), "is a directory");
+  require_input_error(write_temp("empty.obj", ""), "the file is empty");
+  require_input_error(write_temp("garbled.ply", "ply\nformat ascii 1.0\nelement vertex 3\nend_header\n0 0\n"), "cannot read");
+  require_input_error(write_temp("unknown.xyz123", "hello"), "cannot read");
+  require_input_error(write_temp("lines.obj", "v 0 0 0\nv 1 0 0\nl 1 2\n"), "no triangles");
+  require_input_error(write_temp("nan.obj", "v 0 0 0\nv nan 0 0\nv 0 1 0\nf 1 2 3\n"), "NaN or infinite");
+}
