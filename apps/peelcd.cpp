@@ -22,7 +22,7 @@ constexpr int kExitBadInput = 2;
 
 struct DetectArgs {
   std::string scene;
-  int res = -1;
+  int res = 0;  // 0 = not given
   std::string ids, peel;
   double slope = NAN;
   double theta = NAN, phi = NAN, epsilon = NAN;
@@ -35,7 +35,7 @@ struct DetectArgs {
 // Command-line values override the scene file's.
 DetectOptions merged_options(const Scene& scene, const DetectArgs& a) {
   DetectOptions o = scene.options;
-  if (a.res >= 0) o.resolution = a.res;
+  if (a.res > 0) o.resolution = a.res;
   if (!a.ids.empty()) {
     const auto m = parse_id_mode(a.ids);
     if (!m) throw InputError("peelcd detect: --ids: unknown ID mode \"" + a.ids + "\" (expected paper or unique)");
@@ -46,19 +46,10 @@ DetectOptions merged_options(const Scene& scene, const DetectArgs& a) {
     if (!m) throw InputError("peelcd detect: --peel: unknown peel mode \"" + a.peel + "\" (expected full or alternate)");
     o.peel = *m;
   }
-  if (!std::isnan(a.slope)) {
-    if (!(a.slope >= 0) || !std::isfinite(a.slope)) throw InputError("peelcd detect: --slope must be a number >= 0");
-    o.slope = a.slope;
-  }
+  if (!std::isnan(a.slope)) o.slope = a.slope;
   if (!std::isnan(a.theta)) o.theta = a.theta;
-  if (!std::isnan(a.phi)) {
-    if (a.phi < -90 || a.phi > 90) throw InputError("peelcd detect: --phi must be within [-90, 90]");
-    o.phi = a.phi;
-  }
-  if (!std::isnan(a.epsilon)) {
-    if (!(a.epsilon > 0) || !std::isfinite(a.epsilon)) throw InputError("peelcd detect: --epsilon must be a positive number");
-    o.epsilon = a.epsilon;
-  }
+  if (!std::isnan(a.phi)) o.phi = a.phi;
+  if (!std::isnan(a.epsilon)) o.epsilon = a.epsilon;
   return o;
 }
 
@@ -160,15 +151,19 @@ int main(int argc, char** argv) {
       "detect", "Run one frame of collision detection on a scene file and report the colliding "
                 "triangle pairs (indices in each mesh file's triangle order)");
   detect->add_option("scene", d.scene, "Scene JSON file")->required();
-  detect->add_option("--res", d.res, "Forced N x N texture per ROI (default: share a 512^2 budget)");
+  detect->add_option("--res", d.res, "Forced N x N texture per ROI (default: share a 512^2 budget)")
+      ->check(CLI::PositiveNumber);
   detect->add_option("--ids", d.ids, "Triangle ID mode: paper (last-vertex IDs, T(v) sets) or unique");
   detect->add_option("--peel", d.peel, "Peel mode: full (every surface, default) or alternate (the paper's)");
-  detect->add_option("--slope", d.slope, "Slope-following epsilon, in texels (default 1; 0 = the paper's constant epsilon)");
+  detect->add_option("--slope", d.slope, "Slope-following epsilon, in texels (default 1; 0 = the paper's constant epsilon)")
+      ->check(CLI::NonNegativeNumber);
   detect->add_option("--theta", d.theta, "View longitude, degrees");
-  detect->add_option("--phi", d.phi, "View latitude, degrees, in [-90, 90]");
-  detect->add_option("--epsilon", d.epsilon, "PCS depth threshold in world units (default: one texel)");
+  detect->add_option("--phi", d.phi, "View latitude, degrees, in [-90, 90]")->check(CLI::Range(-90.0, 90.0));
+  detect->add_option("--epsilon", d.epsilon, "PCS depth threshold in world units (default: one texel)")
+      ->check(CLI::PositiveNumber);
   detect->add_option("--json", d.json_out, "Write the JSON report to FILE, or - for stdout");
-  detect->add_option("--repeat", d.repeat, "Run the frame N times and report median timings");
+  detect->add_option("--repeat", d.repeat, "Run the frame N times and report median timings")
+      ->check(CLI::PositiveNumber);
   detect->add_flag("--check", d.check, "Also run the exact all-pairs reference and print the miss ratio");
   detect->add_flag("--quiet", d.quiet, "No human summary");
 

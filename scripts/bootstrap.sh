@@ -1,0 +1,27 @@
+#!/usr/bin/env bash
+# Installs peelcd's build dependencies (Debian 12 packages; idempotent), then configures and
+# builds it in ./build (Release). Run as root, or with sudo available.
+set -euo pipefail
+cd "$(dirname "$0")/.."
+
+packages=(
+  build-essential cmake pkg-config python3-glad   # toolchain, glad 2 (GL loader generator)
+  libosmesa6-dev                                  # OSMesa: the software GL reference backend
+  libeigen3-dev libcgal-dev libgmp-dev libmpfr-dev libboost-dev   # geometry, exact predicates
+  libassimp-dev nlohmann-json3-dev libcli11-dev    # mesh files, scene JSON, command line
+  catch2                                           # tests (Catch2 v2)
+)
+missing=()
+for p in "${packages[@]}"; do
+  dpkg-query -W -f='${Status}' "$p" 2>/dev/null | grep -q "install ok installed" || missing+=("$p")
+done
+if [ ${#missing[@]} -gt 0 ]; then
+  sudo_cmd=""
+  [ "$(id -u)" -ne 0 ] && sudo_cmd="sudo"
+  echo "bootstrap: installing ${missing[*]}"
+  $sudo_cmd apt-get update -q
+  DEBIAN_FRONTEND=noninteractive $sudo_cmd apt-get install -y -q --no-install-recommends "${missing[@]}"
+fi
+
+cmake -S . -B build -DCMAKE_BUILD_TYPE=Release
+cmake --build build -j "$(nproc)"
