@@ -1,5 +1,6 @@
 // peelcd: image-space collision detection through alternate surface peeling.
 #include "core/reference.h"
+#include "eval/sweep.h"
 #include "gl/pipeline.h"
 #include "gl_osmesa/osmesa_context.h"
 #include "io/error.h"
@@ -10,9 +11,11 @@
 
 #include <algorithm>
 #include <cstdio>
+#include <cstdlib>
 #include <filesystem>
 #include <fstream>
 #include <iostream>
+#include <unistd.h>
 
 namespace {
 
@@ -28,6 +31,7 @@ struct DetectArgs {
   double theta = NAN, phi = NAN, epsilon = NAN;
   std::string json_out;
   int repeat = 1;
+  int views = 0;  // 0 = not given
   bool check = false;
   bool quiet = false;
 };
@@ -38,7 +42,7 @@ DetectOptions merged_options(const Scene& scene, const DetectArgs& a) {
   if (a.res > 0) o.resolution = a.res;
   if (!a.ids.empty()) {
     const auto m = parse_id_mode(a.ids);
-    if (!m) throw InputError("peelcd detect: --ids: unknown ID mode \"" + a.ids + "\" (expected paper or unique)");
+    if (!m) throw InputError("peelcd detect: --ids: unknown ID mode \"" + a.ids + "\" (expected paper, ring or unique)");
     o.ids = *m;
   }
   if (!a.peel.empty()) {
@@ -47,6 +51,7 @@ DetectOptions merged_options(const Scene& scene, const DetectArgs& a) {
     o.peel = *m;
   }
   if (!std::isnan(a.slope)) o.slope = a.slope;
+  if (a.views) o.views = a.views;
   if (!std::isnan(a.theta)) o.theta = a.theta;
   if (!std::isnan(a.phi)) o.phi = a.phi;
   if (!std::isnan(a.epsilon)) o.epsilon = a.epsilon;
@@ -103,8 +108,8 @@ int run_detect(const DetectArgs& a) {
 
   if (!a.quiet) {
     std::printf("peelcd detect: %s  (%zu objects, %s)\n", a.scene.c_str(), objects.size(), result.renderer.c_str());
-    std::printf("view theta=%g phi=%g  ids=%s  peel=%s  slope=%g\n", opt.theta, opt.phi, to_string(opt.ids),
-                to_string(opt.peel), opt.slope);
+    std::printf("view theta=%g phi=%g  views=%d  ids=%s  peel=%s  slope=%g\n", opt.theta, opt.phi, opt.views,
+                to_string(opt.ids), to_string(opt.peel), opt.slope);
     if (result.pairs.empty()) std::printf("no overlapping bounding boxes: no GL work\n");
     for (const PairResult& p : result.pairs) {
       std::printf("%s x %s: ROI %dx%d, eps %.3g, drawn %zu+%zu tris, %d layers, %zu PCS, %zu candidates, %zu colliding\n",
@@ -140,6 +145,89 @@ int run_detect(const DetectArgs& a) {
   return 0;
 }
 
+struct SweepArgs {
+  std::string scene;
+  std::vector<int> res = {128, 256};
+  std::vector<std::string> ids = {"unique", "paper"};
+  std::vector<std::string> modes = {"paper", "full"};
+  std::vector<double> slopes = {1.0};
+  std::vector<int> views = {1};
+  double theta_step = 30, phi_step = 10;
+  std::string csv, plot;
+};
+
+// A terminal-aware progress bar on stderr: redrawn in place on a terminal, silent otherwise.
+struct Progress {
+  bool tty = isatty(STDERR_FILENO);
+  void operator()(std::size_t done, std::size_t total) const {
+    if (!tty) return;
+    const int width = 40, filled = int(width * done / std::max<std::size_t>(total, 1));
+    std::fprintf(stderr, "\r[%s%s] %zu/%zu frames", std::string(filled, '#').c_str(),
+                 std::string(width - filled, ' ').c_str(), done, total);
+    if (done == total) std::fprintf(stderr, "\n");
+  }
+};
+
+int run_sweep_command(const SweepArgs& a) {
+  const Scene scene = load_scene(a.scene);
+  const std::vector<Object> objects = load_objects(scene);
+  std::vector<SweepConfig> configs;
+  for (int res : a.res)
+    for (const std::string& ids_name : a.ids) {
+      const auto ids = parse_id_mode(ids_name);
+      if (!ids) throw InputError("peelcd sweep: --ids: unknown ID mode \"" + ids_name + "\" (expected paper, ring or unique)");
+      for (const std::string& mode : a.modes) {
+        if (mode != "paper" && mode != "alternate" && mode != "full")
+          throw InputError("peelcd sweep: --mode: unknown mode \"" + mode + "\" (expected paper, alternate or full)");
+        for (int views : a.views)
+          for (double slope : mode == "paper" ? std::vector<double>{0.0} : a.slopes) {
+            SweepConfig c;
+            c.resolution = res;
+            c.ids = *ids;
+            c.peel = mode == "full" ? PeelMode::full : PeelMode::alternate;
+            c.slope = slope;
+            c.views = views;
+            configs.push_back(c);
+          }
+      }
+    }
+  const auto directions = sweep_directions(a.theta_step, a.phi_step);
+  gl::OsmesaContext context;
+  gl::Pipeline pipeline(context);
+  for (int res : a.res)
+    if (res > pipeline.max_resolution())
+      throw InputError("peelcd sweep: --res " + std::to_string(res) + " is above GL_MAX_TEXTURE_SIZE " +
+                       std::to_string(pipeline.max_resolution()));
+  const auto rows = run_sweep(pipeline, objects, configs, directions, Progress{});
+
+  std::printf("sweep: %s, %zu views per configuration (theta step %g, phi step %g), %s\n", a.scene.c_str(),
+              directions.size(), a.theta_step, a.phi_step, pipeline.renderer().c_str());
+  std::printf("%-34s %9s %9s %9s %6s %11s %6s %11s %11s\n", "configuration", "avg miss", "max miss", "min miss",
+              "false", "candidates", "eff", "median ms", "mean ms");
+  for (std::size_t c = 0; c < configs.size(); ++c) {
+    const SweepSummary s = summarize(rows, c);
+    std::printf("%-34s %8.2f%% %8.2f%% %8.2f%% %6zu %11.0f %5.1f%% %11.2f %11.2f\n", configs[c].label().c_str(),
+                100 * s.avg_miss, 100 * s.max_miss, 100 * s.min_miss, s.false_contacts, s.mean_candidates,
+                100 * s.mean_efficiency, s.median_total_ms, s.mean_total_ms);
+  }
+  std::string csv_path = a.csv;
+  if (csv_path.empty() && !a.plot.empty()) {
+    std::filesystem::create_directories(a.plot);
+    csv_path = a.plot + "/sweep.csv";
+  }
+  if (!csv_path.empty()) write_output(csv_path, sweep_csv(rows, configs));
+  if (!a.plot.empty()) {
+    std::filesystem::create_directories(a.plot);
+    // Debian's interpreter, where python3-matplotlib lives, unless PYTHON names another.
+    const char* python = std::getenv("PYTHON");
+    const std::string py = python ? python : (std::filesystem::exists("/usr/bin/python3") ? "/usr/bin/python3" : "python3");
+    const std::string cmd = "'" + py + "' '" + std::string(PEELCD_SCRIPTS_DIR) + "/plot_sweep.py' '" + csv_path + "' '" + a.plot + "'";
+    if (std::system(cmd.c_str()) != 0)
+      throw InputError("peelcd sweep: plotting failed (needs python3-matplotlib): " + cmd);
+  }
+  return 0;
+}
+
 }  // namespace
 
 int main(int argc, char** argv) {
@@ -153,10 +241,12 @@ int main(int argc, char** argv) {
   detect->add_option("scene", d.scene, "Scene JSON file")->required();
   detect->add_option("--res", d.res, "Forced N x N texture per ROI (default: share a 512^2 budget)")
       ->check(CLI::PositiveNumber);
-  detect->add_option("--ids", d.ids, "Triangle ID mode: paper (last-vertex IDs, T(v) sets) or unique");
+  detect->add_option("--ids", d.ids, "Triangle ID mode: paper (last-vertex IDs, T(v) sets), ring (last vertex, whole one-ring) or unique");
   detect->add_option("--peel", d.peel, "Peel mode: full (every surface, default) or alternate (the paper's)");
   detect->add_option("--slope", d.slope, "Slope-following epsilon, in texels (default 1; 0 = the paper's constant epsilon)")
       ->check(CLI::NonNegativeNumber);
+  detect->add_option("--views", d.views, "Views fused per ROI: 1 (default) or 3 (three orthogonal views)")
+      ->check(CLI::IsMember({1, 3}));
   detect->add_option("--theta", d.theta, "View longitude, degrees");
   detect->add_option("--phi", d.phi, "View latitude, degrees, in [-90, 90]")->check(CLI::Range(-90.0, 90.0));
   detect->add_option("--epsilon", d.epsilon, "PCS depth threshold in world units (default: one texel)")
@@ -166,6 +256,30 @@ int main(int argc, char** argv) {
       ->check(CLI::PositiveNumber);
   detect->add_flag("--check", d.check, "Also run the exact all-pairs reference and print the miss ratio");
   detect->add_flag("--quiet", d.quiet, "No human summary");
+
+  SweepArgs sw;
+  CLI::App* sweep = app.add_subcommand(
+      "sweep", "Measure accuracy and run time over view directions and configurations against the "
+               "exact reference; prints a summary per configuration (average/max/min miss ratio)");
+  sweep->add_option("scene", sw.scene, "Scene JSON file")->required();
+  sweep->add_option("--res", sw.res, "Resolutions (comma-separated)")->delimiter(',')->check(CLI::PositiveNumber)
+      ->capture_default_str();
+  sweep->add_option("--ids", sw.ids, "ID modes: unique, paper, ring (comma-separated)")->delimiter(',')
+      ->capture_default_str();
+  sweep->add_option("--mode", sw.modes,
+                    "Modes: paper (alternate peeling, constant epsilon: the paper), alternate (alternate "
+                    "peeling, slope epsilon), full (full peeling, slope epsilon)")
+      ->delimiter(',')->capture_default_str();
+  sweep->add_option("--slope", sw.slopes, "Slope-epsilon factors for the non-paper modes")->delimiter(',')
+      ->check(CLI::NonNegativeNumber)->capture_default_str();
+  sweep->add_option("--views", sw.views, "Fused views per ROI: 1 and/or 3")->delimiter(',')
+      ->check(CLI::IsMember({1, 3}))->capture_default_str();
+  sweep->add_option("--theta-step", sw.theta_step, "Longitude step, degrees")->check(CLI::Range(1.0, 360.0))
+      ->capture_default_str();
+  sweep->add_option("--phi-step", sw.phi_step, "Latitude step, degrees")->check(CLI::Range(1.0, 90.0))
+      ->capture_default_str();
+  sweep->add_option("--csv", sw.csv, "Write one row per (configuration, view) to FILE, or - for stdout");
+  sweep->add_option("--plot", sw.plot, "Write heat maps and the run-time-against-miss-ratio plot to DIR (matplotlib)");
 
   try {
     app.parse(argc, argv);
@@ -179,6 +293,7 @@ int main(int argc, char** argv) {
   }
   try {
     if (*detect) return run_detect(d);
+    if (*sweep) return run_sweep_command(sw);
   } catch (const InputError& e) {
     std::fprintf(stderr, "error: %s\n", e.what());
     return kExitBadInput;

@@ -1,5 +1,7 @@
 #include "core/frame.h"
 
+#include "core/view.h"
+
 #include <algorithm>
 #include <stdexcept>
 
@@ -11,6 +13,13 @@ std::optional<PeelMode> parse_peel_mode(const std::string& text) {
   if (text == "full") return PeelMode::full;
   if (text == "alternate" || text == "paper") return PeelMode::alternate;
   return std::nullopt;
+}
+
+std::vector<ViewFrame> fused_view_frames(const DetectOptions& o) {
+  const ViewFrame f = view_frame(o.theta, o.phi);
+  if (o.views == 1) return {f};
+  if (o.views == 3) return {f, ViewFrame{f.v, f.d, f.u}, ViewFrame{f.d, f.u, f.v}};
+  throw std::invalid_argument("peelcd: views must be 1 or 3");
 }
 
 int tile_resolution(int budget, std::size_t roi_count) {

@@ -3,6 +3,7 @@
 #include "core/aabb.h"
 #include "core/id_map.h"
 #include "core/narrow_phase.h"
+#include "core/view.h"
 
 #include <optional>
 #include <string>
@@ -16,19 +17,27 @@ enum class PeelMode { alternate, full };
 const char* to_string(PeelMode mode);
 std::optional<PeelMode> parse_peel_mode(const std::string& text);
 
+// Defaults chosen on the accuracy sweeps of docs/accuracy.md (the paper's own configuration is
+// ids = paper, peel = alternate, slope = 0, views = 1).
 struct DetectOptions {
   double theta = 0.0;  // view longitude, degrees
   double phi = 0.0;    // view latitude, degrees
   int resolution = 0;  // forced N x N tile per ROI; 0 = share the budget (tile_resolution())
   int budget = 512;    // the frame's texture budget is budget x budget texels
-  IdMode ids = IdMode::paper;
+  IdMode ids = IdMode::ring;
   double epsilon = 0.0;  // PCS depth threshold, world units; 0 = one texel of the ROI tile
-  PeelMode peel = PeelMode::full;
+  PeelMode peel = PeelMode::alternate;
   // Slope-following epsilon: a texel pair is a PCS when |dz| < epsilon + slope * (|dzdx_k+1 -
   // dzdx_k| + |dzdy_k+1 - dzdy_k|), i.e. when the two surfaces' planes meet within `slope`
   // texels of the texel centre. 0 = the paper's constant epsilon.
   double slope = 1.0;
+  // Views fused per ROI: 1 = d(theta, phi) only; 3 = d and the frame's u and v axes (three
+  // orthogonal views); the PCS of all views are united before the narrow phase.
+  int views = 3;
 };
+
+// The view frames a ROI is peeled along for `options` (1 or 3 of them).
+std::vector<ViewFrame> fused_view_frames(const DetectOptions& options);
 
 // Side of each ROI's tile when `roi_count` ROIs share a budget x budget texture: the largest
 // power-of-two fraction of `budget` such that the tiles fit (1 ROI: budget; 2-4: budget/2; ...),
@@ -42,8 +51,8 @@ struct PairResult {
   double epsilon = 0.0;                    // world units
   bool a_first = false;                    // A was peeled first (it was the farther one)
   std::size_t triangles_drawn_a = 0, triangles_drawn_b = 0;
-  int layers = 0;                          // non-empty logical layers peeled
-  int passes = 0;                          // peel passes drawn (layers + the final empty one)
+  int layers = 0;                          // non-empty logical layers peeled (most of any view)
+  int passes = 0;                          // peel passes drawn (layers + the final empty one), all views
   std::size_t pcs_count = 0;               // distinct ID pairs read back
   std::vector<IdPair> pcs;                 // those pairs (ID of A, ID of B), sorted
   std::size_t candidates = 0;              // distinct triangle pairs tested on the CPU

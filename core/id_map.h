@@ -3,6 +3,8 @@
 //   unique: ID = triangle index; it stands for that triangle only.
 //   paper:  flat shading with the last vertex provoking; ID = index of the triangle's last
 //           vertex v, standing for T(v) = every triangle whose last vertex is v.
+//   ring:   the same ID (last vertex v), standing for the whole one-ring of v: every triangle
+//           that has v as any of its corners (a larger neighbourhood, more candidates).
 #include "core/mesh.h"
 
 #include <optional>
@@ -11,7 +13,7 @@
 
 namespace peelcd {
 
-enum class IdMode { unique, paper };
+enum class IdMode { unique, paper, ring };
 
 const char* to_string(IdMode mode);
 std::optional<IdMode> parse_id_mode(const std::string& text);

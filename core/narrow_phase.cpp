@@ -7,6 +7,7 @@
 #include <CGAL/Exact_predicates_inexact_constructions_kernel.h>
 #include <CGAL/intersections.h>
 
+#include <algorithm>
 #include <cmath>
 
 #include <variant>
@@ -78,17 +79,29 @@ void collect_exact(const EK::Segment_3&, const EK::Point_3& b, std::vector<Vec3>
 void collect_exact(const EK::Point_3& a, const EK::Triangle_3&, std::vector<Vec3>& pts) { Collect{pts}(a); }
 void collect_exact(const EK::Triangle_3&, const EK::Point_3& b, std::vector<Vec3>& pts) { Collect{pts}(b); }
 
-// The part of triangle `t` on the plane n.x = c, as the two extreme points along `dir`.
-// Returns false if the triangle does not reach the plane (rounding can say so for a graze).
-bool cut_by_plane(const TriangleCorners& t, const Vec3& n, double c, const Vec3& dir, Vec3& lo, Vec3& hi) {
+// The part of triangle `t` on the plane of triangle `plane`, as the two extreme points along
+// `dir`. Which corners lie on, above or below the plane is decided with exact orientation
+// predicates; only the crossing points of straddling edges are interpolated in double (with the
+// plane n.x = c), clamped to their edge. Returns false if the triangle does not reach the plane.
+bool cut_by_plane(const TriangleCorners& t, const TriangleCorners& plane, const Vec3& n, double c, const Vec3& dir,
+                  Vec3& lo, Vec3& hi) {
+  const P3 q0 = to_cgal(plane[0]), q1 = to_cgal(plane[1]), q2 = to_cgal(plane[2]);
+  CGAL::Orientation side[3];
   double d[3];
-  for (int i = 0; i < 3; ++i) d[i] = n.dot(t[i]) - c;
+  for (int i = 0; i < 3; ++i) {
+    side[i] = CGAL::orientation(q0, q1, q2, to_cgal(t[i]));
+    d[i] = n.dot(t[i]) - c;
+  }
   Vec3 pts[6];
   int count = 0;
   for (int i = 0; i < 3; ++i) {
     const int j = (i + 1) % 3;
-    if (d[i] == 0.0) pts[count++] = t[i];
-    if ((d[i] < 0 && d[j] > 0) || (d[i] > 0 && d[j] < 0)) pts[count++] = t[i] + (t[j] - t[i]) * (d[i] / (d[i] - d[j]));
+    if (side[i] == CGAL::ZERO) pts[count++] = t[i];
+    if (side[i] != CGAL::ZERO && side[j] != CGAL::ZERO && side[i] != side[j]) {
+      const double denom = d[i] - d[j];
+      const double r = denom != 0.0 ? std::clamp(d[i] / denom, 0.0, 1.0) : 0.5;
+      pts[count++] = t[i] + (t[j] - t[i]) * r;
+    }
   }
   if (count == 0) return false;
   lo = hi = pts[0];
@@ -106,7 +119,7 @@ bool crossing_segment(const TriangleCorners& a, const TriangleCorners& b, Vec3& 
   const Vec3 dir = na.cross(nb);
   if (!(dir.squaredNorm() > 0.0)) return false;
   Vec3 alo, ahi, blo, bhi;
-  if (!cut_by_plane(a, nb, nb.dot(b[0]), dir, alo, ahi) || !cut_by_plane(b, na, na.dot(a[0]), dir, blo, bhi))
+  if (!cut_by_plane(a, b, nb, nb.dot(b[0]), dir, alo, ahi) || !cut_by_plane(b, a, na, na.dot(a[0]), dir, blo, bhi))
     return false;
   p = alo.dot(dir) > blo.dot(dir) ? alo : blo;  // the later start
   q = ahi.dot(dir) < bhi.dot(dir) ? ahi : bhi;  // the earlier end
@@ -115,6 +128,35 @@ bool crossing_segment(const TriangleCorners& a, const TriangleCorners& b, Vec3& 
 }
 
 }  // namespace
+
+const char* to_string(ContactKind kind) {
+  switch (kind) {
+    case ContactKind::crossing: return "crossing";
+    case ContactKind::touching: return "touching";
+    case ContactKind::coplanar: return "coplanar";
+    case ContactKind::degenerate: return "degenerate";
+  }
+  return "?";
+}
+
+ContactKind classify_contact(const TriangleCorners& a, const TriangleCorners& b) {
+  const P3 pa[3] = {to_cgal(a[0]), to_cgal(a[1]), to_cgal(a[2])};
+  const P3 pb[3] = {to_cgal(b[0]), to_cgal(b[1]), to_cgal(b[2])};
+  if (CGAL::collinear(pa[0], pa[1], pa[2]) || CGAL::collinear(pb[0], pb[1], pb[2])) return ContactKind::degenerate;
+  // Which sides of `plane` the corners of `t` are on: bit 0 = negative, bit 1 = positive.
+  const auto sides = [](const P3* plane, const P3* t) {
+    int s = 0;
+    for (int i = 0; i < 3; ++i) {
+      const CGAL::Orientation o = CGAL::orientation(plane[0], plane[1], plane[2], t[i]);
+      if (o == CGAL::NEGATIVE) s |= 1;
+      if (o == CGAL::POSITIVE) s |= 2;
+    }
+    return s;
+  };
+  const int sb = sides(pa, pb), sa = sides(pb, pa);
+  if (sb == 0) return ContactKind::coplanar;  // every corner of B on A's plane
+  return sa == 3 && sb == 3 ? ContactKind::crossing : ContactKind::touching;
+}
 
 bool triangles_intersect(const TriangleCorners& a, const TriangleCorners& b) {
   const Simplex sa = simplex(a), sb = simplex(b);
@@ -129,8 +171,14 @@ std::pair<Vec3, Vec3> intersection_segment(const TriangleCorners& a, const Trian
     const bool coplanar = CGAL::coplanar(ta[0], ta[1], ta[2], to_cgal(b[0])) &&
                           CGAL::coplanar(ta[0], ta[1], ta[2], to_cgal(b[1])) &&
                           CGAL::coplanar(ta[0], ta[1], ta[2], to_cgal(b[2]));
+    // The double construction is ill-conditioned for planes within 1e-6 rad of parallel, and
+    // for needles (an angle under 1e-6 rad), whose normals rounding can turn anywhere.
+    const Vec3 a1 = a[1] - a[0], a2 = a[2] - a[0], b1 = b[1] - b[0], b2 = b[2] - b[0];
+    const Vec3 na = a1.cross(a2), nb = b1.cross(b2);
+    const bool steep_enough = na.norm() > 1e-6 * a1.norm() * a2.norm() && nb.norm() > 1e-6 * b1.norm() * b2.norm() &&
+                              na.cross(nb).norm() > 1e-6 * na.norm() * nb.norm();
     Vec3 p, q;
-    if (!coplanar && crossing_segment(a, b, p, q)) return {p, q};
+    if (!coplanar && steep_enough && crossing_segment(a, b, p, q)) return {p, q};
   }
   // Coplanar overlaps, degenerate triangles, and grazes that rounding lost: exact constructions.
   const CGAL::Cartesian_converter<K, EK> to_exact;
@@ -168,6 +216,7 @@ void narrow_phase(const Mesh& a, const Mesh& b, const std::vector<std::uint64_t>
     contact.tri_a = ta;
     contact.tri_b = tb;
     std::tie(contact.p, contact.q) = intersection_segment(ca, cb);
+    contact.kind = classify_contact(ca, cb);
     out.push_back(contact);
   }
 }

@@ -12,9 +12,20 @@ namespace peelcd {
 
 using TriangleCorners = std::array<Vec3, 3>;
 
+// How two intersecting triangles meet, decided with exact predicates:
+//   crossing:   each triangle has corners strictly on both sides of the other's plane (they
+//               penetrate);
+//   touching:   not coplanar, and one triangle lies on one closed side of the other's plane
+//               (contact without penetration: a vertex, an edge or a face resting on the other);
+//   coplanar:   all six corners in one plane, overlapping;
+//   degenerate: one of the triangles has no area (collinear or repeated corners).
+enum class ContactKind { crossing, touching, coplanar, degenerate };
+const char* to_string(ContactKind kind);
+
 struct Contact {
   std::uint32_t tri_a = 0, tri_b = 0;  // triangle indices in A's and B's file order
   Vec3 p = Vec3::Zero(), q = Vec3::Zero();  // intersection segment (p == q for a point)
+  ContactKind kind = ContactKind::crossing;
 };
 
 inline TriangleCorners corners(const Mesh& m, std::uint32_t t) {
@@ -22,6 +33,9 @@ inline TriangleCorners corners(const Mesh& m, std::uint32_t t) {
 }
 
 bool triangles_intersect(const TriangleCorners& a, const TriangleCorners& b);
+
+// Kind of contact of two intersecting triangles (undefined if they are disjoint).
+ContactKind classify_contact(const TriangleCorners& a, const TriangleCorners& b);
 
 // Segment of the intersection of two intersecting triangles. For a coplanar overlap (a
 // polygon) it is the polygon's longest chord among its vertices. Undefined if they are disjoint.

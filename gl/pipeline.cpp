@@ -61,7 +61,7 @@ struct Pipeline::Impl {
 
   // Scratch reused across ROIs and frames (no allocation in steady state).
   std::vector<GpuVertex> staging[2];
-  std::vector<IdPair> pcs;
+  std::vector<IdPair> pcs, pcs_all;
   std::vector<std::uint64_t> candidates;
 
   explicit Impl(Context& ctx) : context(ctx) {
@@ -337,6 +337,8 @@ FrameResult Pipeline::detect(const std::vector<Object>& objects, const DetectOpt
   if (opt.resolution == 0 && (opt.budget <= 0 || opt.budget > s.max_texture))
     throw std::invalid_argument("peelcd::gl::Pipeline::detect(): budget " + std::to_string(opt.budget) +
                                 " is outside 1.." + std::to_string(s.max_texture));
+  if (opt.views != 1 && opt.views != 3)
+    throw std::invalid_argument("peelcd::gl::Pipeline::detect(): views must be 1 or 3");
   if (!(opt.slope >= 0.0) || !std::isfinite(opt.slope))
     throw std::invalid_argument("peelcd::gl::Pipeline::detect(): slope must be finite and >= 0");
   if (!(opt.epsilon >= 0.0) || !std::isfinite(opt.epsilon))
@@ -356,7 +358,7 @@ FrameResult Pipeline::detect(const std::vector<Object>& objects, const DetectOpt
 
   if (!pairs.empty()) s.context.make_current();
   const int n = opt.resolution > 0 ? opt.resolution : tile_resolution(opt.budget, pairs.size());
-  const ViewFrame frame = view_frame(opt.theta, opt.phi);
+  const std::vector<ViewFrame> frames = fused_view_frames(opt);
 
   for (const auto& [ia, ib] : pairs) {
     PairResult r;
@@ -366,35 +368,49 @@ FrameResult Pipeline::detect(const std::vector<Object>& objects, const DetectOpt
     r.resolution = n;
     const Mesh& ma = objects[ia].mesh;
     const Mesh& mb = objects[ib].mesh;
-    const RoiView view = make_padded_roi_view(r.roi, boxes[ia], boxes[ib], frame, n);
-    r.epsilon = opt.epsilon > 0.0 ? opt.epsilon : view.texel();
+    std::vector<IdPair>& all_pcs = s.pcs_all;
+    all_pcs.clear();
+    for (std::size_t v = 0; v < frames.size(); ++v) {
+      const RoiView view = make_padded_roi_view(r.roi, boxes[ia], boxes[ib], frames[v], n);
+      if (v == 0) r.epsilon = opt.epsilon > 0.0 ? opt.epsilon : view.texel();
 
-    t0 = Clock::now();
-    const double min_a = s.gather(ma, view, opt.ids, s.staging[0]);
-    const double min_b = s.gather(mb, view, opt.ids, s.staging[1]);
-    r.triangles_drawn_a = s.staging[0].size() / 3;
-    r.triangles_drawn_b = s.staging[1].size() / 3;
-    r.a_first = min_a > min_b;  // the farther object first; ties: B first
-    if (r.triangles_drawn_a == 0 || r.triangles_drawn_b == 0) {
+      t0 = Clock::now();
+      // Each view gathers its own triangles: the pad follows that view's texel size.
+      const double min_a = s.gather(ma, view, opt.ids, s.staging[0]);
+      const double min_b = s.gather(mb, view, opt.ids, s.staging[1]);
+      if (v == 0) {
+        r.triangles_drawn_a = s.staging[0].size() / 3;
+        r.triangles_drawn_b = s.staging[1].size() / 3;
+        r.a_first = min_a > min_b;  // the farther object first; ties: B first
+      }
+      if (s.staging[0].empty() || s.staging[1].empty()) {
+        out.timings.upload += ms_since(t0);
+        continue;  // one object has nothing in the ROI: no contact possible, no GL work
+      }
+      s.upload(0);
+      s.upload(1);
       out.timings.upload += ms_since(t0);
-      out.pairs.push_back(std::move(r));
-      continue;  // one object has nothing in the ROI: no contact possible, no GL work
-    }
-    s.upload(0);
-    s.upload(1);
-    out.timings.upload += ms_since(t0);
 
-    while (!s.peel(view, r.epsilon, opt, r.a_first ? 0 : 1, r, out.timings)) {
+      PairResult one;
+      while (!s.peel(view, r.epsilon, opt, min_a > min_b ? 0 : 1, one, out.timings)) {
+      }
+      r.layers = std::max(r.layers, one.layers);
+      r.passes += one.passes;
+      all_pcs.insert(all_pcs.end(), s.pcs.begin(), s.pcs.end());
+    }
+    if (r.triangles_drawn_a == 0 || r.triangles_drawn_b == 0) {
+      out.pairs.push_back(std::move(r));
+      continue;
     }
 
     t0 = Clock::now();
-    std::sort(s.pcs.begin(), s.pcs.end());
-    s.pcs.erase(std::unique(s.pcs.begin(), s.pcs.end()), s.pcs.end());
-    r.pcs_count = s.pcs.size();
-    r.pcs.assign(s.pcs.begin(), s.pcs.end());
+    std::sort(all_pcs.begin(), all_pcs.end());
+    all_pcs.erase(std::unique(all_pcs.begin(), all_pcs.end()), all_pcs.end());
+    r.pcs_count = all_pcs.size();
+    r.pcs.assign(all_pcs.begin(), all_pcs.end());
     const IdMap map_a(ma, opt.ids), map_b(mb, opt.ids);
     s.candidates.clear();
-    expand_pcs(s.pcs, map_a, map_b, s.candidates);
+    expand_pcs(all_pcs, map_a, map_b, s.candidates);
     r.candidates = s.candidates.size();
     narrow_phase(ma, mb, s.candidates, r.colliding);
     out.timings.cpu += ms_since(t0);

@@ -11,10 +11,11 @@ nlohmann::json to_json(const FrameResult& r, const std::vector<Object>& objects,
   json pairs = json::array();
   std::size_t total = 0;
   for (const PairResult& p : r.pairs) {
-    json colliding = json::array(), segments = json::array();
+    json colliding = json::array(), segments = json::array(), kinds = json::array();
     for (const Contact& c : p.colliding) {
       colliding.push_back({c.tri_a, c.tri_b});
       segments.push_back({vec(c.p), vec(c.q)});
+      kinds.push_back(to_string(c.kind));
     }
     total += p.colliding.size();
     pairs.push_back({{"a", objects[p.object_a].name},
@@ -29,13 +30,15 @@ nlohmann::json to_json(const FrameResult& r, const std::vector<Object>& objects,
                      {"pcs", p.pcs_count},
                      {"candidates", p.candidates},
                      {"colliding", colliding},
-                     {"segments", segments}});
+                     {"segments", segments},
+                     {"kinds", kinds}});
   }
   return {{"renderer", r.renderer},
           {"view", {{"theta", o.theta}, {"phi", o.phi}}},
           {"ids", to_string(o.ids)},
           {"peel", to_string(o.peel)},
           {"slope", o.slope},
+          {"views", o.views},
           {"pairs", pairs},
           {"colliding_pairs", total},
           {"gl_passes", r.gl_passes},

@@ -52,7 +52,7 @@ Scene parse_scene(const std::string& text, const std::string& path, const std::s
   } catch (const json::parse_error& e) {
     throw InputError("peelcd::load_scene(): '" + path + "': malformed JSON: " + e.what());
   }
-  c.only_keys(root, "the scene", {"objects", "view", "resolution", "budget", "ids", "epsilon", "peel", "slope"});
+  c.only_keys(root, "the scene", {"objects", "view", "resolution", "budget", "ids", "epsilon", "peel", "slope", "views"});
   Scene scene;
   scene.path = path;
   if (!root.contains("objects")) c.fail("the scene", "missing key \"objects\"");
@@ -108,7 +108,7 @@ Scene parse_scene(const std::string& text, const std::string& path, const std::s
   if (root.contains("ids")) {
     const std::string ids = c.string(root["ids"], "ids");
     const auto mode = parse_id_mode(ids);
-    if (!mode) c.fail("ids", "unknown ID mode \"" + ids + "\" (expected paper or unique)");
+    if (!mode) c.fail("ids", "unknown ID mode \"" + ids + "\" (expected paper, ring or unique)");
     opt.ids = *mode;
   }
   if (root.contains("epsilon")) {
@@ -120,6 +120,11 @@ Scene parse_scene(const std::string& text, const std::string& path, const std::s
     const auto mode = parse_peel_mode(peel);
     if (!mode) c.fail("peel", "unknown peel mode \"" + peel + "\" (expected full or alternate)");
     opt.peel = *mode;
+  }
+  if (root.contains("views")) {
+    const json& j = root["views"];
+    if (!j.is_number_integer() || (j.get<long long>() != 1 && j.get<long long>() != 3)) c.fail("views", "must be 1 or 3");
+    opt.views = j.get<int>();
   }
   if (root.contains("slope")) {
     opt.slope = c.number(root["slope"], "slope");

@@ -55,3 +55,15 @@ TEST_CASE("ID modes parse from their names only", "[ids]") {
   CHECK_FALSE(parse_id_mode("Paper").has_value());
   CHECK_FALSE(parse_id_mode("").has_value());
 }
+
+TEST_CASE("ring IDs stand for the whole one-ring of the last vertex", "[ids]") {
+  const Mesh m = fan();
+  const IdMap map(m, IdMode::ring);
+  CHECK(map.triangles(0) == std::vector<std::uint32_t>{0, 1, 2, 3});  // every triangle touches 0
+  CHECK(map.triangles(1) == std::vector<std::uint32_t>{0, 3});
+  CHECK(map.triangles(4) == std::vector<std::uint32_t>{2, 3});
+  CHECK(corner_id(m, 3, 2, IdMode::ring) == 1);  // same fragment ID as the paper's
+  Mesh degenerate = m;
+  degenerate.triangles.push_back({2, 2, 0});  // repeated corner: listed once
+  CHECK(IdMap(degenerate, IdMode::ring).triangles(2) == std::vector<std::uint32_t>{0, 1, 4});
+}

@@ -27,9 +27,12 @@ TEST_CASE("bunny vs dragon: the exact reference finds design.md's 228 pairs", "[
 }
 
 TEST_CASE("bunny vs dragon at 256^2, paper IDs: no false contact, miss ratio under 15% per view", "[bunny_dragon]") {
-  DetectOptions opt;  // default configuration: full peeling, slope-following epsilon
+  DetectOptions opt;  // one view, full peeling, slope-following epsilon, the paper's IDs
   opt.resolution = 256;
   opt.ids = IdMode::paper;
+  opt.peel = PeelMode::full;
+  opt.slope = 1.0;
+  opt.views = 1;
   for (const auto& [theta, phi] : kViews) {
     opt.theta = theta;
     opt.phi = phi;
@@ -50,6 +53,7 @@ TEST_CASE("bunny vs dragon: the paper's mode is reported, and full peeling's PCS
   paper.ids = IdMode::paper;
   paper.peel = PeelMode::alternate;
   paper.slope = 0.0;  // the paper: constant epsilon of one texel
+  paper.views = 1;
   for (const auto& [theta, phi] : kViews) {
     paper.theta = theta;
     paper.phi = phi;

@@ -20,7 +20,9 @@ struct Run {
   std::size_t pcs_differences = 0;             // |GPU PCS symmetric-difference CPU model PCS|
 };
 
-Run run(const Mesh& a, const Mesh& b, const DetectOptions& opt) {
+// One view (the CPU model peels one), whatever the options say.
+Run run(const Mesh& a, const Mesh& b, DetectOptions opt) {
+  opt.views = 1;
   const FrameResult f = osmesa_pipeline().detect(two(a, b), opt);
   REQUIRE(f.pairs.size() == 1);
   Run r;
@@ -55,6 +57,8 @@ TEST_CASE("OSMesa: two axis-aligned boxes crossing", "[gl]") {
   opt.phi = 20;
   opt.resolution = 128;
   opt.ids = IdMode::unique;
+  opt.peel = PeelMode::full;
+  opt.slope = 1.0;
 
   SECTION("full peeling: entry and exit layers, PCS on the rim, every contact longer than a texel found") {
     const Run r = run(a, b, opt);
@@ -118,6 +122,7 @@ TEST_CASE("OSMesa: an open quad through a closed mesh", "[gl]") {
   opt.theta = 75;
   opt.phi = -30;
   opt.resolution = 256;
+  opt.peel = PeelMode::full;
   const Run r = run(ball, quad, opt);
   CHECK(r.gpu.triangles_drawn_b == 2);
   CHECK(r.gpu.layers == 3);  // front of the ball, the quad, back of the ball

@@ -26,7 +26,10 @@ TEST_CASE("a scene with only objects takes every default", "[scene]") {
   const DetectOptions d;
   CHECK(s.options.resolution == d.resolution);
   CHECK(s.options.budget == 512);
-  CHECK(s.options.ids == IdMode::paper);
+  CHECK(s.options.ids == d.ids);
+  CHECK(s.options.peel == d.peel);
+  CHECK(s.options.views == d.views);
+  CHECK(s.options.slope == d.slope);
   CHECK(s.options.epsilon == 0.0);
 }
 

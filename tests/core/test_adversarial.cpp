@@ -1,0 +1,153 @@
+// Numerical stability of the narrow phase on seeded adversarial pairs (tests/core/adversarial.h):
+// the yes/no answer equals CGAL's with exact constructions (an independent exact evaluation),
+// for all 36 corner orderings and both triangle orders; the segment lies on both triangles.
+#include "adversarial.h"
+
+#include <catch2/catch.hpp>
+
+#include <CGAL/Cartesian_converter.h>
+#include <CGAL/Exact_predicates_exact_constructions_kernel.h>
+#include <CGAL/Exact_predicates_inexact_constructions_kernel.h>
+
+#include <algorithm>
+#include <array>
+#include <cstdlib>
+
+using namespace peelcd;
+using namespace peelcd::test;
+
+namespace {
+
+using EK = CGAL::Exact_predicates_exact_constructions_kernel;
+
+EK::Point_3 exact(const Vec3& p) { return EK::Point_3(p.x(), p.y(), p.z()); }
+
+// The oracle: exact arithmetic on the very doubles peelcd sees. Degenerate triangles are the
+// segment or point they are.
+bool oracle(const TriangleCorners& a, const TriangleCorners& b) {
+  const auto shape = [](const TriangleCorners& t) -> std::vector<EK::Point_3> {
+    std::vector<EK::Point_3> p = {exact(t[0]), exact(t[1]), exact(t[2])};
+    if (!CGAL::collinear(p[0], p[1], p[2])) return p;
+    std::sort(p.begin(), p.end());
+    p.erase(std::unique(p.begin(), p.end()), p.end());
+    if (p.size() == 1) return p;
+    return {p.front(), p.back()};  // collinear: the extreme points
+  };
+  const auto sa = shape(a), sb = shape(b);
+  if (sa.size() == 3 && sb.size() == 3) return CGAL::do_intersect(EK::Triangle_3(sa[0], sa[1], sa[2]), EK::Triangle_3(sb[0], sb[1], sb[2]));
+  const auto check = [](const std::vector<EK::Point_3>& x, const std::vector<EK::Point_3>& y) {
+    if (x.size() == 3 && y.size() == 2) return CGAL::do_intersect(EK::Triangle_3(x[0], x[1], x[2]), EK::Segment_3(y[0], y[1]));
+    if (x.size() == 3 && y.size() == 1) return EK::Triangle_3(x[0], x[1], x[2]).has_on(y[0]);
+    if (x.size() == 2 && y.size() == 2) return CGAL::do_intersect(EK::Segment_3(x[0], x[1]), EK::Segment_3(y[0], y[1]));
+    if (x.size() == 2 && y.size() == 1) return EK::Segment_3(x[0], x[1]).has_on(y[0]);
+    return x[0] == y[0];
+  };
+  return sa.size() >= sb.size() ? check(sa, sb) : check(sb, sa);
+}
+
+double distance(const Vec3& p, const TriangleCorners& t) {
+  const EK::Point_3 q = exact(p);
+  const EK::Point_3 a = exact(t[0]), b = exact(t[1]), c = exact(t[2]);
+  if (!CGAL::collinear(a, b, c)) return std::sqrt(CGAL::to_double(CGAL::squared_distance(q, EK::Triangle_3(a, b, c))));
+  double best = std::sqrt(CGAL::to_double(CGAL::squared_distance(q, a)));
+  for (const auto& s : {EK::Segment_3(a, b), EK::Segment_3(b, c), EK::Segment_3(a, c)})
+    if (!s.is_degenerate()) best = std::min(best, std::sqrt(CGAL::to_double(CGAL::squared_distance(q, s))));
+  return best;
+}
+
+// The bound on the segment's distance to either triangle (docs/robustness.md): 1e-8 of the
+// largest coordinate magnitude L of the six corners. The double construction cuts each triangle
+// by the other's plane (error ~ a few ulp(L) off the plane, and ~ ulp(L) / sin(angle) along the
+// line); planes closer than 1e-6 rad to parallel, coplanar and degenerate pairs use exact
+// constructions, rounded once. 1e-8 = 1e6 (the angle floor) x 2^-52 x a factor ~40 of slack.
+double segment_bound(const TriangleCorners& a, const TriangleCorners& b) {
+  double l = 0;
+  for (const auto* t : {&a, &b})
+    for (const Vec3& p : *t) l = std::max(l, p.cwiseAbs().maxCoeff());
+  return 1e-8 * l;
+}
+
+struct Tally {
+  std::size_t cases = 0, disagreements = 0, order_dependent = 0, segment_off = 0;
+  std::size_t per_family[int(Family::count)] = {};
+  std::size_t hits[int(Family::count)] = {};
+  std::size_t kinds[4] = {};
+};
+
+Tally run_cases(std::uint64_t seed, std::size_t n) {
+  AdversarialGenerator gen(seed);
+  Tally t;
+  for (std::size_t i = 0; i < n; ++i) {
+    const AdversarialCase c = gen.next();
+    const bool expected = oracle(c.a, c.b);
+    const bool got = triangles_intersect(c.a, c.b);
+    ++t.cases;
+    ++t.per_family[int(c.family)];
+    if (got != expected) {
+      ++t.disagreements;
+      continue;
+    }
+    // All 36 corner orderings, both triangle orders: 72 evaluations, one answer.
+    std::array<int, 3> pa = {0, 1, 2};
+    bool stable = true;
+    do {
+      std::array<int, 3> pb = {0, 1, 2};
+      do {
+        const TriangleCorners x = {c.a[pa[0]], c.a[pa[1]], c.a[pa[2]]};
+        const TriangleCorners y = {c.b[pb[0]], c.b[pb[1]], c.b[pb[2]]};
+        stable = stable && triangles_intersect(x, y) == got && triangles_intersect(y, x) == got;
+      } while (std::next_permutation(pb.begin(), pb.end()));
+    } while (std::next_permutation(pa.begin(), pa.end()));
+    if (!stable) ++t.order_dependent;
+    if (got) {
+      ++t.hits[int(c.family)];
+      ++t.kinds[int(classify_contact(c.a, c.b))];
+      const auto [p, q] = intersection_segment(c.a, c.b);
+      const double bound = segment_bound(c.a, c.b);
+      const double worst = std::max({distance(p, c.a), distance(q, c.a), distance(p, c.b), distance(q, c.b)});
+      if (worst > bound) {
+        if (t.segment_off < 5)
+          std::printf("  segment off: %s, scale %g, offset %g, %s: distance %.3g > bound %.3g\n",
+                      kFamilyNames[int(c.family)], c.scale, c.offset, to_string(classify_contact(c.a, c.b)), worst, bound);
+        if (std::getenv("PEELCD_DEBUG")) {
+          for (const auto* tr : {&c.a, &c.b})
+            for (const Vec3& v : *tr) std::printf("    %.17g %.17g %.17g\n", v.x(), v.y(), v.z());
+          std::printf("    seg %.17g %.17g %.17g -> %.17g %.17g %.17g\n", p.x(), p.y(), p.z(), q.x(), q.y(), q.z());
+        }
+        ++t.segment_off;
+      }
+    }
+  }
+  return t;
+}
+
+}  // namespace
+
+TEST_CASE("adversarial pairs: exact answers, order-invariant, segments on both triangles", "[narrow][adversarial]") {
+  // PEELCD_SOAK_CASES raises the count (the `soak` target runs millions).
+  const char* env = std::getenv("PEELCD_SOAK_CASES");
+  const std::size_t n = env ? std::strtoull(env, nullptr, 10) : 100000;
+  const Tally t = run_cases(20261122, n);
+  std::printf("adversarial narrow phase: %zu cases, %zu disagreements with the exact oracle, %zu order-dependent, "
+              "%zu segments off their triangles\n", t.cases, t.disagreements, t.order_dependent, t.segment_off);
+  for (int f = 0; f < int(Family::count); ++f)
+    std::printf("  %-17s %8zu cases, %8zu intersecting\n", kFamilyNames[f], t.per_family[f], t.hits[f]);
+  std::printf("  contact kinds: crossing %zu, touching %zu, coplanar %zu, degenerate %zu\n", t.kinds[0], t.kinds[1],
+              t.kinds[2], t.kinds[3]);
+  CHECK(t.cases == n);
+  CHECK(t.disagreements == 0);
+  CHECK(t.order_dependent == 0);
+  CHECK(t.segment_off == 0);
+  // The generator must really produce every kind of contact, or the test proves little.
+  for (int k = 0; k < 4; ++k) CHECK(t.kinds[k] > 0);
+  for (int f = 0; f < int(Family::count); ++f) CHECK(t.hits[f] > 0);
+}
+
+TEST_CASE("contact kinds tell touching from penetrating", "[narrow]") {
+  const TriangleCorners a = {Vec3(0, 0, 0), Vec3(2, 0, 0), Vec3(0, 2, 0)};
+  CHECK(classify_contact(a, {Vec3(0.5, 0.5, -1), Vec3(0.5, 0.5, 1), Vec3(1.5, 0.2, 0.3)}) == ContactKind::crossing);
+  CHECK(classify_contact(a, {Vec3(0.5, 0.5, 0), Vec3(1, 1, 1), Vec3(0, 1, 1)}) == ContactKind::touching);
+  CHECK(classify_contact(a, {Vec3(2, 0, 0), Vec3(0, 2, 0), Vec3(1, 1, 1)}) == ContactKind::touching);
+  CHECK(classify_contact(a, {Vec3(0.5, 0.5, 0), Vec3(3, 0.5, 0), Vec3(0.5, 3, 0)}) == ContactKind::coplanar);
+  CHECK(classify_contact(a, {Vec3(0.5, 0.5, -1), Vec3(0.5, 0.5, 0), Vec3(0.5, 0.5, 1)}) == ContactKind::degenerate);
+}
