@@ -344,6 +344,12 @@ FrameResult Pipeline::detect(const std::vector<Object>& objects, const DetectOpt
   if (!(opt.epsilon >= 0.0) || !std::isfinite(opt.epsilon))
     throw std::invalid_argument("peelcd::gl::Pipeline::detect(): epsilon must be finite and >= 0 (0 = one texel)");
 
+  // A layer texel stores object << 31 | ID + 1 (shaders/peel.frag): IDs must stay below 2^31 - 1.
+  for (const Object& o : objects)
+    if (std::max(o.mesh.triangles.size(), o.mesh.vertices.size()) >= 0x7fffffffu)
+      throw std::invalid_argument("peelcd::gl::Pipeline::detect(): object '" + o.name +
+                                  "' has 2^31 - 1 or more triangles or vertices; IDs hold 31 bits");
+
   FrameResult out;
   out.renderer = s.renderer;
   s.passes_this_frame = 0;

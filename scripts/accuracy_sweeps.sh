@@ -1,6 +1,6 @@
 #!/usr/bin/env bash
 # Regenerates the sweeps of docs/accuracy.md (CSV, summaries, heat maps, run-time plot).
-# Needs a built ./build/peelcd and python3-matplotlib. About 15 minutes on 2 cores.
+# Needs a built ./build/peelcd and python3-matplotlib. About 20 minutes on 2 cores.
 set -euo pipefail
 cd "$(dirname "$0")/.."
 out=docs/accuracy
@@ -16,6 +16,5 @@ run fused   --res 128,256 --ids paper,ring --mode full --views 3
 run alt3    --res 128,256 --ids paper,ring --mode alternate --views 3
 run default --res 512 --ids ring --mode alternate --views 3
 # One CSV for the plots: every configuration once.
-{ head -1 "$out/paper.csv"; for f in paper beat fused alt3 default; do tail -n +2 "$out/$f.csv"; done;
-  grep -h '"512 ' "$out/default.csv" || true; } > "$out/all.csv"
+{ head -1 "$out/paper.csv"; for f in paper beat fused alt3 default; do tail -n +2 "$out/$f.csv"; done; } > "$out/all.csv"
 "${PYTHON:-/usr/bin/python3}" scripts/plot_sweep.py "$out/all.csv" "$out/plots"

@@ -58,6 +58,7 @@ def main(path, out_dir):
     ax.set_xlabel("median run time per frame (ms)")
     ax.set_ylabel("average miss ratio (%)")
     ax.set_xscale("log")
+    ax.set_yscale("symlog", linthresh=0.1)  # the interesting configurations are below 1%
     ax.set_title("run time against miss ratio")
     ax.grid(True, alpha=0.3)
     fig.tight_layout()

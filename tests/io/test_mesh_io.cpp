@@ -103,4 +103,14 @@ TEST_CASE("bad mesh files give an error that names the file and the problem", "[
   require_input_error(write_temp("unknown.xyz123", "hello"), "cannot read");
   require_input_error(write_temp("lines.obj", "v 0 0 0\nv 1 0 0\nl 1 2\n"), "no triangles");
   require_input_error(write_temp("nan.obj", "v 0 0 0\nv nan 0 0\nv 0 1 0\nf 1 2 3\n"), "NaN or infinite");
+  require_input_error(write_temp("inf.off", "OFF\n3 1 0\n0 0 0\ninf 0 0\n0 1 0\n3 0 1 2\n"), "NaN or infinite");
+  require_input_error(write_temp("range.obj", "v 0 0 0\nv 1 0 0\nv 0 1 0\nf 1 2 9\n"), "");
+  require_input_error(write_temp("truncated.ply",
+                                 "ply\nformat ascii 1.0\nelement vertex 4\nproperty float x\nproperty float y\n"
+                                 "property float z\nelement face 1\nproperty list uchar int vertex_indices\nend_header\n"
+                                 "0 0 0\n1 0 0\n"),
+                      "");
+  require_input_error(write_temp("garbled.stl", std::string("solid x\nfacet normal 0 0 1\nouter loop\nvertex 0 0") + '\0' + "\x7f\x01garbage"), "");
+  require_input_error(write_temp("binary_short.stl", std::string(90, '\0')), "");
+  require_input_error(write_temp("zero_faces.off", "OFF\n3 0 0\n0 0 0\n1 0 0\n0 1 0\n"), "");
 }
