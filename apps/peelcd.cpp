@@ -126,14 +126,10 @@ int run_detect(const DetectArgs& a) {
       }
       if (line.size() > 1) std::printf("%s\n", line.c_str());
       if (a.check) {
-        const auto exact = exact_colliding_pairs(objects[p.object_a].mesh, objects[p.object_b].mesh);
-        std::size_t found = 0, false_contacts = 0;
-        for (const Contact& c : p.colliding)
-          (std::binary_search(exact.begin(), exact.end(), pack_pair(c.tri_a, c.tri_b)) ? found : false_contacts)++;
+        const Score sc = score_contacts(exact_colliding_pairs(objects[p.object_a].mesh, objects[p.object_b].mesh),
+                                        p.colliding);
         std::printf("  exact reference: %zu pairs; found %zu, missed %zu (miss ratio %.2f%%), false contacts %zu\n",
-                    exact.size(), found, exact.size() - found,
-                    exact.empty() ? 0.0 : 100.0 * double(exact.size() - found) / double(exact.size()),
-                    false_contacts);
+                    sc.exact, sc.found, sc.missed, 100.0 * sc.miss_ratio(), sc.false_contacts);
       }
     }
     const Timings& t = result.timings;

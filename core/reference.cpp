@@ -43,4 +43,13 @@ std::vector<std::uint64_t> exact_colliding_pairs(const Mesh& a, const Mesh& b) {
   return out;
 }
 
+Score score_contacts(const std::vector<std::uint64_t>& exact, const std::vector<Contact>& reported) {
+  Score s;
+  s.exact = exact.size();
+  for (const Contact& c : reported)
+    (std::binary_search(exact.begin(), exact.end(), pack_pair(c.tri_a, c.tri_b)) ? s.found : s.false_contacts)++;
+  s.missed = s.exact - s.found;
+  return s;
+}
+
 }  // namespace peelcd

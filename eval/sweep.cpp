@@ -60,10 +60,10 @@ std::vector<SweepRow> run_sweep(gl::Pipeline& pipeline, const std::vector<Object
       row.phi = phi;
       row.timings = f.timings;
       for (const PairResult& p : f.pairs) {
-        const auto& ex = exact.at({p.object_a, p.object_b});
-        row.exact += ex.size();
-        for (const Contact& k : p.colliding)
-          (std::binary_search(ex.begin(), ex.end(), pack_pair(k.tri_a, k.tri_b)) ? row.found : row.false_contacts)++;
+        const Score sc = score_contacts(exact.at({p.object_a, p.object_b}), p.colliding);
+        row.exact += sc.exact;
+        row.found += sc.found;
+        row.false_contacts += sc.false_contacts;
         row.pcs += p.pcs_count;
         row.candidates += p.candidates;
         row.layers = std::max(row.layers, p.layers);

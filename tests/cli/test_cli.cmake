@@ -20,6 +20,7 @@ endfunction()
 set(scene ${FIXTURES}/scenes/bunny_dragon.json)
 expect("help" 0 "detect" --help)
 expect("detect help" 0 "--ids" detect --help)
+expect("sweep help" 0 "--theta-step" sweep --help)
 expect("no subcommand" 2 "subcommand" )
 expect("default scene" 0 "bunny x dragon: .* colliding" detect ${scene})
 expect("default scene, checked" 0 "exact reference: 228 pairs.*false contacts 0" detect ${scene} --check)
@@ -63,3 +64,22 @@ endif()
 file(WRITE ${WORK}/apart.json "{\"objects\":[{\"mesh\":\"${FIXTURES}/meshes/bunny_3k.obj\"},
   {\"mesh\":\"${FIXTURES}/meshes/bunny_3k.obj\",\"transform\":{\"translate\":[10,0,0]}}]}")
 expect("no overlap" 0 "no overlapping bounding boxes: no GL work" detect ${WORK}/apart.json)
+
+# A GL context that cannot be created (Mesa told to offer GL 3.3 only): exit 2, a clear message.
+execute_process(COMMAND ${CMAKE_COMMAND} -E env MESA_GL_VERSION_OVERRIDE=3.3 ${PEELCD} detect ${scene} --res 64
+                RESULT_VARIABLE rc OUTPUT_VARIABLE out ERROR_VARIABLE err)
+if(NOT rc EQUAL 2 OR NOT err MATCHES "cannot create an OpenGL 4.5 core context")
+  message(SEND_ERROR "failed GL context: exit ${rc}\n${out}${err}")
+else()
+  message(STATUS "ok: failed GL context")
+endif()
+
+# Sweep: a tiny grid writes a CSV with one row per (configuration, view) and a summary.
+expect("sweep" 0 "64 ring alternate slope=1 views=1" sweep ${scene} --res 64 --ids ring --mode alternate
+       --theta-step 180 --phi-step 90 --csv ${WORK}/sweep.csv)
+file(STRINGS ${WORK}/sweep.csv lines)
+list(LENGTH lines nlines)
+if(NOT nlines EQUAL 5)  # header + 4 views (two poles, theta 0 and 180 at phi 0)
+  message(SEND_ERROR "sweep csv: ${nlines} lines, expected 5")
+endif()
+expect("sweep: bad mode" 2 "unknown mode \"fancy\"" sweep ${scene} --mode fancy)
