@@ -124,8 +124,8 @@ Tally run_cases(std::uint64_t seed, std::size_t n) {
 }  // namespace
 
 TEST_CASE("adversarial pairs: exact answers, order-invariant, segments on both triangles", "[narrow][adversarial]") {
-  // PEELCD_SOAK_CASES raises the count (the `soak` target runs millions).
-  const char* env = std::getenv("PEELCD_SOAK_CASES");
+  // PEELCD_ADVERSARIAL_CASES raises the count (the `soak` target runs millions).
+  const char* env = std::getenv("PEELCD_ADVERSARIAL_CASES");
   const std::size_t n = env ? std::strtoull(env, nullptr, 10) : 100000;
   const Tally t = run_cases(20261122, n);
   std::printf("adversarial narrow phase: %zu cases, %zu disagreements with the exact oracle, %zu order-dependent, "
