@@ -2,6 +2,7 @@
 #include "core/reference.h"
 #include "eval/sweep.h"
 #include "gl/pipeline.h"
+#include "gl_egl/egl_context.h"
 #include "gl_osmesa/osmesa_context.h"
 #include "io/error.h"
 #include "io/result_json.h"
@@ -15,6 +16,7 @@
 #include <filesystem>
 #include <fstream>
 #include <iostream>
+#include <memory>
 #include <unistd.h>
 
 namespace {
@@ -22,6 +24,13 @@ namespace {
 using namespace peelcd;
 
 constexpr int kExitBadInput = 2;
+
+// The GL context of a run: OSMesa (the deterministic reference) or EGL without a window.
+std::unique_ptr<gl::Context> make_context(const std::string& backend) {
+  if (backend == "osmesa") return std::make_unique<gl::OsmesaContext>();
+  if (backend == "egl") return std::make_unique<gl::EglContext>();
+  throw InputError("peelcd: --backend: unknown backend \"" + backend + "\" (expected osmesa or egl)");
+}
 
 struct DetectArgs {
   std::string scene;
@@ -34,6 +43,7 @@ struct DetectArgs {
   int views = 0;  // 0 = not given
   bool check = false;
   bool quiet = false;
+  std::string backend = "osmesa";
 };
 
 // Command-line values override the scene file's.
@@ -88,8 +98,8 @@ int run_detect(const DetectArgs& a) {
   const DetectOptions opt = merged_options(scene, a);
   const std::vector<Object> objects = load_objects(scene);
 
-  gl::OsmesaContext context;
-  gl::Pipeline pipeline(context);
+  const auto context = make_context(a.backend);
+  gl::Pipeline pipeline(*context);
   FrameResult result;
   std::vector<Timings> runs;
   for (int i = 0; i < std::max(1, a.repeat); ++i) {
@@ -107,7 +117,8 @@ int run_detect(const DetectArgs& a) {
   }
 
   if (!a.quiet) {
-    std::printf("peelcd detect: %s  (%zu objects, %s)\n", a.scene.c_str(), objects.size(), result.renderer.c_str());
+    std::printf("peelcd detect: %s  (%zu objects, %s, %s)\n", a.scene.c_str(), objects.size(),
+                context->backend().c_str(), result.renderer.c_str());
     std::printf("view theta=%g phi=%g  views=%d  ids=%s  peel=%s  slope=%g\n", opt.theta, opt.phi, opt.views,
                 to_string(opt.ids), to_string(opt.peel), opt.slope);
     if (result.pairs.empty()) std::printf("no overlapping bounding boxes: no GL work\n");
@@ -150,6 +161,7 @@ struct SweepArgs {
   std::vector<int> views = {1};
   double theta_step = 30, phi_step = 10;
   std::string csv, plot;
+  std::string backend = "osmesa";
 };
 
 // A terminal-aware progress bar on stderr: redrawn in place on a terminal, silent otherwise.
@@ -188,8 +200,8 @@ int run_sweep_command(const SweepArgs& a) {
       }
     }
   const auto directions = sweep_directions(a.theta_step, a.phi_step);
-  gl::OsmesaContext context;
-  gl::Pipeline pipeline(context);
+  const auto context = make_context(a.backend);
+  gl::Pipeline pipeline(*context);
   for (int res : a.res)
     if (res > pipeline.max_resolution())
       throw InputError("peelcd sweep: --res " + std::to_string(res) + " is above GL_MAX_TEXTURE_SIZE " +
@@ -252,6 +264,8 @@ int main(int argc, char** argv) {
       ->check(CLI::PositiveNumber);
   detect->add_flag("--check", d.check, "Also run the exact all-pairs reference and print the miss ratio");
   detect->add_flag("--quiet", d.quiet, "No human summary");
+  detect->add_option("--backend", d.backend, "GL backend: osmesa (software reference) or egl (GPU, or Mesa without one)")
+      ->capture_default_str();
 
   SweepArgs sw;
   CLI::App* sweep = app.add_subcommand(
@@ -274,6 +288,7 @@ int main(int argc, char** argv) {
       ->capture_default_str();
   sweep->add_option("--phi-step", sw.phi_step, "Latitude step, degrees")->check(CLI::Range(1.0, 90.0))
       ->capture_default_str();
+  sweep->add_option("--backend", sw.backend, "GL backend: osmesa or egl")->capture_default_str();
   sweep->add_option("--csv", sw.csv, "Write one row per (configuration, view) to FILE, or - for stdout");
   sweep->add_option("--plot", sw.plot, "Write heat maps and the run-time-against-miss-ratio plot to DIR (matplotlib)");
 

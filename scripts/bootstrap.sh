@@ -7,6 +7,7 @@ cd "$(dirname "$0")/.."
 packages=(
   build-essential cmake pkg-config python3-glad   # toolchain, glad 2 (GL loader generator)
   libosmesa6-dev                                  # OSMesa: the software GL reference backend
+  libegl-dev libegl-mesa0 libgl1-mesa-dri         # EGL without a window (Mesa llvmpipe, or a GPU)
   libeigen3-dev libcgal-dev libgmp-dev libmpfr-dev libboost-dev   # geometry, exact predicates
   libassimp-dev nlohmann-json3-dev libcli11-dev    # mesh files, scene JSON, command line
   catch2                                           # tests (Catch2 v2)

@@ -36,7 +36,7 @@ TEST_CASE("bunny vs dragon at 256^2, paper IDs: no false contact, miss ratio und
   for (const auto& [theta, phi] : kViews) {
     opt.theta = theta;
     opt.phi = phi;
-    const FrameResult f = osmesa_pipeline().detect(scene(), opt);
+    const FrameResult f = test_pipeline().detect(scene(), opt);
     REQUIRE(f.pairs.size() == 1);
     const Score s = score(exact(), f.pairs[0].colliding);
     std::printf("bunny-dragon 256 paper-ids full slope=1 theta=%5.1f phi=%5.1f: found %3zu/%zu miss %5.2f%% false %zu\n",
@@ -59,8 +59,8 @@ TEST_CASE("bunny vs dragon: the paper's mode is reported, and full peeling's PCS
     paper.phi = phi;
     DetectOptions full = paper;
     full.peel = PeelMode::full;
-    const PairResult a = osmesa_pipeline().detect(scene(), paper).pairs.at(0);
-    const PairResult b = osmesa_pipeline().detect(scene(), full).pairs.at(0);
+    const PairResult a = test_pipeline().detect(scene(), paper).pairs.at(0);
+    const PairResult b = test_pipeline().detect(scene(), full).pairs.at(0);
     const Score sa = score(exact(), a.colliding), sb = score(exact(), b.colliding);
     std::printf("bunny-dragon 256 paper-ids alternate slope=0 theta=%5.1f phi=%5.1f: miss %5.2f%%  (full: %5.2f%%)\n",
                 theta, phi, 100 * sa.miss_ratio(), 100 * sb.miss_ratio());

@@ -23,7 +23,7 @@ struct Run {
 // One view (the CPU model peels one), whatever the options say.
 Run run(const Mesh& a, const Mesh& b, DetectOptions opt) {
   opt.views = 1;
-  const FrameResult f = osmesa_pipeline().detect(two(a, b), opt);
+  const FrameResult f = test_pipeline().detect(two(a, b), opt);
   REQUIRE(f.pairs.size() == 1);
   Run r;
   r.gpu = f.pairs[0];
@@ -49,7 +49,7 @@ Run run(const Mesh& a, const Mesh& b, DetectOptions opt) {
 
 // See tests/core/test_cpu_peel.cpp for the picture: B pokes through A's x = 1 face; every ray
 // through the ROI meets exactly two surfaces.
-TEST_CASE("OSMesa: two axis-aligned boxes crossing", "[gl]") {
+TEST_CASE("two axis-aligned boxes crossing", "[gl]") {
   const Mesh a = make_box(Vec3(0, 0, 0), Vec3(1, 1, 1));
   const Mesh b = make_box(Vec3(0.5, 0.25, 0.25), Vec3(1.5, 0.75, 0.75));
   DetectOptions opt;
@@ -89,7 +89,7 @@ TEST_CASE("OSMesa: two axis-aligned boxes crossing", "[gl]") {
   }
 }
 
-TEST_CASE("OSMesa: a tilted plane through a sphere", "[gl]") {
+TEST_CASE("a tilted plane through a sphere", "[gl]") {
   const Mesh sphere = make_uv_sphere(Vec3(0, 0, 0), 1.0, 24, 48);
   // Open grid through the sphere, tilted so its box is not flat: z = 0.1 + 0.2 x.
   const Mesh plane = make_grid(Vec3(-1.5, -1.5, -0.2), Vec3(3, 0, 0.6), Vec3(0, 3, 0), 12, 12);
@@ -113,7 +113,7 @@ TEST_CASE("OSMesa: a tilted plane through a sphere", "[gl]") {
   }
 }
 
-TEST_CASE("OSMesa: an open quad through a closed mesh", "[gl]") {
+TEST_CASE("an open quad through a closed mesh", "[gl]") {
   const Mesh ball = make_uv_sphere(Vec3(0.2, 0.1, 0.0), 0.8, 16, 32);
   Mesh quad;  // two triangles, x from -2 to 2, slanted in y-z
   quad.vertices = {Vec3(-2, -2, -0.5), Vec3(2, -2, -0.5), Vec3(2, 2, 0.7), Vec3(-2, 2, 0.7)};
@@ -132,37 +132,37 @@ TEST_CASE("OSMesa: an open quad through a closed mesh", "[gl]") {
   CHECK(r.missed_longer_than_a_texel == 0);
 }
 
-TEST_CASE("OSMesa: no overlapping boxes means no GL work at all", "[gl]") {
+TEST_CASE("no overlapping boxes means no GL work at all", "[gl]") {
   const Mesh a = make_box(Vec3(0, 0, 0), Vec3(1, 1, 1));
   const Mesh b = make_box(Vec3(2, 0, 0), Vec3(3, 1, 1));
-  const FrameResult f = osmesa_pipeline().detect(two(a, b), DetectOptions{});
+  const FrameResult f = test_pipeline().detect(two(a, b), DetectOptions{});
   CHECK(f.pairs.empty());
   CHECK(f.gl_passes == 0);
 }
 
-TEST_CASE("OSMesa: overlapping boxes without contact peel but report nothing", "[gl]") {
+TEST_CASE("overlapping boxes without contact peel but report nothing", "[gl]") {
   // Two spheres whose boxes overlap at a corner while the surfaces stay apart (Fig. 2-b).
   const Mesh a = make_uv_sphere(Vec3(0, 0, 0), 1.0, 12, 24);
   const Mesh b = make_uv_sphere(Vec3(1.9, 1.9, 0), 1.0, 12, 24);
   DetectOptions opt;
   opt.resolution = 64;
-  const FrameResult f = osmesa_pipeline().detect(two(a, b), opt);
+  const FrameResult f = test_pipeline().detect(two(a, b), opt);
   REQUIRE(f.pairs.size() == 1);
   CHECK(f.pairs[0].colliding.empty());
   CHECK(exact_colliding_pairs(a, b).empty());
 }
 
-TEST_CASE("OSMesa: repeated frames reuse GL objects and give identical answers", "[gl]") {
+TEST_CASE("repeated frames reuse GL objects and give identical answers", "[gl]") {
   const Mesh a = make_uv_sphere(Vec3(0, 0, 0), 1.0, 16, 32);
   const Mesh b = make_uv_sphere(Vec3(0.9, 0.4, 0.2), 0.7, 12, 24);
   DetectOptions opt;
   opt.theta = 10;
   opt.phi = 5;
-  const FrameResult f1 = osmesa_pipeline().detect(two(a, b), opt);
+  const FrameResult f1 = test_pipeline().detect(two(a, b), opt);
   opt.resolution = 64;  // a different tile size in between reallocates the layers
-  osmesa_pipeline().detect(two(a, b), opt);
+  test_pipeline().detect(two(a, b), opt);
   opt.resolution = 0;
-  const FrameResult f2 = osmesa_pipeline().detect(two(a, b), opt);
+  const FrameResult f2 = test_pipeline().detect(two(a, b), opt);
   REQUIRE(f1.pairs.size() == 1);
   REQUIRE(f2.pairs.size() == 1);
   CHECK(f1.pairs[0].resolution == 512);  // one ROI takes the whole budget
@@ -171,11 +171,11 @@ TEST_CASE("OSMesa: repeated frames reuse GL objects and give identical answers",
   CHECK_FALSE(f1.pairs[0].colliding.empty());
 }
 
-TEST_CASE("OSMesa: many ROIs share the texture budget", "[gl]") {
+TEST_CASE("many ROIs share the texture budget", "[gl]") {
   std::vector<Object> objects;
   for (int i = 0; i < 6; ++i)  // a row of overlapping spheres: 5 ROIs
     objects.push_back({"s" + std::to_string(i), make_uv_sphere(Vec3(1.5 * i, 0, 0), 1.0, 8, 16)});
-  const FrameResult f = osmesa_pipeline().detect(objects, DetectOptions{});
+  const FrameResult f = test_pipeline().detect(objects, DetectOptions{});
   REQUIRE(f.pairs.size() == 5);
   for (const PairResult& p : f.pairs) {
     CHECK(p.resolution == 128);
@@ -184,12 +184,12 @@ TEST_CASE("OSMesa: many ROIs share the texture budget", "[gl]") {
   }
 }
 
-TEST_CASE("OSMesa: impossible options are refused with a clear error", "[gl]") {
+TEST_CASE("impossible options are refused with a clear error", "[gl]") {
   const std::vector<Object> objs = two(make_box(Vec3(0, 0, 0), Vec3(1, 1, 1)), make_box(Vec3(0.5, 0, 0), Vec3(2, 1, 1)));
   DetectOptions opt;
-  opt.resolution = osmesa_pipeline().max_resolution() + 1;
-  CHECK_THROWS_WITH(osmesa_pipeline().detect(objs, opt), Catch::Contains("GL_MAX_TEXTURE_SIZE"));
+  opt.resolution = test_pipeline().max_resolution() + 1;
+  CHECK_THROWS_WITH(test_pipeline().detect(objs, opt), Catch::Contains("GL_MAX_TEXTURE_SIZE"));
   opt = DetectOptions{};
   opt.epsilon = -1;
-  CHECK_THROWS_AS(osmesa_pipeline().detect(objs, opt), std::invalid_argument);
+  CHECK_THROWS_AS(test_pipeline().detect(objs, opt), std::invalid_argument);
 }

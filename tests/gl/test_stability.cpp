@@ -41,12 +41,12 @@ TEST_CASE("translated and scaled scenes give the same pairs and PCS", "[stabilit
   opt.views = 1;
   opt.theta = 30;
   opt.phi = 20;
-  const PairResult base = osmesa_pipeline().detect(scene, opt).pairs.at(0);
+  const PairResult base = test_pipeline().detect(scene, opt).pairs.at(0);
   REQUIRE(base.colliding.size() > 200);
 
   SECTION("translation by 1e3, 1e5, 1e6: geometry moves to ROI-local coordinates in double") {
     for (double t : {1e3, 1e5, 1e6}) {
-      const PairResult r = osmesa_pipeline().detect(moved(scene, 1.0, Vec3(t, -t, 0.5 * t)), opt).pairs.at(0);
+      const PairResult r = test_pipeline().detect(moved(scene, 1.0, Vec3(t, -t, 0.5 * t)), opt).pairs.at(0);
       const std::size_t d = symmetric_difference(base.pcs, r.pcs);
       std::printf("translated by %g: %zu of %zu colliding pairs, PCS differences %zu\n", t, r.colliding.size(),
                   base.colliding.size(), d);
@@ -61,7 +61,7 @@ TEST_CASE("translated and scaled scenes give the same pairs and PCS", "[stabilit
   SECTION("scaling by 1e-3 and 1e3, epsilon scaling with it") {
     for (double s : {1e-3, 1e3}) {
       const std::vector<Object> scaled = moved(scene, s, Vec3::Zero());
-      const PairResult r = osmesa_pipeline().detect(scaled, opt).pairs.at(0);
+      const PairResult r = test_pipeline().detect(scaled, opt).pairs.at(0);
       const std::size_t d = symmetric_difference(base.pcs, r.pcs);
       // The scaled geometry is rounded once more (x * s is not exact), so the exact answer
       // itself may change for pairs that touch within rounding: compare with both references.
@@ -94,8 +94,8 @@ TEST_CASE("depth resolution: parallel surfaces just above and below one float ul
   opt.views = 1;
   opt.peel = PeelMode::full;
   const double ulp_world = std::ldexp(1.0, -24) * 2.0 * std::sqrt(2.0);
-  const PairResult above = osmesa_pipeline().detect({{"a", plane(0)}, {"b", plane(8 * ulp_world * std::sqrt(2.0))}}, opt).pairs.at(0);
-  const PairResult below = osmesa_pipeline().detect({{"a", plane(0)}, {"b", plane(0.05 * ulp_world * std::sqrt(2.0))}}, opt).pairs.at(0);
+  const PairResult above = test_pipeline().detect({{"a", plane(0)}, {"b", plane(8 * ulp_world * std::sqrt(2.0))}}, opt).pairs.at(0);
+  const PairResult below = test_pipeline().detect({{"a", plane(0)}, {"b", plane(0.05 * ulp_world * std::sqrt(2.0))}}, opt).pairs.at(0);
   CHECK(above.layers == 2);  // 8 ulps apart: two layers
   CHECK(below.layers == 1);  // 0.05 ulp apart: the same float depth, not strictly behind
 }
@@ -116,7 +116,7 @@ TEST_CASE("triangle IDs above 2^24 survive (stored as integer bits, not float va
   opt.ids = IdMode::paper;
   opt.resolution = 128;
   opt.views = 1;
-  const PairResult r = osmesa_pipeline().detect({{"a", a}, {"b", b}}, opt).pairs.at(0);
+  const PairResult r = test_pipeline().detect({{"a", a}, {"b", b}}, opt).pairs.at(0);
   REQUIRE_FALSE(r.pcs.empty());
   for (const IdPair& p : r.pcs) {
     CHECK(p.a >= base);

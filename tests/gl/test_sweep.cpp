@@ -39,7 +39,7 @@ TEST_CASE("coarse sweep of bunny vs dragon: relations and bounds", "[sweep]") {
   };
   const auto directions = sweep_directions(90, 60);  // 10 views, poles included
   REQUIRE(directions.size() == 10);
-  const auto rows = run_sweep(osmesa_pipeline(), objects, configs, directions);
+  const auto rows = run_sweep(test_pipeline(), objects, configs, directions);
   REQUIRE(rows.size() == configs.size() * directions.size());
 
   std::vector<SweepSummary> s;
