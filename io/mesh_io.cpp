@@ -6,8 +6,13 @@
 #include <assimp/postprocess.h>
 #include <assimp/scene.h>
 
+#include <cctype>
 #include <filesystem>
+#include <fstream>
+#include <iterator>
 #include <functional>
+#include <set>
+#include <sstream>
 #include <unordered_map>
 
 namespace peelcd {
@@ -39,18 +44,123 @@ void append_node(const aiScene* scene, const aiNode* node, const aiMatrix4x4& pa
     }
     for (unsigned f = 0; f < m->mNumFaces; ++f) {
       const aiFace& face = m->mFaces[f];
-      if (face.mNumIndices != 3) continue;  // points and lines are not surfaces
-      Tri t;
-      for (int k = 0; k < 3; ++k) {
+      if (face.mNumIndices < 3 || !face.mIndices) continue;  // points and lines are not surfaces
+      for (unsigned k = 0; k < face.mNumIndices; ++k)
         if (face.mIndices[k] >= m->mNumVertices)
           throw InputError("peelcd::load_mesh(): '" + path + "': face " + std::to_string(f) +
                            " uses a vertex index out of range");
-        t[k] = remap[face.mIndices[k]];
-      }
-      out.triangles.push_back(t);
+      // Polygons become a fan around their first corner, in place: (0, k, k + 1).
+      for (unsigned k = 1; k + 1 < face.mNumIndices; ++k)
+        out.triangles.push_back({remap[face.mIndices[0]], remap[face.mIndices[k]], remap[face.mIndices[k + 1]]});
     }
   }
   for (unsigned c = 0; c < node->mNumChildren; ++c) append_node(scene, node->mChildren[c], xf, out, weld, path);
+}
+
+// Checks the header of an ASCII or binary PLY file line by line before assimp sees it: assimp
+// 5.2's PLY reader loops forever on some malformed headers (an unknown property type, found by
+// fuzzing). Returns an empty string if the header is well-formed, else the problem.
+std::string ply_header_problem(const std::string& path) {
+  std::ifstream in(path, std::ios::binary);
+  std::string line;
+  if (!std::getline(in, line) || line.rfind("ply", 0) != 0) return "";  // not a PLY file: assimp decides
+  static const std::set<std::string> types = {"char",  "uchar", "short",  "ushort",  "int",     "uint",
+                                              "float", "double", "int8",  "uint8",   "int16",   "uint16",
+                                              "int32", "uint32", "float32", "float64"};
+  for (int n = 0; n < 10000 && std::getline(in, line); ++n) {
+    if (!line.empty() && line.back() == '\r') line.pop_back();
+    std::istringstream words(line);
+    std::string w;
+    words >> w;
+    if (w == "end_header") return "";
+    if (w == "comment" || w == "obj_info" || w.empty()) continue;
+    if (w == "format") {
+      std::string kind, version;
+      if (!(words >> kind >> version) ||
+          (kind != "ascii" && kind != "binary_little_endian" && kind != "binary_big_endian"))
+        return "malformed PLY header: bad format line '" + line + "'";
+    } else if (w == "element") {
+      std::string name;
+      long long count = -1;
+      if (!(words >> name >> count) || count < 0) return "malformed PLY header: bad element line '" + line + "'";
+    } else if (w == "property") {
+      std::string type, name;
+      if (!(words >> type)) return "malformed PLY header: empty property line";
+      if (type == "list") {
+        std::string count_type, item_type;
+        if (!(words >> count_type >> item_type >> name) || !types.count(count_type) || !types.count(item_type))
+          return "malformed PLY header: bad property list line '" + line + "'";
+      } else if (!types.count(type) || !(words >> name)) {
+        return "malformed PLY header: bad property line '" + line + "'";
+      }
+    } else {
+      return "malformed PLY header: unknown line '" + line + "'";
+    }
+  }
+  return "malformed PLY header: no end_header";
+}
+
+// OFF is read here, not by assimp: assimp 5.2's OFF reader crashes (SEGV, or an assertion in
+// its triangulation) on malformed files, found by fuzzing. Format: optional "OFF" keyword, then
+// "V F E", V lines "x y z", F lines "n i1 .. in" (extra values, e.g. colours, ignored); '#'
+// starts a comment. Polygons become fans in place, as for the other formats.
+Mesh read_off(const std::string& path) {
+  std::ifstream in(path, std::ios::binary);
+  std::string text((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
+  std::istringstream lines(text);
+  std::vector<std::string> rows;
+  for (std::string line; std::getline(lines, line);) {
+    if (const auto hash = line.find('#'); hash != std::string::npos) line.erase(hash);
+    if (line.find_first_not_of(" \t\r") != std::string::npos) rows.push_back(line);
+  }
+  const auto fail = [&](const std::string& what) -> InputError {
+    return InputError("peelcd::load_mesh(): '" + path + "': malformed OFF: " + what);
+  };
+  std::size_t row = 0;
+  if (row < rows.size() && rows[row].find("OFF") != std::string::npos) ++row;
+  long long nv = -1, nf = -1;
+  if (row >= rows.size() || !(std::istringstream(rows[row++]) >> nv >> nf) || nv < 0 || nf < 0)
+    throw fail("missing or bad vertex and face counts");
+  if (rows.size() - row < std::size_t(nv) + std::size_t(nf))
+    throw fail("the file is truncated (" + std::to_string(nv) + " vertices and " + std::to_string(nf) +
+               " faces announced, " + std::to_string(rows.size() - row) + " lines found)");
+  Mesh mesh;
+  std::vector<std::uint32_t> remap(static_cast<std::size_t>(nv));
+  std::unordered_map<Vec3, std::uint32_t, PositionHash> weld;
+  for (long long v = 0; v < nv; ++v) {
+    std::istringstream r(rows[row++]);
+    std::string x, y, z;
+    if (!(r >> x >> y >> z)) throw fail("vertex " + std::to_string(v) + " has fewer than 3 coordinates");
+    Vec3 p;
+    try {
+      p = Vec3(std::stod(x), std::stod(y), std::stod(z));
+    } catch (const std::exception&) {
+      throw fail("vertex " + std::to_string(v) + " has a coordinate that is not a number");
+    }
+    if (!p.allFinite())
+      throw InputError("peelcd::load_mesh(): '" + path + "': vertex " + std::to_string(v) +
+                       " has a NaN or infinite coordinate");
+    auto [it, inserted] = weld.emplace(p, std::uint32_t(mesh.vertices.size()));
+    if (inserted) mesh.vertices.push_back(p);
+    remap[std::size_t(v)] = it->second;
+  }
+  for (long long f = 0; f < nf; ++f) {
+    std::istringstream r(rows[row++]);
+    long long n = 0;
+    if (!(r >> n) || n < 0) throw fail("face " + std::to_string(f) + " has no corner count");
+    std::vector<std::uint32_t> corners;
+    for (long long k = 0; k < n; ++k) {
+      long long i = -1;
+      if (!(r >> i)) throw fail("face " + std::to_string(f) + " has fewer corners than it announces");
+      if (i < 0 || i >= nv)
+        throw InputError("peelcd::load_mesh(): '" + path + "': face " + std::to_string(f) +
+                         " uses a vertex index out of range");
+      corners.push_back(remap[std::size_t(i)]);
+    }
+    for (std::size_t k = 1; k + 1 < corners.size(); ++k) mesh.triangles.push_back({corners[0], corners[k], corners[k + 1]});
+  }
+  if (mesh.triangles.empty()) throw InputError("peelcd::load_mesh(): '" + path + "': the file has no triangles");
+  return mesh;
 }
 
 }  // namespace
@@ -62,8 +172,16 @@ Mesh load_mesh(const std::string& path) {
   if (fs::is_directory(path, ec)) throw InputError("peelcd::load_mesh(): '" + path + "': is a directory, not a mesh file");
   if (fs::file_size(path, ec) == 0) throw InputError("peelcd::load_mesh(): '" + path + "': the file is empty");
 
+  std::string ext = std::filesystem::path(path).extension().string();
+  for (char& c : ext) c = char(std::tolower(static_cast<unsigned char>(c)));
+  if (ext == ".off") return read_off(path);
+  if (const std::string problem = ply_header_problem(path); !problem.empty())
+    throw InputError("peelcd::load_mesh(): '" + path + "': " + problem);
+
   Assimp::Importer importer;
-  const aiScene* scene = importer.ReadFile(path, aiProcess_Triangulate);
+  // No post-processing: assimp's triangulation asserts (aborts) on some malformed files, which
+  // fuzzing found (docs/robustness.md); polygons are split below instead.
+  const aiScene* scene = importer.ReadFile(path, 0);
   if (!scene || !scene->mRootNode || (scene->mFlags & AI_SCENE_FLAGS_INCOMPLETE))
     throw InputError("peelcd::load_mesh(): '" + path + "': cannot read it as a mesh: " +
                      importer.GetErrorString());

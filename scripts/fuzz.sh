@@ -1,11 +1,13 @@
 #!/usr/bin/env bash
 # Builds the libFuzzer targets with clang (ASan + UBSan) in ./build-fuzz and runs each from the
-# seeds in fixtures/fuzz/. Usage: scripts/fuzz.sh [RUNS]   (default 20000 inputs per target,
-# a fixed seed, so a run is repeatable). New inputs go to build-fuzz/corpus/, crashes to
-# build-fuzz/artifacts/. Longer runs: scripts/fuzz.sh 0 with FUZZ_SECONDS=3600.
+# seeds in fixtures/fuzz/. Usage: scripts/fuzz.sh [SCENE_RUNS [MESH_RUNS]]  (defaults 20000 and
+# 3000 inputs, about a minute each here; a fixed seed, so a run is repeatable). New inputs go to
+# build-fuzz/corpus/, crashes to build-fuzz/artifacts/. Time-bounded runs instead:
+# scripts/fuzz.sh 0 0 with FUZZ_SECONDS=3600 (per target).
 set -euo pipefail
 cd "$(dirname "$0")/.."
-runs=${1:-20000}
+scene_runs=${1:-20000}
+mesh_runs=${2:-3000}
 if ! command -v clang++ >/dev/null || ! ls /usr/lib/llvm-*/lib/clang/*/lib/linux/libclang_rt.fuzzer-x86_64.a >/dev/null 2>&1; then
   sudo_cmd=""; [ "$(id -u)" -ne 0 ] && sudo_cmd="sudo"
   $sudo_cmd apt-get update -q
@@ -18,7 +20,8 @@ export ASAN_OPTIONS=detect_leaks=1
 export LSAN_OPTIONS=suppressions=$PWD/tests/lsan.supp
 export UBSAN_OPTIONS=print_stacktrace=1:halt_on_error=1
 for target in scene mesh; do
-  exe=build-fuzz/fuzz/fuzz_$target; [ $target = mesh ] && exe=build-fuzz/fuzz/fuzz_mesh_detect
+  exe=build-fuzz/fuzz/fuzz_scene; runs=$scene_runs
+  [ $target = mesh ] && exe=build-fuzz/fuzz/fuzz_mesh_detect && runs=$mesh_runs
   mkdir -p build-fuzz/corpus/$target build-fuzz/artifacts
   limit=(-runs="$runs"); [ "$runs" = 0 ] && limit=(-max_total_time="${FUZZ_SECONDS:-3600}")
   "$exe" -seed=1 "${limit[@]}" -max_len=65536 -timeout=20 -print_final_stats=1 \

@@ -112,5 +112,30 @@ TEST_CASE("bad mesh files give an error that names the file and the problem", "[
                       "");
   require_input_error(write_temp("garbled.stl", std::string("solid x\nfacet normal 0 0 1\nouter loop\nvertex 0 0") + '\0' + "\x7f\x01garbage"), "");
   require_input_error(write_temp("binary_short.stl", std::string(90, '\0')), "");
+  require_input_error(write_temp("bad_type.ply", "ply\nformat ascii 1.0\nelement vertex 1\nproperty flot x\nend_header\n0\n"),
+                      "malformed PLY header");
   require_input_error(write_temp("zero_faces.off", "OFF\n3 0 0\n0 0 0\n1 0 0\n0 1 0\n"), "");
+}
+
+TEST_CASE("inputs that once crashed the loader (fuzzing regressions) load or fail cleanly", "[io]") {
+  // fixtures/fuzz/mesh/regression_*: first byte = format (0 OBJ, 1 PLY, 2 STL, 3 OFF), then the
+  // file, as fuzz/fuzz_mesh_detect.cpp reads them.
+  const char* const ext[] = {".obj", ".ply", ".stl", ".off"};
+  int seen = 0;
+  for (const auto& entry : fs::directory_iterator(std::string(PEELCD_FIXTURES) + "/fuzz/mesh")) {
+    if (entry.path().filename().string().rfind("regression_", 0) != 0) continue;
+    std::ifstream in(entry.path(), std::ios::binary);
+    const std::string bytes((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
+    REQUIRE_FALSE(bytes.empty());
+    const std::string path = write_temp(entry.path().filename().string() + ext[std::uint8_t(bytes[0]) % 4], bytes.substr(1));
+    INFO(entry.path());
+    try {
+      const Mesh m = load_mesh(path);
+      CHECK_FALSE(m.triangles.empty());
+    } catch (const InputError& e) {
+      CHECK(std::string(e.what()).find(path) != std::string::npos);
+    }
+    ++seen;
+  }
+  CHECK(seen >= 1);
 }
