@@ -49,7 +49,7 @@ Scene parse_scene(const std::string& text, const std::string& path, const std::s
   json root;
   try {
     root = json::parse(text);
-  } catch (const json::parse_error& e) {
+  } catch (const json::exception& e) {  // a syntax error, or a number out of range (fuzzing)
     throw InputError("peelcd::load_scene(): '" + path + "': malformed JSON: " + e.what());
   }
   c.only_keys(root, "the scene", {"objects", "view", "resolution", "budget", "ids", "epsilon", "peel", "slope", "views"});

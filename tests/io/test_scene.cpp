@@ -52,6 +52,8 @@ TEST_CASE("transforms apply scale, then rotation, then translation", "[scene]") 
 TEST_CASE("bad scenes name the file, the key and the problem", "[scene]") {
   CHECK_THAT(error_of("{"), Catch::Contains("scene.json") && Catch::Contains("malformed JSON"));
   CHECK_THAT(error_of("{}"), Catch::Contains("missing key \"objects\""));
+  // A number too large for a double (found by fuzzing: it used to escape as another exception).
+  CHECK_THAT(error_of("2e222222222000000000000000000000000000"), Catch::Contains("malformed JSON"));
   CHECK_THAT(error_of(R"({"objects":[]})"), Catch::Contains("at least one object"));
   CHECK_THAT(error_of(R"({"objects":[{"mesh":"a.obj"}],"ids":"fancy"})"), Catch::Contains("unknown ID mode \"fancy\""));
   CHECK_THAT(error_of(R"({"objects":[{"mesh":"a.obj"}],"colour":1})"), Catch::Contains("unknown key \"colour\""));
