@@ -82,9 +82,11 @@ EglContext::EglContext(Platform platform) : impl_(std::make_unique<Impl>()) {
 
 EglContext::~EglContext() {
   if (impl_->context != EGL_NO_CONTEXT) {
-    eglMakeCurrent(impl_->display, EGL_NO_SURFACE, EGL_NO_SURFACE, EGL_NO_CONTEXT);
+    if (eglGetCurrentContext() == impl_->context)
+      eglMakeCurrent(impl_->display, EGL_NO_SURFACE, EGL_NO_SURFACE, EGL_NO_CONTEXT);
     eglDestroyContext(impl_->display, impl_->context);
-    eglTerminate(impl_->display);
+    // No eglTerminate: an EGL display is one per platform and device in the whole process, and
+    // terminating it would pull it from under every other EglContext on it.
   }
 }
 
