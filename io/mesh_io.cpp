@@ -63,7 +63,9 @@ void append_node(const aiScene* scene, const aiNode* node, const aiMatrix4x4& pa
 std::string ply_header_problem(const std::string& path) {
   std::ifstream in(path, std::ios::binary);
   std::string line;
-  if (!std::getline(in, line) || line.rfind("ply", 0) != 0) return "";  // not a PLY file: assimp decides
+  if (!std::getline(in, line)) return "";
+  for (char& c : line) c = char(std::tolower(static_cast<unsigned char>(c)));  // assimp accepts "Ply"
+  if (line.rfind("ply", 0) != 0) return "";  // not a PLY file: assimp decides
   static const std::set<std::string> types = {"char",  "uchar", "short",  "ushort",  "int",     "uint",
                                               "float", "double", "int8",  "uint8",   "int16",   "uint16",
                                               "int32", "uint32", "float32", "float64"};

@@ -118,6 +118,8 @@ TEST_CASE("bad mesh files give an error that names the file and the problem", "[
   require_input_error(write_temp("binary.obj", std::string("\x00\x01\x02garbage\xff\xfe", 12)), "cannot read");
   require_input_error(write_temp("truncated.off", "OFF\n4 2 0\n0 0 0\n1 0 0\n0 1 0\n0 0 1\n3 0 1 2\n"), "truncated");
   require_input_error(write_temp("short_face.off", "OFF\n3 1 0\n0 0 0\n1 0 0\n0 1 0\n3 0 1\n"), "fewer corners");
+  require_input_error(write_temp("bad_type_caps.ply", "Ply\nformat ascii 1.0\nelement vertex 1\nproperty flot x\nend_header\n0\n"),
+                      "malformed PLY header");
   require_input_error(write_temp("bad_type.ply", "ply\nformat ascii 1.0\nelement vertex 1\nproperty flot x\nend_header\n0\n"),
                       "malformed PLY header");
   require_input_error(write_temp("zero_faces.off", "OFF\n3 0 0\n0 0 0\n1 0 0\n0 1 0\n"), "");
