@@ -82,7 +82,8 @@ void collect_exact(const EK::Triangle_3&, const EK::Point_3& b, std::vector<Vec3
 // The part of triangle `t` on the plane of triangle `plane`, as the two extreme points along
 // `dir`. Which corners lie on, above or below the plane is decided with exact orientation
 // predicates; only the crossing points of straddling edges are interpolated in double (with the
-// plane n.x = c), clamped to their edge. Returns false if the triangle does not reach the plane.
+// plane n.x = c), clamped to their edge. Returns false if the triangle does not reach the plane,
+// or if a straddling edge is too close to parallel to it for double to place the crossing.
 bool cut_by_plane(const TriangleCorners& t, const TriangleCorners& plane, const Vec3& n, double c, const Vec3& dir,
                   Vec3& lo, Vec3& hi) {
   const P3 q0 = to_cgal(plane[0]), q1 = to_cgal(plane[1]), q2 = to_cgal(plane[2]);
@@ -98,9 +99,11 @@ bool cut_by_plane(const TriangleCorners& t, const TriangleCorners& plane, const 
     const int j = (i + 1) % 3;
     if (side[i] == CGAL::ZERO) pts[count++] = t[i];
     if (side[i] != CGAL::ZERO && side[j] != CGAL::ZERO && side[i] != side[j]) {
+      // An edge nearly parallel to the plane (both ends within rounding of it) has no
+      // well-defined crossing point in double: leave it to the exact construction.
       const double denom = d[i] - d[j];
-      const double r = denom != 0.0 ? std::clamp(d[i] / denom, 0.0, 1.0) : 0.5;
-      pts[count++] = t[i] + (t[j] - t[i]) * r;
+      if (!(std::abs(denom) > 1e-6 * n.norm() * (t[j] - t[i]).norm())) return false;
+      pts[count++] = t[i] + (t[j] - t[i]) * std::clamp(d[i] / denom, 0.0, 1.0);
     }
   }
   if (count == 0) return false;
