@@ -7,6 +7,7 @@
 #include "io/error.h"
 #include "io/result_json.h"
 #include "io/scene.h"
+#include "oracle/dump.h"
 
 #include <CLI/CLI.hpp>
 
@@ -152,6 +153,113 @@ int run_detect(const DetectArgs& a) {
   return 0;
 }
 
+// One frame with every layer captured: the dump of `scene` under `opt` on `backend`.
+oracle::Dump capture_frame(const std::vector<Object>& objects, const DetectOptions& opt, const std::string& backend,
+                           gl::Pipeline& pipeline) {
+  std::vector<gl::CapturedView> captured;
+  pipeline.capture_layers(&captured);
+  const FrameResult result = pipeline.detect(objects, opt);
+  pipeline.capture_layers(nullptr);
+  return oracle::make_dump(result, captured, objects, opt, pipeline.renderer(), pipeline.version(), backend);
+}
+
+int run_dump(const DetectArgs& a, const std::string& out) {
+  const Scene scene = load_scene(a.scene);
+  const DetectOptions opt = merged_options(scene, a);
+  const std::vector<Object> objects = load_objects(scene);
+  const auto context = make_context(a.backend);
+  gl::Pipeline pipeline(*context);
+  const oracle::Dump dump = capture_frame(objects, opt, context->backend(), pipeline);
+  oracle::write_dump(dump, out, true);
+  std::size_t layers = 0, views = 0;
+  for (const auto& p : dump.pairs)
+    for (const auto& v : p.views) layers += v.layers.size(), ++views;
+  if (!a.quiet)
+    std::printf("peelcd dump: %s -> %s: %zu ROIs, %zu views, %zu layers (%s); open %s/index.html\n",
+                a.scene.c_str(), out.c_str(), dump.pairs.size(), views, layers, dump.renderer.c_str(), out.c_str());
+  return 0;
+}
+
+struct GoldenArgs {
+  std::vector<std::string> cases;  // empty = every case
+  std::string dir = PEELCD_GOLDEN_DIR;
+  std::string backend = "osmesa";
+  std::string tier = "auto";
+  std::string report = "golden-report";
+  int repeat = 1;
+};
+
+std::vector<std::string> golden_cases(const GoldenArgs& a) {
+  if (!a.cases.empty()) return a.cases;
+  std::vector<std::string> all;
+  if (!std::filesystem::is_directory(a.dir)) throw InputError("peelcd golden: '" + a.dir + "' is not a folder");
+  for (const auto& e : std::filesystem::directory_iterator(a.dir))
+    if (std::filesystem::exists(e.path() / "case.json")) all.push_back(e.path().filename().string());
+  std::sort(all.begin(), all.end());
+  if (all.empty()) throw InputError("peelcd golden: no cases (folders with a case.json) in '" + a.dir + "'");
+  return all;
+}
+
+std::string case_scene(const GoldenArgs& a, const std::string& name) {
+  const std::string path = a.dir + "/" + name + "/case.json";
+  if (!std::filesystem::exists(path)) throw InputError("peelcd golden: unknown case \"" + name + "\" (no " + path + ")");
+  return path;
+}
+
+int run_golden_record(const GoldenArgs& a) {
+  // Goldens come from the reference backend only.
+  const auto context = make_context("osmesa");
+  gl::Pipeline pipeline(*context);
+  for (const std::string& name : golden_cases(a)) {
+    const Scene scene = load_scene(case_scene(a, name));
+    const std::vector<Object> objects = load_objects(scene);
+    const oracle::Dump dump = capture_frame(objects, scene.options, context->backend(), pipeline);
+    const std::string dir = a.dir + "/" + name + "/expected", fresh = dir + ".new";
+    std::error_code ec;
+    std::filesystem::remove_all(fresh, ec);
+    oracle::write_dump(dump, fresh, false);
+    std::filesystem::remove_all(dir);
+    std::filesystem::rename(fresh, dir);
+    std::size_t layers = 0;
+    for (const auto& p : dump.pairs)
+      for (const auto& v : p.views) layers += v.layers.size();
+    std::printf("recorded %s: %zu ROIs, %zu layers -> %s\n", name.c_str(), dump.pairs.size(), layers, dir.c_str());
+  }
+  return 0;
+}
+
+int run_golden_compare(const GoldenArgs& a) {
+  const auto context = make_context(a.backend);
+  gl::Pipeline pipeline(*context);
+  const std::string renderer = pipeline.renderer();
+  oracle::Tier tier = renderer.find("llvmpipe") != std::string::npos ? oracle::Tier::exact : oracle::Tier::hardware;
+  if (a.tier == "exact") tier = oracle::Tier::exact;
+  else if (a.tier == "hardware") tier = oracle::Tier::hardware;
+  else if (a.tier != "auto") throw InputError("peelcd golden compare: --tier: unknown tier \"" + a.tier + "\" (expected auto, exact or hardware)");
+  std::printf("golden compare: backend %s, %s, %s tier\n", context->backend().c_str(), renderer.c_str(),
+              oracle::to_string(tier));
+  int failed = 0;
+  for (const std::string& name : golden_cases(a)) {
+    const Scene scene = load_scene(case_scene(a, name));
+    const std::vector<Object> objects = load_objects(scene);
+    const oracle::Dump expected = oracle::read_dump(a.dir + "/" + name + "/expected");
+    for (int run = 0; run < std::max(1, a.repeat); ++run) {
+      const oracle::Dump actual = capture_frame(objects, scene.options, context->backend(), pipeline);
+      const oracle::Comparison c = oracle::compare_dumps(expected, actual, tier);
+      const std::string label = a.repeat > 1 ? name + " (run " + std::to_string(run + 1) + ")" : name;
+      if (c.ok()) {
+        std::printf("%s", oracle::report_text(c, label, tier).c_str());
+        continue;
+      }
+      ++failed;
+      std::printf("%s", oracle::write_report(expected, actual, c, label, a.report + "/" + name).c_str());
+      break;
+    }
+  }
+  std::printf("golden compare: %d case(s) differ\n", failed);
+  return failed ? 1 : 0;
+}
+
 struct SweepArgs {
   std::string scene;
   std::vector<int> res = {128, 256};
@@ -236,6 +344,24 @@ int run_sweep_command(const SweepArgs& a) {
   return 0;
 }
 
+// The options that shape a frame, shared by detect and dump (they override the scene file's).
+void add_frame_options(CLI::App* c, DetectArgs& d) {
+  c->add_option("--res", d.res, "Forced N x N texture per ROI (default: share a 512^2 budget)")
+      ->check(CLI::PositiveNumber);
+  c->add_option("--ids", d.ids, "Triangle ID mode: ring (last vertex, whole one-ring; default), paper (last-vertex IDs, T(v) sets) or unique");
+  c->add_option("--peel", d.peel, "Peel mode: alternate (the paper's; default) or full (every surface)");
+  c->add_option("--slope", d.slope, "Slope-following epsilon, in texels (default 1; 0 = the paper's constant epsilon)")
+      ->check(CLI::NonNegativeNumber);
+  c->add_option("--views", d.views, "Views fused per ROI: 3 (three orthogonal views; default) or 1")
+      ->check(CLI::IsMember({1, 3}));
+  c->add_option("--theta", d.theta, "View longitude, degrees");
+  c->add_option("--phi", d.phi, "View latitude, degrees, in [-90, 90]")->check(CLI::Range(-90.0, 90.0));
+  c->add_option("--epsilon", d.epsilon, "PCS depth threshold in world units (default: one texel)")
+      ->check(CLI::PositiveNumber);
+  c->add_option("--backend", d.backend, "GL backend: osmesa (software reference) or egl (GPU, or Mesa without one)")
+      ->capture_default_str();
+}
+
 }  // namespace
 
 int main(int argc, char** argv) {
@@ -247,26 +373,43 @@ int main(int argc, char** argv) {
       "detect", "Run one frame of collision detection on a scene file and report the colliding "
                 "triangle pairs (indices in each mesh file's triangle order)");
   detect->add_option("scene", d.scene, "Scene JSON file")->required();
-  detect->add_option("--res", d.res, "Forced N x N texture per ROI (default: share a 512^2 budget)")
-      ->check(CLI::PositiveNumber);
-  detect->add_option("--ids", d.ids, "Triangle ID mode: paper (last-vertex IDs, T(v) sets), ring (last vertex, whole one-ring) or unique");
-  detect->add_option("--peel", d.peel, "Peel mode: full (every surface, default) or alternate (the paper's)");
-  detect->add_option("--slope", d.slope, "Slope-following epsilon, in texels (default 1; 0 = the paper's constant epsilon)")
-      ->check(CLI::NonNegativeNumber);
-  detect->add_option("--views", d.views, "Views fused per ROI: 1 (default) or 3 (three orthogonal views)")
-      ->check(CLI::IsMember({1, 3}));
-  detect->add_option("--theta", d.theta, "View longitude, degrees");
-  detect->add_option("--phi", d.phi, "View latitude, degrees, in [-90, 90]")->check(CLI::Range(-90.0, 90.0));
-  detect->add_option("--epsilon", d.epsilon, "PCS depth threshold in world units (default: one texel)")
-      ->check(CLI::PositiveNumber);
+  add_frame_options(detect, d);
   detect->add_option("--json", d.json_out, "Write the JSON report to FILE, or - for stdout");
   detect->add_option("--repeat", d.repeat, "Run the frame N times and report median timings")
       ->check(CLI::PositiveNumber);
   detect->add_flag("--check", d.check, "Also run the exact all-pairs reference and print the miss ratio");
   detect->add_flag("--quiet", d.quiet, "No human summary");
-  detect->add_option("--backend", d.backend, "GL backend: osmesa (software reference) or egl (GPU, or Mesa without one)")
-      ->capture_default_str();
 
+  DetectArgs du;
+  std::string dump_out;
+  CLI::App* dump = app.add_subcommand(
+      "dump", "Run one frame and write every peel layer of every ROI view (EXR, lossless; PNG previews), "
+              "the PCS, the colliding pairs, meta.json and a self-contained index.html viewer to a folder");
+  dump->add_option("scene", du.scene, "Scene JSON file")->required();
+  dump->add_option("--out", dump_out, "Output folder (must not exist, or be empty)")->required();
+  add_frame_options(dump, du);
+  dump->add_flag("--quiet", du.quiet, "No summary line");
+
+  GoldenArgs gr, gc;
+  CLI::App* golden = app.add_subcommand("golden", "Record goldens from OSMesa, or compare a backend with them");
+  golden->require_subcommand(1);
+  CLI::App* record = golden->add_subcommand(
+      "record", "Write the goldens of CASE... (default: every case) from the OSMesa reference backend into "
+                "<golden-dir>/<case>/expected; review the change like code");
+  record->add_option("case", gr.cases, "Case names (folders of the golden dir)");
+  record->add_option("--golden-dir", gr.dir, "Folder of the golden cases")->capture_default_str();
+  CLI::App* compare = golden->add_subcommand(
+      "compare", "Run CASE... (default: every case) on a backend and compare every layer, the PCS and the "
+                 "colliding pairs with the goldens; on a difference print the first differing texels and "
+                 "write a report with expected / actual / error-mask PNGs. Exit 1 if any case differs");
+  compare->add_option("case", gc.cases, "Case names (folders of the golden dir)");
+  compare->add_option("--golden-dir", gc.dir, "Folder of the golden cases")->capture_default_str();
+  compare->add_option("--backend", gc.backend, "GL backend: osmesa or egl")->capture_default_str();
+  compare->add_option("--tier", gc.tier, "auto (exact on llvmpipe, hardware otherwise), exact or hardware")
+      ->capture_default_str();
+  compare->add_option("--report", gc.report, "Folder for the reports of differing cases")->capture_default_str();
+  compare->add_option("--repeat", gc.repeat, "Run and compare each case N times in one process (determinism)")
+      ->check(CLI::PositiveNumber)->capture_default_str();
   SweepArgs sw;
   CLI::App* sweep = app.add_subcommand(
       "sweep", "Measure accuracy and run time over view directions and configurations against the "
@@ -304,6 +447,9 @@ int main(int argc, char** argv) {
   }
   try {
     if (*detect) return run_detect(d);
+    if (*dump) return run_dump(du, dump_out);
+    if (*record) return run_golden_record(gr);
+    if (*compare) return run_golden_compare(gc);
     if (*sweep) return run_sweep_command(sw);
   } catch (const InputError& e) {
     std::fprintf(stderr, "error: %s\n", e.what());

@@ -53,9 +53,10 @@ bool intersect(const A& a, const B& b) {
 // Appends every point of an exact-kernel intersection result to `pts`, rounded to double.
 struct Collect {
   std::vector<Vec3>& pts;
-  static Vec3 to_eigen(const EK::Point_3& p) {
-    return Vec3(CGAL::to_double(p.x()), CGAL::to_double(p.y()), CGAL::to_double(p.z()));
-  }
+  // Rounded from the exact value: CGAL's to_double on a lazy number may return its interval
+  // approximation when that is within a relative 1e-5, which is far too coarse at large offsets.
+  static double round(const EK::FT& x) { return CGAL::to_double(CGAL::exact(x)); }
+  static Vec3 to_eigen(const EK::Point_3& p) { return Vec3(round(p.x()), round(p.y()), round(p.z())); }
   void operator()(const EK::Point_3& p) const { pts.push_back(to_eigen(p)); }
   void operator()(const EK::Segment_3& s) const {
     pts.push_back(to_eigen(s.source()));
@@ -73,6 +74,21 @@ template <class A, class B>
 void collect_exact(const A& a, const B& b, std::vector<Vec3>& pts) {
   if (auto r = CGAL::intersection(a, b)) boost::apply_visitor(Collect{pts}, *r);
 }
+// A segment crossing a triangle's plane meets it in one point: the segment's line cut by the
+// plane, constructed exactly. (CGAL 5.5's Segment_3 x Triangle_3 construction returned a point
+// off the segment for a case the soak found, so it is used only for the coplanar case.)
+void collect_exact(const EK::Segment_3& s, const EK::Triangle_3& t, std::vector<Vec3>& pts) {
+  const EK::Plane_3 plane = t.supporting_plane();
+  if (!plane.has_on(s.source()) || !plane.has_on(s.target())) {
+    if (auto r = CGAL::intersection(s.supporting_line(), plane))
+      if (const auto* p = boost::get<EK::Point_3>(&*r)) {
+        Collect{pts}(*p);
+        return;
+      }
+  }
+  if (auto r = CGAL::intersection(s, t)) boost::apply_visitor(Collect{pts}, *r);
+}
+void collect_exact(const EK::Triangle_3& t, const EK::Segment_3& s, std::vector<Vec3>& pts) { collect_exact(s, t, pts); }
 void collect_exact(const EK::Point_3& a, const EK::Point_3&, std::vector<Vec3>& pts) { Collect{pts}(a); }
 void collect_exact(const EK::Point_3& a, const EK::Segment_3&, std::vector<Vec3>& pts) { Collect{pts}(a); }
 void collect_exact(const EK::Segment_3&, const EK::Point_3& b, std::vector<Vec3>& pts) { Collect{pts}(b); }

@@ -15,6 +15,7 @@ namespace peelcd::shaders {
 extern const char* const peel_vert;
 extern const char* const peel_frag;
 extern const char* const pcs_comp;
+extern const char* const shader_sources_hash;
 }  // namespace peelcd::shaders
 
 namespace peelcd::gl {
@@ -63,6 +64,8 @@ struct Pipeline::Impl {
   std::vector<GpuVertex> staging[2];
   std::vector<IdPair> pcs, pcs_all;
   std::vector<std::uint64_t> candidates;
+  std::vector<CapturedView>* capture = nullptr;
+  CapturedView* captured = nullptr;  // the view being peeled, while capturing
 
   explicit Impl(Context& ctx) : context(ctx) {
     context.make_current();
@@ -266,6 +269,11 @@ struct Pipeline::Impl {
     const GLfloat far_depth = 1.0f;
     r.layers = 0;
     r.passes = 0;
+    if (captured) {
+      captured->layers.clear();  // a rerun after a PCS overflow starts over
+      captured->epsilon_window = float(view.world_to_window_depth(epsilon_world));
+      captured->slope = float(opt.slope);
+    }
     for (int k = 0; k < kMaxPasses; ++k) {
       const int cur = k & 1, prev = cur ^ 1;
       gl.BindFramebuffer(GL_FRAMEBUFFER, fbo[cur]);
@@ -291,6 +299,12 @@ struct Pipeline::Impl {
       gl.GetQueryObjectuiv(query, GL_QUERY_RESULT, &any);
       if (!any) break;  // the whole ROI ended
       ++r.layers;
+      if (captured) {
+        std::vector<std::uint32_t>& texels = captured->layers.emplace_back(std::size_t(n) * n * 4);
+        gl.GetTextureImage(layer_tex[cur], 0, GL_RGBA_INTEGER, GL_UNSIGNED_INT,
+                           GLsizei(texels.size() * sizeof(std::uint32_t)), texels.data());
+        check("layer capture");
+      }
       if (k == 0) continue;
       gl.UseProgram(pcs_program);
       gl.BindTextureUnit(0, layer_tex[prev]);
@@ -327,6 +341,8 @@ Pipeline::~Pipeline() = default;
 std::string Pipeline::renderer() const { return impl_->renderer; }
 std::string Pipeline::version() const { return impl_->version; }
 int Pipeline::max_resolution() const { return impl_->max_texture; }
+void Pipeline::capture_layers(std::vector<CapturedView>* sink) { impl_->capture = sink; }
+std::string shader_sources_hash() { return shaders::shader_sources_hash; }
 
 FrameResult Pipeline::detect(const std::vector<Object>& objects, const DetectOptions& opt) {
   Impl& s = *impl_;
@@ -398,7 +414,20 @@ FrameResult Pipeline::detect(const std::vector<Object>& objects, const DetectOpt
       out.timings.upload += ms_since(t0);
 
       PairResult one;
+      if (s.capture) {
+        s.captured = &s.capture->emplace_back();
+        s.captured->pair = out.pairs.size();
+        s.captured->view = int(v);
+        s.captured->roi = view;
+        s.captured->a_first = min_a > min_b;
+      }
       while (!s.peel(view, r.epsilon, opt, min_a > min_b ? 0 : 1, one, out.timings)) {
+      }
+      if (s.captured) {
+        s.captured->pcs = s.pcs;
+        std::sort(s.captured->pcs.begin(), s.captured->pcs.end());
+        s.captured->pcs.erase(std::unique(s.captured->pcs.begin(), s.captured->pcs.end()), s.captured->pcs.end());
+        s.captured = nullptr;
       }
       r.layers = std::max(r.layers, one.layers);
       r.passes += one.passes;

@@ -10,6 +10,8 @@ packages=(
   libegl-dev libegl-mesa0 libgl1-mesa-dri         # EGL without a window (Mesa llvmpipe, or a GPU)
   libeigen3-dev libcgal-dev libgmp-dev libmpfr-dev libboost-dev   # geometry, exact predicates
   libassimp-dev nlohmann-json3-dev libcli11-dev    # mesh files, scene JSON, command line
+  libopenexr-dev libpng-dev                        # layer dumps and goldens (EXR), previews (PNG)
+  chromium                                         # the viewer test (headless)
   catch2                                           # tests (Catch2 v2)
 )
 missing=()

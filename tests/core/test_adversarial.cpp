@@ -48,10 +48,10 @@ bool oracle(const TriangleCorners& a, const TriangleCorners& b) {
 double distance(const Vec3& p, const TriangleCorners& t) {
   const EK::Point_3 q = exact(p);
   const EK::Point_3 a = exact(t[0]), b = exact(t[1]), c = exact(t[2]);
-  if (!CGAL::collinear(a, b, c)) return std::sqrt(CGAL::to_double(CGAL::squared_distance(q, EK::Triangle_3(a, b, c))));
-  double best = std::sqrt(CGAL::to_double(CGAL::squared_distance(q, a)));
+  if (!CGAL::collinear(a, b, c)) return std::sqrt(CGAL::to_double(CGAL::exact(CGAL::squared_distance(q, EK::Triangle_3(a, b, c)))));
+  double best = std::sqrt(CGAL::to_double(CGAL::exact(CGAL::squared_distance(q, a))));
   for (const auto& s : {EK::Segment_3(a, b), EK::Segment_3(b, c), EK::Segment_3(a, c)})
-    if (!s.is_degenerate()) best = std::min(best, std::sqrt(CGAL::to_double(CGAL::squared_distance(q, s))));
+    if (!s.is_degenerate()) best = std::min(best, std::sqrt(CGAL::to_double(CGAL::exact(CGAL::squared_distance(q, s)))));
   return best;
 }
 
