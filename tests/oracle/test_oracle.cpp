@@ -1,0 +1,199 @@
+// Layer images, dumps and the golden comparison, on synthetic layers (no GL).
+#include "io/error.h"
+#include "oracle/dump.h"
+
+#include <catch2/catch.hpp>
+
+#include <cstring>
+#include <filesystem>
+#include <limits>
+
+using namespace peelcd;
+using namespace peelcd::oracle;
+namespace fs = std::filesystem;
+
+namespace {
+
+std::uint32_t bits(float f) {
+  std::uint32_t w;
+  std::memcpy(&w, &f, 4);
+  return w;
+}
+
+// Layer texel t of an n x n layer: depth z, object, ID (stored + 1), slopes.
+void put(std::vector<std::uint32_t>& layer, std::size_t t, float z, std::uint32_t object, std::uint32_t id,
+         float gx = 0.0f, float gy = 0.0f) {
+  layer[4 * t] = bits(z);
+  layer[4 * t + 1] = object << 31 | (id + 1);
+  layer[4 * t + 2] = bits(gx);
+  layer[4 * t + 3] = bits(gy);
+}
+
+// One pair, one view, 8 x 8: layer 0 = object B (ID 7) everywhere in a 6 x 6 block, layer 1 =
+// object A (ID 3, left half; ID 4, right half) just behind it.
+Dump synthetic() {
+  const int n = 8;
+  DumpView v;
+  v.dir = "pair0_a_b/view0";
+  v.resolution = n;
+  v.epsilon_window = 0.01f;
+  v.slope = 1.0f;
+  v.layers.assign(2, std::vector<std::uint32_t>(std::size_t(n) * n * 4, 0));
+  for (int y = 1; y < 7; ++y)
+    for (int x = 1; x < 7; ++x) {
+      put(v.layers[0], std::size_t(y) * n + x, 0.5f, 1, 7);
+      put(v.layers[1], std::size_t(y) * n + x, 0.505f, 0, x < 4 ? 3 : 4);
+    }
+  v.pcs = {{3, 7}, {4, 7}};
+  DumpPair p;
+  p.dir = "pair0_a_b";
+  p.name_a = "a";
+  p.name_b = "b";
+  p.object_b = 1;
+  p.epsilon = 0.1;
+  p.pcs = v.pcs;
+  p.colliding = {{3, 7}, {4, 7}};
+  p.kinds = {"crossing", "touching"};
+  p.views.push_back(v);
+  Dump d;
+  d.renderer = "test";
+  d.gl_version = "test";
+  d.backend = "none";
+  d.shader_hash = "0";
+  d.options = {{"resolution", n}};
+  d.pairs.push_back(p);
+  return d;
+}
+
+fs::path fresh_dir(const std::string& name) {
+  const fs::path p = fs::temp_directory_path() / ("peelcd_test_oracle_" + name);
+  fs::remove_all(p);
+  return p;
+}
+
+}  // namespace
+
+TEST_CASE("EXR layers round-trip bit for bit, IDs above 2^24 included", "[oracle]") {
+  const int n = 5;
+  std::vector<std::uint32_t> layer(std::size_t(n) * n * 4, 0);
+  put(layer, 0, 0.25f, 1, (1u << 24) + 1);  // a float would round this ID
+  put(layer, 1, std::nextafter(1.0f, 0.0f), 0, 0x7ffffffeu - 1, -0.0f, std::numeric_limits<float>::denorm_min());
+  put(layer, 7, 1e-30f, 1, 0, -3.5f, 1e30f);
+  put(layer, 24, 0.0f, 0, 123456789);  // the last texel (top-right in GL, bottom-right in the file)
+  const fs::path dir = fresh_dir("exr");
+  fs::create_directories(dir);
+  write_layer_exr((dir / "l.exr").string(), layer, n);
+  int m = 0;
+  const auto back = read_layer_exr((dir / "l.exr").string(), m);
+  CHECK(m == n);
+  CHECK(back == layer);
+  CHECK_THROWS_AS(read_layer_exr((dir / "missing.exr").string(), m), InputError);
+  fs::remove_all(dir);
+}
+
+TEST_CASE("a dump written and read back compares equal; a non-empty target is refused", "[oracle]") {
+  const Dump d = synthetic();
+  const fs::path dir = fresh_dir("dump");
+  write_dump(d, dir.string(), true);
+  CHECK(fs::exists(dir / "index.html"));
+  CHECK(fs::exists(dir / "pair0_a_b/view0/layer01.png"));
+  const Dump back = read_dump(dir.string());
+  const Comparison c = compare_dumps(d, back, Tier::exact);
+  CHECK(c.ok());
+  CHECK(c.differing_texels == 0);
+  CHECK(back.pairs.at(0).kinds == d.pairs[0].kinds);
+  CHECK_THROWS_AS(write_dump(d, dir.string(), false), InputError);
+  CHECK_FALSE(fs::exists(dir.string() + ".partial"));
+  fs::remove(dir / "pair0_a_b/view0/layer01.exr");
+  CHECK_THROWS_WITH(read_dump(dir.string()), Catch::Contains("layer01.exr"));
+  fs::remove_all(dir);
+}
+
+TEST_CASE("the exact tier finds one changed texel and names it in file coordinates", "[oracle]") {
+  const Dump golden = synthetic();
+  Dump actual = golden;
+  auto& layer = actual.pairs[0].views[0].layers[1];
+  const int n = 8, x = 5, gl_row = 2;
+  layer[4 * (std::size_t(gl_row) * n + x)] = bits(0.5050001f);
+  const Comparison c = compare_dumps(golden, actual, Tier::exact);
+  CHECK_FALSE(c.ok());
+  CHECK(c.differing_texels == 1);
+  REQUIRE(c.first.size() == 1);
+  CHECK(c.first[0].layer == 1);
+  CHECK(c.first[0].x == x);
+  CHECK(c.first[0].y == n - 1 - gl_row);  // files and reports count rows from the top
+  CHECK(c.first[0].channel == "Z");
+  const std::string text = report_text(c, "synthetic", Tier::exact);
+  CHECK_THAT(text, Catch::Contains("layer01 x=5 y=5 Z"));
+
+  const fs::path dir = fresh_dir("report");
+  write_report(golden, actual, c, "synthetic", dir.string());
+  CHECK(fs::exists(dir / "report.txt"));
+  CHECK(fs::exists(dir / "pair0_a_b_view0_layer01_error.png"));
+  fs::remove_all(dir);
+}
+
+TEST_CASE("PCS, colliding pairs and layer counts are part of the exact tier", "[oracle]") {
+  const Dump golden = synthetic();
+  Dump a = golden;
+  a.pairs[0].colliding.pop_back();
+  a.pairs[0].kinds.pop_back();
+  Comparison c = compare_dumps(golden, a, Tier::exact);
+  CHECK_FALSE(c.ok());
+  CHECK_THAT(c.failures.at(0), Catch::Contains("1 golden colliding pairs missing: (4,7)"));
+  CHECK_FALSE(compare_dumps(golden, a, Tier::hardware).ok());  // every tier needs every golden pair
+
+  Dump b = golden;
+  b.pairs[0].colliding.push_back({5, 7});
+  b.pairs[0].kinds.push_back("crossing");
+  CHECK_FALSE(compare_dumps(golden, b, Tier::exact).ok());
+  CHECK(compare_dumps(golden, b, Tier::hardware).ok());  // an extra pair is listed, not failed
+
+  Dump e = golden;
+  e.pairs[0].views[0].layers.pop_back();
+  c = compare_dumps(golden, e, Tier::exact);
+  CHECK_FALSE(c.ok());
+  CHECK(c.differing_texels == 36);  // every filled texel of the missing layer
+}
+
+TEST_CASE("the hardware tier tolerates edges and small depth error, nothing else", "[oracle]") {
+  const Dump golden = synthetic();
+  const int n = 8;
+  const auto with = [&](int x, int y, auto change) {
+    Dump d = golden;
+    change(d.pairs[0].views[0].layers[1], std::size_t(y) * n + x);
+    return compare_dumps(golden, d, Tier::hardware);
+  };
+  // ID 3 -> 4 at x = 3, next to the ID boundary between x = 3 and 4: tolerated.
+  Comparison c = with(3, 3, [](auto& l, std::size_t t) { l[4 * t + 1] = 0u << 31 | 5u; });
+  CHECK(c.ok());
+  CHECK(c.tolerated_texels == 1);
+  // The same change at x = 2, two texels from the ID boundary and from the empty rim: a failure.
+  c = with(2, 3, [](auto& l, std::size_t t) { l[4 * t + 1] = 0u << 31 | 5u; });
+  CHECK_FALSE(c.ok());
+  // Depth off by 10 ULP on the same surface: tolerated; by 10^6 ULP: not.
+  c = with(2, 3, [](auto& l, std::size_t t) { l[4 * t] += 10; });
+  CHECK(c.ok());
+  c = with(2, 3, [](auto& l, std::size_t t) { l[4 * t] += 1000000; });
+  CHECK_FALSE(c.ok());
+  // The exact tier tolerates none of them.
+  Dump d = golden;
+  d.pairs[0].views[0].layers[1][4 * (3 * n + 3) + 1] = 5u;
+  CHECK_FALSE(compare_dumps(golden, d, Tier::exact).ok());
+}
+
+TEST_CASE("PCS texels of a layer: different objects within epsilon", "[oracle]") {
+  const Dump d = synthetic();
+  const DumpView& v = d.pairs[0].views[0];
+  const auto marks0 = pcs_texels(v, 0), marks1 = pcs_texels(v, 1);
+  std::size_t m0 = 0, m1 = 0;
+  for (bool b : marks0) m0 += b;
+  for (bool b : marks1) m1 += b;
+  CHECK(m0 == 0);   // layer 0 has no layer before it
+  CHECK(m1 == 36);  // dz 0.005 < epsilon 0.01 on the whole block
+  DumpView far = v;
+  far.epsilon_window = 0.001f;
+  std::size_t m2 = 0;
+  for (bool b : pcs_texels(far, 1)) m2 += b;
+  CHECK(m2 == 0);
+}
