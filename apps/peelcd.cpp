@@ -1,5 +1,7 @@
 // peelcd: image-space collision detection through alternate surface peeling.
 #include "core/reference.h"
+#include "bench/peers.h"
+#include "eval/scenes.h"
 #include "eval/sweep.h"
 #include "gl/pipeline.h"
 #include "gl_egl/egl_context.h"
@@ -12,6 +14,9 @@
 #include <CLI/CLI.hpp>
 
 #include <algorithm>
+#include <array>
+#include <cmath>
+#include <iterator>
 #include <cstdio>
 #include <cstdlib>
 #include <filesystem>
@@ -36,7 +41,7 @@ std::unique_ptr<gl::Context> make_context(const std::string& backend) {
 struct DetectArgs {
   std::string scene;
   int res = 0;  // 0 = not given
-  std::string ids, peel;
+  std::string ids, peel, peeler;
   double slope = NAN;
   double theta = NAN, phi = NAN, epsilon = NAN;
   std::string json_out;
@@ -60,6 +65,11 @@ DetectOptions merged_options(const Scene& scene, const DetectArgs& a) {
     const auto m = parse_peel_mode(a.peel);
     if (!m) throw InputError("peelcd detect: --peel: unknown peel mode \"" + a.peel + "\" (expected full or alternate)");
     o.peel = *m;
+  }
+  if (!a.peeler.empty()) {
+    const auto m = parse_peeler(a.peeler);
+    if (!m) throw InputError("peelcd: --peeler: unknown peeler \"" + a.peeler + "\" (expected abuffer or multipass)");
+    o.peeler = *m;
   }
   if (!std::isnan(a.slope)) o.slope = a.slope;
   if (a.views) o.views = a.views;
@@ -186,6 +196,7 @@ struct GoldenArgs {
   std::string backend = "osmesa";
   std::string tier = "auto";
   std::string report = "golden-report";
+  std::string peeler;  // empty: the case's (the default)
   int repeat = 1;
 };
 
@@ -240,7 +251,12 @@ int run_golden_compare(const GoldenArgs& a) {
               oracle::to_string(tier));
   int failed = 0;
   for (const std::string& name : golden_cases(a)) {
-    const Scene scene = load_scene(case_scene(a, name));
+    Scene scene = load_scene(case_scene(a, name));
+    if (!a.peeler.empty()) {
+      const auto m = parse_peeler(a.peeler);
+      if (!m) throw InputError("peelcd golden compare: --peeler: unknown peeler \"" + a.peeler + "\" (expected abuffer or multipass)");
+      scene.options.peeler = *m;
+    }
     const std::vector<Object> objects = load_objects(scene);
     const oracle::Dump expected = oracle::read_dump(a.dir + "/" + name + "/expected");
     for (int run = 0; run < std::max(1, a.repeat); ++run) {
@@ -260,6 +276,252 @@ int run_golden_compare(const GoldenArgs& a) {
   return failed ? 1 : 0;
 }
 
+// A terminal-aware progress bar on stderr: redrawn in place on a terminal, silent otherwise.
+struct Progress {
+  bool tty = isatty(STDERR_FILENO);
+  void operator()(std::size_t done, std::size_t total) const {
+    if (!tty) return;
+    const int width = 40, filled = int(width * done / std::max<std::size_t>(total, 1));
+    std::fprintf(stderr, "\r[%s%s] %zu/%zu frames", std::string(filled, '#').c_str(),
+                 std::string(width - filled, ' ').c_str(), done, total);
+    if (done == total) std::fprintf(stderr, "\n");
+  }
+};
+
+// ---- dynamic scenes and benchmarks ----
+
+std::unique_ptr<Sequence> make_sequence(const std::string& name, std::size_t frames) {
+  if (name == "test1") return make_test1(PEELCD_MESHES_DIR, frames);
+  if (name == "test2") return make_test2(PEELCD_MESHES_DIR, frames);
+  throw InputError("peelcd: unknown test scene \"" + name + "\" (expected test1 or test2)");
+}
+
+// The paper's Tables 1 and 2 (GeForce 7900GTX): nCTP, AABB, GPU, readback, CPU, total per phase.
+const std::vector<std::array<double, 6>>& paper_table(const std::string& name) {
+  static const std::vector<std::array<double, 6>> t1 = {{15, 0.07, 3.11, 0.11, 0.07, 3.36},
+                                                         {33, 0.07, 3.08, 0.13, 0.14, 3.42},
+                                                         {96, 0.07, 3.28, 0.15, 0.44, 3.94},
+                                                         {173, 0.07, 3.02, 0.36, 0.68, 4.13}};
+  static const std::vector<std::array<double, 6>> t2 = {
+      {16, 0.03, 2.66, 0.12, 0.10, 2.91},  {115, 0.03, 3.05, 0.68, 0.66, 4.42}, {96, 0.03, 4.26, 0.39, 0.48, 5.16},
+      {39, 0.03, 2.39, 0.14, 0.36, 2.93},  {125, 0.03, 3.22, 0.73, 0.67, 4.65}, {222, 0.03, 2.38, 0.84, 0.95, 4.20},
+      {339, 0.03, 3.15, 0.92, 1.66, 5.75}, {262, 0.03, 2.90, 0.71, 1.17, 4.81}};
+  return name == "test1" ? t1 : t2;
+}
+
+// Found, missed and false contacts of a frame against the exact pairs of the CGAL peer.
+Score score_frame(const FrameResult& r, const bench::PeerFrame& exact) {
+  Score total;
+  for (std::size_t i = 0; i < exact.objects.size(); ++i) {
+    std::vector<Contact> none;
+    const std::vector<Contact>* found = &none;
+    for (const PairResult& p : r.pairs)
+      if (p.object_a == exact.objects[i].first && p.object_b == exact.objects[i].second) found = &p.colliding;
+    const Score s = score_contacts(exact.per_pair[i], *found);
+    total.exact += s.exact;
+    total.found += s.found;
+    total.missed += s.missed;
+    total.false_contacts += s.false_contacts;
+  }
+  return total;
+}
+
+struct SimArgs {
+  std::string test;
+  std::size_t frames = 40;
+  DetectArgs detect;
+  std::string csv;
+};
+
+int run_simulate(const SimArgs& a) {
+  const auto seq = make_sequence(a.test, a.frames);
+  Scene defaults;
+  const DetectOptions opt = merged_options(defaults, a.detect);
+  const auto context = make_context(a.detect.backend);
+  gl::Pipeline pipeline(*context);
+  std::vector<Object> objects;
+  std::string csv = "frame,phase,triangles,rois,rois_peeled,triangles_uploaded,gl_passes,pcs_readbacks,nctp,found,"
+                    "false_contacts,aabb_ms,upload_ms,gpu_ms,readback_ms,cpu_ms,total_ms\n";
+  std::printf("peelcd simulate %s: %zu frames, %s, ids=%s peel=%s slope=%g views=%d res=%s\n", seq->name().c_str(),
+              seq->frames(), pipeline.renderer().c_str(), to_string(opt.ids), to_string(opt.peel), opt.slope,
+              opt.views, opt.resolution ? std::to_string(opt.resolution).c_str() : ("budget " + std::to_string(opt.budget)).c_str());
+  std::printf("%5s %5s %7s %5s %6s %8s %6s %5s %6s %6s %6s %5s %7s %8s %8s %8s %8s\n", "frame", "phase", "tris",
+              "ROIs", "peeled", "uploaded", "passes", "reads", "nCTP", "found", "miss%", "false", "aabb", "gpu",
+              "readback", "cpu", "total");
+  struct PhaseSum {
+    std::size_t frames = 0;
+    double nctp = 0, found = 0, aabb = 0, gpu = 0, readback = 0, cpu = 0, total = 0;
+  };
+  std::vector<PhaseSum> phases(seq->phases());
+  std::size_t false_total = 0;
+  for (std::size_t f = 0; f < seq->frames(); ++f) {
+    seq->frame(f, objects);
+    const FrameResult r = pipeline.detect(objects, opt);
+    const bench::PeerFrame exact = bench::cgal_frame(objects);
+    const Score sc = score_frame(r, exact);
+    false_total += sc.false_contacts;
+    std::size_t tris = 0;
+    for (const Object& o : objects) tris += o.mesh.triangles.size();
+    const Timings& t = r.timings;
+    const int ph = seq->phase(f);
+    std::printf("%5zu %5c %7zu %5zu %6zu %8zu %6zu %5zu %6zu %6zu %5.1f%% %5zu %7.3f %8.2f %8.3f %8.2f %8.2f\n", f,
+                char('a' + ph), tris, r.pairs.size(), r.rois_peeled, r.triangles_uploaded, r.gl_passes,
+                r.pcs_readbacks, sc.exact, sc.found, 100.0 * sc.miss_ratio(), sc.false_contacts, t.aabb,
+                t.upload + t.gpu, t.readback, t.cpu, t.total);
+    char line[512];
+    std::snprintf(line, sizeof line, "%zu,%c,%zu,%zu,%zu,%zu,%zu,%zu,%zu,%zu,%zu,%.4f,%.4f,%.4f,%.4f,%.4f,%.4f\n", f,
+                  char('a' + ph), tris, r.pairs.size(), r.rois_peeled, r.triangles_uploaded, r.gl_passes,
+                  r.pcs_readbacks, sc.exact, sc.found, sc.false_contacts, t.aabb, t.upload, t.gpu, t.readback, t.cpu,
+                  t.total);
+    csv += line;
+    PhaseSum& p = phases[ph];
+    ++p.frames;
+    p.nctp += double(sc.exact);
+    p.found += double(sc.found);
+    p.aabb += t.aabb;
+    p.gpu += t.upload + t.gpu;
+    p.readback += t.readback;
+    p.cpu += t.cpu;
+    p.total += t.total;
+  }
+  std::printf("\nsummary (means per phase; the paper's table beside, GeForce 7900GTX; ms)\n");
+  std::printf("%5s | %6s %6s %6s %7s %8s %7s %8s | %6s %6s %6s %8s %6s %6s\n", "", "nCTP", "found", "AABB", "GPU",
+              "readback", "CPU", "total", "nCTP", "AABB", "GPU", "readback", "CPU", "total");
+  const auto& paper = paper_table(seq->name());
+  for (std::size_t i = 0; i < phases.size(); ++i) {
+    const PhaseSum& p = phases[i];
+    const double n = std::max<double>(1, double(p.frames));
+    std::printf("(%c)   | %6.0f %6.0f %6.3f %7.2f %8.3f %7.2f %8.2f | %6.0f %6.2f %6.2f %8.2f %6.2f %6.2f\n",
+                char('a' + i), p.nctp / n, p.found / n, p.aabb / n, p.gpu / n, p.readback / n, p.cpu / n,
+                p.total / n, paper[i][0], paper[i][1], paper[i][2], paper[i][3], paper[i][4], paper[i][5]);
+  }
+  std::printf("false contacts over all frames: %zu\n", false_total);
+  if (!a.csv.empty()) write_output(a.csv, csv);
+  return false_total ? 1 : 0;
+}
+
+struct BenchArgs {
+  std::string scene = "test1";  // test1, test2 or a scene file
+  std::size_t frames = 12;
+  int res = 256;
+  std::string backend = "osmesa";
+  std::string csv;
+};
+
+int run_bench(const BenchArgs& a) {
+  std::unique_ptr<Sequence> seq;
+  std::vector<Object> fixed;
+  if (a.scene == "test1" || a.scene == "test2") {
+    seq = make_sequence(a.scene, a.frames);
+  } else {
+    fixed = load_objects(load_scene(a.scene));
+  }
+  const auto context = make_context(a.backend);
+  gl::Pipeline pipeline(*context);
+  if (a.res > pipeline.max_resolution())
+    throw InputError("peelcd bench: --res " + std::to_string(a.res) + " is above GL_MAX_TEXTURE_SIZE");
+
+  struct Config {
+    std::string name;
+    DetectOptions opt;
+  };
+  std::vector<Config> configs;
+  DetectOptions base;
+  base.resolution = a.res;
+  configs.push_back({"peelcd default (3 views)", base});
+  DetectOptions one = base;
+  one.views = 1;
+  configs.push_back({"peelcd 1 view", one});
+  DetectOptions paper = one;
+  paper.ids = IdMode::paper;
+  paper.slope = 0.0;
+  configs.push_back({"peelcd paper config", paper});
+
+  const std::size_t methods = configs.size() + 3;  // + CGAL, FCL, floor
+  std::vector<std::string> names;
+  for (const Config& c : configs) names.push_back(c.name);
+  names.insert(names.end(), {"CGAL box_intersection_d + exact", "FCL 0.7 AABB tree built per frame",
+                             "floor: 1 bare draw per ROI view"});
+  std::vector<std::vector<double>> ms(methods);
+  std::vector<Score> scores(methods);
+  std::vector<std::vector<std::vector<double>>> phase_ms;  // [phase][method] -> frame times
+  if (seq) phase_ms.assign(seq->phases(), std::vector<std::vector<double>>(methods));
+  std::string csv = "frame,method,ms,nctp,found,false_contacts\n";
+  std::vector<Object> objects;
+  const std::size_t frames = seq ? seq->frames() : a.frames;
+  Progress progress;
+  for (std::size_t f = 0; f < frames; ++f) {
+    if (seq) seq->frame(f, objects);
+    const std::vector<Object>& obj = seq ? objects : fixed;
+    // Side by side on the same frame: the exact reference first (it is the CGAL peer).
+    const bench::PeerFrame exact = bench::cgal_frame(obj);
+    std::vector<double> t(methods);
+    std::vector<Score> s(methods);
+    for (std::size_t c = 0; c < configs.size(); ++c) {
+      const FrameResult r = pipeline.detect(obj, configs[c].opt);
+      t[c] = r.timings.total;
+      s[c] = score_frame(r, exact);
+    }
+    t[configs.size()] = exact.ms;
+    s[configs.size()] = Score{exact.pairs, exact.pairs, 0, 0};
+    const bench::PeerFrame fcl = bench::fcl_frame(obj);
+    t[configs.size() + 1] = fcl.ms;
+    Score fs;
+    for (std::size_t i = 0; i < exact.per_pair.size(); ++i) {
+      std::vector<std::uint64_t> common;
+      std::set_intersection(exact.per_pair[i].begin(), exact.per_pair[i].end(), fcl.per_pair[i].begin(),
+                            fcl.per_pair[i].end(), std::back_inserter(common));
+      fs.exact += exact.per_pair[i].size();
+      fs.found += common.size();
+      fs.missed += exact.per_pair[i].size() - common.size();
+      fs.false_contacts += fcl.per_pair[i].size() - common.size();
+    }
+    s[configs.size() + 1] = fs;
+    t[configs.size() + 2] = pipeline.floor_ms(obj, configs[0].opt);
+    s[configs.size() + 2] = Score{exact.pairs, 0, exact.pairs, 0};
+    for (std::size_t m = 0; m < methods; ++m) {
+      ms[m].push_back(t[m]);
+      scores[m].exact += s[m].exact;
+      scores[m].found += s[m].found;
+      scores[m].missed += s[m].missed;
+      scores[m].false_contacts += s[m].false_contacts;
+      if (seq) phase_ms[seq->phase(f)][m].push_back(t[m]);
+      char line[256];
+      std::snprintf(line, sizeof line, "%zu,\"%s\",%.4f,%zu,%zu,%zu\n", f, names[m].c_str(), t[m], s[m].exact,
+                    s[m].found, s[m].false_contacts);
+      csv += line;
+    }
+    progress(f + 1, frames);
+  }
+  const std::size_t cg = configs.size(), fc = cg + 1, fl = cg + 2;
+  std::vector<double> med(methods);
+  for (std::size_t m = 0; m < methods; ++m) med[m] = median(ms[m]);
+  std::printf("peelcd bench: %s, %zu frames, %d^2, %s (%s), medians per frame\n", a.scene.c_str(), frames, a.res,
+              context->backend().c_str(), pipeline.renderer().c_str());
+  std::printf("%-36s %10s %8s %7s %8s %8s %8s\n", "method", "median ms", "miss", "false", "x CGAL", "x FCL", "x floor");
+  for (std::size_t m = 0; m < methods; ++m) {
+    const bool peel = m < cg;
+    std::printf("%-36s %10.2f %7.2f%% %7zu", names[m].c_str(), med[m],
+                m == fl ? 0.0 : 100.0 * scores[m].miss_ratio(), m == fl ? std::size_t(0) : scores[m].false_contacts);
+    if (peel) std::printf(" %8.2f %8.2f %8.2f\n", med[m] / med[cg], med[m] / med[fc], med[fl] > 0 ? med[m] / med[fl] : 0.0);
+    else std::printf("\n");
+  }
+  std::printf("(miss / false: over all frames against the exact pairs; FCL's triangle test is not exact; the floor finds nothing)\n");
+  if (seq) {
+    std::printf("\nper phase, median ms:\n%-7s", "phase");
+    for (std::size_t m = 0; m < methods; ++m) std::printf(" %12.12s", names[m].c_str());
+    std::printf(" %9s %9s %9s\n", "dflt/CGAL", "dflt/FCL", "dflt/floor");
+    for (std::size_t p = 0; p < phase_ms.size(); ++p) {
+      std::printf("(%c)    ", char('a' + p));
+      std::vector<double> pm(methods);
+      for (std::size_t m = 0; m < methods; ++m) std::printf(" %12.2f", pm[m] = median(phase_ms[p][m]));
+      std::printf(" %9.2f %9.2f %9.2f\n", pm[0] / pm[cg], pm[0] / pm[fc], pm[fl] > 0 ? pm[0] / pm[fl] : 0.0);
+    }
+  }
+  if (!a.csv.empty()) write_output(a.csv, csv);
+  return 0;
+}
+
 struct SweepArgs {
   std::string scene;
   std::vector<int> res = {128, 256};
@@ -272,17 +534,6 @@ struct SweepArgs {
   std::string backend = "osmesa";
 };
 
-// A terminal-aware progress bar on stderr: redrawn in place on a terminal, silent otherwise.
-struct Progress {
-  bool tty = isatty(STDERR_FILENO);
-  void operator()(std::size_t done, std::size_t total) const {
-    if (!tty) return;
-    const int width = 40, filled = int(width * done / std::max<std::size_t>(total, 1));
-    std::fprintf(stderr, "\r[%s%s] %zu/%zu frames", std::string(filled, '#').c_str(),
-                 std::string(width - filled, ' ').c_str(), done, total);
-    if (done == total) std::fprintf(stderr, "\n");
-  }
-};
 
 int run_sweep_command(const SweepArgs& a) {
   const Scene scene = load_scene(a.scene);
@@ -350,6 +601,8 @@ void add_frame_options(CLI::App* c, DetectArgs& d) {
       ->check(CLI::PositiveNumber);
   c->add_option("--ids", d.ids, "Triangle ID mode: ring (last vertex, whole one-ring; default), paper (last-vertex IDs, T(v) sets) or unique");
   c->add_option("--peel", d.peel, "Peel mode: alternate (the paper's; default) or full (every surface)");
+  c->add_option("--peeler", d.peeler, "How layers are made: abuffer (one draw into per-texel fragment lists; default) "
+                                      "or multipass (one draw per layer); the same layers either way");
   c->add_option("--slope", d.slope, "Slope-following epsilon, in texels (default 1; 0 = the paper's constant epsilon)")
       ->check(CLI::NonNegativeNumber);
   c->add_option("--views", d.views, "Views fused per ROI: 3 (three orthogonal views; default) or 1")
@@ -408,8 +661,31 @@ int main(int argc, char** argv) {
   compare->add_option("--tier", gc.tier, "auto (exact on llvmpipe, hardware otherwise), exact or hardware")
       ->capture_default_str();
   compare->add_option("--report", gc.report, "Folder for the reports of differing cases")->capture_default_str();
+  compare->add_option("--peeler", gc.peeler, "abuffer or multipass (default: the default, abuffer)");
   compare->add_option("--repeat", gc.repeat, "Run and compare each case N times in one process (determinism)")
       ->check(CLI::PositiveNumber)->capture_default_str();
+  SimArgs si;
+  CLI::App* simulate = app.add_subcommand(
+      "simulate", "Run the paper's dynamic scenes (test1: a walking raptor among 40 billiard balls; test2: a "
+                  "tearing cloth with 40 falling objects) and print per-frame nCTP, counters and stage times, "
+                  "and a summary per phase beside the paper's Tables 1 and 2");
+  simulate->add_option("test", si.test, "test1 or test2")->required()->check(CLI::IsMember({"test1", "test2"}));
+  simulate->add_option("--frames", si.frames, "Frames")->check(CLI::PositiveNumber)->capture_default_str();
+  add_frame_options(simulate, si.detect);
+  simulate->add_option("--csv", si.csv, "Write one row per frame to FILE, or - for stdout");
+
+  BenchArgs be;
+  CLI::App* benchmark = app.add_subcommand(
+      "bench", "Time peelcd's configurations, CGAL (exact, no preprocessing), FCL (BVH built per frame) and "
+               "the bare-draw floor side by side on the same frames; print medians, miss ratios and ratios");
+  benchmark->add_option("scene", be.scene, "test1, test2 or a scene file")->capture_default_str();
+  benchmark->add_option("--frames", be.frames, "Frames (of the test scene; repeats of a scene file)")
+      ->check(CLI::PositiveNumber)->capture_default_str();
+  benchmark->add_option("--res", be.res, "Texture size per ROI for peelcd")->check(CLI::PositiveNumber)
+      ->capture_default_str();
+  benchmark->add_option("--backend", be.backend, "GL backend: osmesa or egl")->capture_default_str();
+  benchmark->add_option("--csv", be.csv, "Write one row per (frame, method) to FILE, or - for stdout");
+
   SweepArgs sw;
   CLI::App* sweep = app.add_subcommand(
       "sweep", "Measure accuracy and run time over view directions and configurations against the "
@@ -448,6 +724,8 @@ int main(int argc, char** argv) {
   try {
     if (*detect) return run_detect(d);
     if (*dump) return run_dump(du, dump_out);
+    if (*simulate) return run_simulate(si);
+    if (*benchmark) return run_bench(be);
     if (*record) return run_golden_record(gr);
     if (*compare) return run_golden_compare(gc);
     if (*sweep) return run_sweep_command(sw);

@@ -15,6 +15,14 @@ std::optional<PeelMode> parse_peel_mode(const std::string& text) {
   return std::nullopt;
 }
 
+const char* to_string(Peeler peeler) { return peeler == Peeler::abuffer ? "abuffer" : "multipass"; }
+
+std::optional<Peeler> parse_peeler(const std::string& text) {
+  if (text == "abuffer" || text == "single-pass") return Peeler::abuffer;
+  if (text == "multipass") return Peeler::multipass;
+  return std::nullopt;
+}
+
 std::vector<ViewFrame> fused_view_frames(const DetectOptions& o) {
   const ViewFrame f = view_frame(o.theta, o.phi);
   if (o.views == 1) return {f};

@@ -17,6 +17,14 @@ enum class PeelMode { alternate, full };
 const char* to_string(PeelMode mode);
 std::optional<PeelMode> parse_peel_mode(const std::string& text);
 
+// How the layers are produced on the GPU; both give the same layers and PCS, bit for bit
+// (the goldens check it). multipass: one draw per layer with a strict depth test against the
+// previous layer (the paper's way). abuffer: both objects drawn once into per-texel fragment
+// lists, the layers recovered per texel by one compute pass (shaders/abuffer_resolve.comp).
+enum class Peeler { multipass, abuffer };
+const char* to_string(Peeler peeler);
+std::optional<Peeler> parse_peeler(const std::string& text);
+
 // Defaults chosen on the accuracy sweeps of docs/accuracy.md (the paper's own configuration is
 // ids = paper, peel = alternate, slope = 0, views = 1).
 struct DetectOptions {
@@ -34,6 +42,7 @@ struct DetectOptions {
   // Views fused per ROI: 1 = d(theta, phi) only; 3 = d and the frame's u and v axes (three
   // orthogonal views); the PCS of all views are united before the narrow phase.
   int views = 3;
+  Peeler peeler = Peeler::abuffer;  // chosen on peelcd bench (docs/performance.md)
 };
 
 // The view frames a ROI is peeled along for `options` (1 or 3 of them).
@@ -67,6 +76,11 @@ struct FrameResult {
   std::vector<PairResult> pairs;  // one per overlapping AABB pair, sorted by (a, b)
   Timings timings;
   std::size_t gl_passes = 0;      // draw + compute passes issued this frame (0 without a ROI)
+  // What the frame skipped and did (the per-frame counters of peelcd simulate):
+  std::size_t rois_peeled = 0;          // ROI views peeled (a ROI where one object has no
+                                        // triangle inside does no GL work)
+  std::size_t triangles_uploaded = 0;   // only triangles touching a ROI are uploaded and drawn
+  std::size_t pcs_readbacks = 0;        // PCS lists read back (none when a ROI's count is 0)
   std::string renderer;           // GL_RENDERER of the context that ran it
 };
 

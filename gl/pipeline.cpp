@@ -15,6 +15,8 @@ namespace peelcd::shaders {
 extern const char* const peel_vert;
 extern const char* const peel_frag;
 extern const char* const pcs_comp;
+extern const char* const abuffer_frag;
+extern const char* const abuffer_resolve_comp;
 extern const char* const shader_sources_hash;
 }  // namespace peelcd::shaders
 
@@ -56,7 +58,15 @@ struct Pipeline::Impl {
   int layer_size = 0;
   GLuint query = 0, pcs_buffer = 0;
   std::uint32_t pcs_capacity = 0;
-  std::size_t passes_this_frame = 0;
+  std::size_t passes_this_frame = 0, pcs_readbacks = 0;
+  GLuint floor_program = 0, abuffer_program = 0, resolve_program = 0;
+  GLint u_ab_clip = -1, u_ab_lo = -1, u_ab_hi = -1, u_ab_object = -1;
+  GLint u_rs_eps = -1, u_rs_slope = -1, u_rs_res = -1, u_rs_full = -1, u_rs_first = -1, u_rs_append = -1,
+        u_rs_emit = -1;
+  GLuint heads_tex = 0, node_buffer = 0;
+  int heads_size = 0;
+  std::uint32_t node_capacity = 0;
+  GLint u_floor_clip = -1, u_floor_lo = -1, u_floor_hi = -1;
   std::string renderer, version;
   GLint max_texture = 0;
 
@@ -86,6 +96,31 @@ struct Pipeline::Impl {
                          compile(GL_FRAGMENT_SHADER, shaders::peel_frag, "peel.frag")},
                         "peel");
     pcs_program = link({compile(GL_COMPUTE_SHADER, shaders::pcs_comp, "pcs.comp")}, "pcs");
+    // The floor (benchmarks): the peel vertex shader and a fragment shader that does nothing.
+    floor_program = link({compile(GL_VERTEX_SHADER, shaders::peel_vert, "peel.vert"),
+                          compile(GL_FRAGMENT_SHADER, "#version 450 core\nvoid main() {}\n", "floor.frag")},
+                         "floor");
+    abuffer_program = link({compile(GL_VERTEX_SHADER, shaders::peel_vert, "peel.vert"),
+                            compile(GL_FRAGMENT_SHADER, shaders::abuffer_frag, "abuffer.frag")},
+                           "abuffer");
+    resolve_program = link({compile(GL_COMPUTE_SHADER, shaders::abuffer_resolve_comp, "abuffer_resolve.comp")},
+                           "abuffer resolve");
+    u_ab_clip = gl.GetUniformLocation(abuffer_program, "clip_from_local");
+    u_ab_lo = gl.GetUniformLocation(abuffer_program, "box_lo");
+    u_ab_hi = gl.GetUniformLocation(abuffer_program, "box_hi");
+    u_ab_object = gl.GetUniformLocation(abuffer_program, "object_bit");
+    u_rs_eps = gl.GetUniformLocation(resolve_program, "epsilon_window");
+    u_rs_slope = gl.GetUniformLocation(resolve_program, "slope");
+    u_rs_res = gl.GetUniformLocation(resolve_program, "resolution");
+    u_rs_full = gl.GetUniformLocation(resolve_program, "full_peel");
+    u_rs_first = gl.GetUniformLocation(resolve_program, "first_object");
+    u_rs_append = gl.GetUniformLocation(resolve_program, "append_pcs");
+    u_rs_emit = gl.GetUniformLocation(resolve_program, "emit_layer");
+    gl.CreateBuffers(1, &node_buffer);
+    grow_nodes(1u << 18);
+    u_floor_clip = gl.GetUniformLocation(floor_program, "clip_from_local");
+    u_floor_lo = gl.GetUniformLocation(floor_program, "box_lo");
+    u_floor_hi = gl.GetUniformLocation(floor_program, "box_hi");
     u_clip = gl.GetUniformLocation(peel_program, "clip_from_local");
     u_box_lo = gl.GetUniformLocation(peel_program, "box_lo");
     u_box_hi = gl.GetUniformLocation(peel_program, "box_hi");
@@ -114,6 +149,11 @@ struct Pipeline::Impl {
     context.make_current();
     gl.DeleteProgram(peel_program);
     gl.DeleteProgram(pcs_program);
+    gl.DeleteProgram(floor_program);
+    gl.DeleteProgram(abuffer_program);
+    gl.DeleteProgram(resolve_program);
+    gl.DeleteBuffers(1, &node_buffer);
+    if (heads_size) gl.DeleteTextures(1, &heads_tex);
     gl.DeleteVertexArrays(1, &vao);
     gl.DeleteBuffers(2, vbo);
     gl.DeleteQueries(1, &query);
@@ -164,6 +204,20 @@ struct Pipeline::Impl {
   void grow_pcs(std::uint32_t capacity) {
     pcs_capacity = capacity;
     gl.NamedBufferData(pcs_buffer, sizeof(PcsHeader) + std::size_t(capacity) * 8, nullptr, GL_DYNAMIC_READ);
+  }
+
+  // A-buffer node: 32 bytes (shaders/abuffer.frag), after a 16-byte header.
+  void grow_nodes(std::uint32_t capacity) {
+    node_capacity = capacity;
+    gl.NamedBufferData(node_buffer, 16 + std::size_t(capacity) * 32, nullptr, GL_DYNAMIC_COPY);
+  }
+
+  void ensure_heads(int n) {
+    if (n == heads_size) return;
+    if (heads_size) gl.DeleteTextures(1, &heads_tex);
+    gl.CreateTextures(GL_TEXTURE_2D, 1, &heads_tex);
+    gl.TextureStorage2D(heads_tex, 1, GL_R32UI, n, n);
+    heads_size = n;
   }
 
   void release_layers() {
@@ -228,6 +282,114 @@ struct Pipeline::Impl {
       gl.NamedBufferData(vbo[slot], vbo_capacity[slot] * sizeof(GpuVertex), nullptr, GL_STREAM_DRAW);
     }
     gl.NamedBufferSubData(vbo[slot], 0, n * sizeof(GpuVertex), staging[slot].data());
+  }
+
+  // Single-pass peeling (Peeler::abuffer): both objects drawn once into per-texel fragment
+  // lists, then one compute pass recovers the layers and appends the PCS. Same contract as
+  // peel(); returns false if the node or PCS buffer overflowed (grown; the caller peels again).
+  bool peel_single_pass(const RoiView& view, double epsilon_world, const DetectOptions& opt, int first_slot,
+                        PairResult& r, Timings& t) {
+    const auto t_gpu = Clock::now();
+    const int n = view.resolution;
+    ensure_layers(n);
+    ensure_heads(n);
+    const GLuint empty_list = 0xffffffffu;
+    gl.ClearTexImage(heads_tex, 0, GL_RED_INTEGER, GL_UNSIGNED_INT, &empty_list);
+    const std::uint32_t node_header[4] = {0, node_capacity, 0, 0};
+    gl.NamedBufferSubData(node_buffer, 0, sizeof node_header, node_header);
+    const PcsHeader header{0, pcs_capacity, 0, 0};
+    gl.NamedBufferSubData(pcs_buffer, 0, sizeof header, &header);
+    gl.BindBufferBase(GL_SHADER_STORAGE_BUFFER, 0, pcs_buffer);
+    gl.BindBufferBase(GL_SHADER_STORAGE_BUFFER, 1, node_buffer);
+    gl.BindImageTexture(1, heads_tex, 0, GL_FALSE, 0, GL_READ_WRITE, GL_R32UI);
+
+    const std::array<float, 16> m = view.clip_from_local();
+    const Vec3 lo = view.box.lo - view.center, hi = view.box.hi - view.center;
+    gl.UseProgram(abuffer_program);
+    gl.UniformMatrix4fv(u_ab_clip, 1, GL_FALSE, m.data());
+    gl.Uniform3f(u_ab_lo, float(lo.x()), float(lo.y()), float(lo.z()));
+    gl.Uniform3f(u_ab_hi, float(hi.x()), float(hi.y()), float(hi.z()));
+    gl.BindFramebuffer(GL_FRAMEBUFFER, fbo[0]);
+    gl.Viewport(0, 0, n, n);
+    gl.Disable(GL_DEPTH_TEST);
+    gl.ColorMaski(0, GL_FALSE, GL_FALSE, GL_FALSE, GL_FALSE);
+    gl.Disable(GL_CULL_FACE);
+    gl.ProvokingVertex(GL_LAST_VERTEX_CONVENTION);
+    for (int i = 0; i < 6; ++i) gl.Enable(GL_CLIP_DISTANCE0 + i);
+    gl.BindVertexArray(vao);
+    for (int slot = 0; slot < 2; ++slot) {
+      gl.Uniform1ui(u_ab_object, GLuint(slot));
+      gl.VertexArrayVertexBuffer(vao, 0, vbo[slot], 0, sizeof(GpuVertex));
+      gl.DrawArrays(GL_TRIANGLES, 0, GLsizei(staging[slot].size()));
+    }
+    gl.ColorMaski(0, GL_TRUE, GL_TRUE, GL_TRUE, GL_TRUE);
+    gl.BindFramebuffer(GL_FRAMEBUFFER, 0);
+    gl.MemoryBarrier(GL_SHADER_IMAGE_ACCESS_BARRIER_BIT | GL_SHADER_STORAGE_BARRIER_BIT | GL_BUFFER_UPDATE_BARRIER_BIT);
+    ++passes_this_frame;
+    check("the A-buffer draw");
+    std::uint32_t got_nodes[4] = {0, 0, 0, 0};
+    gl.GetNamedBufferSubData(node_buffer, 0, sizeof got_nodes, got_nodes);
+    if (got_nodes[0] > node_capacity) {
+      grow_nodes(got_nodes[0] + got_nodes[0] / 2);
+      t.gpu += ms_since(t_gpu);
+      return false;
+    }
+
+    gl.UseProgram(resolve_program);
+    gl.Uniform1f(u_rs_eps, float(view.world_to_window_depth(epsilon_world)));
+    gl.Uniform1f(u_rs_slope, float(opt.slope));
+    gl.Uniform1i(u_rs_res, n);
+    gl.Uniform1i(u_rs_full, opt.peel == PeelMode::full);
+    gl.Uniform1ui(u_rs_first, GLuint(first_slot));
+    gl.Uniform1i(u_rs_append, 1);
+    gl.Uniform1i(u_rs_emit, -1);
+    gl.DispatchCompute(GLuint((n + 7) / 8), GLuint((n + 7) / 8), 1);
+    gl.MemoryBarrier(GL_BUFFER_UPDATE_BARRIER_BIT | GL_SHADER_STORAGE_BARRIER_BIT);
+    ++passes_this_frame;
+    check("the A-buffer resolve");
+    gl.GetNamedBufferSubData(node_buffer, 0, sizeof got_nodes, got_nodes);
+    r.layers = int(got_nodes[2]);
+    r.passes = 1;
+    if (captured) {
+      captured->layers.clear();
+      captured->epsilon_window = float(view.world_to_window_depth(epsilon_world));
+      captured->slope = float(opt.slope);
+      const GLuint zero[4] = {0, 0, 0, 0};
+      gl.Uniform1i(u_rs_append, 0);
+      gl.BindImageTexture(2, layer_tex[0], 0, GL_FALSE, 0, GL_WRITE_ONLY, GL_RGBA32UI);
+      for (int k = 0; k < r.layers; ++k) {
+        gl.ClearTexImage(layer_tex[0], 0, GL_RGBA_INTEGER, GL_UNSIGNED_INT, zero);
+        gl.Uniform1i(u_rs_emit, k);
+        gl.DispatchCompute(GLuint((n + 7) / 8), GLuint((n + 7) / 8), 1);
+        gl.MemoryBarrier(GL_TEXTURE_UPDATE_BARRIER_BIT | GL_SHADER_IMAGE_ACCESS_BARRIER_BIT);
+        std::vector<std::uint32_t>& texels = captured->layers.emplace_back(std::size_t(n) * n * 4);
+        gl.GetTextureImage(layer_tex[0], 0, GL_RGBA_INTEGER, GL_UNSIGNED_INT,
+                           GLsizei(texels.size() * sizeof(std::uint32_t)), texels.data());
+      }
+      check("layer capture");
+    }
+    t.gpu += ms_since(t_gpu);
+    return read_pcs(t);
+  }
+
+  // Reads the PCS list back into `pcs`; false if it overflowed (grown; peel again).
+  bool read_pcs(Timings& t) {
+    const auto t_read = Clock::now();
+    PcsHeader got{};
+    gl.GetNamedBufferSubData(pcs_buffer, 0, sizeof got, &got);
+    if (got.count > pcs_capacity) {
+      grow_pcs(got.count + got.count / 2);
+      t.readback += ms_since(t_read);
+      return false;
+    }
+    pcs.resize(got.count);
+    if (got.count) {
+      gl.GetNamedBufferSubData(pcs_buffer, sizeof(PcsHeader), GLsizeiptr(got.count) * 8, pcs.data());
+      ++pcs_readbacks;
+    }
+    check("PCS readback");
+    t.readback += ms_since(t_read);
+    return true;
   }
 
   // Peels one ROI; fills `pcs` with the ID pairs read back. Returns false if the PCS buffer
@@ -318,21 +480,7 @@ struct Pipeline::Impl {
     gl.BindFramebuffer(GL_FRAMEBUFFER, 0);
     gl.MemoryBarrier(GL_BUFFER_UPDATE_BARRIER_BIT);
     t.gpu += ms_since(t_gpu);
-
-    const auto t_read = Clock::now();
-    PcsHeader got{};
-    gl.GetNamedBufferSubData(pcs_buffer, 0, sizeof got, &got);
-    if (got.count > pcs_capacity) {
-      grow_pcs(got.count + got.count / 2);
-      t.readback += ms_since(t_read);
-      return false;
-    }
-    pcs.resize(got.count);
-    if (got.count)
-      gl.GetNamedBufferSubData(pcs_buffer, sizeof(PcsHeader), GLsizeiptr(got.count) * 8, pcs.data());
-    check("PCS readback");
-    t.readback += ms_since(t_read);
-    return true;
+    return read_pcs(t);
   }
 };
 
@@ -369,6 +517,7 @@ FrameResult Pipeline::detect(const std::vector<Object>& objects, const DetectOpt
   FrameResult out;
   out.renderer = s.renderer;
   s.passes_this_frame = 0;
+  s.pcs_readbacks = 0;
   const auto t_total = Clock::now();
 
   auto t0 = Clock::now();
@@ -412,6 +561,8 @@ FrameResult Pipeline::detect(const std::vector<Object>& objects, const DetectOpt
       s.upload(0);
       s.upload(1);
       out.timings.upload += ms_since(t0);
+      out.triangles_uploaded += (s.staging[0].size() + s.staging[1].size()) / 3;
+      ++out.rois_peeled;
 
       PairResult one;
       if (s.capture) {
@@ -421,7 +572,13 @@ FrameResult Pipeline::detect(const std::vector<Object>& objects, const DetectOpt
         s.captured->roi = view;
         s.captured->a_first = min_a > min_b;
       }
-      while (!s.peel(view, r.epsilon, opt, min_a > min_b ? 0 : 1, one, out.timings)) {
+      const int first = min_a > min_b ? 0 : 1;
+      if (opt.peeler == Peeler::abuffer) {
+        while (!s.peel_single_pass(view, r.epsilon, opt, first, one, out.timings)) {
+        }
+      } else {
+        while (!s.peel(view, r.epsilon, opt, first, one, out.timings)) {
+        }
       }
       if (s.captured) {
         s.captured->pcs = s.pcs;
@@ -452,8 +609,58 @@ FrameResult Pipeline::detect(const std::vector<Object>& objects, const DetectOpt
     out.pairs.push_back(std::move(r));
   }
   out.gl_passes = s.passes_this_frame;
+  out.pcs_readbacks = s.pcs_readbacks;
   out.timings.total = ms_since(t_total);
   return out;
+}
+
+double Pipeline::floor_ms(const std::vector<Object>& objects, const DetectOptions& opt) {
+  Impl& s = *impl_;
+  std::vector<Aabb> boxes;
+  for (const Object& o : objects) boxes.push_back(bounds(o.mesh));
+  const auto pairs = overlapping_pairs(boxes);
+  if (pairs.empty()) return 0.0;
+  s.context.make_current();
+  const int n = opt.resolution > 0 ? opt.resolution : tile_resolution(opt.budget, pairs.size());
+  const std::vector<ViewFrame> frames = fused_view_frames(opt);
+  double ms = 0.0;
+  for (const auto& [ia, ib] : pairs) {
+    const Aabb roi = intersection(boxes[ia], boxes[ib]);
+    for (const ViewFrame& frame : frames) {
+      const RoiView view = make_padded_roi_view(roi, boxes[ia], boxes[ib], frame, n);
+      s.gather(objects[ia].mesh, view, opt.ids, s.staging[0]);
+      s.gather(objects[ib].mesh, view, opt.ids, s.staging[1]);
+      if (s.staging[0].empty() || s.staging[1].empty()) continue;
+      s.upload(0);
+      s.upload(1);
+      s.ensure_layers(n);
+      s.gl.Finish();
+      const auto t0 = Clock::now();
+      const std::array<float, 16> m = view.clip_from_local();
+      const Vec3 lo = view.box.lo - view.center, hi = view.box.hi - view.center;
+      s.gl.UseProgram(s.floor_program);
+      s.gl.UniformMatrix4fv(s.u_floor_clip, 1, GL_FALSE, m.data());
+      s.gl.Uniform3f(s.u_floor_lo, float(lo.x()), float(lo.y()), float(lo.z()));
+      s.gl.Uniform3f(s.u_floor_hi, float(hi.x()), float(hi.y()), float(hi.z()));
+      s.gl.BindFramebuffer(GL_FRAMEBUFFER, s.fbo[0]);
+      s.gl.Viewport(0, 0, n, n);
+      s.gl.Enable(GL_DEPTH_TEST);
+      s.gl.DepthFunc(GL_LESS);
+      for (int i = 0; i < 6; ++i) s.gl.Enable(GL_CLIP_DISTANCE0 + i);
+      const GLfloat far_depth = 1.0f;
+      s.gl.ClearBufferfv(GL_DEPTH, 0, &far_depth);
+      s.gl.BindVertexArray(s.vao);
+      for (int slot = 0; slot < 2; ++slot) {
+        s.gl.VertexArrayVertexBuffer(s.vao, 0, s.vbo[slot], 0, sizeof(GpuVertex));
+        s.gl.DrawArrays(GL_TRIANGLES, 0, GLsizei(s.staging[slot].size()));
+      }
+      s.gl.Finish();
+      ms += ms_since(t0);
+      s.gl.BindFramebuffer(GL_FRAMEBUFFER, 0);
+      s.check("the floor draw");
+    }
+  }
+  return ms;
 }
 
 }  // namespace peelcd::gl

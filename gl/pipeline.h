@@ -46,6 +46,12 @@ class Pipeline {
   std::string version() const;   // GL_VERSION
   int max_resolution() const;    // GL_MAX_TEXTURE_SIZE
 
+  // Benchmarks: the floor under any image-space method on this context. Per ROI view (as
+  // detect() would peel them) the same triangles, already uploaded, drawn once with depth
+  // testing and a fragment shader that does nothing; returns the milliseconds of those draws
+  // (to glFinish), excluding gathering and upload.
+  double floor_ms(const std::vector<Object>& objects, const DetectOptions& options);
+
   // Debugging and goldens: while `sink` is set, detect() appends one CapturedView per ROI view
   // it peels (reading every layer back, which costs a full texture transfer per layer).
   // nullptr (the default) turns capture off.

@@ -12,6 +12,7 @@ packages=(
   libassimp-dev nlohmann-json3-dev libcli11-dev    # mesh files, scene JSON, command line
   libopenexr-dev libpng-dev                        # layer dumps and goldens (EXR), previews (PNG)
   chromium                                         # the viewer test (headless)
+  libfcl-dev                                       # benchmark peer: FCL 0.7
   catch2                                           # tests (Catch2 v2)
 )
 missing=()

@@ -101,3 +101,18 @@ if(EXISTS ${WORK}/dump_bad OR EXISTS ${WORK}/dump_bad.partial)
 endif()
 expect("golden: unknown case" 2 "unknown case \"nonesuch\"" golden compare nonesuch)
 expect("golden: bad tier" 2 "unknown tier" golden compare boxes_crossing --tier fuzzy)
+
+# Dynamic scenes: a few frames of each; the exit status is non-zero on any false contact.
+expect("simulate help" 0 "test1 or test2" simulate --help)
+expect("simulate test1" 0 "summary \\(means per phase.*\\(d\\).*false contacts over all frames: 0"
+       simulate test1 --frames 8 --res 64 --csv ${WORK}/sim1.csv)
+file(STRINGS ${WORK}/sim1.csv lines)
+list(LENGTH lines nlines)
+if(NOT nlines EQUAL 9)
+  message(SEND_ERROR "simulate csv: ${nlines} lines, expected 9")
+endif()
+expect("simulate test2" 0 "\\(h\\).*false contacts over all frames: 0" simulate test2 --frames 8 --res 64)
+expect("simulate: unknown scene" 2 "test3" simulate test3)
+# The benchmark runs every method on the same frames and prints the ratios.
+expect("bench" 0 "CGAL box_intersection_d.*FCL 0.7.*floor" bench ${scene} --frames 1 --res 64)
+expect("bench: bad peeler" 2 "unknown peeler" detect ${scene} --peeler magic)
