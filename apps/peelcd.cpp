@@ -290,9 +290,9 @@ struct Progress {
 
 // ---- dynamic scenes and benchmarks ----
 
-std::unique_ptr<Sequence> make_sequence(const std::string& name, std::size_t frames) {
-  if (name == "test1") return make_test1(PEELCD_MESHES_DIR, frames);
-  if (name == "test2") return make_test2(PEELCD_MESHES_DIR, frames);
+std::unique_ptr<Sequence> make_sequence(const std::string& name, std::size_t frames, bool rigid = true) {
+  if (name == "test1") return make_test1(PEELCD_MESHES_DIR, frames, rigid);
+  if (name == "test2") return make_test2(PEELCD_MESHES_DIR, frames, rigid);
   throw InputError("peelcd: unknown test scene \"" + name + "\" (expected test1 or test2)");
 }
 
@@ -329,25 +329,26 @@ Score score_frame(const FrameResult& r, const bench::PeerFrame& exact) {
 struct SimArgs {
   std::string test;
   std::size_t frames = 40;
+  bool no_rigid = false;
   DetectArgs detect;
   std::string csv;
 };
 
 int run_simulate(const SimArgs& a) {
-  const auto seq = make_sequence(a.test, a.frames);
+  const auto seq = make_sequence(a.test, a.frames, !a.no_rigid);
   Scene defaults;
   const DetectOptions opt = merged_options(defaults, a.detect);
   const auto context = make_context(a.detect.backend);
   gl::Pipeline pipeline(*context);
   std::vector<Object> objects;
-  std::string csv = "frame,phase,triangles,rois,rois_peeled,triangles_uploaded,gl_passes,pcs_readbacks,nctp,found,"
+  std::string csv = "frame,phase,triangles,rois,rois_peeled,triangles_uploaded,triangles_indexed,shape_uploads,gl_passes,pcs_readbacks,nctp,found,"
                     "false_contacts,aabb_ms,upload_ms,gpu_ms,readback_ms,cpu_ms,total_ms\n";
   std::printf("peelcd simulate %s: %zu frames, %s, ids=%s peel=%s slope=%g views=%d res=%s\n", seq->name().c_str(),
               seq->frames(), pipeline.renderer().c_str(), to_string(opt.ids), to_string(opt.peel), opt.slope,
               opt.views, opt.resolution ? std::to_string(opt.resolution).c_str() : ("budget " + std::to_string(opt.budget)).c_str());
-  std::printf("%5s %5s %7s %5s %6s %8s %6s %5s %6s %6s %6s %5s %7s %8s %8s %8s %8s\n", "frame", "phase", "tris",
-              "ROIs", "peeled", "uploaded", "passes", "reads", "nCTP", "found", "miss%", "false", "aabb", "gpu",
-              "readback", "cpu", "total");
+  std::printf("%5s %5s %7s %5s %6s %8s %8s %6s %6s %5s %6s %6s %6s %5s %7s %8s %8s %8s %8s\n", "frame", "phase",
+              "tris", "ROIs", "peeled", "uploaded", "indexed", "shapes", "passes", "reads", "nCTP", "found", "miss%",
+              "false", "aabb", "gpu", "readback", "cpu", "total");
   struct PhaseSum {
     std::size_t frames = 0;
     double nctp = 0, found = 0, aabb = 0, gpu = 0, readback = 0, cpu = 0, total = 0;
@@ -364,13 +365,14 @@ int run_simulate(const SimArgs& a) {
     for (const Object& o : objects) tris += o.mesh.triangles.size();
     const Timings& t = r.timings;
     const int ph = seq->phase(f);
-    std::printf("%5zu %5c %7zu %5zu %6zu %8zu %6zu %5zu %6zu %6zu %5.1f%% %5zu %7.3f %8.2f %8.3f %8.2f %8.2f\n", f,
-                char('a' + ph), tris, r.pairs.size(), r.rois_peeled, r.triangles_uploaded, r.gl_passes,
-                r.pcs_readbacks, sc.exact, sc.found, 100.0 * sc.miss_ratio(), sc.false_contacts, t.aabb,
+    std::printf("%5zu %5c %7zu %5zu %6zu %8zu %8zu %6zu %6zu %5zu %6zu %6zu %5.1f%% %5zu %7.3f %8.2f %8.3f %8.2f %8.2f\n",
+                f, char('a' + ph), tris, r.pairs.size(), r.rois_peeled, r.triangles_uploaded, r.triangles_indexed,
+                r.shape_uploads, r.gl_passes, r.pcs_readbacks, sc.exact, sc.found, 100.0 * sc.miss_ratio(), sc.false_contacts, t.aabb,
                 t.upload + t.gpu, t.readback, t.cpu, t.total);
     char line[512];
-    std::snprintf(line, sizeof line, "%zu,%c,%zu,%zu,%zu,%zu,%zu,%zu,%zu,%zu,%zu,%.4f,%.4f,%.4f,%.4f,%.4f,%.4f\n", f,
-                  char('a' + ph), tris, r.pairs.size(), r.rois_peeled, r.triangles_uploaded, r.gl_passes,
+    std::snprintf(line, sizeof line, "%zu,%c,%zu,%zu,%zu,%zu,%zu,%zu,%zu,%zu,%zu,%zu,%zu,%.4f,%.4f,%.4f,%.4f,%.4f,%.4f\n", f,
+                  char('a' + ph), tris, r.pairs.size(), r.rois_peeled, r.triangles_uploaded, r.triangles_indexed,
+                  r.shape_uploads, r.gl_passes,
                   r.pcs_readbacks, sc.exact, sc.found, sc.false_contacts, t.aabb, t.upload, t.gpu, t.readback, t.cpu,
                   t.total);
     csv += line;
@@ -672,6 +674,7 @@ int main(int argc, char** argv) {
   simulate->add_option("test", si.test, "test1 or test2")->required()->check(CLI::IsMember({"test1", "test2"}));
   simulate->add_option("--frames", si.frames, "Frames")->check(CLI::PositiveNumber)->capture_default_str();
   add_frame_options(simulate, si.detect);
+  simulate->add_flag("--no-rigid", si.no_rigid, "Pass the rigid objects as plain triangles (no shape caching)");
   simulate->add_option("--csv", si.csv, "Write one row per frame to FILE, or - for stdout");
 
   BenchArgs be;

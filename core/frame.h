@@ -79,7 +79,11 @@ struct FrameResult {
   // What the frame skipped and did (the per-frame counters of peelcd simulate):
   std::size_t rois_peeled = 0;          // ROI views peeled (a ROI where one object has no
                                         // triangle inside does no GL work)
-  std::size_t triangles_uploaded = 0;   // only triangles touching a ROI are uploaded and drawn
+  std::size_t triangles_uploaded = 0;   // triangles whose corners were uploaded (only those
+                                        // touching a ROI)
+  std::size_t triangles_indexed = 0;    // rigid objects' triangles drawn from their cached
+                                        // shape: only indices uploaded
+  std::size_t shape_uploads = 0;        // rigid shapes uploaded (once each; 0 in steady state)
   std::size_t pcs_readbacks = 0;        // PCS lists read back (none when a ROI's count is 0)
   std::string renderer;           // GL_RENDERER of the context that ran it
 };

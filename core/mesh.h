@@ -5,6 +5,8 @@
 #include <Eigen/Geometry>
 #include <array>
 #include <cstdint>
+#include <memory>
+#include <optional>
 #include <string>
 #include <vector>
 
@@ -35,10 +37,21 @@ Mesh transformed(const Mesh& mesh, const Transform& t);
 // finite, or there are no triangles.
 void validate_mesh(const Mesh& mesh, const std::string& what);
 
-// One object of a frame: its world-space mesh.
+// Optional for an object: it is `shape` moved rigidly, world = pose * local (a rotation and a
+// translation, possibly with a uniform scale). The GL pipeline then keeps `shape` on the GPU
+// across frames (uploaded once per ID mode, while some object holds the shared_ptr) and per ROI
+// uploads only the indices of the triangles touching it, moved by the pose.
+struct RigidMotion {
+  std::shared_ptr<const Mesh> shape;
+  Eigen::Affine3d pose = Eigen::Affine3d::Identity();
+};
+
+// One object of a frame: its world-space mesh (always: the CPU stages use it), and optionally
+// the rigid motion that produced it.
 struct Object {
   std::string name;
   Mesh mesh;
+  std::optional<RigidMotion> rigid;
 };
 
 }  // namespace peelcd

@@ -6,6 +6,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <Eigen/Geometry>
 #include <map>
 
 namespace peelcd {
@@ -22,9 +23,9 @@ Aabb bounds_of(const Mesh& m) {
 
 class Test1 final : public Sequence {
  public:
-  Test1(const std::string& dir, std::size_t frames) : Sequence(frames) {
+  Test1(const std::string& dir, std::size_t frames, bool rigid) : Sequence(frames), rigid_(rigid) {
     raptor_ = load_mesh(dir + "/velociraptor.obj");  // 1,248 triangles, long axis z, feet at y = 0
-    ball_ = make_uv_sphere(Vec3::Zero(), kRadius, 48, 48);  // 4,512 triangles
+    ball_ = std::make_shared<const Mesh>(make_uv_sphere(Vec3::Zero(), kRadius, 48, 48));  // 4,512 triangles
     // 4 columns x 10 rows on the table (y = 0), 0.04 apart: the balls never touch each other.
     for (int row = 0; row < 10; ++row)
       for (int col = 0; col < 4; ++col)
@@ -52,21 +53,25 @@ class Test1 final : public Sequence {
     for (std::size_t k = 0; k < centres_.size(); ++k) {
       Object& b = objects[k + 1];
       b.name = "ball" + std::to_string(k);
-      b.mesh.triangles = ball_.triangles;
-      b.mesh.vertices.resize(ball_.vertices.size());
-      for (std::size_t i = 0; i < ball_.vertices.size(); ++i) b.mesh.vertices[i] = ball_.vertices[i] + centres_[k];
+      b.mesh.triangles = ball_->triangles;
+      b.mesh.vertices.resize(ball_->vertices.size());
+      for (std::size_t i = 0; i < ball_->vertices.size(); ++i) b.mesh.vertices[i] = ball_->vertices[i] + centres_[k];
+      if (rigid_) b.rigid = RigidMotion{ball_, Eigen::Affine3d(Eigen::Translation3d(centres_[k]))};
+      else b.rigid.reset();
     }
   }
 
  private:
   static constexpr double kRadius = 0.28;
-  Mesh raptor_, ball_;
+  bool rigid_;
+  Mesh raptor_;
+  std::shared_ptr<const Mesh> ball_;
   std::vector<Vec3> centres_;
 };
 
 class Test2 final : public Sequence {
  public:
-  Test2(const std::string& dir, std::size_t frames) : Sequence(frames) {
+  Test2(const std::string& dir, std::size_t frames, bool rigid) : Sequence(frames), rigid_(rigid) {
     const char* names[] = {"bunny_3k.obj", "dragon_3k.obj", "fish_2k.obj", "kitten_1k5.obj", "torus.obj",
                            "velociraptor.obj"};
     for (const char* n : names) {
@@ -76,7 +81,7 @@ class Test2 final : public Sequence {
       const Vec3 c = 0.5 * (b.lo + b.hi);
       const double side = (b.hi - b.lo).maxCoeff();
       for (Vec3& v : m.vertices) v = (v - c) * (0.9 / side);
-      shapes_.push_back(std::move(m));
+      shapes_.push_back(std::make_shared<const Mesh>(std::move(m)));
       shape_names_.push_back(std::string(n).substr(0, std::string(n).find('_') == std::string::npos
                                                           ? std::string(n).find('.')
                                                           : std::string(n).find('_')));
@@ -103,7 +108,7 @@ class Test2 final : public Sequence {
     cloth.mesh = torn_cloth(28, s, 0.0);
     for (std::size_t i = 0; i < starts_.size(); ++i) {
       Object& o = objects[i + 1];
-      const Mesh& m = shapes_[i % shapes_.size()];
+      const Mesh& m = *shapes_[i % shapes_.size()];
       o.name = shape_names_[i % shapes_.size()] + std::to_string(i);
       o.mesh.triangles = m.triangles;
       o.mesh.vertices.resize(m.vertices.size());
@@ -113,14 +118,25 @@ class Test2 final : public Sequence {
         const Vec3& v = m.vertices[k];
         o.mesh.vertices[k] = Vec3(ca * v.x() + sa * v.z() + starts_[i].x(), v.y() + y, -sa * v.x() + ca * v.z() + starts_[i].z());
       }
+      if (rigid_) {
+        Eigen::Matrix3d r;
+        r << ca, 0, sa, 0, 1, 0, -sa, 0, ca;
+        Eigen::Affine3d pose = Eigen::Affine3d::Identity();
+        pose.linear() = r;
+        pose.translation() = Vec3(starts_[i].x(), y, starts_[i].z());
+        o.rigid = RigidMotion{shapes_[i % shapes_.size()], pose};
+      } else {
+        o.rigid.reset();
+      }
     }
   }
 
  private:
-  std::vector<Mesh> shapes_;
+  std::vector<std::shared_ptr<const Mesh>> shapes_;
   std::vector<std::string> shape_names_;
   std::vector<Vec3> starts_;
   std::vector<double> spin_;
+  bool rigid_;
 };
 
 }  // namespace
@@ -185,11 +201,11 @@ Mesh torn_cloth(int n, double t, double y) {
   return packed;
 }
 
-std::unique_ptr<Sequence> make_test1(const std::string& dir, std::size_t frames) {
-  return std::make_unique<Test1>(dir, frames);
+std::unique_ptr<Sequence> make_test1(const std::string& dir, std::size_t frames, bool rigid) {
+  return std::make_unique<Test1>(dir, frames, rigid);
 }
-std::unique_ptr<Sequence> make_test2(const std::string& dir, std::size_t frames) {
-  return std::make_unique<Test2>(dir, frames);
+std::unique_ptr<Sequence> make_test2(const std::string& dir, std::size_t frames, bool rigid) {
+  return std::make_unique<Test2>(dir, frames, rigid);
 }
 
 }  // namespace peelcd

@@ -37,8 +37,10 @@ class Sequence {
 };
 
 // `meshes_dir` holds the fixtures' meshes (fixtures/meshes). Throws InputError if one is missing.
-std::unique_ptr<Sequence> make_test1(const std::string& meshes_dir, std::size_t frames);
-std::unique_ptr<Sequence> make_test2(const std::string& meshes_dir, std::size_t frames);
+// `rigid`: the rigid objects (balls, falling objects) carry their RigidMotion, so the GL
+// pipeline uploads their shapes once; without it every object is plain world-space triangles.
+std::unique_ptr<Sequence> make_test1(const std::string& meshes_dir, std::size_t frames, bool rigid = true);
+std::unique_ptr<Sequence> make_test2(const std::string& meshes_dir, std::size_t frames, bool rigid = true);
 
 // The torn cloth of test2 at tear fraction t in [0, 1]: an n x n grid over [-3, 3]^2 at height
 // `y`, torn along x = 0.05 from z = -3 to z = -3 + 6t. Exposed for tests.

@@ -9,6 +9,7 @@
 #include <chrono>
 #include <cmath>
 #include <cstring>
+#include <map>
 #include <sstream>
 
 namespace peelcd::shaders {
@@ -72,6 +73,20 @@ struct Pipeline::Impl {
 
   // Scratch reused across ROIs and frames (no allocation in steady state).
   std::vector<GpuVertex> staging[2];
+  // Per slot of the ROI being peeled: a world-space object's corners in `staging`, or a rigid
+  // object's cached shape with the corner indices of its triangles in the ROI.
+  struct CachedShape {
+    std::weak_ptr<const Mesh> owner;
+    GLuint vbo = 0;
+  };
+  std::map<std::pair<const Mesh*, IdMode>, CachedShape> shapes;
+  std::vector<std::uint32_t> indices[2];
+  const CachedShape* slot_shape[2] = {nullptr, nullptr};
+  std::array<float, 16> slot_model[2];
+  GLuint ibo[2] = {0, 0};
+  std::size_t ibo_capacity[2] = {0, 0};
+  std::size_t shape_uploads = 0;
+  GLint u_model_peel = -1, u_model_ab = -1, u_model_floor = -1;
   std::vector<IdPair> pcs, pcs_all;
   std::vector<std::uint64_t> candidates;
   std::vector<CapturedView>* capture = nullptr;
@@ -109,6 +124,7 @@ struct Pipeline::Impl {
     u_ab_lo = gl.GetUniformLocation(abuffer_program, "box_lo");
     u_ab_hi = gl.GetUniformLocation(abuffer_program, "box_hi");
     u_ab_object = gl.GetUniformLocation(abuffer_program, "object_bit");
+    u_model_ab = gl.GetUniformLocation(abuffer_program, "roi_from_object");
     u_rs_eps = gl.GetUniformLocation(resolve_program, "epsilon_window");
     u_rs_slope = gl.GetUniformLocation(resolve_program, "slope");
     u_rs_res = gl.GetUniformLocation(resolve_program, "resolution");
@@ -119,6 +135,7 @@ struct Pipeline::Impl {
     gl.CreateBuffers(1, &node_buffer);
     grow_nodes(1u << 18);
     u_floor_clip = gl.GetUniformLocation(floor_program, "clip_from_local");
+    u_model_floor = gl.GetUniformLocation(floor_program, "roi_from_object");
     u_floor_lo = gl.GetUniformLocation(floor_program, "box_lo");
     u_floor_hi = gl.GetUniformLocation(floor_program, "box_hi");
     u_clip = gl.GetUniformLocation(peel_program, "clip_from_local");
@@ -139,6 +156,8 @@ struct Pipeline::Impl {
     gl.VertexArrayAttribIFormat(vao, 1, 1, GL_UNSIGNED_INT, offsetof(GpuVertex, id));
     gl.VertexArrayAttribBinding(vao, 1, 0);
     gl.CreateBuffers(2, vbo);
+    gl.CreateBuffers(2, ibo);
+    u_model_peel = gl.GetUniformLocation(peel_program, "roi_from_object");
     gl.CreateQueries(GL_ANY_SAMPLES_PASSED, 1, &query);
     gl.CreateBuffers(1, &pcs_buffer);
     grow_pcs(1 << 16);
@@ -156,6 +175,8 @@ struct Pipeline::Impl {
     if (heads_size) gl.DeleteTextures(1, &heads_tex);
     gl.DeleteVertexArrays(1, &vao);
     gl.DeleteBuffers(2, vbo);
+    gl.DeleteBuffers(2, ibo);
+    for (auto& [key, shape] : shapes) gl.DeleteBuffers(1, &shape.vbo);
     gl.DeleteQueries(1, &query);
     gl.DeleteBuffers(1, &pcs_buffer);
     release_layers();
@@ -275,7 +296,103 @@ struct Pipeline::Impl {
     return min_depth;
   }
 
+  // Number of corners slot `slot` draws for the current ROI view.
+  std::size_t corners(int slot) const { return slot_shape[slot] ? indices[slot].size() : staging[slot].size(); }
+
+  // Prepares slot `slot` for `object` in `view`: a world-space object's triangles touching the
+  // ROI gathered into `staging`, or a rigid object's triangle indices (its shape cached on the
+  // GPU). Returns the smallest depth along d of the gathered corners, clamped to the ROI.
+  double prepare(const Object& object, const RoiView& view, IdMode ids, int slot) {
+    if (!object.rigid || !object.rigid->shape) {
+      slot_shape[slot] = nullptr;
+      return gather(object.mesh, view, ids, staging[slot]);
+    }
+    const Mesh& mesh = object.mesh;  // world space: culling and depth as for any object
+    std::vector<std::uint32_t>& out = indices[slot];
+    out.clear();
+    double min_depth = view.half_depth;
+    const Aabb& box = view.box;
+    for (std::uint32_t t = 0; t < mesh.triangles.size(); ++t) {
+      const Tri& f = mesh.triangles[t];
+      const Vec3& a = mesh.vertices[f[0]];
+      const Vec3& b = mesh.vertices[f[1]];
+      const Vec3& c = mesh.vertices[f[2]];
+      const Vec3 lo = a.cwiseMin(b).cwiseMin(c), hi = a.cwiseMax(b).cwiseMax(c);
+      if ((hi.array() < box.lo.array()).any() || (lo.array() > box.hi.array()).any()) continue;
+      for (int k = 0; k < 3; ++k) {
+        out.push_back(3 * t + std::uint32_t(k));
+        min_depth = std::min(min_depth, std::max(-view.half_depth, (mesh.vertices[f[k]] - view.center).dot(view.frame.d)));
+      }
+    }
+    slot_shape[slot] = &cached_shape(object.rigid->shape, ids);
+    // ROI-local from shape-local, composed in double, rounded once.
+    Eigen::Affine3d m = object.rigid->pose;
+    m.translation() -= view.center;
+    const Eigen::Matrix4d mm = m.matrix();
+    for (int i = 0; i < 16; ++i) slot_model[slot][i] = float(mm(i % 4, i / 4));
+    return min_depth;
+  }
+
+  // The GPU copy of a rigid shape (every triangle's corners in shape-local floats, with IDs),
+  // uploaded the first time it is seen with this ID mode. Shapes no longer held are dropped.
+  const CachedShape& cached_shape(const std::shared_ptr<const Mesh>& shape, IdMode ids) {
+    auto it = shapes.find({shape.get(), ids});
+    if (it != shapes.end() && !it->second.owner.expired()) return it->second;
+    if (it != shapes.end()) {
+      gl.DeleteBuffers(1, &it->second.vbo);
+      shapes.erase(it);
+    }
+    std::vector<GpuVertex> corners_local;
+    corners_local.reserve(shape->triangles.size() * 3);
+    for (std::uint32_t t = 0; t < shape->triangles.size(); ++t)
+      for (int k = 0; k < 3; ++k) {
+        const Vec3& p = shape->vertices[shape->triangles[t][k]];
+        corners_local.push_back({float(p.x()), float(p.y()), float(p.z()), corner_id(*shape, t, k, ids)});
+      }
+    CachedShape c;
+    c.owner = shape;
+    gl.CreateBuffers(1, &c.vbo);
+    gl.NamedBufferData(c.vbo, GLsizeiptr(corners_local.size() * sizeof(GpuVertex)), corners_local.data(), GL_STATIC_DRAW);
+    ++shape_uploads;
+    return shapes.emplace(std::make_pair(shape.get(), ids), c).first->second;
+  }
+
+  void drop_expired_shapes() {
+    for (auto it = shapes.begin(); it != shapes.end();) {
+      if (it->second.owner.expired()) {
+        gl.DeleteBuffers(1, &it->second.vbo);
+        it = shapes.erase(it);
+      } else {
+        ++it;
+      }
+    }
+  }
+
+  // Draws slot `slot` with the current program, whose roi_from_object is at `u_model`.
+  void draw(int slot, GLint u_model) {
+    static const float identity[16] = {1, 0, 0, 0, 0, 1, 0, 0, 0, 0, 1, 0, 0, 0, 0, 1};
+    if (!slot_shape[slot]) {
+      gl.UniformMatrix4fv(u_model, 1, GL_FALSE, identity);
+      gl.VertexArrayVertexBuffer(vao, 0, vbo[slot], 0, sizeof(GpuVertex));
+      gl.DrawArrays(GL_TRIANGLES, 0, GLsizei(staging[slot].size()));
+      return;
+    }
+    gl.UniformMatrix4fv(u_model, 1, GL_FALSE, slot_model[slot].data());
+    gl.VertexArrayVertexBuffer(vao, 0, slot_shape[slot]->vbo, 0, sizeof(GpuVertex));
+    gl.VertexArrayElementBuffer(vao, ibo[slot]);
+    gl.DrawElements(GL_TRIANGLES, GLsizei(indices[slot].size()), GL_UNSIGNED_INT, nullptr);
+  }
+
   void upload(int slot) {
+    if (slot_shape[slot]) {  // a rigid shape: only the indices
+      const std::size_t n = indices[slot].size();
+      if (n > ibo_capacity[slot]) {
+        ibo_capacity[slot] = std::max<std::size_t>(n, ibo_capacity[slot] * 3 / 2);
+        gl.NamedBufferData(ibo[slot], ibo_capacity[slot] * sizeof(std::uint32_t), nullptr, GL_STREAM_DRAW);
+      }
+      gl.NamedBufferSubData(ibo[slot], 0, n * sizeof(std::uint32_t), indices[slot].data());
+      return;
+    }
     const std::size_t n = staging[slot].size();
     if (n > vbo_capacity[slot]) {
       vbo_capacity[slot] = std::max<std::size_t>(n, vbo_capacity[slot] * 3 / 2);
@@ -319,8 +436,7 @@ struct Pipeline::Impl {
     gl.BindVertexArray(vao);
     for (int slot = 0; slot < 2; ++slot) {
       gl.Uniform1ui(u_ab_object, GLuint(slot));
-      gl.VertexArrayVertexBuffer(vao, 0, vbo[slot], 0, sizeof(GpuVertex));
-      gl.DrawArrays(GL_TRIANGLES, 0, GLsizei(staging[slot].size()));
+      draw(slot, u_model_ab);
     }
     gl.ColorMaski(0, GL_TRUE, GL_TRUE, GL_TRUE, GL_TRUE);
     gl.BindFramebuffer(GL_FRAMEBUFFER, 0);
@@ -450,8 +566,7 @@ struct Pipeline::Impl {
         const int slot = opt.peel == PeelMode::full ? i : (first_slot + k) & 1;
         if (opt.peel == PeelMode::alternate && i == 1) break;
         gl.Uniform1ui(u_object, GLuint(slot));
-        gl.VertexArrayVertexBuffer(vao, 0, vbo[slot], 0, sizeof(GpuVertex));
-        gl.DrawArrays(GL_TRIANGLES, 0, GLsizei(staging[slot].size()));
+        draw(slot, u_model_peel);
       }
       gl.EndQuery(GL_ANY_SAMPLES_PASSED);
       ++r.passes;
@@ -518,6 +633,7 @@ FrameResult Pipeline::detect(const std::vector<Object>& objects, const DetectOpt
   out.renderer = s.renderer;
   s.passes_this_frame = 0;
   s.pcs_readbacks = 0;
+  s.shape_uploads = 0;
   const auto t_total = Clock::now();
 
   auto t0 = Clock::now();
@@ -527,7 +643,10 @@ FrameResult Pipeline::detect(const std::vector<Object>& objects, const DetectOpt
   const auto pairs = overlapping_pairs(boxes);
   out.timings.aabb = ms_since(t0);
 
-  if (!pairs.empty()) s.context.make_current();
+  if (!pairs.empty()) {
+    s.context.make_current();
+    s.drop_expired_shapes();
+  }
   const int n = opt.resolution > 0 ? opt.resolution : tile_resolution(opt.budget, pairs.size());
   const std::vector<ViewFrame> frames = fused_view_frames(opt);
 
@@ -547,21 +666,22 @@ FrameResult Pipeline::detect(const std::vector<Object>& objects, const DetectOpt
 
       t0 = Clock::now();
       // Each view gathers its own triangles: the pad follows that view's texel size.
-      const double min_a = s.gather(ma, view, opt.ids, s.staging[0]);
-      const double min_b = s.gather(mb, view, opt.ids, s.staging[1]);
+      const double min_a = s.prepare(objects[ia], view, opt.ids, 0);
+      const double min_b = s.prepare(objects[ib], view, opt.ids, 1);
       if (v == 0) {
-        r.triangles_drawn_a = s.staging[0].size() / 3;
-        r.triangles_drawn_b = s.staging[1].size() / 3;
+        r.triangles_drawn_a = s.corners(0) / 3;
+        r.triangles_drawn_b = s.corners(1) / 3;
         r.a_first = min_a > min_b;  // the farther object first; ties: B first
       }
-      if (s.staging[0].empty() || s.staging[1].empty()) {
+      if (s.corners(0) == 0 || s.corners(1) == 0) {
         out.timings.upload += ms_since(t0);
         continue;  // one object has nothing in the ROI: no contact possible, no GL work
       }
       s.upload(0);
       s.upload(1);
       out.timings.upload += ms_since(t0);
-      out.triangles_uploaded += (s.staging[0].size() + s.staging[1].size()) / 3;
+      for (int slot = 0; slot < 2; ++slot)
+        (s.slot_shape[slot] ? out.triangles_indexed : out.triangles_uploaded) += s.corners(slot) / 3;
       ++out.rois_peeled;
 
       PairResult one;
@@ -610,6 +730,7 @@ FrameResult Pipeline::detect(const std::vector<Object>& objects, const DetectOpt
   }
   out.gl_passes = s.passes_this_frame;
   out.pcs_readbacks = s.pcs_readbacks;
+  out.shape_uploads = s.shape_uploads;
   out.timings.total = ms_since(t_total);
   return out;
 }
@@ -628,9 +749,9 @@ double Pipeline::floor_ms(const std::vector<Object>& objects, const DetectOption
     const Aabb roi = intersection(boxes[ia], boxes[ib]);
     for (const ViewFrame& frame : frames) {
       const RoiView view = make_padded_roi_view(roi, boxes[ia], boxes[ib], frame, n);
-      s.gather(objects[ia].mesh, view, opt.ids, s.staging[0]);
-      s.gather(objects[ib].mesh, view, opt.ids, s.staging[1]);
-      if (s.staging[0].empty() || s.staging[1].empty()) continue;
+      s.prepare(objects[ia], view, opt.ids, 0);
+      s.prepare(objects[ib], view, opt.ids, 1);
+      if (s.corners(0) == 0 || s.corners(1) == 0) continue;
       s.upload(0);
       s.upload(1);
       s.ensure_layers(n);
@@ -650,10 +771,7 @@ double Pipeline::floor_ms(const std::vector<Object>& objects, const DetectOption
       const GLfloat far_depth = 1.0f;
       s.gl.ClearBufferfv(GL_DEPTH, 0, &far_depth);
       s.gl.BindVertexArray(s.vao);
-      for (int slot = 0; slot < 2; ++slot) {
-        s.gl.VertexArrayVertexBuffer(s.vao, 0, s.vbo[slot], 0, sizeof(GpuVertex));
-        s.gl.DrawArrays(GL_TRIANGLES, 0, GLsizei(s.staging[slot].size()));
-      }
+      for (int slot = 0; slot < 2; ++slot) s.draw(slot, s.u_model_floor);
       s.gl.Finish();
       ms += ms_since(t0);
       s.gl.BindFramebuffer(GL_FRAMEBUFFER, 0);
