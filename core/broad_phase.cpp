@@ -6,12 +6,20 @@
 namespace peelcd {
 
 std::vector<std::pair<std::size_t, std::size_t>> overlapping_pairs(const std::vector<Aabb>& boxes) {
-  std::vector<std::size_t> order(boxes.size());
+  std::vector<std::pair<std::size_t, std::size_t>> out;
+  std::vector<std::size_t> order;
+  overlapping_pairs(boxes, out, order);
+  return out;
+}
+
+void overlapping_pairs(const std::vector<Aabb>& boxes, std::vector<std::pair<std::size_t, std::size_t>>& out,
+                       std::vector<std::size_t>& order) {
+  order.resize(boxes.size());
   std::iota(order.begin(), order.end(), 0);
   std::sort(order.begin(), order.end(), [&](std::size_t a, std::size_t b) {
     return boxes[a].lo.x() < boxes[b].lo.x() || (boxes[a].lo.x() == boxes[b].lo.x() && a < b);
   });
-  std::vector<std::pair<std::size_t, std::size_t>> out;
+  out.clear();
   for (std::size_t i = 0; i < order.size(); ++i) {
     const Aabb& a = boxes[order[i]];
     if (a.empty()) continue;
@@ -23,7 +31,6 @@ std::vector<std::pair<std::size_t, std::size_t>> overlapping_pairs(const std::ve
     }
   }
   std::sort(out.begin(), out.end());
-  return out;
 }
 
 }  // namespace peelcd

@@ -23,11 +23,22 @@ std::optional<Peeler> parse_peeler(const std::string& text) {
   return std::nullopt;
 }
 
-std::vector<ViewFrame> fused_view_frames(const DetectOptions& o) {
+std::size_t fused_view_frames(const DetectOptions& o, ViewFrame out[3]) {
   const ViewFrame f = view_frame(o.theta, o.phi);
-  if (o.views == 1) return {f};
-  if (o.views == 3) return {f, ViewFrame{f.v, f.d, f.u}, ViewFrame{f.d, f.u, f.v}};
+  out[0] = f;
+  if (o.views == 1) return 1;
+  if (o.views == 3) {
+    out[1] = ViewFrame{f.v, f.d, f.u};
+    out[2] = ViewFrame{f.d, f.u, f.v};
+    return 3;
+  }
   throw std::invalid_argument("peelcd: views must be 1 or 3");
+}
+
+std::vector<ViewFrame> fused_view_frames(const DetectOptions& o) {
+  ViewFrame f[3];
+  const std::size_t n = fused_view_frames(o, f);
+  return std::vector<ViewFrame>(f, f + n);
 }
 
 int tile_resolution(int budget, std::size_t roi_count) {

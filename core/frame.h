@@ -47,6 +47,8 @@ struct DetectOptions {
 
 // The view frames a ROI is peeled along for `options` (1 or 3 of them).
 std::vector<ViewFrame> fused_view_frames(const DetectOptions& options);
+// The same into `out` (room for 3); returns the count. Allocates nothing.
+std::size_t fused_view_frames(const DetectOptions& options, ViewFrame out[3]);
 
 // Side of each ROI's tile when `roi_count` ROIs share a budget x budget texture: the largest
 // power-of-two fraction of `budget` such that the tiles fit (1 ROI: budget; 2-4: budget/2; ...),

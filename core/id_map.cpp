@@ -21,7 +21,10 @@ std::optional<IdMode> parse_id_mode(const std::string& text) {
   return std::nullopt;
 }
 
-IdMap::IdMap(const Mesh& mesh, IdMode mode) : mode_(mode) {
+IdMap::IdMap(const Mesh& mesh, IdMode mode) { rebuild(mesh, mode); }
+
+void IdMap::rebuild(const Mesh& mesh, IdMode mode) {
+  mode_ = mode;
   const std::size_t f = mesh.triangles.size();
   const std::size_t ids = mode == IdMode::unique ? f : mesh.vertices.size();
   // Corners of triangle t that name an ID standing for t: the last one, or all three (ring).
@@ -31,24 +34,24 @@ IdMap::IdMap(const Mesh& mesh, IdMode mode) : mode_(mode) {
     for (int c = first_corner; c < 3; ++c) ++offsets_[corner_id(mesh, t, c, mode) + 1];
   for (std::size_t i = 0; i < ids; ++i) offsets_[i + 1] += offsets_[i];
   tris_.resize(offsets_.back());
-  std::vector<std::uint32_t> fill(offsets_.begin(), offsets_.end() - 1);
+  fill_.assign(offsets_.begin(), offsets_.end() - 1);
   for (std::uint32_t t = 0; t < f; ++t)
     for (int c = first_corner; c < 3; ++c) {
       const std::uint32_t id = corner_id(mesh, t, c, mode);
       // A degenerate triangle can repeat a vertex: list it once.
-      if (fill[id] > offsets_[id] && tris_[fill[id] - 1] == t) continue;
-      tris_[fill[id]++] = t;
+      if (fill_[id] > offsets_[id] && tris_[fill_[id] - 1] == t) continue;
+      tris_[fill_[id]++] = t;
     }
   // Compact away the slots left by repeated vertices.
   std::size_t out = 0;
-  std::vector<std::uint32_t> offsets(ids + 1, 0);
+  scratch_.assign(ids + 1, 0);
   for (std::size_t id = 0; id < ids; ++id) {
-    offsets[id] = std::uint32_t(out);
-    for (std::uint32_t k = offsets_[id]; k < fill[id]; ++k) tris_[out++] = tris_[k];
+    scratch_[id] = std::uint32_t(out);
+    for (std::uint32_t k = offsets_[id]; k < fill_[id]; ++k) tris_[out++] = tris_[k];
   }
-  offsets[ids] = std::uint32_t(out);
+  scratch_[ids] = std::uint32_t(out);
   tris_.resize(out);
-  offsets_ = std::move(offsets);
+  offsets_.swap(scratch_);
 }
 
 void expand_pcs(const std::vector<IdPair>& pcs, const IdMap& a, const IdMap& b,

@@ -29,6 +29,8 @@ class IdMap {
  public:
   IdMap() = default;
   IdMap(const Mesh& mesh, IdMode mode);
+  // Rebuilds the map for `mesh` in place, reusing storage (no allocation once it has grown).
+  void rebuild(const Mesh& mesh, IdMode mode);
 
   IdMode mode() const { return mode_; }
   std::size_t id_count() const { return offsets_.empty() ? 0 : offsets_.size() - 1; }
@@ -40,6 +42,7 @@ class IdMap {
   IdMode mode_ = IdMode::unique;
   std::vector<std::uint32_t> offsets_;  // id_count() + 1
   std::vector<std::uint32_t> tris_;
+  std::vector<std::uint32_t> fill_, scratch_;
 };
 
 // A PCS as read back: one ID of object A and one of object B.

@@ -89,6 +89,10 @@ struct Pipeline::Impl {
   GLint u_model_peel = -1, u_model_ab = -1, u_model_floor = -1;
   std::vector<IdPair> pcs, pcs_all;
   std::vector<std::uint64_t> candidates;
+  std::vector<Aabb> boxes;
+  std::vector<std::pair<std::size_t, std::size_t>> object_pairs;
+  std::vector<std::size_t> order;
+  IdMap map_a, map_b;
   std::vector<CapturedView>* capture = nullptr;
   CapturedView* captured = nullptr;  // the view being peeled, while capturing
 
@@ -608,6 +612,12 @@ void Pipeline::capture_layers(std::vector<CapturedView>* sink) { impl_->capture 
 std::string shader_sources_hash() { return shaders::shader_sources_hash; }
 
 FrameResult Pipeline::detect(const std::vector<Object>& objects, const DetectOptions& opt) {
+  FrameResult out;
+  detect(objects, opt, out);
+  return out;
+}
+
+void Pipeline::detect(const std::vector<Object>& objects, const DetectOptions& opt, FrameResult& out) {
   Impl& s = *impl_;
   if (opt.resolution < 0 || opt.resolution > s.max_texture)
     throw std::invalid_argument("peelcd::gl::Pipeline::detect(): resolution " +
@@ -629,18 +639,23 @@ FrameResult Pipeline::detect(const std::vector<Object>& objects, const DetectOpt
       throw std::invalid_argument("peelcd::gl::Pipeline::detect(): object '" + o.name +
                                   "' has 2^31 - 1 or more triangles or vertices; IDs hold 31 bits");
 
-  FrameResult out;
-  out.renderer = s.renderer;
+  // `out` is reused: its vectors keep their capacity, so a steady stream of frames allocates
+  // nothing here (tests/alloc/test_alloc.cpp counts it).
+  if (out.renderer != s.renderer) out.renderer = s.renderer;
+  out.timings = Timings{};
+  out.gl_passes = out.rois_peeled = out.triangles_uploaded = out.triangles_indexed = out.shape_uploads = 0;
+  out.pcs_readbacks = 0;
   s.passes_this_frame = 0;
   s.pcs_readbacks = 0;
   s.shape_uploads = 0;
   const auto t_total = Clock::now();
 
   auto t0 = Clock::now();
-  std::vector<Aabb> boxes;
-  boxes.reserve(objects.size());
+  std::vector<Aabb>& boxes = s.boxes;
+  boxes.clear();
   for (const Object& o : objects) boxes.push_back(bounds(o.mesh));
-  const auto pairs = overlapping_pairs(boxes);
+  overlapping_pairs(boxes, s.object_pairs, s.order);
+  const auto& pairs = s.object_pairs;
   out.timings.aabb = ms_since(t0);
 
   if (!pairs.empty()) {
@@ -648,10 +663,18 @@ FrameResult Pipeline::detect(const std::vector<Object>& objects, const DetectOpt
     s.drop_expired_shapes();
   }
   const int n = opt.resolution > 0 ? opt.resolution : tile_resolution(opt.budget, pairs.size());
-  const std::vector<ViewFrame> frames = fused_view_frames(opt);
+  ViewFrame frames[3];
+  const std::size_t frame_count = fused_view_frames(opt, frames);
 
+  std::size_t used = 0;
   for (const auto& [ia, ib] : pairs) {
-    PairResult r;
+    if (used == out.pairs.size()) out.pairs.emplace_back();
+    PairResult& r = out.pairs[used++];
+    r.pcs.clear();
+    r.colliding.clear();
+    r.layers = r.passes = 0;
+    r.pcs_count = r.candidates = 0;
+    r.triangles_drawn_a = r.triangles_drawn_b = 0;
     r.object_a = ia;
     r.object_b = ib;
     r.roi = intersection(boxes[ia], boxes[ib]);
@@ -660,7 +683,7 @@ FrameResult Pipeline::detect(const std::vector<Object>& objects, const DetectOpt
     const Mesh& mb = objects[ib].mesh;
     std::vector<IdPair>& all_pcs = s.pcs_all;
     all_pcs.clear();
-    for (std::size_t v = 0; v < frames.size(); ++v) {
+    for (std::size_t v = 0; v < frame_count; ++v) {
       const RoiView view = make_padded_roi_view(r.roi, boxes[ia], boxes[ib], frames[v], n);
       if (v == 0) r.epsilon = opt.epsilon > 0.0 ? opt.epsilon : view.texel();
 
@@ -687,7 +710,7 @@ FrameResult Pipeline::detect(const std::vector<Object>& objects, const DetectOpt
       PairResult one;
       if (s.capture) {
         s.captured = &s.capture->emplace_back();
-        s.captured->pair = out.pairs.size();
+        s.captured->pair = used - 1;
         s.captured->view = int(v);
         s.captured->roi = view;
         s.captured->a_first = min_a > min_b;
@@ -710,29 +733,26 @@ FrameResult Pipeline::detect(const std::vector<Object>& objects, const DetectOpt
       r.passes += one.passes;
       all_pcs.insert(all_pcs.end(), s.pcs.begin(), s.pcs.end());
     }
-    if (r.triangles_drawn_a == 0 || r.triangles_drawn_b == 0) {
-      out.pairs.push_back(std::move(r));
-      continue;
-    }
+    if (r.triangles_drawn_a == 0 || r.triangles_drawn_b == 0) continue;
 
     t0 = Clock::now();
     std::sort(all_pcs.begin(), all_pcs.end());
     all_pcs.erase(std::unique(all_pcs.begin(), all_pcs.end()), all_pcs.end());
     r.pcs_count = all_pcs.size();
     r.pcs.assign(all_pcs.begin(), all_pcs.end());
-    const IdMap map_a(ma, opt.ids), map_b(mb, opt.ids);
+    s.map_a.rebuild(ma, opt.ids);
+    s.map_b.rebuild(mb, opt.ids);
     s.candidates.clear();
-    expand_pcs(all_pcs, map_a, map_b, s.candidates);
+    expand_pcs(all_pcs, s.map_a, s.map_b, s.candidates);
     r.candidates = s.candidates.size();
     narrow_phase(ma, mb, s.candidates, r.colliding);
     out.timings.cpu += ms_since(t0);
-    out.pairs.push_back(std::move(r));
   }
+  out.pairs.resize(used);
   out.gl_passes = s.passes_this_frame;
   out.pcs_readbacks = s.pcs_readbacks;
   out.shape_uploads = s.shape_uploads;
   out.timings.total = ms_since(t_total);
-  return out;
 }
 
 double Pipeline::floor_ms(const std::vector<Object>& objects, const DetectOptions& opt) {
@@ -743,12 +763,13 @@ double Pipeline::floor_ms(const std::vector<Object>& objects, const DetectOption
   if (pairs.empty()) return 0.0;
   s.context.make_current();
   const int n = opt.resolution > 0 ? opt.resolution : tile_resolution(opt.budget, pairs.size());
-  const std::vector<ViewFrame> frames = fused_view_frames(opt);
+  ViewFrame frames[3];
+  const std::size_t frame_count = fused_view_frames(opt, frames);
   double ms = 0.0;
   for (const auto& [ia, ib] : pairs) {
     const Aabb roi = intersection(boxes[ia], boxes[ib]);
-    for (const ViewFrame& frame : frames) {
-      const RoiView view = make_padded_roi_view(roi, boxes[ia], boxes[ib], frame, n);
+    for (std::size_t v = 0; v < frame_count; ++v) {
+      const RoiView view = make_padded_roi_view(roi, boxes[ia], boxes[ib], frames[v], n);
       s.prepare(objects[ia], view, opt.ids, 0);
       s.prepare(objects[ib], view, opt.ids, 1);
       if (s.corners(0) == 0 || s.corners(1) == 0) continue;

@@ -41,6 +41,9 @@ class Pipeline {
   // Objects are world-space meshes (validated by the caller). Throws std::invalid_argument on
   // bad options (e.g. a resolution above max_resolution()), GlError on a GL failure.
   FrameResult detect(const std::vector<Object>& objects, const DetectOptions& options);
+  // The same into `out`, reusing its storage: with the same number of overlapping pairs frame
+  // after frame, this allocates nothing (beyond what the GL driver does inside its calls).
+  void detect(const std::vector<Object>& objects, const DetectOptions& options, FrameResult& out);
 
   std::string renderer() const;  // GL_RENDERER
   std::string version() const;   // GL_VERSION

@@ -1,0 +1,75 @@
+// Steady state allocates nothing: the frame loop of a simulation (the same objects moving,
+// Pipeline::detect into a reused FrameResult) makes no C++ heap allocation once its buffers
+// have grown to the working set. The motion here is periodic: the first period warms up, the
+// second must not allocate. (A new maximum of PCS or contacts grows a buffer once, geometrically.)
+// Counted: every operator new in this process (replaced below). Not counted: the GL driver's
+// own malloc calls inside GL functions, which peelcd does not control.
+#include "core/primitives.h"
+#include "gl/pipeline.h"
+#include "gl_osmesa/osmesa_context.h"
+
+#include <catch2/catch.hpp>
+
+#include <atomic>
+#include <cstdlib>
+#include <new>
+
+namespace {
+std::atomic<std::size_t> g_allocations{0};
+}
+
+void* operator new(std::size_t n) {
+  ++g_allocations;
+  if (void* p = std::malloc(n ? n : 1)) return p;
+  throw std::bad_alloc();
+}
+void* operator new[](std::size_t n) { return operator new(n); }
+void operator delete(void* p) noexcept { std::free(p); }
+void operator delete[](void* p) noexcept { std::free(p); }
+void operator delete(void* p, std::size_t) noexcept { std::free(p); }
+void operator delete[](void* p, std::size_t) noexcept { std::free(p); }
+
+using namespace peelcd;
+
+TEST_CASE("a steady stream of frames allocates nothing", "[alloc]") {
+  gl::OsmesaContext context;
+  gl::Pipeline pipeline(context);
+  // Two spheres and a rigid ball moving a little every frame: two ROIs, contacts every frame.
+  const Mesh big = make_uv_sphere(Vec3(0, 0, 0), 1.0, 16, 32);
+  auto ball = std::make_shared<const Mesh>(make_uv_sphere(Vec3(0, 0, 0), 0.6, 12, 24));
+  std::vector<Object> objects(3);
+  objects[0] = {"big", big, {}};
+  objects[1] = {"small", make_uv_sphere(Vec3(0.9, 0.3, 0.1), 0.5, 12, 24), {}};
+  objects[2] = {"ball", *ball, RigidMotion{ball, Eigen::Affine3d::Identity()}};
+  const Mesh small = objects[1].mesh;
+  const auto move = [&](int f) {
+    const int phase = f % 5;  // period 5
+    const Vec3 at(-0.9 + 0.03 * phase, -0.4, 0.2);
+    objects[2].rigid->pose = Eigen::Translation3d(at);
+    for (std::size_t i = 0; i < ball->vertices.size(); ++i) objects[2].mesh.vertices[i] = ball->vertices[i] + at;
+    for (std::size_t i = 0; i < small.vertices.size(); ++i)  // a deforming object: new vertices
+      objects[1].mesh.vertices[i] = small.vertices[i] * (1.0 + 0.02 * phase);
+  };
+  for (Peeler peeler : {Peeler::abuffer, Peeler::multipass}) {
+    DetectOptions opt;
+    opt.peeler = peeler;
+    opt.resolution = 128;
+    FrameResult result;
+    for (int f = 0; f < 5; ++f) {  // warm-up: one period; buffers grow to their working size
+      move(f);
+      pipeline.detect(objects, opt, result);
+    }
+    std::size_t before = 0, after = 0, contacts = 0;
+    for (int f = 5; f < 10; ++f) {
+      move(f);
+      before = g_allocations.load();
+      pipeline.detect(objects, opt, result);
+      after = g_allocations.load();
+      INFO("peeler " << to_string(peeler) << ", frame " << f);
+      CHECK(after - before == 0);
+      REQUIRE(result.pairs.size() == 2);
+      contacts += result.pairs[0].colliding.size() + result.pairs[1].colliding.size();
+    }
+    CHECK(contacts > 0);
+  }
+}
