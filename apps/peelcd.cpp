@@ -355,9 +355,10 @@ int run_simulate(const SimArgs& a) {
   };
   std::vector<PhaseSum> phases(seq->phases());
   std::size_t false_total = 0;
+  FrameResult r;  // reused frame after frame, as an application would
   for (std::size_t f = 0; f < seq->frames(); ++f) {
     seq->frame(f, objects);
-    const FrameResult r = pipeline.detect(objects, opt);
+    pipeline.detect(objects, opt, r);
     const bench::PeerFrame exact = bench::cgal_frame(objects);
     const Score sc = score_frame(r, exact);
     false_total += sc.false_contacts;
@@ -431,6 +432,9 @@ int run_bench(const BenchArgs& a) {
   DetectOptions base;
   base.resolution = a.res;
   configs.push_back({"peelcd default (3 views)", base});
+  DetectOptions multi = base;
+  multi.peeler = Peeler::multipass;
+  configs.push_back({"peelcd default, multi-pass", multi});
   DetectOptions one = base;
   one.views = 1;
   configs.push_back({"peelcd 1 view", one});
@@ -438,12 +442,16 @@ int run_bench(const BenchArgs& a) {
   paper.ids = IdMode::paper;
   paper.slope = 0.0;
   configs.push_back({"peelcd paper config", paper});
+  DetectOptions paper_multi = paper;
+  paper_multi.peeler = Peeler::multipass;
+  configs.push_back({"peelcd paper config, multi-pass", paper_multi});
 
-  const std::size_t methods = configs.size() + 3;  // + CGAL, FCL, floor
+  const std::size_t methods = configs.size() + 4;  // + CGAL, FCL, two floors
   std::vector<std::string> names;
   for (const Config& c : configs) names.push_back(c.name);
   names.insert(names.end(), {"CGAL box_intersection_d + exact", "FCL 0.7 AABB tree built per frame",
-                             "floor: 1 bare draw per ROI view"});
+                             "floor: 1 bare draw x 3 views", "floor: 1 bare draw x 1 view"});
+  std::vector<FrameResult> results(configs.size());
   std::vector<std::vector<double>> ms(methods);
   std::vector<Score> scores(methods);
   std::vector<std::vector<std::vector<double>>> phase_ms;  // [phase][method] -> frame times
@@ -460,9 +468,9 @@ int run_bench(const BenchArgs& a) {
     std::vector<double> t(methods);
     std::vector<Score> s(methods);
     for (std::size_t c = 0; c < configs.size(); ++c) {
-      const FrameResult r = pipeline.detect(obj, configs[c].opt);
-      t[c] = r.timings.total;
-      s[c] = score_frame(r, exact);
+      pipeline.detect(obj, configs[c].opt, results[c]);
+      t[c] = results[c].timings.total;
+      s[c] = score_frame(results[c], exact);
     }
     t[configs.size()] = exact.ms;
     s[configs.size()] = Score{exact.pairs, exact.pairs, 0, 0};
@@ -481,6 +489,8 @@ int run_bench(const BenchArgs& a) {
     s[configs.size() + 1] = fs;
     t[configs.size() + 2] = pipeline.floor_ms(obj, configs[0].opt);
     s[configs.size() + 2] = Score{exact.pairs, 0, exact.pairs, 0};
+    t[configs.size() + 3] = pipeline.floor_ms(obj, one);
+    s[configs.size() + 3] = Score{exact.pairs, 0, exact.pairs, 0};
     for (std::size_t m = 0; m < methods; ++m) {
       ms[m].push_back(t[m]);
       scores[m].exact += s[m].exact;
@@ -495,7 +505,9 @@ int run_bench(const BenchArgs& a) {
     }
     progress(f + 1, frames);
   }
-  const std::size_t cg = configs.size(), fc = cg + 1, fl = cg + 2;
+  const std::size_t cg = configs.size(), fc = cg + 1, fl = cg + 2, fl1 = cg + 3;
+  // The floor with the same number of views as the configuration.
+  const auto floor_of = [&](std::size_t m) { return configs[m].opt.views == 3 ? fl : fl1; };
   std::vector<double> med(methods);
   for (std::size_t m = 0; m < methods; ++m) med[m] = median(ms[m]);
   std::printf("peelcd bench: %s, %zu frames, %d^2, %s (%s), medians per frame\n", a.scene.c_str(), frames, a.res,
@@ -503,20 +515,27 @@ int run_bench(const BenchArgs& a) {
   std::printf("%-36s %10s %8s %7s %8s %8s %8s\n", "method", "median ms", "miss", "false", "x CGAL", "x FCL", "x floor");
   for (std::size_t m = 0; m < methods; ++m) {
     const bool peel = m < cg;
-    std::printf("%-36s %10.2f %7.2f%% %7zu", names[m].c_str(), med[m],
-                m == fl ? 0.0 : 100.0 * scores[m].miss_ratio(), m == fl ? std::size_t(0) : scores[m].false_contacts);
-    if (peel) std::printf(" %8.2f %8.2f %8.2f\n", med[m] / med[cg], med[m] / med[fc], med[fl] > 0 ? med[m] / med[fl] : 0.0);
+    const bool is_floor = m >= fl;
+    std::printf("%-36s %10.2f", names[m].c_str(), med[m]);
+    if (is_floor) std::printf(" %8s %7s", "-", "-");
+    else std::printf(" %7.2f%% %7zu", 100.0 * scores[m].miss_ratio(), scores[m].false_contacts);
+    if (peel)
+      std::printf(" %8.2f %8.2f %8.2f\n", med[m] / med[cg], med[m] / med[fc],
+                  med[floor_of(m)] > 0 ? med[m] / med[floor_of(m)] : 0.0);
     else std::printf("\n");
   }
   std::printf("(miss / false: over all frames against the exact pairs; FCL's triangle test is not exact; the floor finds nothing)\n");
   if (seq) {
-    std::printf("\nper phase, median ms:\n%-7s", "phase");
-    for (std::size_t m = 0; m < methods; ++m) std::printf(" %12.12s", names[m].c_str());
+    std::printf("\nper phase, median ms (default = %s; paper mp = paper config, multi-pass):\n%-7s",
+                names[0].c_str(), "phase");
+    static const char* const shorts[] = {"default", "multipass", "1 view", "paper", "paper mp",
+                                         "CGAL", "FCL", "floor x3", "floor x1"};
+    for (std::size_t m = 0; m < methods; ++m) std::printf(" %9s", shorts[m]);
     std::printf(" %9s %9s %9s\n", "dflt/CGAL", "dflt/FCL", "dflt/floor");
     for (std::size_t p = 0; p < phase_ms.size(); ++p) {
       std::printf("(%c)    ", char('a' + p));
       std::vector<double> pm(methods);
-      for (std::size_t m = 0; m < methods; ++m) std::printf(" %12.2f", pm[m] = median(phase_ms[p][m]));
+      for (std::size_t m = 0; m < methods; ++m) std::printf(" %9.2f", pm[m] = median(phase_ms[p][m]));
       std::printf(" %9.2f %9.2f %9.2f\n", pm[0] / pm[cg], pm[0] / pm[fc], pm[fl] > 0 ? pm[0] / pm[fl] : 0.0);
     }
   }
