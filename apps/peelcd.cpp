@@ -406,7 +406,7 @@ int run_simulate(const SimArgs& a) {
 struct BenchArgs {
   std::string scene = "test1";  // test1, test2 or a scene file
   std::size_t frames = 12;
-  int res = 256;
+  int res = -1;  // -1: 256 for a scene file; the shared 512^2 budget for test1/test2
   std::string backend = "osmesa";
   std::string csv;
 };
@@ -421,7 +421,7 @@ int run_bench(const BenchArgs& a) {
   }
   const auto context = make_context(a.backend);
   gl::Pipeline pipeline(*context);
-  if (a.res > pipeline.max_resolution())
+  if (a.res > 0 && a.res > pipeline.max_resolution())
     throw InputError("peelcd bench: --res " + std::to_string(a.res) + " is above GL_MAX_TEXTURE_SIZE");
 
   struct Config {
@@ -430,7 +430,7 @@ int run_bench(const BenchArgs& a) {
   };
   std::vector<Config> configs;
   DetectOptions base;
-  base.resolution = a.res;
+  base.resolution = a.res >= 0 ? a.res : (seq ? 0 : 256);
   configs.push_back({"peelcd default (3 views)", base});
   DetectOptions multi = base;
   multi.peeler = Peeler::multipass;
@@ -510,7 +510,9 @@ int run_bench(const BenchArgs& a) {
   const auto floor_of = [&](std::size_t m) { return configs[m].opt.views == 3 ? fl : fl1; };
   std::vector<double> med(methods);
   for (std::size_t m = 0; m < methods; ++m) med[m] = median(ms[m]);
-  std::printf("peelcd bench: %s, %zu frames, %d^2, %s (%s), medians per frame\n", a.scene.c_str(), frames, a.res,
+  std::printf("peelcd bench: %s, %zu frames, %s, %s (%s), medians per frame\n", a.scene.c_str(), frames,
+              base.resolution ? (std::to_string(base.resolution) + "^2 per ROI").c_str()
+                              : ("a " + std::to_string(base.budget) + "^2 budget shared by the ROIs").c_str(),
               context->backend().c_str(), pipeline.renderer().c_str());
   std::printf("%-36s %10s %8s %7s %8s %8s %8s\n", "method", "median ms", "miss", "false", "x CGAL", "x FCL", "x floor");
   for (std::size_t m = 0; m < methods; ++m) {
@@ -703,8 +705,9 @@ int main(int argc, char** argv) {
   benchmark->add_option("scene", be.scene, "test1, test2 or a scene file")->capture_default_str();
   benchmark->add_option("--frames", be.frames, "Frames (of the test scene; repeats of a scene file)")
       ->check(CLI::PositiveNumber)->capture_default_str();
-  benchmark->add_option("--res", be.res, "Texture size per ROI for peelcd")->check(CLI::PositiveNumber)
-      ->capture_default_str();
+  benchmark->add_option("--res", be.res, "Texture size per ROI for peelcd; 0 = share the 512^2 budget "
+                                         "(default: 256 for a scene file, 0 for test1/test2)")
+      ->check(CLI::NonNegativeNumber);
   benchmark->add_option("--backend", be.backend, "GL backend: osmesa or egl")->capture_default_str();
   benchmark->add_option("--csv", be.csv, "Write one row per (frame, method) to FILE, or - for stdout");
 

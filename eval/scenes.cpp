@@ -91,7 +91,7 @@ class Test2 final : public Sequence {
     // is shifted onto its neighbour so that pairs of falling objects collide too.
     for (int i = 0; i < 40; ++i) {
       const int col = i % 5, row = i / 5;
-      Vec3 p(-1.9 + 0.95 * col, 1.2 + 0.35 * ((i * 7) % 11), -2.6 + 0.75 * row);
+      Vec3 p(-1.9 + 0.95 * col, 0.85 + 0.35 * ((i * 7) % 11), -2.6 + 0.75 * row);
       if (i % 5 == 4) p.x() -= 0.45;
       starts_.push_back(p);
       spin_.push_back(0.3 + 0.1 * (i % 7));
