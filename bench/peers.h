@@ -4,7 +4,8 @@
 //         boxes plus the exact triangle test (core/reference.h): the fastest exact method that
 //         needs no preprocessing, and the reference nCTP.
 //   fcl:  FCL 0.7, a BVH (AABB tree) built for every object in an overlapping pair, every frame
-//         (what a deforming or fracturing mesh costs there), then collide() with all contacts.
+//         (what a deforming or fracturing mesh costs there), then collided with all contacts
+//         (collide()'s traversal, without its model copies: see peers.cpp).
 // Both use the same object-level broad phase as peelcd (core/broad_phase.h).
 #include "core/mesh.h"
 
