@@ -278,10 +278,11 @@ struct Pipeline::Impl {
     check("layer allocation");
   }
 
-  // Gathers the triangles of `mesh` touching the ROI box into `out` (ROI-local floats).
-  // Returns the smallest depth along d of the gathered corners, clamped to the ROI.
-  double gather(const Mesh& mesh, const RoiView& view, IdMode ids, std::vector<GpuVertex>& out) {
-    out.clear();
+  // Calls emit(t, k, local) for every corner k of every triangle t of `mesh` whose box touches
+  // the ROI box, local = corner - ROI centre (double). Returns the smallest depth along d of
+  // those corners, clamped to the ROI.
+  template <class Emit>
+  static double for_each_corner_in_roi(const Mesh& mesh, const RoiView& view, Emit&& emit) {
     double min_depth = view.half_depth;
     const Aabb& box = view.box;
     for (std::uint32_t t = 0; t < mesh.triangles.size(); ++t) {
@@ -292,12 +293,20 @@ struct Pipeline::Impl {
       const Vec3 lo = a.cwiseMin(b).cwiseMin(c), hi = a.cwiseMax(b).cwiseMax(c);
       if ((hi.array() < box.lo.array()).any() || (lo.array() > box.hi.array()).any()) continue;
       for (int k = 0; k < 3; ++k) {
-        const Vec3 local = mesh.vertices[f[k]] - view.center;  // double, then float
-        out.push_back({float(local.x()), float(local.y()), float(local.z()), corner_id(mesh, t, k, ids)});
+        const Vec3 local = mesh.vertices[f[k]] - view.center;
+        emit(t, k, local);
         min_depth = std::min(min_depth, std::max(-view.half_depth, local.dot(view.frame.d)));
       }
     }
     return min_depth;
+  }
+
+  // Gathers the triangles of `mesh` touching the ROI box into `out` (ROI-local floats).
+  double gather(const Mesh& mesh, const RoiView& view, IdMode ids, std::vector<GpuVertex>& out) {
+    out.clear();
+    return for_each_corner_in_roi(mesh, view, [&](std::uint32_t t, int k, const Vec3& local) {
+      out.push_back({float(local.x()), float(local.y()), float(local.z()), corner_id(mesh, t, k, ids)});
+    });
   }
 
   // Number of corners slot `slot` draws for the current ROI view.
@@ -311,23 +320,11 @@ struct Pipeline::Impl {
       slot_shape[slot] = nullptr;
       return gather(object.mesh, view, ids, staging[slot]);
     }
-    const Mesh& mesh = object.mesh;  // world space: culling and depth as for any object
+    // World space: culling and depth as for any object; only the corner indices go up.
     std::vector<std::uint32_t>& out = indices[slot];
     out.clear();
-    double min_depth = view.half_depth;
-    const Aabb& box = view.box;
-    for (std::uint32_t t = 0; t < mesh.triangles.size(); ++t) {
-      const Tri& f = mesh.triangles[t];
-      const Vec3& a = mesh.vertices[f[0]];
-      const Vec3& b = mesh.vertices[f[1]];
-      const Vec3& c = mesh.vertices[f[2]];
-      const Vec3 lo = a.cwiseMin(b).cwiseMin(c), hi = a.cwiseMax(b).cwiseMax(c);
-      if ((hi.array() < box.lo.array()).any() || (lo.array() > box.hi.array()).any()) continue;
-      for (int k = 0; k < 3; ++k) {
-        out.push_back(3 * t + std::uint32_t(k));
-        min_depth = std::min(min_depth, std::max(-view.half_depth, (mesh.vertices[f[k]] - view.center).dot(view.frame.d)));
-      }
-    }
+    const double min_depth = for_each_corner_in_roi(
+        object.mesh, view, [&](std::uint32_t t, int k, const Vec3&) { out.push_back(3 * t + std::uint32_t(k)); });
     slot_shape[slot] = &cached_shape(object.rigid->shape, ids);
     // ROI-local from shape-local, composed in double, rounded once.
     Eigen::Affine3d m = object.rigid->pose;
