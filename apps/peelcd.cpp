@@ -52,6 +52,13 @@ struct DetectArgs {
   std::string backend = "osmesa";
 };
 
+// --peeler's value, or an InputError naming it.
+Peeler peeler_option(const std::string& text) {
+  const auto m = parse_peeler(text);
+  if (!m) throw InputError("peelcd: --peeler: unknown peeler \"" + text + "\" (expected abuffer or multipass)");
+  return *m;
+}
+
 // Command-line values override the scene file's.
 DetectOptions merged_options(const Scene& scene, const DetectArgs& a) {
   DetectOptions o = scene.options;
@@ -66,11 +73,7 @@ DetectOptions merged_options(const Scene& scene, const DetectArgs& a) {
     if (!m) throw InputError("peelcd detect: --peel: unknown peel mode \"" + a.peel + "\" (expected full or alternate)");
     o.peel = *m;
   }
-  if (!a.peeler.empty()) {
-    const auto m = parse_peeler(a.peeler);
-    if (!m) throw InputError("peelcd: --peeler: unknown peeler \"" + a.peeler + "\" (expected abuffer or multipass)");
-    o.peeler = *m;
-  }
+  if (!a.peeler.empty()) o.peeler = peeler_option(a.peeler);
   if (!std::isnan(a.slope)) o.slope = a.slope;
   if (a.views) o.views = a.views;
   if (!std::isnan(a.theta)) o.theta = a.theta;
@@ -252,11 +255,7 @@ int run_golden_compare(const GoldenArgs& a) {
   int failed = 0;
   for (const std::string& name : golden_cases(a)) {
     Scene scene = load_scene(case_scene(a, name));
-    if (!a.peeler.empty()) {
-      const auto m = parse_peeler(a.peeler);
-      if (!m) throw InputError("peelcd golden compare: --peeler: unknown peeler \"" + a.peeler + "\" (expected abuffer or multipass)");
-      scene.options.peeler = *m;
-    }
+    if (!a.peeler.empty()) scene.options.peeler = peeler_option(a.peeler);
     const std::vector<Object> objects = load_objects(scene);
     const oracle::Dump expected = oracle::read_dump(a.dir + "/" + name + "/expected");
     for (int run = 0; run < std::max(1, a.repeat); ++run) {
