@@ -623,7 +623,7 @@ void add_frame_options(CLI::App* c, DetectArgs& d) {
       ->check(CLI::PositiveNumber);
   c->add_option("--ids", d.ids, "Triangle ID mode: ring (last vertex, whole one-ring; default), paper (last-vertex IDs, T(v) sets) or unique");
   c->add_option("--peel", d.peel, "Peel mode: alternate (the paper's; default) or full (every surface)");
-  c->add_option("--peeler", d.peeler, "How layers are made: abuffer (one draw into per-texel fragment lists; default) "
+  c->add_option("--peeler", d.peeler, "How layers are made: abuffer (one draw into a per-texel k-buffer of fragments; default) "
                                       "or multipass (one draw per layer); the same layers either way");
   c->add_option("--slope", d.slope, "Slope-following epsilon, in texels (default 1; 0 = the paper's constant epsilon)")
       ->check(CLI::NonNegativeNumber);

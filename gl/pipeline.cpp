@@ -36,9 +36,10 @@ struct GpuVertex {
 };
 static_assert(sizeof(GpuVertex) == 16, "vertex layout is 16 bytes");
 
-// Header of the PCS append buffer; matches PcsBuffer in shaders/pcs.comp.
+// Header of the PCS append buffer; matches PcsBuffer in shaders/pcs.comp and
+// shaders/abuffer_resolve.comp (the multi-pass peeler leaves the last two words alone).
 struct PcsHeader {
-  std::uint32_t count, capacity, pad0, pad1;
+  std::uint32_t count, capacity, max_layers, max_fragments;
 };
 
 // Peel passes per ROI before giving up; each pass strictly increases every live texel's depth,
@@ -62,14 +63,18 @@ struct Pipeline::Impl {
   std::size_t passes_this_frame = 0, pcs_readbacks = 0;
   GLuint floor_program = 0, abuffer_program = 0, resolve_program = 0;
   GLint u_ab_clip = -1, u_ab_lo = -1, u_ab_hi = -1, u_ab_object = -1;
+  GLint u_ab_res = -1, u_ab_slots = -1;
   GLint u_rs_eps = -1, u_rs_slope = -1, u_rs_res = -1, u_rs_full = -1, u_rs_first = -1, u_rs_append = -1,
-        u_rs_emit = -1;
-  GLuint heads_tex = 0, node_buffer = 0;
-  int heads_size = 0;
-  std::uint32_t node_capacity = 0;
+        u_rs_emit = -1, u_rs_slots = -1;
+  // The k-buffer of the single-pass peeler: per-texel fragment counts and `slots` fragments of
+  // five words per texel (shaders/abuffer.frag), sized for `kbuffer_texels` texels.
+  GLuint count_buffer = 0, fragment_buffer = 0, dzdy_buffer = 0, count_tex = 0, fragment_tex = 0, dzdy_tex = 0;
+  std::uint32_t slots = 16;
+  std::size_t kbuffer_texels = 0, kbuffer_slots = 0;
   GLint u_floor_clip = -1, u_floor_lo = -1, u_floor_hi = -1;
   std::string renderer, version;
   GLint max_texture = 0;
+  std::size_t max_storage_block = 0;  // GL_MAX_SHADER_STORAGE_BLOCK_SIZE, bytes
 
   // Scratch reused across ROIs and frames (no allocation in steady state).
   std::vector<GpuVertex> staging[2];
@@ -110,6 +115,9 @@ struct Pipeline::Impl {
     renderer = reinterpret_cast<const char*>(gl.GetString(GL_RENDERER));
     version = reinterpret_cast<const char*>(gl.GetString(GL_VERSION));
     gl.GetIntegerv(GL_MAX_TEXTURE_SIZE, &max_texture);
+    GLint64 block = 0;
+    gl.GetInteger64v(GL_MAX_SHADER_STORAGE_BLOCK_SIZE, &block);
+    max_storage_block = std::size_t(std::max<GLint64>(block, 0));
 
     peel_program = link({compile(GL_VERTEX_SHADER, shaders::peel_vert, "peel.vert"),
                          compile(GL_FRAGMENT_SHADER, shaders::peel_frag, "peel.frag")},
@@ -129,6 +137,9 @@ struct Pipeline::Impl {
     u_ab_hi = gl.GetUniformLocation(abuffer_program, "box_hi");
     u_ab_object = gl.GetUniformLocation(abuffer_program, "object_bit");
     u_model_ab = gl.GetUniformLocation(abuffer_program, "roi_from_object");
+    u_ab_res = gl.GetUniformLocation(abuffer_program, "resolution");
+    u_ab_slots = gl.GetUniformLocation(abuffer_program, "slots");
+    u_rs_slots = gl.GetUniformLocation(resolve_program, "slots");
     u_rs_eps = gl.GetUniformLocation(resolve_program, "epsilon_window");
     u_rs_slope = gl.GetUniformLocation(resolve_program, "slope");
     u_rs_res = gl.GetUniformLocation(resolve_program, "resolution");
@@ -136,8 +147,12 @@ struct Pipeline::Impl {
     u_rs_first = gl.GetUniformLocation(resolve_program, "first_object");
     u_rs_append = gl.GetUniformLocation(resolve_program, "append_pcs");
     u_rs_emit = gl.GetUniformLocation(resolve_program, "emit_layer");
-    gl.CreateBuffers(1, &node_buffer);
-    grow_nodes(1u << 18);
+    gl.CreateBuffers(1, &count_buffer);
+    gl.CreateBuffers(1, &fragment_buffer);
+    gl.CreateBuffers(1, &dzdy_buffer);
+    gl.CreateTextures(GL_TEXTURE_BUFFER, 1, &count_tex);
+    gl.CreateTextures(GL_TEXTURE_BUFFER, 1, &fragment_tex);
+    gl.CreateTextures(GL_TEXTURE_BUFFER, 1, &dzdy_tex);
     u_floor_clip = gl.GetUniformLocation(floor_program, "clip_from_local");
     u_model_floor = gl.GetUniformLocation(floor_program, "roi_from_object");
     u_floor_lo = gl.GetUniformLocation(floor_program, "box_lo");
@@ -175,8 +190,12 @@ struct Pipeline::Impl {
     gl.DeleteProgram(floor_program);
     gl.DeleteProgram(abuffer_program);
     gl.DeleteProgram(resolve_program);
-    gl.DeleteBuffers(1, &node_buffer);
-    if (heads_size) gl.DeleteTextures(1, &heads_tex);
+    gl.DeleteBuffers(1, &count_buffer);
+    gl.DeleteBuffers(1, &fragment_buffer);
+    gl.DeleteBuffers(1, &dzdy_buffer);
+    gl.DeleteTextures(1, &count_tex);
+    gl.DeleteTextures(1, &fragment_tex);
+    gl.DeleteTextures(1, &dzdy_tex);
     gl.DeleteVertexArrays(1, &vao);
     gl.DeleteBuffers(2, vbo);
     gl.DeleteBuffers(2, ibo);
@@ -231,18 +250,23 @@ struct Pipeline::Impl {
     gl.NamedBufferData(pcs_buffer, sizeof(PcsHeader) + std::size_t(capacity) * 8, nullptr, GL_DYNAMIC_READ);
   }
 
-  // A-buffer node: 32 bytes (shaders/abuffer.frag), after a 16-byte header.
-  void grow_nodes(std::uint32_t capacity) {
-    node_capacity = capacity;
-    gl.NamedBufferData(node_buffer, 16 + std::size_t(capacity) * 32, nullptr, GL_DYNAMIC_COPY);
-  }
-
-  void ensure_heads(int n) {
-    if (n == heads_size) return;
-    if (heads_size) gl.DeleteTextures(1, &heads_tex);
-    gl.CreateTextures(GL_TEXTURE_2D, 1, &heads_tex);
-    gl.TextureStorage2D(heads_tex, 1, GL_R32UI, n, n);
-    heads_size = n;
+  // The k-buffer for an n x n view with `slots` fragments per texel: 4 bytes of count and
+  // 20 bytes per slot per texel. Grows only (steady state allocates nothing).
+  void ensure_kbuffer(int n) {
+    const std::size_t texels = std::size_t(n) * std::size_t(n);
+    if (texels > kbuffer_texels) {
+      gl.NamedBufferData(count_buffer, GLsizeiptr(texels * 4), nullptr, GL_DYNAMIC_COPY);
+      kbuffer_texels = texels;
+      kbuffer_slots = 0;
+      gl.TextureBuffer(count_tex, GL_R32UI, count_buffer);
+    }
+    if (kbuffer_slots < slots || texels * slots > kbuffer_texels * kbuffer_slots) {
+      gl.NamedBufferData(fragment_buffer, GLsizeiptr(kbuffer_texels * slots * 16), nullptr, GL_DYNAMIC_COPY);
+      gl.NamedBufferData(dzdy_buffer, GLsizeiptr(kbuffer_texels * slots * 4), nullptr, GL_DYNAMIC_COPY);
+      kbuffer_slots = slots;
+      gl.TextureBuffer(fragment_tex, GL_RGBA32UI, fragment_buffer);
+      gl.TextureBuffer(dzdy_tex, GL_R32UI, dzdy_buffer);
+    }
   }
 
   void release_layers() {
@@ -402,24 +426,30 @@ struct Pipeline::Impl {
     gl.NamedBufferSubData(vbo[slot], 0, n * sizeof(GpuVertex), staging[slot].data());
   }
 
-  // Single-pass peeling (Peeler::abuffer): both objects drawn once into per-texel fragment
-  // lists, then one compute pass recovers the layers and appends the PCS. Same contract as
-  // peel(); returns false if the node or PCS buffer overflowed (grown; the caller peels again).
+  // Single-pass peeling (Peeler::abuffer): both objects drawn once into a per-texel k-buffer,
+  // then one compute pass recovers the layers and appends the PCS. Same contract as peel();
+  // returns false if a texel had more fragments than slots or the PCS buffer overflowed (grown;
+  // the caller peels again). A view whose k-buffer would exceed the largest shader storage
+  // block is peeled by multi-pass instead (the same layers and PCS).
   bool peel_single_pass(const RoiView& view, double epsilon_world, const DetectOptions& opt, int first_slot,
                         PairResult& r, Timings& t) {
-    const auto t_gpu = Clock::now();
     const int n = view.resolution;
+    const std::size_t texels = std::size_t(n) * std::size_t(n);
+    // 5 words per slot; the shaders index them with 32-bit unsigned integers.
+    if (texels * slots * 20 > max_storage_block || texels * slots * 5 > 0xffffffffu)
+      return peel(view, epsilon_world, opt, first_slot, r, t);
+    const auto t_gpu = Clock::now();
     ensure_layers(n);
-    ensure_heads(n);
-    const GLuint empty_list = 0xffffffffu;
-    gl.ClearTexImage(heads_tex, 0, GL_RED_INTEGER, GL_UNSIGNED_INT, &empty_list);
-    const std::uint32_t node_header[4] = {0, node_capacity, 0, 0};
-    gl.NamedBufferSubData(node_buffer, 0, sizeof node_header, node_header);
+    ensure_kbuffer(n);
+    const GLuint zero = 0;
+    gl.ClearNamedBufferSubData(count_buffer, GL_R32UI, 0, GLsizeiptr(texels * 4), GL_RED_INTEGER, GL_UNSIGNED_INT,
+                               &zero);
     const PcsHeader header{0, pcs_capacity, 0, 0};
     gl.NamedBufferSubData(pcs_buffer, 0, sizeof header, &header);
     gl.BindBufferBase(GL_SHADER_STORAGE_BUFFER, 0, pcs_buffer);
-    gl.BindBufferBase(GL_SHADER_STORAGE_BUFFER, 1, node_buffer);
-    gl.BindImageTexture(1, heads_tex, 0, GL_FALSE, 0, GL_READ_WRITE, GL_R32UI);
+    gl.BindBufferBase(GL_SHADER_STORAGE_BUFFER, 1, fragment_buffer);
+    gl.BindBufferBase(GL_SHADER_STORAGE_BUFFER, 2, count_buffer);
+    gl.BindBufferBase(GL_SHADER_STORAGE_BUFFER, 3, dzdy_buffer);
 
     const std::array<float, 16> m = view.clip_from_local();
     const Vec3 lo = view.box.lo - view.center, hi = view.box.hi - view.center;
@@ -427,6 +457,8 @@ struct Pipeline::Impl {
     gl.UniformMatrix4fv(u_ab_clip, 1, GL_FALSE, m.data());
     gl.Uniform3f(u_ab_lo, float(lo.x()), float(lo.y()), float(lo.z()));
     gl.Uniform3f(u_ab_hi, float(hi.x()), float(hi.y()), float(hi.z()));
+    gl.Uniform1i(u_ab_res, n);
+    gl.Uniform1ui(u_ab_slots, slots);
     gl.BindFramebuffer(GL_FRAMEBUFFER, fbo[0]);
     gl.Viewport(0, 0, n, n);
     gl.Disable(GL_DEPTH_TEST);
@@ -441,21 +473,18 @@ struct Pipeline::Impl {
     }
     gl.ColorMaski(0, GL_TRUE, GL_TRUE, GL_TRUE, GL_TRUE);
     gl.BindFramebuffer(GL_FRAMEBUFFER, 0);
-    gl.MemoryBarrier(GL_SHADER_IMAGE_ACCESS_BARRIER_BIT | GL_SHADER_STORAGE_BARRIER_BIT | GL_BUFFER_UPDATE_BARRIER_BIT);
+    gl.MemoryBarrier(GL_SHADER_STORAGE_BARRIER_BIT);
     ++passes_this_frame;
-    check("the A-buffer draw");
-    std::uint32_t got_nodes[4] = {0, 0, 0, 0};
-    gl.GetNamedBufferSubData(node_buffer, 0, sizeof got_nodes, got_nodes);
-    if (got_nodes[0] > node_capacity) {
-      grow_nodes(got_nodes[0] + got_nodes[0] / 2);
-      t.gpu += ms_since(t_gpu);
-      return false;
-    }
+    check("the k-buffer draw");
 
     gl.UseProgram(resolve_program);
+    gl.BindTextureUnit(0, count_tex);
+    gl.BindTextureUnit(1, fragment_tex);
+    gl.BindTextureUnit(2, dzdy_tex);
     gl.Uniform1f(u_rs_eps, float(view.world_to_window_depth(epsilon_world)));
     gl.Uniform1f(u_rs_slope, float(opt.slope));
     gl.Uniform1i(u_rs_res, n);
+    gl.Uniform1ui(u_rs_slots, slots);
     gl.Uniform1i(u_rs_full, opt.peel == PeelMode::full);
     gl.Uniform1ui(u_rs_first, GLuint(first_slot));
     gl.Uniform1i(u_rs_append, 1);
@@ -463,9 +492,15 @@ struct Pipeline::Impl {
     gl.DispatchCompute(GLuint((n + 7) / 8), GLuint((n + 7) / 8), 1);
     gl.MemoryBarrier(GL_BUFFER_UPDATE_BARRIER_BIT | GL_SHADER_STORAGE_BARRIER_BIT);
     ++passes_this_frame;
-    check("the A-buffer resolve");
-    gl.GetNamedBufferSubData(node_buffer, 0, sizeof got_nodes, got_nodes);
-    r.layers = int(got_nodes[2]);
+    check("the k-buffer resolve");
+    PcsHeader got{};
+    gl.GetNamedBufferSubData(pcs_buffer, 0, sizeof got, &got);
+    if (got.max_fragments > slots) {
+      slots = got.max_fragments + got.max_fragments / 4;
+      t.gpu += ms_since(t_gpu);
+      return false;
+    }
+    r.layers = int(got.max_layers);
     r.passes = 1;
     if (captured) {
       captured->layers.clear();
@@ -486,14 +521,18 @@ struct Pipeline::Impl {
       check("layer capture");
     }
     t.gpu += ms_since(t_gpu);
-    return read_pcs(t);
+    return read_pcs(t, &got);
   }
 
-  // Reads the PCS list back into `pcs`; false if it overflowed (grown; peel again).
-  bool read_pcs(Timings& t) {
+  // Reads the PCS list back into `pcs` (the header too, unless given); false if it overflowed
+  // (grown; peel again).
+  bool read_pcs(Timings& t, const PcsHeader* header = nullptr) {
     const auto t_read = Clock::now();
     PcsHeader got{};
-    gl.GetNamedBufferSubData(pcs_buffer, 0, sizeof got, &got);
+    if (header)
+      got = *header;
+    else
+      gl.GetNamedBufferSubData(pcs_buffer, 0, sizeof got, &got);
     if (got.count > pcs_capacity) {
       grow_pcs(got.count + got.count / 2);
       t.readback += ms_since(t_read);

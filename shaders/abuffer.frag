@@ -1,37 +1,30 @@
 #version 450 core
-// Single-pass peeling, step 1: both objects drawn once; every fragment is appended to its
-// texel's list (an A-buffer: a node buffer filled through an atomic counter, a head image
-// swapped atomically). shaders/abuffer_resolve.comp recovers the layers from the lists.
-// A node holds exactly what a peel pass would store for the fragment (shaders/peel.frag) plus
-// the primitive's index, which breaks depth ties the way the depth test does in primitive order.
+// Single-pass peeling, step 1: both objects drawn once; every fragment is stored in one of its
+// texel's slots (a k-buffer: a per-texel counter claims the slot atomically; slot s of texel t
+// lives at s * texels + t, so neighbouring texels' fragments are neighbours in memory).
+// shaders/abuffer_resolve.comp recovers the layers from the slots.
+// A fragment holds exactly what a peel pass would store for it (shaders/peel.frag) plus the
+// primitive's index, which breaks depth ties the way the depth test does in primitive order.
+// The five words are five planes of one buffer (the resolve mostly reads depth and ID only).
 flat in uint v_id;
 uniform uint object_bit;  // 0 for object A, 1 for object B
+uniform int resolution;
+uniform uint slots;       // fragments a texel can hold; more are counted, not stored
 
-layout(binding = 1, r32ui) uniform coherent uimage2D heads;  // 0xffffffff = empty list
-
-struct Node {
-  uvec4 layer;  // as a layer texel: depth bits, object << 31 | ID + 1, dz/dx bits, dz/dy bits
-  uint primitive;
-  uint next;
-  uint pad0, pad1;
-};
-layout(std430, binding = 1) buffer NodeBuffer {
-  uint node_count;     // fragments appended, may exceed capacity (the host grows and redraws)
-  uint node_capacity;
-  uint max_layers;     // written by the resolve pass
-  uint pad;
-  Node nodes[];
-};
+layout(std430, binding = 2) buffer Counts { uint counts[]; };     // per texel, zeroed per view
+layout(std430, binding = 1) writeonly buffer Heads { uvec4 heads[]; };  // depth, object | ID + 1, primitive, dz/dx
+layout(std430, binding = 3) writeonly buffer Dzdy { uint dzdy[]; };
 
 void main() {
   float z = gl_FragCoord.z;
   float gx = dFdx(z), gy = dFdy(z);
   // A peel pass clears depth to 1.0 and tests GL_LESS: a fragment at the far plane never lands.
   if (!(z < 1.0)) return;
-  uint i = atomicAdd(node_count, 1u);
-  if (i >= node_capacity) return;
-  nodes[i].layer = uvec4(floatBitsToUint(z), (object_bit << 31) | (v_id + 1u), floatBitsToUint(gx),
-                         floatBitsToUint(gy));
-  nodes[i].primitive = uint(gl_PrimitiveID);
-  nodes[i].next = imageAtomicExchange(heads, ivec2(gl_FragCoord.xy), i);
+  uint texels = uint(resolution) * uint(resolution);
+  uint texel = uint(gl_FragCoord.y) * uint(resolution) + uint(gl_FragCoord.x);
+  uint s = atomicAdd(counts[texel], 1u);
+  if (s >= slots) return;  // the resolve sees the count and asks the host for more slots
+  uint i = s * texels + texel;
+  heads[i] = uvec4(floatBitsToUint(z), (object_bit << 31) | (v_id + 1u), uint(gl_PrimitiveID), floatBitsToUint(gx));
+  dzdy[i] = floatBitsToUint(gy);
 }

@@ -1,39 +1,31 @@
 #version 450 core
-// Single-pass peeling, step 2: per texel, the layers of design.md recovered from the fragment
-// list, exactly as the multi-pass peel (shaders/peel.frag) builds them: layer 0 is the nearest
-// fragment of the first object (alternate) or of both (full); layer k+1 the nearest fragment of
-// the next object (alternate) or of either (full) strictly behind layer k; the texel ends at the
-// first layer with no such fragment. Depth ties go to the earlier-drawn fragment, as GL_LESS does
-// in primitive order: object A's draw before B's, then the lower primitive index.
+// Single-pass peeling, step 2: per texel, the layers of design.md recovered from the fragments
+// stored by shaders/abuffer.frag, exactly as the multi-pass peel (shaders/peel.frag) builds
+// them: layer 0 is the nearest fragment of the first object (alternate) or of both (full);
+// layer k+1 the nearest fragment of the next object (alternate) or of either (full) strictly
+// behind layer k; the texel ends at the first layer with no such fragment. Depth ties go to the
+// earlier-drawn fragment, as GL_LESS does in primitive order: object A's draw before B's, then
+// the lower primitive index.
 // The PCS test between adjacent layers is shaders/pcs.comp's, run start included.
 layout(local_size_x = 8, local_size_y = 8) in;
 
-layout(binding = 1, r32ui) uniform readonly uimage2D heads;
 layout(binding = 2, rgba32ui) uniform writeonly uimage2D layer_out;  // capture: layer `emit_layer`
 
-struct Node {
-  uvec4 layer;
-  uint primitive;
-  uint next;
-  uint pad0, pad1;
-};
-layout(std430, binding = 1) buffer NodeBuffer {
-  uint node_count;
-  uint node_capacity;
-  uint max_layers;  // the most layers of any texel
-  uint pad;
-  Node nodes[];
-};
+layout(binding = 0) uniform usamplerBuffer count_tex;
+layout(binding = 1) uniform usamplerBuffer head_tex;  // per fragment: depth, object | ID + 1, primitive, dz/dx
+layout(binding = 2) uniform usamplerBuffer dzdy_tex;  // per fragment: dz/dy
 layout(std430, binding = 0) buffer PcsBuffer {
   uint count;
   uint capacity;
-  uint pad0, pad1;
+  uint max_layers;     // the most layers of any texel
+  uint max_fragments;  // the most fragments of a texel that had more than `slots`; else 0
   uvec2 pairs[];
 };
 
 uniform float epsilon_window;
 uniform float slope;
 uniform int resolution;
+uniform uint slots;
 uniform bool full_peel;
 uniform uint first_object;  // alternate: the object of layer 0
 uniform bool append_pcs;
@@ -49,53 +41,58 @@ void test_pair(uvec4 t0, uvec4 t1) {
   if (slot < capacity) pairs[slot] = (t0.y >> 31) == 0u ? uvec2(id0, id1) : uvec2(id1, id0);
 }
 
-// Is fragment (a, pa) drawn before (b, pb) at equal depth, or nearer?
-bool before(uvec4 a, uint pa, uvec4 b, uint pb) {
-  float za = uintBitsToFloat(a.x), zb = uintBitsToFloat(b.x);
-  if (za != zb) return za < zb;
-  if ((a.y >> 31) != (b.y >> 31)) return (a.y >> 31) < (b.y >> 31);
-  return pa < pb;
-}
-
 void main() {
   ivec2 p = ivec2(gl_GlobalInvocationID.xy);
   if (p.x >= resolution || p.y >= resolution) return;
-  uint head = imageLoad(heads, p).x;
+  uint texels = uint(resolution) * uint(resolution);
+  uint texel = uint(p.y) * uint(resolution) + uint(p.x);
+  uint n = texelFetch(count_tex, int(texel)).x;
+  if (n > slots) {
+    // Some fragments were not stored: no layers from this texel; the host grows and redraws.
+    if (n > max_fragments) atomicMax(max_fragments, n);
+    return;
+  }
+  uint end = n * texels + texel;
   uvec4 prev = uvec4(0u), run_start = uvec4(0u);
   int k = 0;
-  // Lists are short (a few fragments per texel): each layer rescans the texel's list for the
-  // first fragment, in (depth, object, primitive) order, of the wanted object strictly behind
-  // the previous layer. (Sorting the list once in registers was slower on llvmpipe.)
+  // Fragments per texel are few: each layer rescans them for the first, in (depth, object,
+  // primitive) order, of the wanted object strictly behind the previous layer.
   for (;; ++k) {
     uint want = full_peel ? 2u : ((first_object + uint(k)) & 1u);
-    bool found = false;
-    uvec4 best = uvec4(0u);
-    uint best_prim = 0u;
-    for (uint i = head; i != 0xffffffffu; i = nodes[i].next) {
-      uvec4 d = nodes[i].layer;
-      if (want != 2u && (d.y >> 31) != want) continue;
-      if (k > 0 && !(uintBitsToFloat(d.x) > uintBitsToFloat(prev.x))) continue;
-      uint q = nodes[i].primitive;
-      if (!found || before(d, q, best, best_prim)) {
-        best = d;
-        best_prim = q;
-        found = true;
+    float prev_z = uintBitsToFloat(prev.x);
+    uint best = 0xffffffffu;
+    uvec4 best_f = uvec4(0u);
+    for (uint i = texel; i < end; i += texels) {
+      uvec4 f = texelFetch(head_tex, int(i));
+      float z = uintBitsToFloat(f.x);
+      if (k > 0 && !(z > prev_z)) continue;
+      if (want != 2u && (f.y >> 31) != want) continue;
+      float best_z = uintBitsToFloat(best_f.x);
+      bool take = best == 0xffffffffu || z < best_z;
+      if (!take && z == best_z) {
+        // Equal depth: the earlier draw wins (object A, then the lower primitive index).
+        take = (f.y >> 31) != (best_f.y >> 31) ? (f.y >> 31) < (best_f.y >> 31) : f.z < best_f.z;
+      }
+      if (take) {
+        best = i;
+        best_f = f;
       }
     }
-    if (!found) break;
-    if (k == emit_layer) imageStore(layer_out, p, best);
+    if (best == 0xffffffffu) break;
+    uvec4 layer = uvec4(best_f.x, best_f.y, best_f.w, texelFetch(dzdy_tex, int(best)).x);
+    if (k == emit_layer) imageStore(layer_out, p, layer);
     if (k > 0 && append_pcs) {
-      bool switched = (prev.y >> 31) != (best.y >> 31);
-      if (switched) test_pair(prev, best);
+      bool switched = (prev.y >> 31) != (layer.y >> 31);
+      if (switched) test_pair(prev, layer);
       if (full_peel) {
         if (run_start.y == 0u) run_start = prev;
         if (switched) {
-          if (run_start != prev) test_pair(run_start, best);
-          run_start = best;
+          if (run_start != prev) test_pair(run_start, layer);
+          run_start = layer;
         }
       }
     }
-    prev = best;
+    prev = layer;
   }
-  if (k > 0) atomicMax(max_layers, uint(k));
+  if (uint(k) > max_layers) atomicMax(max_layers, uint(k));
 }

@@ -241,3 +241,46 @@ TEST_CASE("a rigid object's shape is uploaded once, then moved by its pose", "[g
   ball = std::make_shared<const Mesh>(make_uv_sphere(Vec3(0, 0, 0), 0.7, 10, 20));
   CHECK(frame(Vec3(0.9, 0.4, 0.2), true).first.shape_uploads == 1);
 }
+
+// 26 surfaces along every central ray, more than the single-pass peeler's k-buffer holds at
+// first (16 fragments per texel): it must notice, grow, redraw, and end with multi-pass's layers
+// and PCS, bit for bit.
+TEST_CASE("texels deeper than the k-buffer: it grows and matches multi-pass", "[gl]") {
+  Mesh a, b;
+  auto add_quad = [](Mesh& m, double z0, double tilt) {
+    const Mesh q = make_grid(Vec3(-5, -5, z0 - 5 * tilt), Vec3(10, 0, 10 * tilt), Vec3(0, 10, 0), 1, 1);
+    const auto base = std::uint32_t(m.vertices.size());
+    m.vertices.insert(m.vertices.end(), q.vertices.begin(), q.vertices.end());
+    for (const Tri& t : q.triangles) m.triangles.push_back({t[0] + base, t[1] + base, t[2] + base});
+  };
+  for (int k = 0; k < 13; ++k) {
+    add_quad(a, 0.1 * k, 0.0);
+    add_quad(b, 0.1 * k + 0.05, 0.02);  // tilted: each crosses its neighbours in A
+  }
+  gl::Pipeline fresh(test_context());  // its k-buffer starts at the default depth
+  DetectOptions opt;
+  opt.resolution = 64;
+  opt.views = 1;
+  opt.theta = 20;
+  opt.phi = 70;
+  opt.peel = PeelMode::full;
+  std::vector<gl::CapturedView> single, multi;
+  opt.peeler = Peeler::abuffer;
+  fresh.capture_layers(&single);
+  const FrameResult fs = fresh.detect(two(a, b), opt);
+  opt.peeler = Peeler::multipass;
+  fresh.capture_layers(&multi);
+  const FrameResult fm = fresh.detect(two(a, b), opt);
+  fresh.capture_layers(nullptr);
+  REQUIRE(fs.pairs.size() == 1);
+  REQUIRE(fm.pairs.size() == 1);
+  CHECK(fs.pairs[0].layers == 26);
+  CHECK(fs.pairs[0].layers == fm.pairs[0].layers);
+  CHECK(fs.pairs[0].pcs == fm.pairs[0].pcs);
+  CHECK(fs.pairs[0].colliding.size() == fm.pairs[0].colliding.size());
+  CHECK_FALSE(fs.pairs[0].colliding.empty());
+  REQUIRE(single.size() == 1);
+  REQUIRE(multi.size() == 1);
+  CHECK(single[0].layers == multi[0].layers);
+  CHECK(single[0].pcs == multi[0].pcs);
+}
