@@ -5,14 +5,14 @@
 // layer k+1 the nearest fragment of the next object (alternate) or of either (full) strictly
 // behind layer k; the texel ends at the first layer with no such fragment. Depth ties go to the
 // earlier-drawn fragment, as GL_LESS does in primitive order: object A's draw before B's, then
-// the lower primitive index.
+// the triangle drawn first.
 // The PCS test between adjacent layers is shaders/pcs.comp's, run start included.
 layout(local_size_x = 8, local_size_y = 8) in;
 
 layout(binding = 2, rgba32ui) uniform writeonly uimage2D layer_out;  // capture: layer `emit_layer`
 
 layout(binding = 0) uniform usamplerBuffer count_tex;
-layout(binding = 1) uniform usamplerBuffer head_tex;  // per fragment: depth, object | ID + 1, primitive, dz/dx
+layout(binding = 1) uniform usamplerBuffer head_tex;  // per fragment: depth, object | ID + 1, draw order, dz/dx
 layout(binding = 2) uniform usamplerBuffer dzdy_tex;  // per fragment: dz/dy
 layout(std430, binding = 0) buffer PcsBuffer {
   uint count;
@@ -70,7 +70,7 @@ void main() {
       float best_z = uintBitsToFloat(best_f.x);
       bool take = best == 0xffffffffu || z < best_z;
       if (!take && z == best_z) {
-        // Equal depth: the earlier draw wins (object A, then the lower primitive index).
+        // Equal depth: the earlier draw wins (object A, then the lower draw order).
         take = (f.y >> 31) != (best_f.y >> 31) ? (f.y >> 31) < (best_f.y >> 31) : f.z < best_f.z;
       }
       if (take) {

@@ -10,6 +10,9 @@ uniform vec3 box_lo;  // ROI box, ROI-local
 uniform vec3 box_hi;
 
 flat out uint v_id;  // flat: the last (provoking) vertex decides the fragment's ID
+// The triangle's place in the draw order (single-pass peeling breaks depth ties with it):
+// corners are drawn three per triangle in order, as arrays or by indices 3t + k in ascending t.
+flat out uint v_order;
 out float gl_ClipDistance[6];
 
 void main() {
@@ -22,4 +25,5 @@ void main() {
   gl_ClipDistance[4] = p.z - box_lo.z;
   gl_ClipDistance[5] = box_hi.z - p.z;
   v_id = id;
+  v_order = uint(gl_VertexID) / 3u;
 }
