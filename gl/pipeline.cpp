@@ -68,7 +68,8 @@ struct Pipeline::Impl {
         u_rs_emit = -1, u_rs_slots = -1;
   // The k-buffer of the single-pass peeler: per-texel fragment counts and `slots` fragments of
   // five words per texel (shaders/abuffer.frag), sized for `kbuffer_texels` texels.
-  GLuint count_buffer = 0, fragment_buffer = 0, dzdy_buffer = 0, count_tex = 0, fragment_tex = 0, dzdy_tex = 0;
+  GLuint count_buffer = 0, fragment_buffer = 0, count_tex = 0, fragment_tex = 0, corner_tex[2] = {0, 0};
+  GLint max_texture_buffer = 0;  // GL_MAX_TEXTURE_BUFFER_SIZE, texels
   std::uint32_t slots = 16;
   std::size_t kbuffer_texels = 0, kbuffer_slots = 0;
   GLint u_floor_clip = -1, u_floor_lo = -1, u_floor_hi = -1;
@@ -83,6 +84,7 @@ struct Pipeline::Impl {
   struct CachedShape {
     std::weak_ptr<const Mesh> owner;
     GLuint vbo = 0;
+    std::size_t corners = 0;  // in the VBO: 3 per triangle of the shape
   };
   std::map<std::pair<const Mesh*, IdMode>, CachedShape> shapes;
   std::vector<std::uint32_t> indices[2];
@@ -149,10 +151,10 @@ struct Pipeline::Impl {
     u_rs_emit = gl.GetUniformLocation(resolve_program, "emit_layer");
     gl.CreateBuffers(1, &count_buffer);
     gl.CreateBuffers(1, &fragment_buffer);
-    gl.CreateBuffers(1, &dzdy_buffer);
     gl.CreateTextures(GL_TEXTURE_BUFFER, 1, &count_tex);
     gl.CreateTextures(GL_TEXTURE_BUFFER, 1, &fragment_tex);
-    gl.CreateTextures(GL_TEXTURE_BUFFER, 1, &dzdy_tex);
+    gl.CreateTextures(GL_TEXTURE_BUFFER, 2, corner_tex);
+    gl.GetIntegerv(GL_MAX_TEXTURE_BUFFER_SIZE, &max_texture_buffer);
     u_floor_clip = gl.GetUniformLocation(floor_program, "clip_from_local");
     u_model_floor = gl.GetUniformLocation(floor_program, "roi_from_object");
     u_floor_lo = gl.GetUniformLocation(floor_program, "box_lo");
@@ -192,10 +194,9 @@ struct Pipeline::Impl {
     gl.DeleteProgram(resolve_program);
     gl.DeleteBuffers(1, &count_buffer);
     gl.DeleteBuffers(1, &fragment_buffer);
-    gl.DeleteBuffers(1, &dzdy_buffer);
     gl.DeleteTextures(1, &count_tex);
     gl.DeleteTextures(1, &fragment_tex);
-    gl.DeleteTextures(1, &dzdy_tex);
+    gl.DeleteTextures(2, corner_tex);
     gl.DeleteVertexArrays(1, &vao);
     gl.DeleteBuffers(2, vbo);
     gl.DeleteBuffers(2, ibo);
@@ -251,7 +252,7 @@ struct Pipeline::Impl {
   }
 
   // The k-buffer for an n x n view with `slots` fragments per texel: 4 bytes of count and
-  // 20 bytes per slot per texel. Grows only (steady state allocates nothing).
+  // 16 bytes per slot per texel. Grows only (steady state allocates nothing).
   void ensure_kbuffer(int n) {
     const std::size_t texels = std::size_t(n) * std::size_t(n);
     if (texels > kbuffer_texels) {
@@ -262,10 +263,8 @@ struct Pipeline::Impl {
     }
     if (kbuffer_slots < slots || texels * slots > kbuffer_texels * kbuffer_slots) {
       gl.NamedBufferData(fragment_buffer, GLsizeiptr(kbuffer_texels * slots * 16), nullptr, GL_DYNAMIC_COPY);
-      gl.NamedBufferData(dzdy_buffer, GLsizeiptr(kbuffer_texels * slots * 4), nullptr, GL_DYNAMIC_COPY);
       kbuffer_slots = slots;
       gl.TextureBuffer(fragment_tex, GL_RGBA32UI, fragment_buffer);
-      gl.TextureBuffer(dzdy_tex, GL_R32UI, dzdy_buffer);
     }
   }
 
@@ -334,6 +333,8 @@ struct Pipeline::Impl {
   }
 
   // Number of corners slot `slot` draws for the current ROI view.
+  // Corners in the VBO a slot draws from (its triangles in the ROI, or a rigid shape's all).
+  std::size_t vbo_corners(int slot) const { return slot_shape[slot] ? slot_shape[slot]->corners : staging[slot].size(); }
   std::size_t corners(int slot) const { return slot_shape[slot] ? indices[slot].size() : staging[slot].size(); }
 
   // Prepares slot `slot` for `object` in `view`: a world-space object's triangles touching the
@@ -376,6 +377,7 @@ struct Pipeline::Impl {
       }
     CachedShape c;
     c.owner = shape;
+    c.corners = corners_local.size();
     gl.CreateBuffers(1, &c.vbo);
     gl.NamedBufferData(c.vbo, GLsizeiptr(corners_local.size() * sizeof(GpuVertex)), corners_local.data(), GL_STATIC_DRAW);
     ++shape_uploads;
@@ -435,8 +437,10 @@ struct Pipeline::Impl {
                         PairResult& r, Timings& t) {
     const int n = view.resolution;
     const std::size_t texels = std::size_t(n) * std::size_t(n);
-    // 5 words per slot; the shaders index them with 32-bit unsigned integers.
-    if (texels * slots * 20 > max_storage_block || texels * slots * 5 > 0xffffffffu)
+    // The shaders index fragments and corners with 32-bit signed integers, through buffer
+    // textures of at most GL_MAX_TEXTURE_BUFFER_SIZE texels.
+    const std::size_t limit = std::min<std::size_t>(std::size_t(std::max(max_texture_buffer, 0)), 0x7fffffff);
+    if (texels * slots * 16 > max_storage_block || texels * slots > limit || std::max(vbo_corners(0), vbo_corners(1)) > limit)
       return peel(view, epsilon_world, opt, first_slot, r, t);
     const auto t_gpu = Clock::now();
     ensure_layers(n);
@@ -449,7 +453,6 @@ struct Pipeline::Impl {
     gl.BindBufferBase(GL_SHADER_STORAGE_BUFFER, 0, pcs_buffer);
     gl.BindBufferBase(GL_SHADER_STORAGE_BUFFER, 1, fragment_buffer);
     gl.BindBufferBase(GL_SHADER_STORAGE_BUFFER, 2, count_buffer);
-    gl.BindBufferBase(GL_SHADER_STORAGE_BUFFER, 3, dzdy_buffer);
 
     const std::array<float, 16> m = view.clip_from_local();
     const Vec3 lo = view.box.lo - view.center, hi = view.box.hi - view.center;
@@ -480,7 +483,10 @@ struct Pipeline::Impl {
     gl.UseProgram(resolve_program);
     gl.BindTextureUnit(0, count_tex);
     gl.BindTextureUnit(1, fragment_tex);
-    gl.BindTextureUnit(2, dzdy_tex);
+    for (int slot = 0; slot < 2; ++slot) {
+      gl.TextureBuffer(corner_tex[slot], GL_RGBA32UI, slot_shape[slot] ? slot_shape[slot]->vbo : vbo[slot]);
+      gl.BindTextureUnit(GLuint(2 + slot), corner_tex[slot]);
+    }
     gl.Uniform1f(u_rs_eps, float(view.world_to_window_depth(epsilon_world)));
     gl.Uniform1f(u_rs_slope, float(opt.slope));
     gl.Uniform1i(u_rs_res, n);

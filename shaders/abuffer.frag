@@ -3,19 +3,17 @@
 // texel's slots (a k-buffer: a per-texel counter claims the slot atomically; slot s of texel t
 // lives at s * texels + t, so neighbouring texels' fragments are neighbours in memory).
 // shaders/abuffer_resolve.comp recovers the layers from the slots.
-// A fragment holds exactly what a peel pass would store for it (shaders/peel.frag) plus the
-// triangle's place in the draw order, which breaks depth ties the way the depth test does.
-// Depth, ID, order and dz/dx go into one plane of uvec4, dz/dy into a second (the resolve's scan
-// reads the first only).
-flat in uint v_id;
+// A fragment is one uvec4: what a peel pass would store for it (shaders/peel.frag) with the
+// triangle's place in the draw order in place of its ID (the resolve reads the ID from the
+// triangle's provoking corner); the order breaks depth ties the way the depth test does:
+//   depth bits, object << 31 | draw order, dz/dx bits, dz/dy bits.
 flat in uint v_order;  // the triangle's place in the draw order (shaders/peel.vert)
 uniform uint object_bit;  // 0 for object A, 1 for object B
 uniform int resolution;
 uniform uint slots;       // fragments a texel can hold; more are counted, not stored
 
 layout(std430, binding = 2) buffer Counts { uint counts[]; };     // per texel, zeroed per view
-layout(std430, binding = 1) writeonly buffer Heads { uvec4 heads[]; };  // depth, object | ID + 1, draw order, dz/dx
-layout(std430, binding = 3) writeonly buffer Dzdy { uint dzdy[]; };
+layout(std430, binding = 1) writeonly buffer Fragments { uvec4 fragments[]; };
 
 void main() {
   float z = gl_FragCoord.z;
@@ -26,7 +24,6 @@ void main() {
   uint texel = uint(gl_FragCoord.y) * uint(resolution) + uint(gl_FragCoord.x);
   uint s = atomicAdd(counts[texel], 1u);
   if (s >= slots) return;  // the resolve sees the count and asks the host for more slots
-  uint i = s * texels + texel;
-  heads[i] = uvec4(floatBitsToUint(z), (object_bit << 31) | (v_id + 1u), v_order, floatBitsToUint(gx));
-  dzdy[i] = floatBitsToUint(gy);
+  fragments[s * texels + texel] =
+      uvec4(floatBitsToUint(z), (object_bit << 31) | v_order, floatBitsToUint(gx), floatBitsToUint(gy));
 }

@@ -4,16 +4,19 @@
 // them: layer 0 is the nearest fragment of the first object (alternate) or of both (full);
 // layer k+1 the nearest fragment of the next object (alternate) or of either (full) strictly
 // behind layer k; the texel ends at the first layer with no such fragment. Depth ties go to the
-// earlier-drawn fragment, as GL_LESS does in primitive order: object A's draw before B's, then
-// the triangle drawn first.
+// earlier-drawn fragment, as GL_LESS does: object A's draw before B's, then the triangle drawn
+// first.
 // The PCS test between adjacent layers is shaders/pcs.comp's, run start included.
 layout(local_size_x = 8, local_size_y = 8) in;
 
 layout(binding = 2, rgba32ui) uniform writeonly uimage2D layer_out;  // capture: layer `emit_layer`
 
 layout(binding = 0) uniform usamplerBuffer count_tex;
-layout(binding = 1) uniform usamplerBuffer head_tex;  // per fragment: depth, object | ID + 1, draw order, dz/dx
-layout(binding = 2) uniform usamplerBuffer dzdy_tex;  // per fragment: dz/dy
+layout(binding = 1) uniform usamplerBuffer fragment_tex;  // shaders/abuffer.frag
+// The corners each object was drawn from (x, y, z, ID; three per triangle in draw order, as
+// arrays or as a rigid shape's 3t + k): a layer's ID is its triangle's provoking (last) corner's.
+layout(binding = 2) uniform usamplerBuffer corners_a;
+layout(binding = 3) uniform usamplerBuffer corners_b;
 layout(std430, binding = 0) buffer PcsBuffer {
   uint count;
   uint capacity;
@@ -56,30 +59,27 @@ void main() {
   uvec4 prev = uvec4(0u), run_start = uvec4(0u);
   int k = 0;
   // Fragments per texel are few: each layer rescans them for the first, in (depth, object,
-  // primitive) order, of the wanted object strictly behind the previous layer.
+  // draw order) order, of the wanted object strictly behind the previous layer.
   for (;; ++k) {
     uint want = full_peel ? 2u : ((first_object + uint(k)) & 1u);
     float prev_z = uintBitsToFloat(prev.x);
-    uint best = 0xffffffffu;
-    uvec4 best_f = uvec4(0u);
+    bool found = false;
+    uvec4 best = uvec4(0u);
     for (uint i = texel; i < end; i += texels) {
-      uvec4 f = texelFetch(head_tex, int(i));
+      uvec4 f = texelFetch(fragment_tex, int(i));
       float z = uintBitsToFloat(f.x);
       if (k > 0 && !(z > prev_z)) continue;
       if (want != 2u && (f.y >> 31) != want) continue;
-      float best_z = uintBitsToFloat(best_f.x);
-      bool take = best == 0xffffffffu || z < best_z;
-      if (!take && z == best_z) {
-        // Equal depth: the earlier draw wins (object A, then the lower draw order).
-        take = (f.y >> 31) != (best_f.y >> 31) ? (f.y >> 31) < (best_f.y >> 31) : f.z < best_f.z;
-      }
-      if (take) {
-        best = i;
-        best_f = f;
+      // Equal depth: the earlier draw wins (object A, then the lower draw order): f.y's order.
+      if (!found || z < uintBitsToFloat(best.x) || (z == uintBitsToFloat(best.x) && f.y < best.y)) {
+        best = f;
+        found = true;
       }
     }
-    if (best == 0xffffffffu) break;
-    uvec4 layer = uvec4(best_f.x, best_f.y, best_f.w, texelFetch(dzdy_tex, int(best)).x);
+    if (!found) break;
+    uint object = best.y >> 31, corner = 3u * (best.y & 0x7fffffffu) + 2u;
+    uint id = object == 0u ? texelFetch(corners_a, int(corner)).w : texelFetch(corners_b, int(corner)).w;
+    uvec4 layer = uvec4(best.x, (object << 31) | (id + 1u), best.z, best.w);
     if (k == emit_layer) imageStore(layer_out, p, layer);
     if (k > 0 && append_pcs) {
       bool switched = (prev.y >> 31) != (layer.y >> 31);
