@@ -437,6 +437,9 @@ int run_bench(const BenchArgs& a) {
   DetectOptions one = base;
   one.views = 1;
   configs.push_back({"peelcd 1 view", one});
+  DetectOptions one_full = one;
+  one_full.peel = PeelMode::full;
+  configs.push_back({"peelcd 1 view, full peeling", one_full});
   DetectOptions paper = one;
   paper.ids = IdMode::paper;
   paper.slope = 0.0;
