@@ -425,28 +425,29 @@ int run_bench(const BenchArgs& a) {
 
   struct Config {
     std::string name;
+    std::string column;  // its column in the per-phase table
     DetectOptions opt;
   };
   std::vector<Config> configs;
   DetectOptions base;
   base.resolution = a.res >= 0 ? a.res : (seq ? 0 : 256);
-  configs.push_back({"peelcd default (3 views)", base});
+  configs.push_back({"peelcd default (3 views)", "default", base});
   DetectOptions multi = base;
   multi.peeler = Peeler::multipass;
-  configs.push_back({"peelcd default, multi-pass", multi});
+  configs.push_back({"peelcd default, multi-pass", "multipass", multi});
   DetectOptions one = base;
   one.views = 1;
-  configs.push_back({"peelcd 1 view", one});
+  configs.push_back({"peelcd 1 view", "1 view", one});
   DetectOptions one_full = one;
   one_full.peel = PeelMode::full;
-  configs.push_back({"peelcd 1 view, full peeling", one_full});
+  configs.push_back({"peelcd 1 view, full peeling", "1v full", one_full});
   DetectOptions paper = one;
   paper.ids = IdMode::paper;
   paper.slope = 0.0;
-  configs.push_back({"peelcd paper config", paper});
+  configs.push_back({"peelcd paper config", "paper", paper});
   DetectOptions paper_multi = paper;
   paper_multi.peeler = Peeler::multipass;
-  configs.push_back({"peelcd paper config, multi-pass", paper_multi});
+  configs.push_back({"peelcd paper config, multi-pass", "paper mp", paper_multi});
 
   const std::size_t methods = configs.size() + 4;  // + CGAL, FCL, two floors
   std::vector<std::string> names;
@@ -532,12 +533,15 @@ int run_bench(const BenchArgs& a) {
   if (seq) {
     std::printf("\nper phase, median ms (default = %s; paper mp = paper config, multi-pass):\n%-7s",
                 names[0].c_str(), "phase");
-    static const char* const shorts[] = {"default", "multipass", "1 view", "paper", "paper mp",
-                                         "CGAL", "FCL", "floor x3", "floor x1"};
-    for (std::size_t m = 0; m < methods; ++m) std::printf(" %9s", shorts[m]);
+    for (const Config& c : configs) std::printf(" %9s", c.column.c_str());
+    for (const char* peer : {"CGAL", "FCL", "floor x3", "floor x1"}) std::printf(" %9s", peer);
     std::printf(" %9s %9s %9s\n", "dflt/CGAL", "dflt/FCL", "dflt/floor");
     for (std::size_t p = 0; p < phase_ms.size(); ++p) {
       std::printf("(%c)    ", char('a' + p));
+      if (phase_ms[p][0].empty()) {  // fewer frames than phases
+        std::printf(" no frames\n");
+        continue;
+      }
       std::vector<double> pm(methods);
       for (std::size_t m = 0; m < methods; ++m) std::printf(" %9.2f", pm[m] = median(phase_ms[p][m]));
       std::printf(" %9.2f %9.2f %9.2f\n", pm[0] / pm[cg], pm[0] / pm[fc], pm[fl] > 0 ? pm[0] / pm[fl] : 0.0);
