@@ -71,7 +71,7 @@ struct Pipeline::Impl {
   GLuint count_buffer = 0, fragment_buffer = 0, count_tex = 0, fragment_tex = 0, corner_tex[2] = {0, 0};
   GLint max_texture_buffer = 0;  // GL_MAX_TEXTURE_BUFFER_SIZE, texels
   std::uint32_t slots = 16;
-  std::size_t kbuffer_texels = 0, kbuffer_slots = 0;
+  std::size_t kbuffer_texels = 0, kbuffer_fragments = 0;
   GLint u_floor_clip = -1, u_floor_lo = -1, u_floor_hi = -1;
   std::string renderer, version;
   GLint max_texture = 0;
@@ -251,19 +251,25 @@ struct Pipeline::Impl {
     gl.NamedBufferData(pcs_buffer, sizeof(PcsHeader) + std::size_t(capacity) * 8, nullptr, GL_DYNAMIC_READ);
   }
 
-  // The k-buffer for an n x n view with `slots` fragments per texel: 4 bytes of count and
-  // 16 bytes per slot per texel. Grows only (steady state allocates nothing).
-  void ensure_kbuffer(int n) {
-    const std::size_t texels = std::size_t(n) * std::size_t(n);
+  // The most fragments per texel a k-buffer of `texels` texels can hold: 16 bytes each, within
+  // the largest shader storage block and the largest buffer texture (whose texel index is a
+  // 32-bit signed integer in the shaders).
+  std::size_t fitting_slots(std::size_t texels) const {
+    const std::size_t fetchable = std::min<std::size_t>(std::size_t(std::max(max_texture_buffer, 0)), 0x7fffffff);
+    return std::min(max_storage_block / 16, fetchable) / std::max<std::size_t>(texels, 1);
+  }
+
+  // The k-buffer for `texels` texels with `view_slots` fragments each: 4 bytes of count per
+  // texel, 16 bytes per fragment. Grows only (steady state allocates nothing).
+  void ensure_kbuffer(std::size_t texels, std::size_t view_slots) {
     if (texels > kbuffer_texels) {
       gl.NamedBufferData(count_buffer, GLsizeiptr(texels * 4), nullptr, GL_DYNAMIC_COPY);
       kbuffer_texels = texels;
-      kbuffer_slots = 0;
       gl.TextureBuffer(count_tex, GL_R32UI, count_buffer);
     }
-    if (kbuffer_slots < slots || texels * slots > kbuffer_texels * kbuffer_slots) {
-      gl.NamedBufferData(fragment_buffer, GLsizeiptr(kbuffer_texels * slots * 16), nullptr, GL_DYNAMIC_COPY);
-      kbuffer_slots = slots;
+    if (texels * view_slots > kbuffer_fragments) {
+      kbuffer_fragments = texels * view_slots;
+      gl.NamedBufferData(fragment_buffer, GLsizeiptr(kbuffer_fragments * 16), nullptr, GL_DYNAMIC_COPY);
       gl.TextureBuffer(fragment_tex, GL_RGBA32UI, fragment_buffer);
     }
   }
@@ -437,14 +443,15 @@ struct Pipeline::Impl {
                         PairResult& r, Timings& t) {
     const int n = view.resolution;
     const std::size_t texels = std::size_t(n) * std::size_t(n);
-    // The shaders index fragments and corners with 32-bit signed integers, through buffer
-    // textures of at most GL_MAX_TEXTURE_BUFFER_SIZE texels.
-    const std::size_t limit = std::min<std::size_t>(std::size_t(std::max(max_texture_buffer, 0)), 0x7fffffff);
-    if (texels * slots * 16 > max_storage_block || texels * slots > limit || std::max(vbo_corners(0), vbo_corners(1)) > limit)
+    // The resolve fetches corners through buffer textures too (32-bit signed texel index).
+    const std::size_t fetchable = std::min<std::size_t>(std::size_t(std::max(max_texture_buffer, 0)), 0x7fffffff);
+    const std::size_t fitting = fitting_slots(texels);
+    const auto view_slots = std::uint32_t(std::min<std::size_t>(slots, fitting));
+    if (view_slots == 0 || std::max(vbo_corners(0), vbo_corners(1)) > fetchable)
       return peel(view, epsilon_world, opt, first_slot, r, t);
     const auto t_gpu = Clock::now();
     ensure_layers(n);
-    ensure_kbuffer(n);
+    ensure_kbuffer(texels, view_slots);
     const GLuint zero = 0;
     gl.ClearNamedBufferSubData(count_buffer, GL_R32UI, 0, GLsizeiptr(texels * 4), GL_RED_INTEGER, GL_UNSIGNED_INT,
                                &zero);
@@ -461,7 +468,7 @@ struct Pipeline::Impl {
     gl.Uniform3f(u_ab_lo, float(lo.x()), float(lo.y()), float(lo.z()));
     gl.Uniform3f(u_ab_hi, float(hi.x()), float(hi.y()), float(hi.z()));
     gl.Uniform1i(u_ab_res, n);
-    gl.Uniform1ui(u_ab_slots, slots);
+    gl.Uniform1ui(u_ab_slots, view_slots);
     gl.BindFramebuffer(GL_FRAMEBUFFER, fbo[0]);
     gl.Viewport(0, 0, n, n);
     gl.Disable(GL_DEPTH_TEST);
@@ -490,7 +497,7 @@ struct Pipeline::Impl {
     gl.Uniform1f(u_rs_eps, float(view.world_to_window_depth(epsilon_world)));
     gl.Uniform1f(u_rs_slope, float(opt.slope));
     gl.Uniform1i(u_rs_res, n);
-    gl.Uniform1ui(u_rs_slots, slots);
+    gl.Uniform1ui(u_rs_slots, view_slots);
     gl.Uniform1i(u_rs_full, opt.peel == PeelMode::full);
     gl.Uniform1ui(u_rs_first, GLuint(first_slot));
     gl.Uniform1i(u_rs_append, 1);
@@ -501,9 +508,13 @@ struct Pipeline::Impl {
     check("the k-buffer resolve");
     PcsHeader got{};
     gl.GetNamedBufferSubData(pcs_buffer, 0, sizeof got, &got);
-    if (got.max_fragments > slots) {
-      slots = got.max_fragments + got.max_fragments / 4;
+    if (got.max_fragments > view_slots) {
       t.gpu += ms_since(t_gpu);
+      // A texel had more fragments than slots: grow (with a quarter to spare) and peel again;
+      // deeper than any k-buffer that fits, this view goes to multi-pass (`slots` stays).
+      const std::size_t wanted = std::min<std::size_t>(std::size_t(got.max_fragments) * 5 / 4, fitting);
+      if (wanted < got.max_fragments) return peel(view, epsilon_world, opt, first_slot, r, t);
+      slots = std::max(slots, std::uint32_t(wanted));
       return false;
     }
     r.layers = int(got.max_layers);
