@@ -1,0 +1,105 @@
+#!/usr/bin/env python3
+"""Rewrites the measured tables of docs/performance.md from the files scripts/performance.sh
+writes (docs/performance/simulate_*.txt, bench_*.txt). Each table sits between
+<!-- BEGIN name --> and <!-- END name --> markers; text outside the markers is left alone.
+
+usage: performance_tables.py DOC DIR
+"""
+import re
+import sys
+
+
+def simulate_rows(path):
+    """Rows of the per-phase summary of `peelcd simulate`, ours and the paper's."""
+    lines = open(path).read().split("\n")
+    start = next(i for i, l in enumerate(lines) if l.startswith("summary"))
+    rows = []
+    for line in lines[start + 2:]:
+        if not line.startswith("("):
+            continue
+        phase, ours, paper = (part.split() for part in line.split("|"))
+        n, found, aabb, gpu, readback, cpu, total = ours
+        rows.append("| %s | %s | %s | %.2f | %.1f | %.3f | %.2f | %.1f | %s |" % (
+            phase[0], n, found, float(aabb), float(gpu), float(readback), float(cpu), float(total),
+            " | ".join(paper)))
+    return rows
+
+
+def simulate_table(path):
+    head = ("| phase | nCTP | found | AABB | GPU | readback | CPU | total "
+            "| paper: nCTP | AABB | GPU | readback | CPU | total |\n|" + "---|" * 14)
+    return head + "\n" + "\n".join(simulate_rows(path))
+
+
+def bench_methods(path):
+    """{method: [median, miss, false, xCGAL, xFCL, xfloor]} from a `peelcd bench` table."""
+    out = {}
+    for line in open(path):
+        m = re.match(r"^(peelcd .*?|CGAL .*?|FCL .*?|floor: .*?)\s{2,}(\S.*)$", line.rstrip())
+        if m:
+            out[m.group(1)] = m.group(2).split()
+    return out
+
+
+def bench_default_table(path):
+    b = bench_methods(path)
+    rows = ["| method | median ms | miss | false | x CGAL | x FCL | x floor |", "|---|---|---|---|---|---|---|"]
+    for name, v in b.items():
+        if name.startswith("floor"):
+            continue
+        rows.append("| %s | %s |" % (name, " | ".join(v + [""] * (6 - len(v)))))
+    rows.append("| floor: one bare draw, 3 views / 1 view | %s / %s | | | | | |" % (
+        b["floor: 1 bare draw x 3 views"][0], b["floor: 1 bare draw x 1 view"][0]))
+    return "\n".join(rows)
+
+
+def bench_scenes_table(p1, p2):
+    b1, b2 = bench_methods(p1), bench_methods(p2)
+    rows = ["| | test1 ms | miss | x CGAL | x FCL | x floor | test2 ms | miss | x CGAL | x FCL | x floor |",
+            "|" + "---|" * 11]
+    for name in b1:
+        if name.startswith("floor"):
+            continue
+        v1, v2 = b1[name], b2[name]
+        if name.startswith("peelcd"):
+            rows.append("| %s | %s | %s | %s | %s | %s | %s | %s | %s | %s | %s |" % (
+                name, v1[0], v1[1], v1[3], v1[4], v1[5], v2[0], v2[1], v2[3], v2[4], v2[5]))
+        else:
+            rows.append("| %s | %s | %s | | | | %s | %s | | | |" % (name, v1[0], v1[1], v2[0], v2[1]))
+    return "\n".join(rows)
+
+
+def peeler_table(paths):
+    """Single-pass against multi-pass, side by side in each benchmark run."""
+    rows = ["| scene, configuration | single-pass ms | multi-pass ms | ratio |", "|---|---|---|---|"]
+    for label, path in paths:
+        b = bench_methods(path)
+        for single, multi in (("peelcd default (3 views)", "peelcd default, multi-pass"),
+                              ("peelcd paper config", "peelcd paper config, multi-pass")):
+            s, m = float(b[single][0]), float(b[multi][0])
+            rows.append("| %s, %s | %.2f | %.2f | %.2fx |" % (label, single[len("peelcd "):], s, m, s / m))
+    return "\n".join(rows)
+
+
+def main():
+    doc, d = sys.argv[1], sys.argv[2]
+    tables = {
+        "simulate_test1": simulate_table(d + "/simulate_test1.txt"),
+        "simulate_test2": simulate_table(d + "/simulate_test2.txt"),
+        "bench_default": bench_default_table(d + "/bench_default.txt"),
+        "bench_scenes": bench_scenes_table(d + "/bench_test1.txt", d + "/bench_test2.txt"),
+        "peelers": peeler_table([("default scene 256²", d + "/bench_default.txt"),
+                                 ("test1", d + "/bench_test1.txt"), ("test2", d + "/bench_test2.txt")]),
+    }
+    text = open(doc).read()
+    for name, table in tables.items():
+        pattern = re.compile(r"(<!-- BEGIN %s -->\n).*?(\n<!-- END %s -->)" % (name, name), re.S)
+        if not pattern.search(text):
+            sys.exit("performance_tables.py: %s has no markers for %s" % (doc, name))
+        text = pattern.sub(lambda m: m.group(1) + table + m.group(2), text)
+    open(doc, "w").write(text)
+    print("rewrote %d tables in %s" % (len(tables), doc))
+
+
+if __name__ == "__main__":
+    main()
