@@ -66,8 +66,10 @@ struct Pipeline::Impl {
   GLint u_ab_res = -1, u_ab_slots = -1;
   GLint u_rs_eps = -1, u_rs_slope = -1, u_rs_res = -1, u_rs_full = -1, u_rs_first = -1, u_rs_append = -1,
         u_rs_emit = -1, u_rs_slots = -1;
-  // The k-buffer of the single-pass peeler: per-texel fragment counts and `slots` fragments of
-  // five words per texel (shaders/abuffer.frag), sized for `kbuffer_texels` texels.
+  // The k-buffer of the single-pass peeler (shaders/abuffer.frag): per-texel fragment counts
+  // and up to `slots` fragments of 16 bytes per texel; the resolve reads both, and the corners
+  // the objects were drawn from, through buffer textures. Sized for `kbuffer_texels` texels and
+  // `kbuffer_fragments` fragments.
   GLuint count_buffer = 0, fragment_buffer = 0, count_tex = 0, fragment_tex = 0, corner_tex[2] = {0, 0};
   GLint max_texture_buffer = 0;  // GL_MAX_TEXTURE_BUFFER_SIZE, texels
   std::uint32_t slots = 16;
@@ -338,9 +340,9 @@ struct Pipeline::Impl {
     });
   }
 
-  // Number of corners slot `slot` draws for the current ROI view.
   // Corners in the VBO a slot draws from (its triangles in the ROI, or a rigid shape's all).
   std::size_t vbo_corners(int slot) const { return slot_shape[slot] ? slot_shape[slot]->corners : staging[slot].size(); }
+  // Number of corners slot `slot` draws for the current ROI view.
   std::size_t corners(int slot) const { return slot_shape[slot] ? indices[slot].size() : staging[slot].size(); }
 
   // Prepares slot `slot` for `object` in `view`: a world-space object's triangles touching the
@@ -483,7 +485,8 @@ struct Pipeline::Impl {
     }
     gl.ColorMaski(0, GL_TRUE, GL_TRUE, GL_TRUE, GL_TRUE);
     gl.BindFramebuffer(GL_FRAMEBUFFER, 0);
-    gl.MemoryBarrier(GL_SHADER_STORAGE_BARRIER_BIT);
+    // The resolve reads what the draw stored through buffer textures (texture fetches).
+    gl.MemoryBarrier(GL_SHADER_STORAGE_BARRIER_BIT | GL_TEXTURE_FETCH_BARRIER_BIT);
     ++passes_this_frame;
     check("the k-buffer draw");
 
