@@ -261,15 +261,21 @@ static std::pair<Mesh, Mesh> interleaved_stacks() {
   return {a, b};
 }
 
-TEST_CASE("texels deeper than the k-buffer: it grows and matches multi-pass", "[gl]") {
-  const auto [a, b] = interleaved_stacks();
-  gl::Pipeline fresh(test_context());  // its k-buffer starts at the default depth
+// One oblique view of the stacks with full peeling: every surface is a layer.
+static DetectOptions stacks_view(int resolution) {
   DetectOptions opt;
-  opt.resolution = 64;
+  opt.resolution = resolution;
   opt.views = 1;
   opt.theta = 20;
   opt.phi = 70;
   opt.peel = PeelMode::full;
+  return opt;
+}
+
+TEST_CASE("texels deeper than the k-buffer: it grows and matches multi-pass", "[gl]") {
+  const auto [a, b] = interleaved_stacks();
+  gl::Pipeline fresh(test_context());  // its k-buffer starts at the default depth
+  DetectOptions opt = stacks_view(64);
   std::vector<gl::CapturedView> single, multi;
   opt.peeler = Peeler::abuffer;
   fresh.capture_layers(&single);
@@ -296,12 +302,7 @@ TEST_CASE("texels deeper than the k-buffer: it grows and matches multi-pass", "[
 TEST_CASE("a k-buffer larger than a storage block falls back to multi-pass", "[gl]") {
   const auto [a, b] = interleaved_stacks();
   gl::Pipeline fresh(test_context());
-  DetectOptions opt;
-  opt.resolution = 768;
-  opt.views = 1;
-  opt.theta = 20;
-  opt.phi = 70;
-  opt.peel = PeelMode::full;
+  DetectOptions opt = stacks_view(768);
   opt.peeler = Peeler::abuffer;
   const FrameResult fs = fresh.detect(two(a, b), opt);
   opt.peeler = Peeler::multipass;
