@@ -81,6 +81,42 @@ def peeler_table(paths):
     return "\n".join(rows)
 
 
+def phase_table(path):
+    """Per phase of a dynamic scene: medians and the ratios of the default and of one view with
+    full peeling against CGAL, FCL and the floor with the same number of views."""
+    lines = open(path).read().split("\n")
+    start = next(i for i, l in enumerate(lines) if l.startswith("per phase"))
+    head = lines[start + 1]  # "phase" in 7 characters, then one column per 10 (" %9s")
+    cols = [head[i:i + 10].strip() for i in range(7, len(head), 10)]
+    rows = ["| phase | default ms | 1 view, full ms | CGAL ms | FCL ms | default x CGAL | x FCL | x floor "
+            "| 1 view, full x CGAL | x FCL | x floor |", "|" + "---|" * 11]
+    for line in lines[start + 2:]:
+        if not line.startswith("("):
+            continue
+        parts = line.split()
+        if parts[1:3] == ["no", "frames"]:
+            continue
+        v = dict(zip(cols, map(float, parts[1:])))
+        d, f, cg, fc = v["default"], v["1v full"], v["CGAL"], v["FCL"]
+        f3, f1 = v["floor x3"], v["floor x1"]
+        ratio = lambda a, b: "%.2f" % (a / b) if b > 0 else "-"
+        rows.append("| %s | %.2f | %.2f | %.2f | %.2f | %s | %s | %s | %s | %s | %s |" % (
+            parts[0], d, f, cg, fc, ratio(d, cg), ratio(d, fc), ratio(d, f3), ratio(f, cg), ratio(f, fc), ratio(f, f1)))
+    return "\n".join(rows)
+
+
+def targets_text(path):
+    """The sentence of the targets section, from the default scene's benchmark."""
+    b = bench_methods(path)
+    d, f = b["peelcd default (3 views)"], b["peelcd 1 view, full peeling"]
+    return ("In this run the fastest configuration within the miss ratio, one view with full peeling\n"
+            "(%s ms, %s miss), takes %sx CGAL (%s ms), %sx FCL (%s ms) and %sx its floor (%s ms); the\n"
+            "default (%s ms, %s miss) takes %sx CGAL, %sx FCL and %sx its floor (%s ms)." % (
+                f[0], f[1], f[3], b["CGAL box_intersection_d + exact"][0], f[4],
+                b["FCL 0.7 AABB tree built per frame"][0], f[5], b["floor: 1 bare draw x 1 view"][0],
+                d[0], d[1], d[3], d[4], d[5], b["floor: 1 bare draw x 3 views"][0]))
+
+
 def main():
     doc, d = sys.argv[1], sys.argv[2]
     tables = {
@@ -88,6 +124,9 @@ def main():
         "simulate_test2": simulate_table(d + "/simulate_test2.txt"),
         "bench_default": bench_default_table(d + "/bench_default.txt"),
         "bench_scenes": bench_scenes_table(d + "/bench_test1.txt", d + "/bench_test2.txt"),
+        "phases_test1": phase_table(d + "/bench_test1.txt"),
+        "phases_test2": phase_table(d + "/bench_test2.txt"),
+        "targets": targets_text(d + "/bench_default.txt"),
         "peelers": peeler_table([("default scene 256²", d + "/bench_default.txt"),
                                  ("test1", d + "/bench_test1.txt"), ("test2", d + "/bench_test2.txt")]),
     }
