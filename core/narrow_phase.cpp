@@ -1,5 +1,7 @@
 #include "core/narrow_phase.h"
 
+#include "core/aabb.h"
+
 #include "core/id_map.h"
 
 #include <CGAL/Cartesian_converter.h>
@@ -225,27 +227,14 @@ std::pair<Vec3, Vec3> intersection_segment(const TriangleCorners& a, const Trian
   return seg;
 }
 
-namespace {
-// A triangle lies in the box of its corners: disjoint boxes, no contact. Comparisons of doubles
-// are exact, so this rejects nothing the exact test would accept (touching boxes pass).
-bool boxes_disjoint(const TriangleCorners& a, const TriangleCorners& b) {
-  for (int axis = 0; axis < 3; ++axis) {
-    const double alo = std::min({a[0][axis], a[1][axis], a[2][axis]});
-    const double ahi = std::max({a[0][axis], a[1][axis], a[2][axis]});
-    const double blo = std::min({b[0][axis], b[1][axis], b[2][axis]});
-    const double bhi = std::max({b[0][axis], b[1][axis], b[2][axis]});
-    if (ahi < blo || bhi < alo) return true;
-  }
-  return false;
-}
-}  // namespace
-
 void narrow_phase(const Mesh& a, const Mesh& b, const std::vector<std::uint64_t>& candidates,
                   std::vector<Contact>& out) {
   for (std::uint64_t c : candidates) {
     const std::uint32_t ta = pair_a(c), tb = pair_b(c);
     const TriangleCorners ca = corners(a, ta), cb = corners(b, tb);
-    if (boxes_disjoint(ca, cb) || !triangles_intersect(ca, cb)) continue;
+    // A triangle lies in the box of its corners: disjoint boxes, no contact (exact: comparisons
+    // of doubles; boxes that only touch overlap).
+    if (!triangle_bounds(a, ta).overlaps(triangle_bounds(b, tb)) || !triangles_intersect(ca, cb)) continue;
     Contact contact;
     contact.tri_a = ta;
     contact.tri_b = tb;

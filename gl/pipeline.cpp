@@ -257,8 +257,13 @@ struct Pipeline::Impl {
   // the largest shader storage block and the largest buffer texture (whose texel index is a
   // 32-bit signed integer in the shaders).
   std::size_t fitting_slots(std::size_t texels) const {
-    const std::size_t fetchable = std::min<std::size_t>(std::size_t(std::max(max_texture_buffer, 0)), 0x7fffffff);
-    return std::min(max_storage_block / 16, fetchable) / std::max<std::size_t>(texels, 1);
+    return std::min(max_storage_block / 16, fetchable()) / std::max<std::size_t>(texels, 1);
+  }
+
+  // Texels a shader can fetch from a buffer texture: GL_MAX_TEXTURE_BUFFER_SIZE, and the
+  // shaders' index is a 32-bit signed integer.
+  std::size_t fetchable() const {
+    return std::min<std::size_t>(std::size_t(std::max(max_texture_buffer, 0)), 0x7fffffff);
   }
 
   // The k-buffer for `texels` texels with `view_slots` fragments each: 4 bytes of count per
@@ -445,11 +450,10 @@ struct Pipeline::Impl {
                         PairResult& r, Timings& t) {
     const int n = view.resolution;
     const std::size_t texels = std::size_t(n) * std::size_t(n);
-    // The resolve fetches corners through buffer textures too (32-bit signed texel index).
-    const std::size_t fetchable = std::min<std::size_t>(std::size_t(std::max(max_texture_buffer, 0)), 0x7fffffff);
+    // The resolve fetches the corners through buffer textures too.
     const std::size_t fitting = fitting_slots(texels);
     const auto view_slots = std::uint32_t(std::min<std::size_t>(slots, fitting));
-    if (view_slots == 0 || std::max(vbo_corners(0), vbo_corners(1)) > fetchable)
+    if (view_slots == 0 || std::max(vbo_corners(0), vbo_corners(1)) > fetchable())
       return peel(view, epsilon_world, opt, first_slot, r, t);
     const auto t_gpu = Clock::now();
     ensure_layers(n);
