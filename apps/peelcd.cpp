@@ -41,7 +41,7 @@ std::unique_ptr<gl::Context> make_context(const std::string& backend) {
 struct DetectArgs {
   std::string scene;
   int res = 0;  // 0 = not given
-  std::string ids, peel, peeler;
+  std::string ids, peel, peeler, cull, resolve;
   double slope = NAN;
   double theta = NAN, phi = NAN, epsilon = NAN;
   std::string json_out;
@@ -74,6 +74,16 @@ DetectOptions merged_options(const Scene& scene, const DetectArgs& a) {
     o.peel = *m;
   }
   if (!a.peeler.empty()) o.peeler = peeler_option(a.peeler);
+  if (!a.cull.empty()) {
+    const auto m = parse_cull(a.cull);
+    if (!m) throw InputError("peelcd detect: --cull: unknown culling \"" + a.cull + "\" (expected contact or box)");
+    o.cull = *m;
+  }
+  if (!a.resolve.empty()) {
+    const auto m = parse_resolve(a.resolve);
+    if (!m) throw InputError("peelcd detect: --resolve: unknown resolve \"" + a.resolve + "\" (expected auto, gpu or host)");
+    o.resolve = *m;
+  }
   if (!std::isnan(a.slope)) o.slope = a.slope;
   if (a.views) o.views = a.views;
   if (!std::isnan(a.theta)) o.theta = a.theta;
@@ -558,6 +568,7 @@ struct SweepArgs {
   std::vector<std::string> modes = {"paper", "full"};
   std::vector<double> slopes = {1.0};
   std::vector<int> views = {1};
+  std::vector<std::string> culls = {"contact"};
   double theta_step = 30, phi_step = 10;
   std::string csv, plot;
   std::string backend = "osmesa";
@@ -576,15 +587,20 @@ int run_sweep_command(const SweepArgs& a) {
         if (mode != "paper" && mode != "alternate" && mode != "full")
           throw InputError("peelcd sweep: --mode: unknown mode \"" + mode + "\" (expected paper, alternate or full)");
         for (int views : a.views)
-          for (double slope : mode == "paper" ? std::vector<double>{0.0} : a.slopes) {
-            SweepConfig c;
-            c.resolution = res;
-            c.ids = *ids;
-            c.peel = mode == "full" ? PeelMode::full : PeelMode::alternate;
-            c.slope = slope;
-            c.views = views;
-            configs.push_back(c);
-          }
+          for (double slope : mode == "paper" ? std::vector<double>{0.0} : a.slopes)
+            for (const std::string& cull_name : a.culls) {
+              const auto cull = parse_cull(cull_name);
+              if (!cull)
+                throw InputError("peelcd sweep: --cull: unknown culling \"" + cull_name + "\" (expected contact or box)");
+              SweepConfig c;
+              c.resolution = res;
+              c.ids = *ids;
+              c.peel = mode == "full" ? PeelMode::full : PeelMode::alternate;
+              c.slope = slope;
+              c.views = views;
+              c.cull = *cull;
+              configs.push_back(c);
+            }
       }
     }
   const auto directions = sweep_directions(a.theta_step, a.phi_step);
@@ -598,11 +614,11 @@ int run_sweep_command(const SweepArgs& a) {
 
   std::printf("sweep: %s, %zu views per configuration (theta step %g, phi step %g), %s\n", a.scene.c_str(),
               directions.size(), a.theta_step, a.phi_step, pipeline.renderer().c_str());
-  std::printf("%-34s %9s %9s %9s %6s %11s %6s %11s %11s\n", "configuration", "avg miss", "max miss", "min miss",
+  std::printf("%-46s %9s %9s %9s %6s %11s %6s %11s %11s\n", "configuration", "avg miss", "max miss", "min miss",
               "false", "candidates", "eff", "median ms", "mean ms");
   for (std::size_t c = 0; c < configs.size(); ++c) {
     const SweepSummary s = summarize(rows, c);
-    std::printf("%-34s %8.2f%% %8.2f%% %8.2f%% %6zu %11.0f %5.1f%% %11.2f %11.2f\n", configs[c].label().c_str(),
+    std::printf("%-46s %8.2f%% %8.2f%% %8.2f%% %6zu %11.0f %5.1f%% %11.2f %11.2f\n", configs[c].label().c_str(),
                 100 * s.avg_miss, 100 * s.max_miss, 100 * s.min_miss, s.false_contacts, s.mean_candidates,
                 100 * s.mean_efficiency, s.median_total_ms, s.mean_total_ms);
   }
@@ -632,6 +648,10 @@ void add_frame_options(CLI::App* c, DetectArgs& d) {
   c->add_option("--peel", d.peel, "Peel mode: alternate (the paper's; default) or full (every surface)");
   c->add_option("--peeler", d.peeler, "How layers are made: abuffer (one draw into a per-texel k-buffer of fragments; default) "
                                       "or multipass (one draw per layer); the same layers either way");
+  c->add_option("--cull", d.cull, "Triangles peeled per ROI: contact (only those sharing a grid cell of the ROI with the "
+                                  "other object, the ROI shrunk to them; default) or box (all touching the ROI, the paper's)");
+  c->add_option("--resolve", d.resolve, "Where the k-buffer becomes layers and PCS: auto (host on a software renderer such as "
+                                        "llvmpipe, else gpu; default), gpu (a compute pass) or host (mapped, resolved on the CPU)");
   c->add_option("--slope", d.slope, "Slope-following epsilon, in texels (default 1; 0 = the paper's constant epsilon)")
       ->check(CLI::NonNegativeNumber);
   c->add_option("--views", d.views, "Views fused per ROI: 3 (three orthogonal views; default) or 1")
@@ -734,6 +754,8 @@ int main(int argc, char** argv) {
       ->check(CLI::NonNegativeNumber)->capture_default_str();
   sweep->add_option("--views", sw.views, "Fused views per ROI: 1 and/or 3")->delimiter(',')
       ->check(CLI::IsMember({1, 3}))->capture_default_str();
+  sweep->add_option("--cull", sw.culls, "Culling: contact and/or box (see detect --cull)")->delimiter(',')
+      ->capture_default_str();
   sweep->add_option("--theta-step", sw.theta_step, "Longitude step, degrees")->check(CLI::Range(1.0, 360.0))
       ->capture_default_str();
   sweep->add_option("--phi-step", sw.phi_step, "Latitude step, degrees")->check(CLI::Range(1.0, 90.0))

@@ -23,6 +23,25 @@ std::optional<Peeler> parse_peeler(const std::string& text) {
   return std::nullopt;
 }
 
+const char* to_string(Resolve resolve) {
+  return resolve == Resolve::gpu ? "gpu" : resolve == Resolve::host ? "host" : "auto";
+}
+
+std::optional<Resolve> parse_resolve(const std::string& text) {
+  if (text == "auto") return Resolve::automatic;
+  if (text == "gpu") return Resolve::gpu;
+  if (text == "host") return Resolve::host;
+  return std::nullopt;
+}
+
+const char* to_string(Cull cull) { return cull == Cull::contact ? "contact" : "box"; }
+
+std::optional<Cull> parse_cull(const std::string& text) {
+  if (text == "contact") return Cull::contact;
+  if (text == "box" || text == "none") return Cull::box;
+  return std::nullopt;
+}
+
 std::size_t fused_view_frames(const DetectOptions& o, ViewFrame out[3]) {
   const ViewFrame f = view_frame(o.theta, o.phi);
   out[0] = f;

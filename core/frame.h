@@ -25,6 +25,22 @@ enum class Peeler { multipass, abuffer };
 const char* to_string(Peeler peeler);
 std::optional<Peeler> parse_peeler(const std::string& text);
 
+// Where the single-pass peeler's k-buffer is resolved into layers and PCS: gpu (a compute pass,
+// shaders/abuffer_resolve.comp; the PCS list is read back), host (the k-buffer is mapped and
+// resolved by core/kbuffer.h: the same layers and PCS), or automatic: host where GL renders on
+// the CPU (llvmpipe, softpipe: the buffers are host memory already), gpu elsewhere.
+enum class Resolve { automatic, gpu, host };
+const char* to_string(Resolve resolve);
+std::optional<Resolve> parse_resolve(const std::string& text);
+
+// Which triangles of a ROI are peeled. box: every triangle touching the ROI (the paper's way).
+// contact: contact-region culling (core/cull.h): only the triangles whose boxes share a grid cell
+// of the ROI with the other object's, the ROI shrunk to their boxes' overlap; conservative (no
+// colliding pair is dropped), fewer triangles drawn and a finer tile on the same budget.
+enum class Cull { box, contact };
+const char* to_string(Cull cull);
+std::optional<Cull> parse_cull(const std::string& text);
+
 // Defaults chosen on the accuracy sweeps of docs/accuracy.md (the paper's own configuration is
 // ids = paper, peel = alternate, slope = 0, views = 1).
 struct DetectOptions {
@@ -43,6 +59,8 @@ struct DetectOptions {
   // orthogonal views); the PCS of all views are united before the narrow phase.
   int views = 3;
   Peeler peeler = Peeler::abuffer;  // chosen on peelcd bench (docs/performance.md)
+  Cull cull = Cull::contact;         // chosen on peelcd bench and sweep (docs/performance.md)
+  Resolve resolve = Resolve::automatic;  // single-pass peeler only
 };
 
 // The view frames a ROI is peeled along for `options` (1 or 3 of them).
@@ -58,6 +76,9 @@ int tile_resolution(int budget, std::size_t roi_count);
 struct PairResult {
   std::size_t object_a = 0, object_b = 0;  // indices into the frame's objects, a < b
   Aabb roi;                                // intersection of the two world AABBs
+  Aabb region;                             // the box peeled: `roi`, or with Cull::contact the
+                                           // ROI shrunk to the kept triangles (empty: none kept)
+  std::size_t triangles_in_roi_a = 0, triangles_in_roi_b = 0;  // touching `roi`, before culling
   int resolution = 0;
   double epsilon = 0.0;                    // world units
   bool a_first = false;                    // A was peeled first (it was the farther one)

@@ -11,7 +11,7 @@ namespace peelcd {
 
 std::string SweepConfig::label() const {
   std::ostringstream s;
-  s << resolution << " " << to_string(ids) << " " << mode() << " slope=" << slope << " views=" << views;
+  s << resolution << " " << to_string(ids) << " " << mode() << " slope=" << slope << " views=" << views << " cull=" << to_string(cull);
   return s.str();
 }
 
@@ -50,6 +50,7 @@ std::vector<SweepRow> run_sweep(gl::Pipeline& pipeline, const std::vector<Object
     opt.peel = configs[c].peel;
     opt.slope = configs[c].slope;
     opt.views = configs[c].views;
+    opt.cull = configs[c].cull;
     for (const auto& [theta, phi] : directions) {
       opt.theta = theta;
       opt.phi = phi;
@@ -106,7 +107,7 @@ SweepSummary summarize(const std::vector<SweepRow>& rows, std::size_t config) {
 std::string sweep_csv(const std::vector<SweepRow>& rows, const std::vector<SweepConfig>& configs) {
   std::ostringstream out;
   out << "config,resolution,ids,mode,slope,views,theta,phi,exact,found,missed,miss_ratio,false_contacts,pcs,"
-         "candidates,efficiency,layers,passes,aabb_ms,upload_ms,gpu_ms,readback_ms,cpu_ms,total_ms\n";
+         "candidates,efficiency,layers,passes,aabb_ms,upload_ms,gpu_ms,readback_ms,cpu_ms,total_ms,cull\n";
   for (const SweepRow& r : rows) {
     const SweepConfig& c = configs[r.config];
     out << '"' << c.label() << "\"," << c.resolution << ',' << to_string(c.ids) << ','
@@ -115,7 +116,7 @@ std::string sweep_csv(const std::vector<SweepRow>& rows, const std::vector<Sweep
         << r.miss_ratio() << ',' << r.false_contacts << ',' << r.pcs << ',' << r.candidates << ','
         << r.efficiency() << ',' << r.layers << ',' << r.passes << ',' << r.timings.aabb << ','
         << r.timings.upload << ',' << r.timings.gpu << ',' << r.timings.readback << ',' << r.timings.cpu << ','
-        << r.timings.total << '\n';
+        << r.timings.total << ',' << to_string(c.cull) << '\n';
   }
   return out.str();
 }

@@ -16,7 +16,8 @@ struct SweepConfig {
   PeelMode peel = PeelMode::full;
   double slope = 1.0;
   int views = 1;
-  std::string label() const;  // e.g. "256 paper full slope=1 views=1"
+  Cull cull = Cull::contact;
+  std::string label() const;  // e.g. "256 paper full slope=1 views=1 cull=contact"
   std::string mode() const;   // paper (alternate, slope 0), alternate or full
 };
 

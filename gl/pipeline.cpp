@@ -1,6 +1,8 @@
 #include "gl/pipeline.h"
 
 #include "core/broad_phase.h"
+#include "core/cull.h"
+#include "core/kbuffer.h"
 #include "core/view.h"
 
 #include <glad/gl.h>
@@ -56,7 +58,7 @@ struct Pipeline::Impl {
   GLint u_eps = -1, u_slope = -1, u_res = -1, u_track = -1;
   GLuint vao = 0, vbo[2] = {0, 0};
   std::size_t vbo_capacity[2] = {0, 0};  // in vertices
-  GLuint layer_tex[2] = {0, 0}, run_tex = 0, depth_rb = 0, fbo[2] = {0, 0};
+  GLuint layer_tex[2] = {0, 0}, run_tex = 0, depth_rb = 0, fbo[2] = {0, 0}, bare_fbo = 0;
   int layer_size = 0;
   GLuint query = 0, pcs_buffer = 0;
   std::uint32_t pcs_capacity = 0;
@@ -87,6 +89,7 @@ struct Pipeline::Impl {
     std::weak_ptr<const Mesh> owner;
     GLuint vbo = 0;
     std::size_t corners = 0;  // in the VBO: 3 per triangle of the shape
+    std::vector<std::uint32_t> ids;  // each corner's ID, as in the VBO (the host resolve reads it)
   };
   std::map<std::pair<const Mesh*, IdMode>, CachedShape> shapes;
   std::vector<std::uint32_t> indices[2];
@@ -98,6 +101,12 @@ struct Pipeline::Impl {
   GLint u_model_peel = -1, u_model_ab = -1, u_model_floor = -1;
   std::vector<IdPair> pcs, pcs_all;
   std::vector<std::uint64_t> candidates;
+  ContactCull cull;
+  // The host resolve (Resolve::host): triangle ID by draw order per slot, and one texel's
+  // fragments.
+  std::vector<std::uint32_t> ids_by_order[2];
+  std::vector<KFragment> texel_fragments;
+  bool software_renderer = false;  // GL runs on the CPU: Resolve::automatic resolves on the host
   std::vector<Aabb> boxes;
   std::vector<std::pair<std::size_t, std::size_t>> object_pairs;
   std::vector<std::size_t> order;
@@ -118,6 +127,8 @@ struct Pipeline::Impl {
                     " context does not provide OpenGL 4.5 core");
     renderer = reinterpret_cast<const char*>(gl.GetString(GL_RENDERER));
     version = reinterpret_cast<const char*>(gl.GetString(GL_VERSION));
+    for (const char* soft : {"llvmpipe", "softpipe", "swrast"})
+      if (renderer.find(soft) != std::string::npos) software_renderer = true;
     gl.GetIntegerv(GL_MAX_TEXTURE_SIZE, &max_texture);
     GLint64 block = 0;
     gl.GetInteger64v(GL_MAX_SHADER_STORAGE_BLOCK_SIZE, &block);
@@ -284,6 +295,7 @@ struct Pipeline::Impl {
   void release_layers() {
     if (!layer_size) return;
     gl.DeleteFramebuffers(2, fbo);
+    gl.DeleteFramebuffers(1, &bare_fbo);
     gl.DeleteTextures(2, layer_tex);
     gl.DeleteTextures(1, &run_tex);
     gl.DeleteRenderbuffers(1, &depth_rb);
@@ -310,6 +322,13 @@ struct Pipeline::Impl {
       if (gl.CheckNamedFramebufferStatus(fbo[i], GL_FRAMEBUFFER) != GL_FRAMEBUFFER_COMPLETE)
         throw GlError("peelcd::gl::Pipeline: layer framebuffer of " + std::to_string(n) + "^2 is incomplete");
     }
+    // The k-buffer draw writes storage buffers only: a framebuffer without attachments (no
+    // colour or depth tiles for a software rasterizer to load and store).
+    gl.CreateFramebuffers(1, &bare_fbo);
+    gl.NamedFramebufferParameteri(bare_fbo, GL_FRAMEBUFFER_DEFAULT_WIDTH, n);
+    gl.NamedFramebufferParameteri(bare_fbo, GL_FRAMEBUFFER_DEFAULT_HEIGHT, n);
+    if (gl.CheckNamedFramebufferStatus(bare_fbo, GL_FRAMEBUFFER) != GL_FRAMEBUFFER_COMPLETE)
+      throw GlError("peelcd::gl::Pipeline: attachment-less framebuffer of " + std::to_string(n) + "^2 is incomplete");
     layer_size = n;
     check("layer allocation");
   }
@@ -317,11 +336,15 @@ struct Pipeline::Impl {
   // Calls emit(t, k, local) for every corner k of every triangle t of `mesh` whose box touches
   // the ROI box, local = corner - ROI centre (double). Returns the smallest depth along d of
   // those corners, clamped to the ROI.
+  // With `only`, just the triangles it lists (ascending) are candidates.
   template <class Emit>
-  static double for_each_corner_in_roi(const Mesh& mesh, const RoiView& view, Emit&& emit) {
+  static double for_each_corner_in_roi(const Mesh& mesh, const RoiView& view, const std::vector<std::uint32_t>* only,
+                                       Emit&& emit) {
     double min_depth = view.half_depth;
     const Aabb& box = view.box;
-    for (std::uint32_t t = 0; t < mesh.triangles.size(); ++t) {
+    const std::size_t count = only ? only->size() : mesh.triangles.size();
+    for (std::size_t i = 0; i < count; ++i) {
+      const auto t = only ? (*only)[i] : std::uint32_t(i);
       const Tri& f = mesh.triangles[t];
       const Vec3& a = mesh.vertices[f[0]];
       const Vec3& b = mesh.vertices[f[1]];
@@ -338,9 +361,10 @@ struct Pipeline::Impl {
   }
 
   // Gathers the triangles of `mesh` touching the ROI box into `out` (ROI-local floats).
-  double gather(const Mesh& mesh, const RoiView& view, IdMode ids, std::vector<GpuVertex>& out) {
+  double gather(const Mesh& mesh, const RoiView& view, const std::vector<std::uint32_t>* only, IdMode ids,
+                std::vector<GpuVertex>& out) {
     out.clear();
-    return for_each_corner_in_roi(mesh, view, [&](std::uint32_t t, int k, const Vec3& local) {
+    return for_each_corner_in_roi(mesh, view, only, [&](std::uint32_t t, int k, const Vec3& local) {
       out.push_back({float(local.x()), float(local.y()), float(local.z()), corner_id(mesh, t, k, ids)});
     });
   }
@@ -353,16 +377,18 @@ struct Pipeline::Impl {
   // Prepares slot `slot` for `object` in `view`: a world-space object's triangles touching the
   // ROI gathered into `staging`, or a rigid object's triangle indices (its shape cached on the
   // GPU). Returns the smallest depth along d of the gathered corners, clamped to the ROI.
-  double prepare(const Object& object, const RoiView& view, IdMode ids, int slot) {
+  // With `only`, just the triangles it lists (contact-region culling) are candidates.
+  double prepare(const Object& object, const RoiView& view, const std::vector<std::uint32_t>* only, IdMode ids,
+                 int slot) {
     if (!object.rigid || !object.rigid->shape) {
       slot_shape[slot] = nullptr;
-      return gather(object.mesh, view, ids, staging[slot]);
+      return gather(object.mesh, view, only, ids, staging[slot]);
     }
     // World space: culling and depth as for any object; only the corner indices go up.
     std::vector<std::uint32_t>& out = indices[slot];
     out.clear();
     const double min_depth = for_each_corner_in_roi(
-        object.mesh, view, [&](std::uint32_t t, int k, const Vec3&) { out.push_back(3 * t + std::uint32_t(k)); });
+        object.mesh, view, only, [&](std::uint32_t t, int k, const Vec3&) { out.push_back(3 * t + std::uint32_t(k)); });
     slot_shape[slot] = &cached_shape(object.rigid->shape, ids);
     // ROI-local from shape-local, composed in double, rounded once.
     Eigen::Affine3d m = object.rigid->pose;
@@ -391,10 +417,12 @@ struct Pipeline::Impl {
     CachedShape c;
     c.owner = shape;
     c.corners = corners_local.size();
+    c.ids.reserve(c.corners);
+    for (const GpuVertex& v : corners_local) c.ids.push_back(v.id);
     gl.CreateBuffers(1, &c.vbo);
     gl.NamedBufferData(c.vbo, GLsizeiptr(corners_local.size() * sizeof(GpuVertex)), corners_local.data(), GL_STATIC_DRAW);
     ++shape_uploads;
-    return shapes.emplace(std::make_pair(shape.get(), ids), c).first->second;
+    return shapes.emplace(std::make_pair(shape.get(), ids), std::move(c)).first->second;
   }
 
   void drop_expired_shapes() {
@@ -475,10 +503,9 @@ struct Pipeline::Impl {
     gl.Uniform3f(u_ab_hi, float(hi.x()), float(hi.y()), float(hi.z()));
     gl.Uniform1i(u_ab_res, n);
     gl.Uniform1ui(u_ab_slots, view_slots);
-    gl.BindFramebuffer(GL_FRAMEBUFFER, fbo[0]);
+    gl.BindFramebuffer(GL_FRAMEBUFFER, bare_fbo);
     gl.Viewport(0, 0, n, n);
     gl.Disable(GL_DEPTH_TEST);
-    gl.ColorMaski(0, GL_FALSE, GL_FALSE, GL_FALSE, GL_FALSE);
     gl.Disable(GL_CULL_FACE);
     gl.ProvokingVertex(GL_LAST_VERTEX_CONVENTION);
     for (int i = 0; i < 6; ++i) gl.Enable(GL_CLIP_DISTANCE0 + i);
@@ -487,8 +514,9 @@ struct Pipeline::Impl {
       gl.Uniform1ui(u_ab_object, GLuint(slot));
       draw(slot, u_model_ab);
     }
-    gl.ColorMaski(0, GL_TRUE, GL_TRUE, GL_TRUE, GL_TRUE);
     gl.BindFramebuffer(GL_FRAMEBUFFER, 0);
+    if (opt.resolve == Resolve::host || (opt.resolve == Resolve::automatic && software_renderer))
+      return resolve_on_host(view, epsilon_world, opt, first_slot, fitting, view_slots, t_gpu, r, t);
     // The resolve reads what the draw stored through buffer textures (texture fetches).
     gl.MemoryBarrier(GL_SHADER_STORAGE_BARRIER_BIT | GL_TEXTURE_FETCH_BARRIER_BIT);
     ++passes_this_frame;
@@ -546,6 +574,75 @@ struct Pipeline::Impl {
     }
     t.gpu += ms_since(t_gpu);
     return read_pcs(t, &got);
+  }
+
+  // The second half of peel_single_pass() with Resolve::host: the k-buffer mapped (host memory
+  // on a software renderer: no copy) and resolved by core/kbuffer.h into `pcs`.
+  bool resolve_on_host(const RoiView& view, double epsilon_world, const DetectOptions& opt, int first_slot,
+                       std::size_t fitting, std::uint32_t view_slots, Clock::time_point t_gpu, PairResult& r,
+                       Timings& t) {
+    const int n = view.resolution;
+    const std::size_t texels = std::size_t(n) * std::size_t(n);
+    ++passes_this_frame;
+    // Triangle IDs by draw order: the provoking (last) corner of each triangle drawn.
+    for (int slot = 0; slot < 2; ++slot) {
+      std::vector<std::uint32_t>& ids = ids_by_order[slot];
+      ids.resize(corners(slot) / 3);
+      if (slot_shape[slot]) {
+        const std::vector<std::uint32_t>& corner_ids = slot_shape[slot]->ids;
+        for (std::size_t i = 0; i < ids.size(); ++i) ids[i] = corner_ids[indices[slot][3 * i + 2]];
+      } else {
+        for (std::size_t i = 0; i < ids.size(); ++i) ids[i] = staging[slot][3 * i + 2].id;
+      }
+    }
+    gl.MemoryBarrier(GL_BUFFER_UPDATE_BARRIER_BIT);
+    const auto t_map = Clock::now();
+    const auto* counts = static_cast<const std::uint32_t*>(
+        gl.MapNamedBufferRange(count_buffer, 0, GLsizeiptr(texels * 4), GL_MAP_READ_BIT));
+    const auto* fragments = static_cast<const KFragment*>(gl.MapNamedBufferRange(
+        fragment_buffer, 0, GLsizeiptr(texels * view_slots * sizeof(KFragment)), GL_MAP_READ_BIT));
+    const double map_ms = ms_since(t_map);  // a wait for the draw, then (llvmpipe) no copy
+    t.readback += map_ms;
+    if (!counts || !fragments) {
+      if (counts) gl.UnmapNamedBuffer(count_buffer);
+      if (fragments) gl.UnmapNamedBuffer(fragment_buffer);
+      check("mapping the k-buffer");
+      throw GlError("peelcd::gl::Pipeline: mapping the k-buffer failed");
+    }
+    KBuffer kb;
+    kb.counts = counts;
+    kb.fragments = fragments;
+    kb.resolution = n;
+    kb.slots = view_slots;
+    KResolveParams p;
+    p.epsilon_window = float(view.world_to_window_depth(epsilon_world));
+    p.slope = float(opt.slope);
+    p.full_peel = opt.peel == PeelMode::full;
+    p.first_object = std::uint32_t(first_slot);
+    p.ids[0] = ids_by_order[0].data();
+    p.ids[1] = ids_by_order[1].data();
+    pcs.clear();
+    if (captured) {
+      captured->layers.clear();
+      captured->epsilon_window = p.epsilon_window;
+      captured->slope = p.slope;
+    }
+    const KResolveResult got = resolve_kbuffer(kb, p, pcs, texel_fragments, captured ? &captured->layers : nullptr);
+    gl.UnmapNamedBuffer(count_buffer);
+    gl.UnmapNamedBuffer(fragment_buffer);
+    check("the host k-buffer resolve");
+    t.gpu += ms_since(t_gpu) - map_ms;
+    if (got.max_fragments > view_slots) {
+      // As peel_single_pass(): grow the k-buffer and peel again, or go to multi-pass.
+      const std::size_t wanted = std::min<std::size_t>(std::size_t(got.max_fragments) * 5 / 4, fitting);
+      if (wanted < got.max_fragments) return peel(view, epsilon_world, opt, first_slot, r, t);
+      slots = std::max(slots, std::uint32_t(wanted));
+      return false;
+    }
+    r.layers = int(got.max_layers);
+    r.passes = 1;
+    if (!pcs.empty()) ++pcs_readbacks;  // the PCS reach the CPU (no list to read back here)
+    return true;
   }
 
   // Reads the PCS list back into `pcs` (the header too, unless given); false if it overflowed
@@ -738,19 +835,33 @@ void Pipeline::detect(const std::vector<Object>& objects, const DetectOptions& o
     r.object_a = ia;
     r.object_b = ib;
     r.roi = intersection(boxes[ia], boxes[ib]);
+    r.region = r.roi;
+    r.triangles_in_roi_a = r.triangles_in_roi_b = 0;
     r.resolution = n;
     const Mesh& ma = objects[ia].mesh;
     const Mesh& mb = objects[ib].mesh;
+    const std::vector<std::uint32_t>*only_a = nullptr, *only_b = nullptr;
+    if (opt.cull == Cull::contact) {
+      t0 = Clock::now();
+      cull_to_contact_region(ma, mb, r.roi, s.cull);
+      out.timings.aabb += ms_since(t0);
+      r.region = s.cull.box;
+      r.triangles_in_roi_a = s.cull.stats.in_roi_a;
+      r.triangles_in_roi_b = s.cull.stats.in_roi_b;
+      if (r.region.empty()) continue;  // no triangle of one object near the other: no contact
+      only_a = &s.cull.kept_a;
+      only_b = &s.cull.kept_b;
+    }
     std::vector<IdPair>& all_pcs = s.pcs_all;
     all_pcs.clear();
     for (std::size_t v = 0; v < frame_count; ++v) {
-      const RoiView view = make_padded_roi_view(r.roi, boxes[ia], boxes[ib], frames[v], n);
+      const RoiView view = make_padded_roi_view(r.region, boxes[ia], boxes[ib], frames[v], n);
       if (v == 0) r.epsilon = opt.epsilon > 0.0 ? opt.epsilon : view.texel();
 
       t0 = Clock::now();
       // Each view gathers its own triangles: the pad follows that view's texel size.
-      const double min_a = s.prepare(objects[ia], view, opt.ids, 0);
-      const double min_b = s.prepare(objects[ib], view, opt.ids, 1);
+      const double min_a = s.prepare(objects[ia], view, only_a, opt.ids, 0);
+      const double min_b = s.prepare(objects[ib], view, only_b, opt.ids, 1);
       if (v == 0) {
         r.triangles_drawn_a = s.corners(0) / 3;
         r.triangles_drawn_b = s.corners(1) / 3;
@@ -830,8 +941,8 @@ double Pipeline::floor_ms(const std::vector<Object>& objects, const DetectOption
     const Aabb roi = intersection(boxes[ia], boxes[ib]);
     for (std::size_t v = 0; v < frame_count; ++v) {
       const RoiView view = make_padded_roi_view(roi, boxes[ia], boxes[ib], frames[v], n);
-      s.prepare(objects[ia], view, opt.ids, 0);
-      s.prepare(objects[ib], view, opt.ids, 1);
+      s.prepare(objects[ia], view, nullptr, opt.ids, 0);
+      s.prepare(objects[ib], view, nullptr, opt.ids, 1);
       if (s.corners(0) == 0 || s.corners(1) == 0) continue;
       s.upload(0);
       s.upload(1);

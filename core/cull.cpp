@@ -1,0 +1,179 @@
+#include "core/cull.h"
+
+#include <algorithm>
+#include <cmath>
+
+namespace peelcd {
+namespace {
+
+using Entry = ContactCull::Entry;
+
+// A grid of dims[0] x dims[1] x dims[2] cells over a box; a coordinate's cell is
+// floor((x - lo) * inv) clamped to the grid: monotone in x (see cull.h).
+struct Grid {
+  Vec3 lo = Vec3::Zero();
+  double inv[3] = {0, 0, 0};
+  int dims[3] = {1, 1, 1};
+
+  std::uint16_t cell(double x, int axis) const {
+    const double f = (x - lo[axis]) * inv[axis];
+    if (!(f > 0.0)) return 0;
+    if (f >= double(dims[axis] - 1)) return std::uint16_t(dims[axis] - 1);
+    return std::uint16_t(f);
+  }
+  std::size_t cells() const { return std::size_t(dims[0]) * std::size_t(dims[1]) * std::size_t(dims[2]); }
+};
+
+Grid make_grid(const Aabb& box, std::size_t triangles) {
+  Grid g;
+  g.lo = box.lo;
+  const Vec3 e = box.extent();
+  const double longest = e.maxCoeff();
+  if (!(longest > 0.0)) return g;  // a point: one cell
+  const double target = double(std::clamp<std::size_t>(triangles * kCullCellsPerTriangle, 1, kMaxCullCells));
+  // Cubic cells of side s with about `target` of them; a flat axis gets one cell.
+  double volume = 1.0;
+  for (int i = 0; i < 3; ++i) volume *= std::max(e[i], 1e-3 * longest);
+  const double s = std::cbrt(volume / target);
+  for (int i = 0; i < 3; ++i) g.dims[i] = int(std::clamp(std::floor(e[i] / s), 1.0, 1024.0));
+  while (g.cells() > kMaxCullCells) *std::max_element(g.dims, g.dims + 3) /= 2;
+  for (int i = 0; i < 3; ++i) g.inv[i] = e[i] > 0.0 ? double(g.dims[i]) / e[i] : 0.0;
+  return g;
+}
+
+Entry entry_of(std::uint32_t tri, const Aabb& b, const Grid& g) {
+  Entry e{tri, {}, {}};
+  for (int i = 0; i < 3; ++i) {
+    e.lo[i] = g.cell(b.lo[i], i);
+    e.hi[i] = g.cell(b.hi[i], i);
+  }
+  return e;
+}
+
+// Bits [first, first + count) of `bits`: set them, or test whether any is set.
+void set_bits(std::vector<std::uint64_t>& bits, std::size_t first, std::size_t count) {
+  for (std::size_t i = first, end = first + count; i < end;) {
+    const std::size_t word = i >> 6, bit = i & 63, n = std::min<std::size_t>(64 - bit, end - i);
+    bits[word] |= (n == 64 ? ~std::uint64_t(0) : ((std::uint64_t(1) << n) - 1)) << bit;
+    i += n;
+  }
+}
+bool any_bit(const std::vector<std::uint64_t>& bits, std::size_t first, std::size_t count) {
+  for (std::size_t i = first, end = first + count; i < end;) {
+    const std::size_t word = i >> 6, bit = i & 63, n = std::min<std::size_t>(64 - bit, end - i);
+    if (bits[word] & ((n == 64 ? ~std::uint64_t(0) : ((std::uint64_t(1) << n) - 1)) << bit)) return true;
+    i += n;
+  }
+  return false;
+}
+
+// Rows of cells along the last axis are contiguous: a triangle's range is dims-0 x dims-1 runs.
+template <class Row>
+bool for_each_row(const Entry& e, const Grid& g, Row&& row) {
+  for (int i = e.lo[0]; i <= e.hi[0]; ++i)
+    for (int j = e.lo[1]; j <= e.hi[1]; ++j)
+      if (row((std::size_t(i) * std::size_t(g.dims[1]) + std::size_t(j)) * std::size_t(g.dims[2]) + e.lo[2],
+              std::size_t(e.hi[2] - e.lo[2] + 1)))
+        return true;
+  return false;
+}
+
+void mark(const std::vector<Entry>& entries, const Grid& g, std::vector<std::uint64_t>& bits) {
+  bits.assign((g.cells() + 63) / 64, 0);
+  for (const Entry& e : entries)
+    for_each_row(e, g, [&](std::size_t first, std::size_t count) {
+      set_bits(bits, first, count);
+      return false;
+    });
+}
+
+// Keeps the entries (and their boxes, and indices) touching a cell of `other`; returns the box
+// of the kept triangles.
+Aabb keep_touching(std::vector<Entry>& entries, std::vector<Aabb>& boxes, const Grid& g,
+                   const std::vector<std::uint64_t>& other) {
+  Aabb kept_box;
+  std::size_t out = 0;
+  for (std::size_t i = 0; i < entries.size(); ++i) {
+    const bool touches = for_each_row(entries[i], g, [&](std::size_t first, std::size_t count) {
+      return any_bit(other, first, count);
+    });
+    if (!touches) continue;
+    kept_box.extend(boxes[i].lo);
+    kept_box.extend(boxes[i].hi);
+    entries[out] = entries[i];
+    boxes[out] = boxes[i];
+    ++out;
+  }
+  entries.resize(out);
+  boxes.resize(out);
+  return kept_box;
+}
+
+// Drops the entries whose box does not touch `box` (closed).
+void keep_in(std::vector<Entry>& entries, std::vector<Aabb>& boxes, const Aabb& box) {
+  std::size_t out = 0;
+  for (std::size_t i = 0; i < entries.size(); ++i) {
+    if (!boxes[i].overlaps(box)) continue;
+    entries[out] = entries[i];
+    boxes[out] = boxes[i];
+    ++out;
+  }
+  entries.resize(out);
+  boxes.resize(out);
+}
+
+void gather(const Mesh& m, const Aabb& roi, std::vector<Entry>& entries, std::vector<Aabb>& boxes) {
+  entries.clear();
+  boxes.clear();
+  for (std::uint32_t t = 0; t < m.triangles.size(); ++t) {
+    const Aabb b = triangle_bounds(m, t);
+    if (!b.overlaps(roi)) continue;
+    entries.push_back(Entry{t, {}, {}});
+    boxes.push_back(b);
+  }
+}
+
+}  // namespace
+
+void cull_to_contact_region(const Mesh& a, const Mesh& b, const Aabb& roi, ContactCull& out) {
+  out.stats = CullStats{};
+  out.kept_a.clear();
+  out.kept_b.clear();
+  out.box = Aabb{};
+  if (roi.empty()) return;
+  gather(a, roi, out.entries_a, out.boxes_a);
+  gather(b, roi, out.entries_b, out.boxes_b);
+  out.stats.in_roi_a = out.entries_a.size();
+  out.stats.in_roi_b = out.entries_b.size();
+  Aabb box = roi;
+  while (!out.entries_a.empty() && !out.entries_b.empty() && out.stats.rounds < kMaxCullRounds) {
+    const std::size_t before = out.entries_a.size() + out.entries_b.size();
+    const Grid g = make_grid(box, before);
+    for (std::size_t i = 0; i < out.entries_a.size(); ++i)
+      out.entries_a[i] = entry_of(out.entries_a[i].tri, out.boxes_a[i], g);
+    for (std::size_t i = 0; i < out.entries_b.size(); ++i)
+      out.entries_b[i] = entry_of(out.entries_b[i].tri, out.boxes_b[i], g);
+    mark(out.entries_a, g, out.cells_a);
+    mark(out.entries_b, g, out.cells_b);
+    const Aabb box_a = keep_touching(out.entries_a, out.boxes_a, g, out.cells_b);
+    const Aabb box_b = keep_touching(out.entries_b, out.boxes_b, g, out.cells_a);
+    ++out.stats.rounds;
+    box = intersection(box, intersection(box_a, box_b));
+    if (box.empty()) {
+      out.entries_a.clear();
+      out.entries_b.clear();
+      break;
+    }
+    keep_in(out.entries_a, out.boxes_a, box);
+    keep_in(out.entries_b, out.boxes_b, box);
+    if (out.entries_a.size() + out.entries_b.size() == before) break;  // nothing more to drop
+  }
+  if (out.entries_a.empty() || out.entries_b.empty()) return;  // no contact possible
+  out.box = box;
+  for (const Entry& e : out.entries_a) out.kept_a.push_back(e.tri);
+  for (const Entry& e : out.entries_b) out.kept_b.push_back(e.tri);
+  out.stats.kept_a = out.kept_a.size();
+  out.stats.kept_b = out.kept_b.size();
+}
+
+}  // namespace peelcd

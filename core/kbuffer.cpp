@@ -1,0 +1,98 @@
+#include "core/kbuffer.h"
+
+#include <algorithm>
+#include <cmath>
+#include <cstring>
+
+namespace peelcd {
+namespace {
+
+float as_float(std::uint32_t bits) {
+  float f;
+  std::memcpy(&f, &bits, sizeof f);
+  return f;
+}
+
+struct Layer {
+  std::uint32_t depth = 0, key = 0, dzdx = 0, dzdy = 0;  // key: object << 31 | ID + 1
+  bool operator!=(const Layer& o) const {
+    return depth != o.depth || key != o.key || dzdx != o.dzdx || dzdy != o.dzdy;
+  }
+};
+
+// shaders/abuffer_resolve.comp's test_pair, in the same float operations.
+void test_pair(const Layer& t0, const Layer& t1, const KResolveParams& p, std::vector<IdPair>& pcs) {
+  const float dz = std::fabs(as_float(t1.depth) - as_float(t0.depth));
+  const float spread = std::fabs(as_float(t1.dzdx) - as_float(t0.dzdx)) + std::fabs(as_float(t1.dzdy) - as_float(t0.dzdy));
+  const float bound = p.epsilon_window + p.slope * spread;
+  if (!(dz < bound)) return;
+  const std::uint32_t id0 = (t0.key & 0x7fffffffu) - 1u, id1 = (t1.key & 0x7fffffffu) - 1u;
+  pcs.push_back((t0.key >> 31) == 0u ? IdPair{id0, id1} : IdPair{id1, id0});
+}
+
+// (depth, object << 31 | draw order): the order the compute resolve picks fragments in.
+bool before(const KFragment& x, const KFragment& y) {
+  const float zx = as_float(x.depth), zy = as_float(y.depth);
+  return zx < zy || (zx == zy && x.key < y.key);
+}
+
+}  // namespace
+
+KResolveResult resolve_kbuffer(const KBuffer& kb, const KResolveParams& p, std::vector<IdPair>& pcs,
+                               std::vector<KFragment>& sorted, std::vector<std::vector<std::uint32_t>>* layers) {
+  KResolveResult result;
+  const std::size_t texels = std::size_t(kb.resolution) * std::size_t(kb.resolution);
+  if (sorted.size() < kb.slots) sorted.resize(kb.slots);
+  for (std::size_t t = 0; t < texels; ++t) {
+    const std::uint32_t n = kb.counts[t];
+    if (n > kb.slots) {
+      result.max_fragments = std::max(result.max_fragments, n);
+      continue;  // fragments were dropped: no layers from this texel (the host peels again)
+    }
+    if (n == 0) continue;
+    // Insertion sort: a texel holds a handful of fragments.
+    for (std::uint32_t i = 0; i < n; ++i) {
+      const KFragment f = kb.fragments[std::size_t(i) * texels + t];
+      std::uint32_t j = i;
+      for (; j > 0 && before(f, sorted[j - 1]); --j) sorted[j] = sorted[j - 1];
+      sorted[j] = f;
+    }
+    Layer prev, run_start;
+    std::uint32_t k = 0;
+    for (std::uint32_t i = 0; i < n; ++k) {
+      // Layer k: the first fragment (in sorted order) of the wanted object strictly behind
+      // layer k - 1; everything before position i is not behind it.
+      const std::uint32_t want = p.full_peel ? 2u : ((p.first_object + k) & 1u);
+      const float prev_z = as_float(prev.depth);
+      while (i < n && ((k > 0 && !(as_float(sorted[i].depth) > prev_z)) ||
+                       (want != 2u && (sorted[i].key >> 31) != want)))
+        ++i;
+      if (i == n) break;
+      const KFragment& best = sorted[i++];
+      const std::uint32_t object = best.key >> 31;
+      const std::uint32_t id = p.ids[object][best.key & 0x7fffffffu];
+      const Layer layer{best.depth, (object << 31) | (id + 1u), best.dzdx, best.dzdy};
+      if (layers) {
+        if (layers->size() <= k) layers->emplace_back(texels * 4, 0u);
+        std::uint32_t* out = (*layers)[k].data() + 4 * t;
+        out[0] = layer.depth, out[1] = layer.key, out[2] = layer.dzdx, out[3] = layer.dzdy;
+      }
+      if (k > 0) {
+        const bool switched = (prev.key >> 31) != (layer.key >> 31);
+        if (switched) test_pair(prev, layer, p, pcs);
+        if (p.full_peel) {
+          if (run_start.key == 0u) run_start = prev;
+          if (switched) {
+            if (run_start != prev) test_pair(run_start, layer, p, pcs);
+            run_start = layer;
+          }
+        }
+      }
+      prev = layer;
+    }
+    result.max_layers = std::max(result.max_layers, k);
+  }
+  return result;
+}
+
+}  // namespace peelcd
