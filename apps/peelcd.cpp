@@ -210,6 +210,7 @@ struct GoldenArgs {
   std::string tier = "auto";
   std::string report = "golden-report";
   std::string peeler;  // empty: the case's (the default)
+  std::string resolve;  // empty: the default (auto)
   int repeat = 1;
 };
 
@@ -266,6 +267,11 @@ int run_golden_compare(const GoldenArgs& a) {
   for (const std::string& name : golden_cases(a)) {
     Scene scene = load_scene(case_scene(a, name));
     if (!a.peeler.empty()) scene.options.peeler = peeler_option(a.peeler);
+    if (!a.resolve.empty()) {
+      const auto m = parse_resolve(a.resolve);
+      if (!m) throw InputError("peelcd golden compare: --resolve: unknown resolve \"" + a.resolve + "\" (expected auto, gpu or host)");
+      scene.options.resolve = *m;
+    }
     const std::vector<Object> objects = load_objects(scene);
     const oracle::Dump expected = oracle::read_dump(a.dir + "/" + name + "/expected");
     for (int run = 0; run < std::max(1, a.repeat); ++run) {
@@ -711,6 +717,7 @@ int main(int argc, char** argv) {
       ->capture_default_str();
   compare->add_option("--report", gc.report, "Folder for the reports of differing cases")->capture_default_str();
   compare->add_option("--peeler", gc.peeler, "abuffer or multipass (default: the default, abuffer)");
+  compare->add_option("--resolve", gc.resolve, "auto, gpu or host: where the k-buffer is resolved (default: auto)");
   compare->add_option("--repeat", gc.repeat, "Run and compare each case N times in one process (determinism)")
       ->check(CLI::PositiveNumber)->capture_default_str();
   SimArgs si;

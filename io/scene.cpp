@@ -52,7 +52,7 @@ Scene parse_scene(const std::string& text, const std::string& path, const std::s
   } catch (const json::exception& e) {  // a syntax error, or a number out of range (fuzzing)
     throw InputError("peelcd::load_scene(): '" + path + "': malformed JSON: " + e.what());
   }
-  c.only_keys(root, "the scene", {"objects", "view", "resolution", "budget", "ids", "epsilon", "peel", "slope", "views"});
+  c.only_keys(root, "the scene", {"objects", "view", "resolution", "budget", "ids", "epsilon", "peel", "slope", "views", "cull"});
   Scene scene;
   scene.path = path;
   if (!root.contains("objects")) c.fail("the scene", "missing key \"objects\"");
@@ -120,6 +120,12 @@ Scene parse_scene(const std::string& text, const std::string& path, const std::s
     const auto mode = parse_peel_mode(peel);
     if (!mode) c.fail("peel", "unknown peel mode \"" + peel + "\" (expected full or alternate)");
     opt.peel = *mode;
+  }
+  if (root.contains("cull")) {
+    const std::string cull = c.string(root["cull"], "cull");
+    const auto mode = parse_cull(cull);
+    if (!mode) c.fail("cull", "unknown culling \"" + cull + "\" (expected contact or box)");
+    opt.cull = *mode;
   }
   if (root.contains("views")) {
     const json& j = root["views"];

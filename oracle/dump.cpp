@@ -120,7 +120,8 @@ Dump make_dump(const FrameResult& frame, const std::vector<gl::CapturedView>& ca
   d.shader_hash = gl::shader_sources_hash();
   d.options = {{"theta", o.theta}, {"phi", o.phi},       {"resolution", o.resolution},
                {"budget", o.budget}, {"ids", to_string(o.ids)}, {"epsilon", o.epsilon},
-               {"peel", to_string(o.peel)}, {"slope", o.slope}, {"views", o.views}};
+               {"peel", to_string(o.peel)}, {"slope", o.slope}, {"views", o.views},
+               {"cull", to_string(o.cull)}};
   for (std::size_t i = 0; i < frame.pairs.size(); ++i) {
     const PairResult& r = frame.pairs[i];
     DumpPair p;
