@@ -14,12 +14,14 @@ struct Hit {
 };
 
 // Appends the hits of `mesh`'s triangles with the texel-centre rays of `view`.
-void rasterize(const Mesh& mesh, int object, const RoiView& view, IdMode ids,
+void rasterize(const Mesh& mesh, const std::vector<std::uint32_t>* only, int object, const RoiView& view, IdMode ids,
                std::vector<std::vector<Hit>>& texels) {
   const int n = view.resolution;
   const double h = view.half_uv, texel = view.texel();
   const ViewFrame& f = view.frame;
-  for (std::uint32_t t = 0; t < mesh.triangles.size(); ++t) {
+  const std::size_t count = only ? only->size() : mesh.triangles.size();
+  for (std::size_t i_tri = 0; i_tri < count; ++i_tri) {
+    const auto t = only ? (*only)[i_tri] : std::uint32_t(i_tri);
     Vec3 p[3];
     double u[3], v[3];
     for (int k = 0; k < 3; ++k) {
@@ -58,11 +60,12 @@ void rasterize(const Mesh& mesh, int object, const RoiView& view, IdMode ids,
 }  // namespace
 
 CpuPeelResult cpu_peel(const Mesh& a, const Mesh& b, const RoiView& view, IdMode ids, double epsilon,
-                       bool a_first, PeelMode mode, double slope) {
+                       bool a_first, PeelMode mode, double slope, const std::vector<std::uint32_t>* only_a,
+                       const std::vector<std::uint32_t>* only_b) {
   const int n = view.resolution;
   std::vector<std::vector<Hit>> texels(std::size_t(n) * n);
-  rasterize(a, 0, view, ids, texels);
-  rasterize(b, 1, view, ids, texels);
+  rasterize(a, only_a, 0, view, ids, texels);
+  rasterize(b, only_b, 1, view, ids, texels);
   CpuPeelResult r;
   std::vector<Hit> layers;
   for (auto& hits : texels) {

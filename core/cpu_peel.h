@@ -18,8 +18,10 @@ struct CpuPeelResult {
 };
 
 // `a_first`: object A is peeled first (alternate mode). `slope` as in DetectOptions. Depth
-// comparisons are done in double.
+// comparisons are done in double. With `only_a` / `only_b`, just the triangles listed are cast
+// against (contact-region culling, core/cull.h).
 CpuPeelResult cpu_peel(const Mesh& a, const Mesh& b, const RoiView& view, IdMode ids, double epsilon,
-                       bool a_first, PeelMode mode, double slope);
+                       bool a_first, PeelMode mode, double slope, const std::vector<std::uint32_t>* only_a = nullptr,
+                       const std::vector<std::uint32_t>* only_b = nullptr);
 
 }  // namespace peelcd

@@ -89,7 +89,9 @@ struct Pipeline::Impl {
     std::weak_ptr<const Mesh> owner;
     GLuint vbo = 0;
     std::size_t corners = 0;  // in the VBO: 3 per triangle of the shape
-    std::vector<std::uint32_t> ids;  // each corner's ID, as in the VBO (the host resolve reads it)
+    // Each triangle's provoking-corner ID (the host resolve's; an indexed draw's order is the
+    // shape's triangle index, gl_VertexID / 3 of its corners 3t + k).
+    std::vector<std::uint32_t> provoking_ids;
   };
   std::map<std::pair<const Mesh*, IdMode>, CachedShape> shapes;
   std::vector<std::uint32_t> indices[2];
@@ -417,8 +419,8 @@ struct Pipeline::Impl {
     CachedShape c;
     c.owner = shape;
     c.corners = corners_local.size();
-    c.ids.reserve(c.corners);
-    for (const GpuVertex& v : corners_local) c.ids.push_back(v.id);
+    c.provoking_ids.reserve(c.corners / 3);
+    for (std::size_t i = 2; i < corners_local.size(); i += 3) c.provoking_ids.push_back(corners_local[i].id);
     gl.CreateBuffers(1, &c.vbo);
     gl.NamedBufferData(c.vbo, GLsizeiptr(corners_local.size() * sizeof(GpuVertex)), corners_local.data(), GL_STATIC_DRAW);
     ++shape_uploads;
@@ -584,16 +586,18 @@ struct Pipeline::Impl {
     const int n = view.resolution;
     const std::size_t texels = std::size_t(n) * std::size_t(n);
     ++passes_this_frame;
-    // Triangle IDs by draw order: the provoking (last) corner of each triangle drawn.
+    // Triangle IDs by draw order (gl_VertexID / 3, shaders/peel.vert): the provoking (last)
+    // corner's. Arrays: the position in `staging`; a rigid shape: its triangle index.
+    const std::uint32_t* ids[2];
     for (int slot = 0; slot < 2; ++slot) {
-      std::vector<std::uint32_t>& ids = ids_by_order[slot];
-      ids.resize(corners(slot) / 3);
       if (slot_shape[slot]) {
-        const std::vector<std::uint32_t>& corner_ids = slot_shape[slot]->ids;
-        for (std::size_t i = 0; i < ids.size(); ++i) ids[i] = corner_ids[indices[slot][3 * i + 2]];
-      } else {
-        for (std::size_t i = 0; i < ids.size(); ++i) ids[i] = staging[slot][3 * i + 2].id;
+        ids[slot] = slot_shape[slot]->provoking_ids.data();
+        continue;
       }
+      std::vector<std::uint32_t>& by_order = ids_by_order[slot];
+      by_order.resize(staging[slot].size() / 3);
+      for (std::size_t i = 0; i < by_order.size(); ++i) by_order[i] = staging[slot][3 * i + 2].id;
+      ids[slot] = by_order.data();
     }
     gl.MemoryBarrier(GL_BUFFER_UPDATE_BARRIER_BIT);
     const auto t_map = Clock::now();
@@ -619,8 +623,8 @@ struct Pipeline::Impl {
     p.slope = float(opt.slope);
     p.full_peel = opt.peel == PeelMode::full;
     p.first_object = std::uint32_t(first_slot);
-    p.ids[0] = ids_by_order[0].data();
-    p.ids[1] = ids_by_order[1].data();
+    p.ids[0] = ids[0];
+    p.ids[1] = ids[1];
     pcs.clear();
     if (captured) {
       captured->layers.clear();

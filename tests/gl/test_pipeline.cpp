@@ -1,3 +1,4 @@
+#include "core/cull.h"
 #include "core/primitives.h"
 #include "gl_fixture.h"
 
@@ -27,8 +28,16 @@ Run run(const Mesh& a, const Mesh& b, DetectOptions opt) {
   REQUIRE(f.pairs.size() == 1);
   Run r;
   r.gpu = f.pairs[0];
-  const RoiView view = make_padded_roi_view(r.gpu.roi, bounds(a), bounds(b), view_frame(opt.theta, opt.phi), r.gpu.resolution);
-  r.cpu = cpu_peel(a, b, view, opt.ids, r.gpu.epsilon, r.gpu.a_first, opt.peel, opt.slope);
+  const RoiView view = make_padded_roi_view(r.gpu.region, bounds(a), bounds(b), view_frame(opt.theta, opt.phi), r.gpu.resolution);
+  if (opt.cull == Cull::contact) {  // the model casts against the same triangles
+    ContactCull cull;
+    cull_to_contact_region(a, b, r.gpu.roi, cull);
+    REQUIRE(cull.box.lo == r.gpu.region.lo);
+    REQUIRE(cull.box.hi == r.gpu.region.hi);
+    r.cpu = cpu_peel(a, b, view, opt.ids, r.gpu.epsilon, r.gpu.a_first, opt.peel, opt.slope, &cull.kept_a, &cull.kept_b);
+  } else {
+    r.cpu = cpu_peel(a, b, view, opt.ids, r.gpu.epsilon, r.gpu.a_first, opt.peel, opt.slope);
+  }
   const auto exact = exact_colliding_pairs(a, b);
   r.score = score(exact, r.gpu.colliding);
   r.texel = view.texel();
@@ -59,6 +68,7 @@ TEST_CASE("two axis-aligned boxes crossing", "[gl]") {
   opt.ids = IdMode::unique;
   opt.peel = PeelMode::full;
   opt.slope = 1.0;
+  opt.cull = Cull::box;  // the whole overlap box, as the paper peels it
 
   SECTION("full peeling: entry and exit layers, PCS on the rim, every contact longer than a texel found") {
     opt.peeler = GENERATE(Peeler::multipass, Peeler::abuffer);
@@ -81,6 +91,26 @@ TEST_CASE("two axis-aligned boxes crossing", "[gl]") {
     CHECK(r.missed_longer_than_a_texel == 0);
     CHECK(r.score.missed <= 4);
   }
+  SECTION("contact culling keeps the two crossing faces and finds the same contacts in a smaller box") {
+    opt.peeler = GENERATE(Peeler::multipass, Peeler::abuffer);
+    INFO("peeler " << to_string(opt.peeler));
+    const Run whole = run(a, b, opt);
+    opt.cull = Cull::contact;
+    const Run r = run(a, b, opt);
+    // In the ROI: A's x = 1 face (2 triangles), B's 4 side faces (8) and B's x = 0.5 face (2),
+    // which lies inside A, far from A's surface: dropped.
+    CHECK(r.gpu.triangles_in_roi_a == 2);
+    CHECK(r.gpu.triangles_in_roi_b == 10);
+    CHECK(r.gpu.triangles_drawn_a == 2);
+    CHECK(r.gpu.triangles_drawn_b == 8);
+    CHECK((r.gpu.region.extent().array() <= r.gpu.roi.extent().array()).all());
+    CHECK(r.gpu.region.extent().prod() < r.gpu.roi.extent().prod());
+    CHECK(r.gpu.pcs == r.cpu.pcs);
+    CHECK(r.score.exact == 12);
+    CHECK(r.score.false_contacts == 0);
+    CHECK(r.missed_longer_than_a_texel == 0);
+    CHECK(r.score.found >= whole.score.found);
+  }
   SECTION("alternate peeling starts with A, the farther object, and misses what lies in front of it") {
     opt.peel = PeelMode::alternate;
     const Run r = run(a, b, opt);
@@ -100,10 +130,12 @@ TEST_CASE("a tilted plane through a sphere", "[gl]") {
   opt.theta = 20;
   opt.phi = 50;
   opt.resolution = 256;
+  for (Cull cull : {Cull::box, Cull::contact})
   for (PeelMode mode : {PeelMode::full, PeelMode::alternate}) {
     opt.peel = mode;
+    opt.cull = cull;
     const Run r = run(sphere, plane, opt);
-    INFO(to_string(mode) << ": found " << r.score.found << " of " << r.score.exact);
+    INFO(to_string(mode) << ", cull " << to_string(cull) << ": found " << r.score.found << " of " << r.score.exact);
     // The sphere's front cap, the plane, the back cap: 3 surfaces on most rays.
     if (mode == PeelMode::full) CHECK(r.gpu.layers == 3);
     CHECK(r.gpu.layers == r.cpu.layers);
