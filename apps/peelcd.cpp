@@ -143,13 +143,14 @@ int run_detect(const DetectArgs& a) {
   if (!a.quiet) {
     std::printf("peelcd detect: %s  (%zu objects, %s, %s)\n", a.scene.c_str(), objects.size(),
                 context->backend().c_str(), result.renderer.c_str());
-    std::printf("view theta=%g phi=%g  views=%d  ids=%s  peel=%s  slope=%g\n", opt.theta, opt.phi, opt.views,
-                to_string(opt.ids), to_string(opt.peel), opt.slope);
+    std::printf("view theta=%g phi=%g  views=%d  ids=%s  peel=%s  slope=%g  cull=%s\n", opt.theta, opt.phi, opt.views,
+                to_string(opt.ids), to_string(opt.peel), opt.slope, to_string(opt.cull));
     if (result.pairs.empty()) std::printf("no overlapping bounding boxes: no GL work\n");
     for (const PairResult& p : result.pairs) {
-      std::printf("%s x %s: ROI %dx%d, eps %.3g, drawn %zu+%zu tris, %d layers, %zu PCS, %zu candidates, %zu colliding\n",
+      std::printf("%s x %s: ROI %dx%d, eps %.3g, drawn %zu+%zu of %zu+%zu tris, %d layers, %zu PCS, %zu candidates, %zu colliding\n",
                   objects[p.object_a].name.c_str(), objects[p.object_b].name.c_str(), p.resolution,
-                  p.resolution, p.epsilon, p.triangles_drawn_a, p.triangles_drawn_b, p.layers,
+                  p.resolution, p.epsilon, p.triangles_drawn_a, p.triangles_drawn_b, p.triangles_in_roi_a,
+                  p.triangles_in_roi_b, p.layers,
                   p.pcs_count, p.candidates, p.colliding.size());
       std::string line = " ";
       for (const Contact& c : p.colliding) {
@@ -448,18 +449,28 @@ int run_bench(const BenchArgs& a) {
   DetectOptions base;
   base.resolution = a.res >= 0 ? a.res : (seq ? 0 : 256);
   configs.push_back({"peelcd default (3 views)", "default", base});
+  DetectOptions box = base;
+  box.cull = Cull::box;
+  configs.push_back({"peelcd default, box culling", "box cull", box});
+  DetectOptions gpu_resolve = base;
+  gpu_resolve.resolve = Resolve::gpu;
+  configs.push_back({"peelcd default, GPU resolve", "gpu rslv", gpu_resolve});
   DetectOptions multi = base;
   multi.peeler = Peeler::multipass;
   configs.push_back({"peelcd default, multi-pass", "multipass", multi});
+  DetectOptions three_full = base;
+  three_full.peel = PeelMode::full;
+  configs.push_back({"peelcd 3 views, full peeling", "3v full", three_full});
   DetectOptions one = base;
   one.views = 1;
   configs.push_back({"peelcd 1 view", "1 view", one});
   DetectOptions one_full = one;
   one_full.peel = PeelMode::full;
   configs.push_back({"peelcd 1 view, full peeling", "1v full", one_full});
-  DetectOptions paper = one;
+  DetectOptions paper = one;  // the paper's pipeline: the whole overlap box, one view
   paper.ids = IdMode::paper;
   paper.slope = 0.0;
+  paper.cull = Cull::box;
   configs.push_back({"peelcd paper config", "paper", paper});
   DetectOptions paper_multi = paper;
   paper_multi.peeler = Peeler::multipass;

@@ -78,7 +78,9 @@ struct PairResult {
   Aabb roi;                                // intersection of the two world AABBs
   Aabb region;                             // the box peeled: `roi`, or with Cull::contact the
                                            // ROI shrunk to the kept triangles (empty: none kept)
-  std::size_t triangles_in_roi_a = 0, triangles_in_roi_b = 0;  // touching `roi`, before culling
+  // Triangles touching `roi`, before culling (Cull::box: those touching the padded ROI of the
+  // first view, i.e. the triangles drawn).
+  std::size_t triangles_in_roi_a = 0, triangles_in_roi_b = 0;
   int resolution = 0;
   double epsilon = 0.0;                    // world units
   bool a_first = false;                    // A was peeled first (it was the farther one)

@@ -3,6 +3,7 @@
 #include <algorithm>
 #include <cmath>
 #include <cstring>
+#include <thread>
 
 namespace peelcd {
 namespace {
@@ -36,14 +37,14 @@ bool before(const KFragment& x, const KFragment& y) {
   return zx < zy || (zx == zy && x.key < y.key);
 }
 
-}  // namespace
-
-KResolveResult resolve_kbuffer(const KBuffer& kb, const KResolveParams& p, std::vector<IdPair>& pcs,
-                               std::vector<KFragment>& sorted, std::vector<std::vector<std::uint32_t>>* layers) {
+// Texels [first, last) of the k-buffer.
+KResolveResult resolve_range(const KBuffer& kb, const KResolveParams& p, std::size_t first, std::size_t last,
+                             std::vector<IdPair>& pcs, std::vector<KFragment>& sorted,
+                             std::vector<std::vector<std::uint32_t>>* layers) {
   KResolveResult result;
   const std::size_t texels = std::size_t(kb.resolution) * std::size_t(kb.resolution);
   if (sorted.size() < kb.slots) sorted.resize(kb.slots);
-  for (std::size_t t = 0; t < texels; ++t) {
+  for (std::size_t t = first; t < last; ++t) {
     const std::uint32_t n = kb.counts[t];
     if (n > kb.slots) {
       result.max_fragments = std::max(result.max_fragments, n);
@@ -91,6 +92,82 @@ KResolveResult resolve_kbuffer(const KBuffer& kb, const KResolveParams& p, std::
       prev = layer;
     }
     result.max_layers = std::max(result.max_layers, k);
+  }
+  return result;
+}
+
+}  // namespace
+
+KResolveResult resolve_kbuffer(const KBuffer& kb, const KResolveParams& p, std::vector<IdPair>& pcs,
+                               std::vector<KFragment>& scratch, std::vector<std::vector<std::uint32_t>>* layers) {
+  return resolve_range(kb, p, 0, std::size_t(kb.resolution) * std::size_t(kb.resolution), pcs, scratch, layers);
+}
+
+KResolver::KResolver(unsigned threads) {
+  if (threads == 0) threads = std::max(1u, std::min(8u, std::thread::hardware_concurrency()));
+  lanes_.resize(threads);
+  for (unsigned i = 1; i < threads; ++i) workers_.emplace_back([this, i] { work(i); });
+}
+
+KResolver::~KResolver() {
+  {
+    std::lock_guard<std::mutex> lock(mutex_);
+    stop_ = true;
+  }
+  start_.notify_all();
+  for (std::thread& w : workers_) w.join();
+}
+
+void KResolver::run_lane(unsigned lane) {
+  const std::size_t texels = std::size_t(job_kb_.resolution) * std::size_t(job_kb_.resolution);
+  const std::size_t n = lanes_.size();
+  // Rows in contiguous blocks: lane i takes texels [i * texels / n, (i + 1) * texels / n).
+  Lane& l = lanes_[lane];
+  l.pcs.clear();
+  l.result = resolve_range(job_kb_, job_p_, lane * texels / n, (lane + 1) * texels / n, l.pcs, l.scratch, nullptr);
+}
+
+void KResolver::work(unsigned lane) {
+  std::uint64_t seen = 0;
+  for (;;) {
+    {
+      std::unique_lock<std::mutex> lock(mutex_);
+      start_.wait(lock, [&] { return stop_ || generation_ != seen; });
+      if (stop_) return;
+      seen = generation_;
+    }
+    run_lane(lane);
+    {
+      std::lock_guard<std::mutex> lock(mutex_);
+      ++done_;
+    }
+    done_cv_.notify_one();
+  }
+}
+
+KResolveResult KResolver::resolve(const KBuffer& kb, const KResolveParams& p, std::vector<IdPair>& pcs,
+                                  std::vector<std::vector<std::uint32_t>>* layers) {
+  if (layers || lanes_.size() == 1)  // a capture grows the layer images as it goes: one lane
+    return resolve_range(kb, p, 0, std::size_t(kb.resolution) * std::size_t(kb.resolution), pcs, lanes_[0].scratch,
+                         layers);
+  {
+    std::lock_guard<std::mutex> lock(mutex_);
+    job_kb_ = kb;
+    job_p_ = p;
+    done_ = 0;
+    ++generation_;
+  }
+  start_.notify_all();
+  run_lane(0);
+  {
+    std::unique_lock<std::mutex> lock(mutex_);
+    done_cv_.wait(lock, [&] { return done_ == workers_.size(); });
+  }
+  KResolveResult result;
+  for (const Lane& l : lanes_) {
+    result.max_layers = std::max(result.max_layers, l.result.max_layers);
+    result.max_fragments = std::max(result.max_fragments, l.result.max_fragments);
+    pcs.insert(pcs.end(), l.pcs.begin(), l.pcs.end());
   }
   return result;
 }

@@ -104,10 +104,9 @@ struct Pipeline::Impl {
   std::vector<IdPair> pcs, pcs_all;
   std::vector<std::uint64_t> candidates;
   ContactCull cull;
-  // The host resolve (Resolve::host): triangle ID by draw order per slot, and one texel's
-  // fragments.
+  // The host resolve (Resolve::host): triangle ID by draw order per slot, and the threads.
   std::vector<std::uint32_t> ids_by_order[2];
-  std::vector<KFragment> texel_fragments;
+  KResolver resolver;
   bool software_renderer = false;  // GL runs on the CPU: Resolve::automatic resolves on the host
   std::vector<Aabb> boxes;
   std::vector<std::pair<std::size_t, std::size_t>> object_pairs;
@@ -631,7 +630,7 @@ struct Pipeline::Impl {
       captured->epsilon_window = p.epsilon_window;
       captured->slope = p.slope;
     }
-    const KResolveResult got = resolve_kbuffer(kb, p, pcs, texel_fragments, captured ? &captured->layers : nullptr);
+    const KResolveResult got = resolver.resolve(kb, p, pcs, captured ? &captured->layers : nullptr);
     gl.UnmapNamedBuffer(count_buffer);
     gl.UnmapNamedBuffer(fragment_buffer);
     check("the host k-buffer resolve");
@@ -869,6 +868,10 @@ void Pipeline::detect(const std::vector<Object>& objects, const DetectOptions& o
       if (v == 0) {
         r.triangles_drawn_a = s.corners(0) / 3;
         r.triangles_drawn_b = s.corners(1) / 3;
+        if (opt.cull == Cull::box) {  // nothing culled: what touches the (padded) ROI
+          r.triangles_in_roi_a = r.triangles_drawn_a;
+          r.triangles_in_roi_b = r.triangles_drawn_b;
+        }
         r.a_first = min_a > min_b;  // the farther object first; ties: B first
       }
       if (s.corners(0) == 0 || s.corners(1) == 0) {
