@@ -41,8 +41,9 @@ enum class Cull { box, contact };
 const char* to_string(Cull cull);
 std::optional<Cull> parse_cull(const std::string& text);
 
-// Defaults chosen on the accuracy sweeps of docs/accuracy.md (the paper's own configuration is
-// ids = paper, peel = alternate, slope = 0, views = 1).
+// Defaults chosen on the accuracy sweeps of docs/accuracy.md and the benchmarks of
+// docs/performance.md (the paper's own configuration is ids = paper, peel = alternate,
+// slope = 0, views = 1, cull = box).
 struct DetectOptions {
   double theta = 0.0;  // view longitude, degrees
   double phi = 0.0;    // view latitude, degrees
@@ -50,7 +51,8 @@ struct DetectOptions {
   int budget = 512;    // the frame's texture budget is budget x budget texels
   IdMode ids = IdMode::ring;
   double epsilon = 0.0;  // PCS depth threshold, world units; 0 = one texel of the ROI tile
-  PeelMode peel = PeelMode::alternate;
+  PeelMode peel = PeelMode::full;  // full: no slower than alternate since the host resolve,
+                                   // and more accurate (docs/performance.md)
   // Slope-following epsilon: a texel pair is a PCS when |dz| < epsilon + slope * (|dzdx_k+1 -
   // dzdx_k| + |dzdy_k+1 - dzdy_k|), i.e. when the two surfaces' planes meet within `slope`
   // texels of the texel centre. 0 = the paper's constant epsilon.
