@@ -122,14 +122,25 @@ void keep_in(std::vector<Entry>& entries, std::vector<Aabb>& boxes, const Aabb& 
   boxes.resize(out);
 }
 
-void gather(const Mesh& m, const Aabb& roi, std::vector<Entry>& entries, std::vector<Aabb>& boxes) {
+// The triangles of `m` whose boxes touch `roi` (closed). Each vertex gets an outcode, one bit per
+// side of the box it lies strictly beyond; a triangle whose three corners share a bit misses the
+// box (the same test as its box's, exactly), and only the others get a box.
+void gather(const Mesh& m, const Aabb& roi, std::vector<std::uint8_t>& outcodes, std::vector<Entry>& entries,
+            std::vector<Aabb>& boxes) {
   entries.clear();
   boxes.clear();
+  outcodes.resize(m.vertices.size());
+  for (std::size_t v = 0; v < m.vertices.size(); ++v) {
+    const Vec3& p = m.vertices[v];
+    std::uint8_t code = 0;
+    for (int i = 0; i < 3; ++i) code |= std::uint8_t((p[i] < roi.lo[i]) << (2 * i) | (p[i] > roi.hi[i]) << (2 * i + 1));
+    outcodes[v] = code;
+  }
   for (std::uint32_t t = 0; t < m.triangles.size(); ++t) {
-    const Aabb b = triangle_bounds(m, t);
-    if (!b.overlaps(roi)) continue;
+    const Tri& f = m.triangles[t];
+    if (outcodes[f[0]] & outcodes[f[1]] & outcodes[f[2]]) continue;
     entries.push_back(Entry{t, {}, {}});
-    boxes.push_back(b);
+    boxes.push_back(triangle_bounds(m, t));
   }
 }
 
@@ -141,8 +152,8 @@ void cull_to_contact_region(const Mesh& a, const Mesh& b, const Aabb& roi, Conta
   out.kept_b.clear();
   out.box = Aabb{};
   if (roi.empty()) return;
-  gather(a, roi, out.entries_a, out.boxes_a);
-  gather(b, roi, out.entries_b, out.boxes_b);
+  gather(a, roi, out.outcodes, out.entries_a, out.boxes_a);
+  if (!out.entries_a.empty()) gather(b, roi, out.outcodes, out.entries_b, out.boxes_b);
   out.stats.in_roi_a = out.entries_a.size();
   out.stats.in_roi_b = out.entries_b.size();
   Aabb box = roi;
@@ -153,10 +164,19 @@ void cull_to_contact_region(const Mesh& a, const Mesh& b, const Aabb& roi, Conta
       out.entries_a[i] = entry_of(out.entries_a[i].tri, out.boxes_a[i], g);
     for (std::size_t i = 0; i < out.entries_b.size(); ++i)
       out.entries_b[i] = entry_of(out.entries_b[i].tri, out.boxes_b[i], g);
-    mark(out.entries_a, g, out.cells_a);
-    mark(out.entries_b, g, out.cells_b);
-    const Aabb box_a = keep_touching(out.entries_a, out.boxes_a, g, out.cells_b);
-    const Aabb box_b = keep_touching(out.entries_b, out.boxes_b, g, out.cells_a);
+    // The smaller side marks its cells and filters the larger; the larger side's survivors
+    // mark theirs and filter the smaller (a colliding pair's common cell survives both).
+    const bool a_small = out.entries_a.size() <= out.entries_b.size();
+    std::vector<Entry>& small = a_small ? out.entries_a : out.entries_b;
+    std::vector<Entry>& large = a_small ? out.entries_b : out.entries_a;
+    std::vector<Aabb>& small_boxes = a_small ? out.boxes_a : out.boxes_b;
+    std::vector<Aabb>& large_boxes = a_small ? out.boxes_b : out.boxes_a;
+    mark(small, g, out.cells_a);
+    const Aabb box_large = keep_touching(large, large_boxes, g, out.cells_a);
+    mark(large, g, out.cells_b);
+    const Aabb box_small = keep_touching(small, small_boxes, g, out.cells_b);
+    const Aabb& box_a = a_small ? box_small : box_large;
+    const Aabb& box_b = a_small ? box_large : box_small;
     ++out.stats.rounds;
     box = intersection(box, intersection(box_a, box_b));
     if (box.empty()) {

@@ -42,6 +42,7 @@ struct ContactCull {
   std::vector<Entry> entries_a, entries_b;
   std::vector<Aabb> boxes_a, boxes_b;  // per kept triangle, parallel to kept_*
   std::vector<std::uint64_t> cells_a, cells_b;  // occupancy bitsets
+  std::vector<std::uint8_t> outcodes;           // per vertex of the mesh being gathered
 };
 
 // Grid cells per round: about `cells_per_triangle` times the triangles touching the ROI, at
