@@ -458,16 +458,16 @@ int run_bench(const BenchArgs& a) {
   DetectOptions multi = base;
   multi.peeler = Peeler::multipass;
   configs.push_back({"peelcd default, multi-pass", "multipass", multi});
-  DetectOptions three_full = base;
-  three_full.peel = PeelMode::full;
-  configs.push_back({"peelcd 3 views, full peeling", "3v full", three_full});
+  DetectOptions three_alt = base;
+  three_alt.peel = PeelMode::alternate;
+  configs.push_back({"peelcd 3 views, alternate peeling", "3v alt", three_alt});
   DetectOptions one = base;
   one.views = 1;
-  configs.push_back({"peelcd 1 view", "1 view", one});
-  DetectOptions one_full = one;
-  one_full.peel = PeelMode::full;
-  configs.push_back({"peelcd 1 view, full peeling", "1v full", one_full});
-  DetectOptions paper = one;  // the paper's pipeline: the whole overlap box, one view
+  configs.push_back({"peelcd 1 view, full peeling", "1v full", one});
+  DetectOptions one_alt = one;
+  one_alt.peel = PeelMode::alternate;
+  configs.push_back({"peelcd 1 view, alternate peeling", "1v alt", one_alt});
+  DetectOptions paper = one_alt;  // the paper's pipeline: the whole overlap box, one view
   paper.ids = IdMode::paper;
   paper.slope = 0.0;
   paper.cull = Cull::box;
@@ -476,11 +476,18 @@ int run_bench(const BenchArgs& a) {
   paper_multi.peeler = Peeler::multipass;
   configs.push_back({"peelcd paper config, multi-pass", "paper mp", paper_multi});
 
-  const std::size_t methods = configs.size() + 4;  // + CGAL, FCL, two floors
+  // The floors: one bare draw per view of every triangle touching the overlap box (the paper's
+  // ROI), and of the triangles contact culling keeps (what the default configurations draw).
+  DetectOptions floor3 = base, floor1 = one;
+  floor3.cull = floor1.cull = Cull::box;
+  DetectOptions cfloor3 = base, cfloor1 = one;
+  cfloor3.cull = cfloor1.cull = Cull::contact;
+  const std::size_t methods = configs.size() + 6;  // + CGAL, FCL, four floors
   std::vector<std::string> names;
   for (const Config& c : configs) names.push_back(c.name);
   names.insert(names.end(), {"CGAL box_intersection_d + exact", "FCL 0.7 AABB tree built per frame",
-                             "floor: 1 bare draw x 3 views", "floor: 1 bare draw x 1 view"});
+                             "floor: 1 bare draw x 3 views", "floor: 1 bare draw x 1 view",
+                             "floor: culled, 1 draw x 3 views", "floor: culled, 1 draw x 1 view"});
   std::vector<FrameResult> results(configs.size());
   std::vector<std::vector<double>> ms(methods);
   std::vector<Score> scores(methods);
@@ -517,10 +524,11 @@ int run_bench(const BenchArgs& a) {
       fs.false_contacts += fcl.per_pair[i].size() - common.size();
     }
     s[configs.size() + 1] = fs;
-    t[configs.size() + 2] = pipeline.floor_ms(obj, configs[0].opt);
-    s[configs.size() + 2] = Score{exact.pairs, 0, exact.pairs, 0};
-    t[configs.size() + 3] = pipeline.floor_ms(obj, one);
-    s[configs.size() + 3] = Score{exact.pairs, 0, exact.pairs, 0};
+    const DetectOptions* floors[4] = {&floor3, &floor1, &cfloor3, &cfloor1};
+    for (std::size_t i = 0; i < 4; ++i) {
+      t[configs.size() + 2 + i] = pipeline.floor_ms(obj, *floors[i]);
+      s[configs.size() + 2 + i] = Score{exact.pairs, 0, exact.pairs, 0};
+    }
     for (std::size_t m = 0; m < methods; ++m) {
       ms[m].push_back(t[m]);
       scores[m].exact += s[m].exact;
@@ -535,16 +543,22 @@ int run_bench(const BenchArgs& a) {
     }
     progress(f + 1, frames);
   }
-  const std::size_t cg = configs.size(), fc = cg + 1, fl = cg + 2, fl1 = cg + 3;
-  // The floor with the same number of views as the configuration.
+  const std::size_t cg = configs.size(), fc = cg + 1, fl = cg + 2, fl1 = cg + 3, cfl = cg + 4, cfl1 = cg + 5;
+  // The floor of the paper's ROI with the same number of views as the configuration (the
+  // issue's floor), and the floor of the triangles the configuration draws.
   const auto floor_of = [&](std::size_t m) { return configs[m].opt.views == 3 ? fl : fl1; };
+  const auto own_floor_of = [&](std::size_t m) {
+    if (configs[m].opt.cull == Cull::box) return floor_of(m);
+    return configs[m].opt.views == 3 ? cfl : cfl1;
+  };
   std::vector<double> med(methods);
   for (std::size_t m = 0; m < methods; ++m) med[m] = median(ms[m]);
   std::printf("peelcd bench: %s, %zu frames, %s, %s (%s), medians per frame\n", a.scene.c_str(), frames,
               base.resolution ? (std::to_string(base.resolution) + "^2 per ROI").c_str()
                               : ("a " + std::to_string(base.budget) + "^2 budget shared by the ROIs").c_str(),
               context->backend().c_str(), pipeline.renderer().c_str());
-  std::printf("%-36s %10s %8s %7s %8s %8s %8s\n", "method", "median ms", "miss", "false", "x CGAL", "x FCL", "x floor");
+  std::printf("%-36s %10s %8s %7s %8s %8s %8s %8s\n", "method", "median ms", "miss", "false", "x CGAL", "x FCL", "x floor",
+              "x own fl");
   for (std::size_t m = 0; m < methods; ++m) {
     const bool peel = m < cg;
     const bool is_floor = m >= fl;
@@ -552,16 +566,18 @@ int run_bench(const BenchArgs& a) {
     if (is_floor) std::printf(" %8s %7s", "-", "-");
     else std::printf(" %7.2f%% %7zu", 100.0 * scores[m].miss_ratio(), scores[m].false_contacts);
     if (peel)
-      std::printf(" %8.2f %8.2f %8.2f\n", med[m] / med[cg], med[m] / med[fc],
-                  med[floor_of(m)] > 0 ? med[m] / med[floor_of(m)] : 0.0);
+      std::printf(" %8.2f %8.2f %8.2f %8.2f\n", med[m] / med[cg], med[m] / med[fc],
+                  med[floor_of(m)] > 0 ? med[m] / med[floor_of(m)] : 0.0,
+                  med[own_floor_of(m)] > 0 ? med[m] / med[own_floor_of(m)] : 0.0);
     else std::printf("\n");
   }
-  std::printf("(miss / false: over all frames against the exact pairs; FCL's triangle test is not exact; the floor finds nothing)\n");
+  std::printf("(miss / false: over all frames against the exact pairs; FCL's triangle test is not exact; the floor finds nothing;\n"
+              " x floor: against the bare draw of the overlap box's triangles; x own fl: of the triangles the configuration draws)\n");
   if (seq) {
     std::printf("\nper phase, median ms (default = %s; paper mp = paper config, multi-pass):\n%-7s",
                 names[0].c_str(), "phase");
     for (const Config& c : configs) std::printf(" %9s", c.column.c_str());
-    for (const char* peer : {"CGAL", "FCL", "floor x3", "floor x1"}) std::printf(" %9s", peer);
+    for (const char* peer : {"CGAL", "FCL", "floor x3", "floor x1", "cfloor x3", "cfloor x1"}) std::printf(" %9s", peer);
     std::printf(" %9s %9s %9s\n", "dflt/CGAL", "dflt/FCL", "dflt/floor");
     for (std::size_t p = 0; p < phase_ms.size(); ++p) {
       std::printf("(%c)    ", char('a' + p));

@@ -28,7 +28,10 @@ void test_pair(const Layer& t0, const Layer& t1, const KResolveParams& p, std::v
   const float bound = p.epsilon_window + p.slope * spread;
   if (!(dz < bound)) return;
   const std::uint32_t id0 = (t0.key & 0x7fffffffu) - 1u, id1 = (t1.key & 0x7fffffffu) - 1u;
-  pcs.push_back((t0.key >> 31) == 0u ? IdPair{id0, id1} : IdPair{id1, id0});
+  const IdPair pair = (t0.key >> 31) == 0u ? IdPair{id0, id1} : IdPair{id1, id0};
+  // Neighbouring texels mostly repeat the last pair: keep the list short (the caller makes it
+  // unique anyway).
+  if (pcs.empty() || !(pcs.back() == pair)) pcs.push_back(pair);
 }
 
 // (depth, object << 31 | draw order): the order the compute resolve picks fragments in.
@@ -51,6 +54,10 @@ KResolveResult resolve_range(const KBuffer& kb, const KResolveParams& p, std::si
       continue;  // fragments were dropped: no layers from this texel (the host peels again)
     }
     if (n == 0) continue;
+    if (n == 1 && !layers) {  // one surface: layer 0 or nothing, no pair
+      if (p.full_peel || (kb.fragments[t].key >> 31) == p.first_object) result.max_layers = std::max(result.max_layers, 1u);
+      continue;
+    }
     // Insertion sort: a texel holds a handful of fragments.
     for (std::uint32_t i = 0; i < n; ++i) {
       const KFragment f = kb.fragments[std::size_t(i) * texels + t];

@@ -42,7 +42,7 @@ struct KResolveResult {
   std::uint32_t max_fragments = 0;  // the most fragments of a texel that had more than `slots`
 };
 
-// Appends the PCS (ID of A, ID of B; unsorted, with repeats) to `pcs`. `scratch` holds one
+// Appends the PCS (ID of A, ID of B; unsorted, with repeats, though not of the last pair) to `pcs`. `scratch` holds one
 // texel's fragments (reused: no allocation in steady state). With `layers`, also writes layer k
 // of every texel into layers[k] (4 words per texel as the layer textures hold them, zero where
 // a texel has no layer k; grown as needed).

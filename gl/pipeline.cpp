@@ -945,11 +945,19 @@ double Pipeline::floor_ms(const std::vector<Object>& objects, const DetectOption
   const std::size_t frame_count = fused_view_frames(opt, frames);
   double ms = 0.0;
   for (const auto& [ia, ib] : pairs) {
-    const Aabb roi = intersection(boxes[ia], boxes[ib]);
+    Aabb roi = intersection(boxes[ia], boxes[ib]);
+    const std::vector<std::uint32_t>*only_a = nullptr, *only_b = nullptr;
+    if (opt.cull == Cull::contact) {  // the triangles detect() would draw (culling not timed)
+      cull_to_contact_region(objects[ia].mesh, objects[ib].mesh, roi, s.cull);
+      if (s.cull.box.empty()) continue;
+      roi = s.cull.box;
+      only_a = &s.cull.kept_a;
+      only_b = &s.cull.kept_b;
+    }
     for (std::size_t v = 0; v < frame_count; ++v) {
       const RoiView view = make_padded_roi_view(roi, boxes[ia], boxes[ib], frames[v], n);
-      s.prepare(objects[ia], view, nullptr, opt.ids, 0);
-      s.prepare(objects[ib], view, nullptr, opt.ids, 1);
+      s.prepare(objects[ia], view, only_a, opt.ids, 0);
+      s.prepare(objects[ib], view, only_b, opt.ids, 1);
       if (s.corners(0) == 0 || s.corners(1) == 0) continue;
       s.upload(0);
       s.upload(1);

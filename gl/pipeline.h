@@ -52,7 +52,9 @@ class Pipeline {
   // Benchmarks: the floor under any image-space method on this context. Per ROI view (as
   // detect() would peel them) the same triangles, already uploaded, drawn once with depth
   // testing and a fragment shader that does nothing; returns the milliseconds of those draws
-  // (to glFinish), excluding gathering and upload.
+  // (to glFinish), excluding culling, gathering and upload. With options.cull == Cull::box, every
+  // triangle touching the overlap box (the paper's ROI: the floor of the benchmark); with
+  // Cull::contact, the triangles culling keeps, in the shrunk box.
   double floor_ms(const std::vector<Object>& objects, const DetectOptions& options);
 
   // Debugging and goldens: while `sink` is set, detect() appends one CapturedView per ROI view
