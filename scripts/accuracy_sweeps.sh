@@ -1,6 +1,6 @@
 #!/usr/bin/env bash
 # Regenerates the sweeps of docs/accuracy.md (CSV, summaries, heat maps, run-time plot).
-# Needs a built ./build/peelcd and python3-matplotlib. About 20 minutes on 2 cores.
+# Needs a built ./build/peelcd and python3-matplotlib. About 10 minutes on 2 cores.
 set -euo pipefail
 cd "$(dirname "$0")/.."
 out=docs/accuracy
@@ -10,11 +10,13 @@ run() {  # run NAME ARGS...: summary to $out/NAME.txt, rows to $out/NAME.csv
   local name=$1; shift
   ./build/peelcd sweep "$scene" "$@" --csv "$out/$name.csv" | tee "$out/$name.txt"
 }
-run paper   --res 128,256 --ids unique,paper --mode paper
-run beat    --res 128,256 --ids paper,ring --mode alternate,full --slope 0,1
-run fused   --res 128,256 --ids paper,ring --mode full --views 3
-run alt3    --res 128,256 --ids paper,ring --mode alternate --views 3
-run default --res 512 --ids ring --mode alternate --views 3
+# The paper's pipeline peels the whole overlap box: the paper's modes with --cull box.
+run paper   --res 128,256 --ids unique,paper --mode paper --cull box
+run beat    --res 128,256 --ids paper,ring --mode alternate,full --slope 0,1 --cull box
+run fused   --res 128,256 --ids paper,ring --mode full --views 3 --cull box,contact
+run alt3    --res 128,256 --ids paper,ring --mode alternate --views 3 --cull box,contact
+run cull    --res 128,256 --ids ring --mode full,alternate --views 1 --cull box,contact
+run default --res 512 --ids ring --mode full,alternate --views 3
 # One CSV for the plots: every configuration once.
-{ head -1 "$out/paper.csv"; for f in paper beat fused alt3 default; do tail -n +2 "$out/$f.csv"; done; } > "$out/all.csv"
+{ head -1 "$out/paper.csv"; for f in paper beat fused alt3 cull default; do tail -n +2 "$out/$f.csv"; done; } > "$out/all.csv"
 "${PYTHON:-/usr/bin/python3}" scripts/plot_sweep.py "$out/all.csv" "$out/plots"
