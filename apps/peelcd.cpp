@@ -458,6 +458,12 @@ int run_bench(const BenchArgs& a) {
   DetectOptions multi = base;
   multi.peeler = Peeler::multipass;
   configs.push_back({"peelcd default, multi-pass", "multipass", multi});
+  DetectOptions half = base;  // half the tile side: the texels culling saves
+  if (half.resolution > 0)
+    half.resolution = std::max(16, half.resolution / 2);
+  else
+    half.budget = std::max(16, half.budget / 2);
+  configs.push_back({"peelcd default, half the resolution", "half res", half});
   DetectOptions three_alt = base;
   three_alt.peel = PeelMode::alternate;
   configs.push_back({"peelcd 3 views, alternate peeling", "3v alt", three_alt});
