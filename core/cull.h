@@ -40,13 +40,13 @@ struct ContactCull {
     std::uint16_t lo[3], hi[3];  // cell range, inclusive
   };
   std::vector<Entry> entries_a, entries_b;
-  std::vector<Aabb> boxes_a, boxes_b;  // per kept triangle, parallel to kept_*
+  std::vector<Aabb> boxes_a, boxes_b;  // each entry's triangle box, parallel to entries_*
   std::vector<std::uint64_t> cells_a, cells_b;  // occupancy bitsets
   std::vector<std::uint8_t> outcodes;           // per vertex of the mesh being gathered
 };
 
-// Grid cells per round: about `cells_per_triangle` times the triangles touching the ROI, at
-// most kMaxCullCells.
+// Grid cells per round: about kCullCellsPerTriangle times the triangles still in play, at most
+// kMaxCullCells; at most kMaxCullRounds rounds (a round that drops nothing ends it).
 constexpr int kCullCellsPerTriangle = 4;
 constexpr std::size_t kMaxCullCells = std::size_t(1) << 18;
 constexpr int kMaxCullRounds = 3;

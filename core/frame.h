@@ -51,6 +51,7 @@ struct DetectOptions {
   int budget = 512;    // the frame's texture budget is budget x budget texels
   IdMode ids = IdMode::ring;
   double epsilon = 0.0;  // PCS depth threshold, world units; 0 = one texel of the ROI tile
+                        // (of the culled region's tile with Cull::contact)
   PeelMode peel = PeelMode::full;  // full: no slower than alternate since the host resolve,
                                    // and more accurate (docs/performance.md)
   // Slope-following epsilon: a texel pair is a PCS when |dz| < epsilon + slope * (|dzdx_k+1 -

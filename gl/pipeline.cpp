@@ -546,12 +546,7 @@ struct Pipeline::Impl {
     gl.GetNamedBufferSubData(pcs_buffer, 0, sizeof got, &got);
     if (got.max_fragments > view_slots) {
       t.gpu += ms_since(t_gpu);
-      // A texel had more fragments than slots: grow (with a quarter to spare) and peel again;
-      // deeper than any k-buffer that fits, this view goes to multi-pass (`slots` stays).
-      const std::size_t wanted = std::min<std::size_t>(std::size_t(got.max_fragments) * 5 / 4, fitting);
-      if (wanted < got.max_fragments) return peel(view, epsilon_world, opt, first_slot, r, t);
-      slots = std::max(slots, std::uint32_t(wanted));
-      return false;
+      return regrow(got.max_fragments, fitting, view, epsilon_world, opt, first_slot, r, t);
     }
     r.layers = int(got.max_layers);
     r.passes = 1;
@@ -575,6 +570,17 @@ struct Pipeline::Impl {
     }
     t.gpu += ms_since(t_gpu);
     return read_pcs(t, &got);
+  }
+
+  // A texel had `max_fragments`, more than the k-buffer's slots: grow it (with a quarter to
+  // spare) and return false (peel again); deeper than any k-buffer that fits (`fitting` slots),
+  // this view goes to multi-pass (`slots` stays).
+  bool regrow(std::uint32_t max_fragments, std::size_t fitting, const RoiView& view, double epsilon_world,
+              const DetectOptions& opt, int first_slot, PairResult& r, Timings& t) {
+    const std::size_t wanted = std::min<std::size_t>(std::size_t(max_fragments) * 5 / 4, fitting);
+    if (wanted < max_fragments) return peel(view, epsilon_world, opt, first_slot, r, t);
+    slots = std::max(slots, std::uint32_t(wanted));
+    return false;
   }
 
   // The second half of peel_single_pass() with Resolve::host: the k-buffer mapped (host memory
@@ -635,13 +641,7 @@ struct Pipeline::Impl {
     gl.UnmapNamedBuffer(fragment_buffer);
     check("the host k-buffer resolve");
     t.gpu += ms_since(t_gpu) - map_ms;
-    if (got.max_fragments > view_slots) {
-      // As peel_single_pass(): grow the k-buffer and peel again, or go to multi-pass.
-      const std::size_t wanted = std::min<std::size_t>(std::size_t(got.max_fragments) * 5 / 4, fitting);
-      if (wanted < got.max_fragments) return peel(view, epsilon_world, opt, first_slot, r, t);
-      slots = std::max(slots, std::uint32_t(wanted));
-      return false;
-    }
+    if (got.max_fragments > view_slots) return regrow(got.max_fragments, fitting, view, epsilon_world, opt, first_slot, r, t);
     r.layers = int(got.max_layers);
     r.passes = 1;
     if (!pcs.empty()) ++pcs_readbacks;  // the PCS reach the CPU (no list to read back here)
