@@ -59,31 +59,26 @@ Peeler peeler_option(const std::string& text) {
   return *m;
 }
 
+// `text` parsed by `parse` (returning std::optional), or an InputError: `unknown` "text"
+// (expected `expected`).
+template <class Parse>
+auto parsed(const std::string& text, Parse parse, const std::string& unknown, const char* expected) {
+  const auto m = parse(text);
+  if (!m) throw InputError(unknown + " \"" + text + "\" (expected " + expected + ")");
+  return *m;
+}
+
 // Command-line values override the scene file's.
 DetectOptions merged_options(const Scene& scene, const DetectArgs& a) {
   DetectOptions o = scene.options;
   if (a.res > 0) o.resolution = a.res;
-  if (!a.ids.empty()) {
-    const auto m = parse_id_mode(a.ids);
-    if (!m) throw InputError("peelcd detect: --ids: unknown ID mode \"" + a.ids + "\" (expected paper, ring or unique)");
-    o.ids = *m;
-  }
-  if (!a.peel.empty()) {
-    const auto m = parse_peel_mode(a.peel);
-    if (!m) throw InputError("peelcd detect: --peel: unknown peel mode \"" + a.peel + "\" (expected full or alternate)");
-    o.peel = *m;
-  }
+  if (!a.ids.empty()) o.ids = parsed(a.ids, parse_id_mode, "peelcd detect: --ids: unknown ID mode", "paper, ring or unique");
+  if (!a.peel.empty())
+    o.peel = parsed(a.peel, parse_peel_mode, "peelcd detect: --peel: unknown peel mode", "full or alternate");
   if (!a.peeler.empty()) o.peeler = peeler_option(a.peeler);
-  if (!a.cull.empty()) {
-    const auto m = parse_cull(a.cull);
-    if (!m) throw InputError("peelcd detect: --cull: unknown culling \"" + a.cull + "\" (expected contact or box)");
-    o.cull = *m;
-  }
-  if (!a.resolve.empty()) {
-    const auto m = parse_resolve(a.resolve);
-    if (!m) throw InputError("peelcd detect: --resolve: unknown resolve \"" + a.resolve + "\" (expected auto, gpu or host)");
-    o.resolve = *m;
-  }
+  if (!a.cull.empty()) o.cull = parsed(a.cull, parse_cull, "peelcd detect: --cull: unknown culling", "contact or box");
+  if (!a.resolve.empty())
+    o.resolve = parsed(a.resolve, parse_resolve, "peelcd detect: --resolve: unknown resolve", "auto, gpu or host");
   if (!std::isnan(a.slope)) o.slope = a.slope;
   if (a.views) o.views = a.views;
   if (!std::isnan(a.theta)) o.theta = a.theta;
@@ -268,11 +263,9 @@ int run_golden_compare(const GoldenArgs& a) {
   for (const std::string& name : golden_cases(a)) {
     Scene scene = load_scene(case_scene(a, name));
     if (!a.peeler.empty()) scene.options.peeler = peeler_option(a.peeler);
-    if (!a.resolve.empty()) {
-      const auto m = parse_resolve(a.resolve);
-      if (!m) throw InputError("peelcd golden compare: --resolve: unknown resolve \"" + a.resolve + "\" (expected auto, gpu or host)");
-      scene.options.resolve = *m;
-    }
+    if (!a.resolve.empty())
+      scene.options.resolve =
+          parsed(a.resolve, parse_resolve, "peelcd golden compare: --resolve: unknown resolve", "auto, gpu or host");
     const std::vector<Object> objects = load_objects(scene);
     const oracle::Dump expected = oracle::read_dump(a.dir + "/" + name + "/expected");
     for (int run = 0; run < std::max(1, a.repeat); ++run) {
@@ -628,16 +621,13 @@ int run_sweep_command(const SweepArgs& a) {
         for (int views : a.views)
           for (double slope : mode == "paper" ? std::vector<double>{0.0} : a.slopes)
             for (const std::string& cull_name : a.culls) {
-              const auto cull = parse_cull(cull_name);
-              if (!cull)
-                throw InputError("peelcd sweep: --cull: unknown culling \"" + cull_name + "\" (expected contact or box)");
               SweepConfig c;
+              c.cull = parsed(cull_name, parse_cull, "peelcd sweep: --cull: unknown culling", "contact or box");
               c.resolution = res;
               c.ids = *ids;
               c.peel = mode == "full" ? PeelMode::full : PeelMode::alternate;
               c.slope = slope;
               c.views = views;
-              c.cull = *cull;
               configs.push_back(c);
             }
       }
