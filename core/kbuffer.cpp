@@ -3,7 +3,6 @@
 #include <algorithm>
 #include <cmath>
 #include <cstring>
-#include <thread>
 
 namespace peelcd {
 namespace {
@@ -110,66 +109,19 @@ KResolveResult resolve_kbuffer(const KBuffer& kb, const KResolveParams& p, std::
   return resolve_range(kb, p, 0, std::size_t(kb.resolution) * std::size_t(kb.resolution), pcs, scratch, layers);
 }
 
-KResolver::KResolver(unsigned threads) {
-  if (threads == 0) threads = std::max(1u, std::min(8u, std::thread::hardware_concurrency()));
-  lanes_.resize(threads);
-  for (unsigned i = 1; i < threads; ++i) workers_.emplace_back([this, i] { work(i); });
-}
-
-KResolver::~KResolver() {
-  {
-    std::lock_guard<std::mutex> lock(mutex_);
-    stop_ = true;
-  }
-  start_.notify_all();
-  for (std::thread& w : workers_) w.join();
-}
-
-void KResolver::run_lane(unsigned lane) {
-  const std::size_t texels = std::size_t(job_kb_.resolution) * std::size_t(job_kb_.resolution);
-  const std::size_t n = lanes_.size();
-  // Rows in contiguous blocks: lane i takes texels [i * texels / n, (i + 1) * texels / n).
-  Lane& l = lanes_[lane];
-  l.pcs.clear();
-  l.result = resolve_range(job_kb_, job_p_, lane * texels / n, (lane + 1) * texels / n, l.pcs, l.scratch, nullptr);
-}
-
-void KResolver::work(unsigned lane) {
-  std::uint64_t seen = 0;
-  for (;;) {
-    {
-      std::unique_lock<std::mutex> lock(mutex_);
-      start_.wait(lock, [&] { return stop_ || generation_ != seen; });
-      if (stop_) return;
-      seen = generation_;
-    }
-    run_lane(lane);
-    {
-      std::lock_guard<std::mutex> lock(mutex_);
-      ++done_;
-    }
-    done_cv_.notify_one();
-  }
-}
-
 KResolveResult KResolver::resolve(const KBuffer& kb, const KResolveParams& p, std::vector<IdPair>& pcs,
                                   std::vector<std::vector<std::uint32_t>>* layers) {
+  const std::size_t texels = std::size_t(kb.resolution) * std::size_t(kb.resolution);
   if (layers || lanes_.size() == 1)  // a capture grows the layer images as it goes: one lane
-    return resolve_range(kb, p, 0, std::size_t(kb.resolution) * std::size_t(kb.resolution), pcs, lanes_[0].scratch,
-                         layers);
-  {
-    std::lock_guard<std::mutex> lock(mutex_);
-    job_kb_ = kb;
-    job_p_ = p;
-    done_ = 0;
-    ++generation_;
-  }
-  start_.notify_all();
-  run_lane(0);
-  {
-    std::unique_lock<std::mutex> lock(mutex_);
-    done_cv_.wait(lock, [&] { return done_ == workers_.size(); });
-  }
+    return resolve_range(kb, p, 0, texels, pcs, lanes_[0].scratch, layers);
+  const std::size_t n = lanes_.size();
+  auto job = [&](unsigned lane) {
+    // Contiguous blocks of texels: lane i takes [i * texels / n, (i + 1) * texels / n).
+    Lane& l = lanes_[lane];
+    l.pcs.clear();
+    l.result = resolve_range(kb, p, lane * texels / n, (lane + 1) * texels / n, l.pcs, l.scratch, nullptr);
+  };
+  pool_.run(job);
   KResolveResult result;
   for (const Lane& l : lanes_) {
     result.max_layers = std::max(result.max_layers, l.result.max_layers);

@@ -6,10 +6,9 @@
 // compute shader, which rescans them once per layer (docs/performance.md).
 #include "core/id_map.h"
 
-#include <condition_variable>
+#include "core/worker_pool.h"
+
 #include <cstdint>
-#include <mutex>
-#include <thread>
 #include <vector>
 
 namespace peelcd {
@@ -50,17 +49,13 @@ KResolveResult resolve_kbuffer(const KBuffer& kb, const KResolveParams& p, std::
                                std::vector<KFragment>& scratch,
                                std::vector<std::vector<std::uint32_t>>* layers = nullptr);
 
-// resolve_kbuffer() split over threads by blocks of texels (the PCS come in a different order,
-// the same set). The threads live as long as the resolver; a resolve allocates nothing once the
-// PCS lists have grown. With `layers` (a capture) it runs on the calling thread only.
+// resolve_kbuffer() split over a WorkerPool's lanes by blocks of texels (the PCS come in a
+// different order, the same set). A resolve allocates nothing once the PCS lists have grown.
+// With `layers` (a capture) it runs on the calling thread only.
 class KResolver {
  public:
-  explicit KResolver(unsigned threads = 0);  // 0: the hardware's threads, at most 8
-  ~KResolver();
-  KResolver(const KResolver&) = delete;
-  KResolver& operator=(const KResolver&) = delete;
+  explicit KResolver(WorkerPool& pool) : pool_(pool), lanes_(pool.lanes()) {}
 
-  unsigned threads() const { return unsigned(lanes_.size()); }
   // Appends to `pcs` as resolve_kbuffer() does.
   KResolveResult resolve(const KBuffer& kb, const KResolveParams& p, std::vector<IdPair>& pcs,
                          std::vector<std::vector<std::uint32_t>>* layers = nullptr);
@@ -71,18 +66,8 @@ class KResolver {
     std::vector<KFragment> scratch;
     KResolveResult result;
   };
-  void work(unsigned lane);
-  void run_lane(unsigned lane);
-
-  std::vector<Lane> lanes_;  // lane 0 is the calling thread's
-  std::vector<std::thread> workers_;
-  std::mutex mutex_;
-  std::condition_variable start_, done_cv_;
-  std::uint64_t generation_ = 0;
-  std::size_t done_ = 0;
-  bool stop_ = false;
-  KBuffer job_kb_;
-  KResolveParams job_p_;
+  WorkerPool& pool_;
+  std::vector<Lane> lanes_;
 };
 
 }  // namespace peelcd

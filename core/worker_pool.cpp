@@ -1,0 +1,68 @@
+#include "core/worker_pool.h"
+
+#include <algorithm>
+
+namespace peelcd {
+
+WorkerPool::WorkerPool(unsigned lanes) {
+  if (lanes == 0) lanes = std::max(1u, std::min(8u, std::thread::hardware_concurrency()));
+  for (unsigned i = 1; i < lanes; ++i) workers_.emplace_back([this, i] { work(i); });
+}
+
+WorkerPool::~WorkerPool() {
+  {
+    std::lock_guard<std::mutex> lock(mutex_);
+    stop_ = true;
+  }
+  start_.notify_all();
+  for (std::thread& w : workers_) w.join();
+}
+
+void WorkerPool::call(unsigned lane) {
+  try {
+    job_(context_, lane);
+  } catch (...) {
+    std::lock_guard<std::mutex> lock(mutex_);
+    if (!error_) error_ = std::current_exception();
+  }
+}
+
+void WorkerPool::work(unsigned lane) {
+  std::uint64_t seen = 0;
+  for (;;) {
+    {
+      std::unique_lock<std::mutex> lock(mutex_);
+      start_.wait(lock, [&] { return stop_ || generation_ != seen; });
+      if (stop_) return;
+      seen = generation_;
+    }
+    call(lane);
+    {
+      std::lock_guard<std::mutex> lock(mutex_);
+      ++finished_;
+    }
+    done_.notify_one();
+  }
+}
+
+void WorkerPool::run_erased(Erased fn, void* context) {
+  {
+    std::lock_guard<std::mutex> lock(mutex_);
+    job_ = fn;
+    context_ = context;
+    finished_ = 0;
+    error_ = nullptr;
+    ++generation_;
+  }
+  start_.notify_all();
+  call(0);
+  std::exception_ptr error;
+  {
+    std::unique_lock<std::mutex> lock(mutex_);
+    done_.wait(lock, [&] { return finished_ == workers_.size(); });
+    error = error_;
+  }
+  if (error) std::rethrow_exception(error);
+}
+
+}  // namespace peelcd
