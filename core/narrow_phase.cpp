@@ -227,47 +227,21 @@ std::pair<Vec3, Vec3> intersection_segment(const TriangleCorners& a, const Trian
   return seg;
 }
 
-namespace {
-
-// Whether candidate `c` collides. A triangle lies in the box of its corners: disjoint boxes, no
-// contact (exact: comparisons of doubles; boxes that only touch overlap).
-bool collides(const Mesh& a, const Mesh& b, std::uint64_t c) {
-  const std::uint32_t ta = pair_a(c), tb = pair_b(c);
-  return triangle_bounds(a, ta).overlaps(triangle_bounds(b, tb)) && triangles_intersect(corners(a, ta), corners(b, tb));
-}
-
-void append_contact(const Mesh& a, const Mesh& b, std::uint64_t c, std::vector<Contact>& out) {
-  const std::uint32_t ta = pair_a(c), tb = pair_b(c);
-  const TriangleCorners ca = corners(a, ta), cb = corners(b, tb);
-  Contact contact;
-  contact.tri_a = ta;
-  contact.tri_b = tb;
-  std::tie(contact.p, contact.q) = intersection_segment(ca, cb);
-  contact.kind = classify_contact(ca, cb);
-  out.push_back(contact);
-}
-
-}  // namespace
-
 void narrow_phase(const Mesh& a, const Mesh& b, const std::vector<std::uint64_t>& candidates,
                   std::vector<Contact>& out) {
-  for (std::uint64_t c : candidates)
-    if (collides(a, b, c)) append_contact(a, b, c, out);
-}
-
-void narrow_phase(const Mesh& a, const Mesh& b, const std::vector<std::uint64_t>& candidates,
-                  std::vector<Contact>& out, WorkerPool& pool, std::vector<std::uint8_t>& hits) {
-  // Below a few hundred candidates waking the threads costs more than the tests.
-  if (pool.lanes() == 1 || candidates.size() < 512) return narrow_phase(a, b, candidates, out);
-  hits.resize(candidates.size());
-  const std::size_t n = candidates.size(), lanes = pool.lanes();
-  auto job = [&](unsigned lane) {
-    for (std::size_t i = lane * n / lanes, end = (lane + 1) * n / lanes; i < end; ++i)
-      hits[i] = collides(a, b, candidates[i]);
-  };
-  pool.run(job);
-  for (std::size_t i = 0; i < n; ++i)
-    if (hits[i]) append_contact(a, b, candidates[i], out);
+  for (std::uint64_t c : candidates) {
+    const std::uint32_t ta = pair_a(c), tb = pair_b(c);
+    const TriangleCorners ca = corners(a, ta), cb = corners(b, tb);
+    // A triangle lies in the box of its corners: disjoint boxes, no contact (exact: comparisons
+    // of doubles; boxes that only touch overlap).
+    if (!triangle_bounds(a, ta).overlaps(triangle_bounds(b, tb)) || !triangles_intersect(ca, cb)) continue;
+    Contact contact;
+    contact.tri_a = ta;
+    contact.tri_b = tb;
+    std::tie(contact.p, contact.q) = intersection_segment(ca, cb);
+    contact.kind = classify_contact(ca, cb);
+    out.push_back(contact);
+  }
 }
 
 }  // namespace peelcd

@@ -4,7 +4,6 @@
 // triangle order or rounding. Degenerate triangles (collinear or repeated vertices) are tested
 // as the segment or point they are. The intersection segment is constructed in double.
 #include "core/mesh.h"
-#include "core/worker_pool.h"
 
 #include <array>
 #include <vector>
@@ -46,10 +45,5 @@ std::pair<Vec3, Vec3> intersection_segment(const TriangleCorners& a, const Trian
 // the colliding ones to `out` in candidate order.
 void narrow_phase(const Mesh& a, const Mesh& b, const std::vector<std::uint64_t>& candidates,
                   std::vector<Contact>& out);
-// The same, the same output: the yes/no tests (exact predicates only) split over `pool`'s lanes
-// by blocks of candidates, then the colliding pairs' segments and kinds (exact constructions)
-// on the calling thread. `hits` is scratch.
-void narrow_phase(const Mesh& a, const Mesh& b, const std::vector<std::uint64_t>& candidates,
-                  std::vector<Contact>& out, WorkerPool& pool, std::vector<std::uint8_t>& hits);
 
 }  // namespace peelcd

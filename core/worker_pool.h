@@ -1,7 +1,7 @@
 #pragma once
 // A fixed set of threads that run one job at a time, split into lanes: the host resolve of the
-// k-buffer (core/kbuffer.h) and the narrow phase's exact tests (core/narrow_phase.h) share one
-// per gl::Pipeline. Threads live as long as the pool; running a job allocates nothing.
+// k-buffer (core/kbuffer.h) runs on one per gl::Pipeline. Threads live as long as the pool;
+// running a job allocates nothing.
 #include <condition_variable>
 #include <cstdint>
 #include <exception>

@@ -106,9 +106,8 @@ struct Pipeline::Impl {
   ContactCull cull;
   // The host resolve (Resolve::host): triangle ID by draw order per slot, and the threads.
   std::vector<std::uint32_t> ids_by_order[2];
-  WorkerPool pool;             // the host resolve's and the narrow phase's threads
+  WorkerPool pool;  // the host resolve's threads
   KResolver resolver{pool};
-  std::vector<std::uint8_t> hits;  // the narrow phase's per-candidate results
   bool software_renderer = false;  // GL runs on the CPU: Resolve::automatic resolves on the host
   std::vector<Aabb> boxes;
   std::vector<std::pair<std::size_t, std::size_t>> object_pairs;
@@ -925,7 +924,7 @@ void Pipeline::detect(const std::vector<Object>& objects, const DetectOptions& o
     s.candidates.clear();
     expand_pcs(all_pcs, s.map_a, s.map_b, s.candidates);
     r.candidates = s.candidates.size();
-    narrow_phase(ma, mb, s.candidates, r.colliding, s.pool, s.hits);
+    narrow_phase(ma, mb, s.candidates, r.colliding);
     out.timings.cpu += ms_since(t0);
   }
   out.pairs.resize(used);
