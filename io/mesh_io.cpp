@@ -8,6 +8,7 @@
 
 #include <cctype>
 #include <filesystem>
+#include <cstdlib>
 #include <fstream>
 #include <iterator>
 #include <functional>
@@ -59,7 +60,9 @@ void append_node(const aiScene* scene, const aiNode* node, const aiMatrix4x4& pa
 
 // Checks the header of an ASCII or binary PLY file line by line before assimp sees it: assimp
 // 5.2's PLY reader loops forever on some malformed headers (an unknown property type, found by
-// fuzzing). Returns an empty string if the header is well-formed, else the problem.
+// fuzzing), and on an ASCII body with a value that is not a number (`3 #include0 2 3` as a face
+// line, found by fuzzing: assimp spins in its reader). Returns an empty string if the file is
+// well-formed so far, else the problem.
 std::string ply_header_problem(const std::string& path) {
   std::ifstream in(path, std::ios::binary);
   std::string line;
@@ -69,18 +72,30 @@ std::string ply_header_problem(const std::string& path) {
   static const std::set<std::string> types = {"char",  "uchar", "short",  "ushort",  "int",     "uint",
                                               "float", "double", "int8",  "uint8",   "int16",   "uint16",
                                               "int32", "uint32", "float32", "float64"};
+  bool ascii = false;
   for (int n = 0; n < 10000 && std::getline(in, line); ++n) {
     if (!line.empty() && line.back() == '\r') line.pop_back();
     std::istringstream words(line);
     std::string w;
     words >> w;
-    if (w == "end_header") return "";
+    if (w == "end_header") {
+      if (!ascii) return "";
+      // An ASCII body holds numbers only (comments belong to the header).
+      for (std::string value; in >> value;) {
+        char* end = nullptr;
+        std::strtod(value.c_str(), &end);
+        if (end != value.c_str() + value.size())
+          return "malformed PLY body: '" + value.substr(0, 40) + "' is not a number";
+      }
+      return "";
+    }
     if (w == "comment" || w == "obj_info" || w.empty()) continue;
     if (w == "format") {
       std::string kind, version;
       if (!(words >> kind >> version) ||
           (kind != "ascii" && kind != "binary_little_endian" && kind != "binary_big_endian"))
         return "malformed PLY header: bad format line '" + line + "'";
+      ascii = kind == "ascii";
     } else if (w == "element") {
       std::string name;
       long long count = -1;

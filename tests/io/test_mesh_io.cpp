@@ -123,6 +123,12 @@ TEST_CASE("bad mesh files give an error that names the file and the problem", "[
   require_input_error(write_temp("bad_type.ply", "ply\nformat ascii 1.0\nelement vertex 1\nproperty flot x\nend_header\n0\n"),
                       "malformed PLY header");
   require_input_error(write_temp("zero_faces.off", "OFF\n3 0 0\n0 0 0\n1 0 0\n0 1 0\n"), "");
+  // Found by fuzzing: assimp's reader spins on a non-numeric value in an ASCII PLY body.
+  require_input_error(write_temp("word_in_face.ply",
+                                 "ply\nformat ascii 1.0\nelement vertex 4\nproperty float x\nproperty float y\n"
+                                 "property float z\nelement face 2\nproperty list uchar int vertex_indices\n"
+                                 "end_header\n0 5 0\n1 0 0\n0 1 0\n0 0 1\n3 0 2 1\n3 #include0 2 3\n"),
+                      "'#include0' is not a number");
 }
 
 TEST_CASE("inputs that once crashed the loader (fuzzing regressions) load or fail cleanly", "[io]") {
