@@ -52,13 +52,6 @@ struct DetectArgs {
   std::string backend = "osmesa";
 };
 
-// --peeler's value, or an InputError naming it.
-Peeler peeler_option(const std::string& text) {
-  const auto m = parse_peeler(text);
-  if (!m) throw InputError("peelcd: --peeler: unknown peeler \"" + text + "\" (expected abuffer or multipass)");
-  return *m;
-}
-
 // `text` parsed by `parse` (returning std::optional), or an InputError: `unknown` "text"
 // (expected `expected`).
 template <class Parse>
@@ -66,6 +59,11 @@ auto parsed(const std::string& text, Parse parse, const std::string& unknown, co
   const auto m = parse(text);
   if (!m) throw InputError(unknown + " \"" + text + "\" (expected " + expected + ")");
   return *m;
+}
+
+// --peeler's value, or an InputError naming it.
+Peeler peeler_option(const std::string& text) {
+  return parsed(text, parse_peeler, "peelcd: --peeler: unknown peeler", "abuffer or multipass");
 }
 
 // Command-line values override the scene file's.

@@ -87,39 +87,35 @@ void mark(const std::vector<Entry>& entries, const Grid& g, std::vector<std::uin
     });
 }
 
-// Keeps the entries (and their boxes, and indices) touching a cell of `other`; returns the box
-// of the kept triangles.
+// Keeps the entries (and their boxes) for which keep(entry, box) holds, in order.
+template <class Keep>
+void compact(std::vector<Entry>& entries, std::vector<Aabb>& boxes, Keep&& keep) {
+  std::size_t out = 0;
+  for (std::size_t i = 0; i < entries.size(); ++i) {
+    if (!keep(entries[i], boxes[i])) continue;
+    entries[out] = entries[i];
+    boxes[out] = boxes[i];
+    ++out;
+  }
+  entries.resize(out);
+  boxes.resize(out);
+}
+
+// Keeps the entries touching a cell of `other`; returns the box of the kept triangles.
 Aabb keep_touching(std::vector<Entry>& entries, std::vector<Aabb>& boxes, const Grid& g,
                    const std::vector<std::uint64_t>& other) {
   Aabb kept_box;
-  std::size_t out = 0;
-  for (std::size_t i = 0; i < entries.size(); ++i) {
-    const bool touches = for_each_row(entries[i], g, [&](std::size_t first, std::size_t count) {
+  compact(entries, boxes, [&](const Entry& e, const Aabb& b) {
+    const bool touches = for_each_row(e, g, [&](std::size_t first, std::size_t count) {
       return any_bit(other, first, count);
     });
-    if (!touches) continue;
-    kept_box.extend(boxes[i].lo);
-    kept_box.extend(boxes[i].hi);
-    entries[out] = entries[i];
-    boxes[out] = boxes[i];
-    ++out;
-  }
-  entries.resize(out);
-  boxes.resize(out);
+    if (touches) {
+      kept_box.extend(b.lo);
+      kept_box.extend(b.hi);
+    }
+    return touches;
+  });
   return kept_box;
-}
-
-// Drops the entries whose box does not touch `box` (closed).
-void keep_in(std::vector<Entry>& entries, std::vector<Aabb>& boxes, const Aabb& box) {
-  std::size_t out = 0;
-  for (std::size_t i = 0; i < entries.size(); ++i) {
-    if (!boxes[i].overlaps(box)) continue;
-    entries[out] = entries[i];
-    boxes[out] = boxes[i];
-    ++out;
-  }
-  entries.resize(out);
-  boxes.resize(out);
 }
 
 // The triangles of `m` whose boxes touch `roi` (closed). Each vertex gets an outcode, one bit per
@@ -184,8 +180,9 @@ void cull_to_contact_region(const Mesh& a, const Mesh& b, const Aabb& roi, Conta
       out.entries_b.clear();
       break;
     }
-    keep_in(out.entries_a, out.boxes_a, box);
-    keep_in(out.entries_b, out.boxes_b, box);
+    const auto in_box = [&](const Entry&, const Aabb& b) { return b.overlaps(box); };
+    compact(out.entries_a, out.boxes_a, in_box);
+    compact(out.entries_b, out.boxes_b, in_box);
     if (out.entries_a.size() + out.entries_b.size() == before) break;  // nothing more to drop
   }
   if (out.entries_a.empty() || out.entries_b.empty()) return;  // no contact possible
