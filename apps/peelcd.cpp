@@ -458,6 +458,9 @@ int run_bench(const BenchArgs& a) {
   DetectOptions three_alt = base;
   three_alt.peel = PeelMode::alternate;
   configs.push_back({"peelcd 3 views, alternate peeling", "3v alt", three_alt});
+  DetectOptions two = base;
+  two.views = 2;
+  configs.push_back({"peelcd 2 views, full peeling", "2v full", two});
   DetectOptions one = base;
   one.views = 1;
   configs.push_back({"peelcd 1 view, full peeling", "1v full", one});
@@ -474,17 +477,18 @@ int run_bench(const BenchArgs& a) {
   configs.push_back({"peelcd paper config, multi-pass", "paper mp", paper_multi});
 
   // The floors: one bare draw per view of every triangle touching the overlap box (the paper's
-  // ROI), and of the triangles contact culling keeps (what the default configurations draw).
-  DetectOptions floor3 = base, floor1 = one;
-  floor3.cull = floor1.cull = Cull::box;
-  DetectOptions cfloor3 = base, cfloor1 = one;
-  cfloor3.cull = cfloor1.cull = Cull::contact;
-  const std::size_t methods = configs.size() + 6;  // + CGAL, FCL, four floors
+  // ROI), and of the triangles contact culling keeps (what the default configurations draw);
+  // drawn along the three views, the floor of k views is the time of the first k.
+  DetectOptions floor3 = base, cfloor3 = base;
+  floor3.cull = Cull::box;
+  cfloor3.cull = Cull::contact;
+  const std::size_t methods = configs.size() + 8;  // + CGAL, FCL, six floors
   std::vector<std::string> names;
   for (const Config& c : configs) names.push_back(c.name);
   names.insert(names.end(), {"CGAL box_intersection_d + exact", "FCL 0.7 AABB tree built per frame",
-                             "floor: 1 bare draw x 3 views", "floor: 1 bare draw x 1 view",
-                             "floor: culled, 1 draw x 3 views", "floor: culled, 1 draw x 1 view"});
+                             "floor: 1 bare draw x 3 views", "floor: 1 bare draw x 2 views",
+                             "floor: 1 bare draw x 1 view", "floor: culled, 1 draw x 3 views",
+                             "floor: culled, 1 draw x 2 views", "floor: culled, 1 draw x 1 view"});
   std::vector<FrameResult> results(configs.size());
   std::vector<std::vector<double>> ms(methods);
   std::vector<Score> scores(methods);
@@ -521,10 +525,16 @@ int run_bench(const BenchArgs& a) {
       fs.false_contacts += fcl.per_pair[i].size() - common.size();
     }
     s[configs.size() + 1] = fs;
-    const DetectOptions* floors[4] = {&floor3, &floor1, &cfloor3, &cfloor1};
-    for (std::size_t i = 0; i < 4; ++i) {
-      t[configs.size() + 2 + i] = pipeline.floor_ms(obj, *floors[i]);
-      s[configs.size() + 2 + i] = Score{exact.pairs, 0, exact.pairs, 0};
+    const DetectOptions* floors[2] = {&floor3, &cfloor3};
+    for (std::size_t i = 0; i < 2; ++i) {
+      std::vector<double> per_view;
+      pipeline.floor_ms(obj, *floors[i], &per_view);
+      for (std::size_t k = 0; k < 3; ++k) {  // 3, 2, 1 views
+        double sum = 0.0;
+        for (std::size_t v = 0; v < 3 - k; ++v) sum += per_view[v];
+        t[configs.size() + 2 + 3 * i + k] = sum;
+        s[configs.size() + 2 + 3 * i + k] = Score{exact.pairs, 0, exact.pairs, 0};
+      }
     }
     for (std::size_t m = 0; m < methods; ++m) {
       ms[m].push_back(t[m]);
@@ -540,13 +550,13 @@ int run_bench(const BenchArgs& a) {
     }
     progress(f + 1, frames);
   }
-  const std::size_t cg = configs.size(), fc = cg + 1, fl = cg + 2, fl1 = cg + 3, cfl = cg + 4, cfl1 = cg + 5;
+  const std::size_t cg = configs.size(), fc = cg + 1, fl = cg + 2, cfl = cg + 5;
   // The floor of the paper's ROI with the same number of views as the configuration (the
   // issue's floor), and the floor of the triangles the configuration draws.
-  const auto floor_of = [&](std::size_t m) { return configs[m].opt.views == 3 ? fl : fl1; };
+  const auto floor_of = [&](std::size_t m) { return fl + std::size_t(3 - configs[m].opt.views); };
   const auto own_floor_of = [&](std::size_t m) {
     if (configs[m].opt.cull == Cull::box) return floor_of(m);
-    return configs[m].opt.views == 3 ? cfl : cfl1;
+    return cfl + std::size_t(3 - configs[m].opt.views);
   };
   std::vector<double> med(methods);
   for (std::size_t m = 0; m < methods; ++m) med[m] = median(ms[m]);
@@ -574,7 +584,8 @@ int run_bench(const BenchArgs& a) {
     std::printf("\nper phase, median ms (default = %s; paper mp = paper config, multi-pass):\n%-7s",
                 names[0].c_str(), "phase");
     for (const Config& c : configs) std::printf(" %9s", c.column.c_str());
-    for (const char* peer : {"CGAL", "FCL", "floor x3", "floor x1", "cfloor x3", "cfloor x1"}) std::printf(" %9s", peer);
+    for (const char* peer : {"CGAL", "FCL", "floor x3", "floor x2", "floor x1", "cfloor x3", "cfloor x2", "cfloor x1"})
+      std::printf(" %9s", peer);
     std::printf(" %9s %9s %9s\n", "dflt/CGAL", "dflt/FCL", "dflt/floor");
     for (std::size_t p = 0; p < phase_ms.size(); ++p) {
       std::printf("(%c)    ", char('a' + p));
@@ -672,7 +683,7 @@ void add_frame_options(CLI::App* c, DetectArgs& d) {
   c->add_option("--res", d.res, "Forced N x N texture per ROI (default: share a 512^2 budget)")
       ->check(CLI::PositiveNumber);
   c->add_option("--ids", d.ids, "Triangle ID mode: ring (last vertex, whole one-ring; default), paper (last-vertex IDs, T(v) sets) or unique");
-  c->add_option("--peel", d.peel, "Peel mode: alternate (the paper's; default) or full (every surface)");
+  c->add_option("--peel", d.peel, "Peel mode: full (every surface; default) or alternate (the paper's)");
   c->add_option("--peeler", d.peeler, "How layers are made: abuffer (one draw into a per-texel k-buffer of fragments; default) "
                                       "or multipass (one draw per layer); the same layers either way");
   c->add_option("--cull", d.cull, "Triangles peeled per ROI: contact (only those sharing a grid cell of the ROI with the "
@@ -681,8 +692,8 @@ void add_frame_options(CLI::App* c, DetectArgs& d) {
                                         "llvmpipe, else gpu; default), gpu (a compute pass) or host (mapped, resolved on the CPU)");
   c->add_option("--slope", d.slope, "Slope-following epsilon, in texels (default 1; 0 = the paper's constant epsilon)")
       ->check(CLI::NonNegativeNumber);
-  c->add_option("--views", d.views, "Views fused per ROI: 3 (three orthogonal views; default) or 1")
-      ->check(CLI::IsMember({1, 3}));
+  c->add_option("--views", d.views, "Views fused per ROI: 3 (three orthogonal views; default), 2 (along d and u) or 1 (along d)")
+      ->check(CLI::IsMember({1, 2, 3}));
   c->add_option("--theta", d.theta, "View longitude, degrees");
   c->add_option("--phi", d.phi, "View latitude, degrees, in [-90, 90]")->check(CLI::Range(-90.0, 90.0));
   c->add_option("--epsilon", d.epsilon, "PCS depth threshold in world units (default: one texel)")
@@ -780,8 +791,8 @@ int main(int argc, char** argv) {
       ->delimiter(',')->capture_default_str();
   sweep->add_option("--slope", sw.slopes, "Slope-epsilon factors for the non-paper modes")->delimiter(',')
       ->check(CLI::NonNegativeNumber)->capture_default_str();
-  sweep->add_option("--views", sw.views, "Fused views per ROI: 1 and/or 3")->delimiter(',')
-      ->check(CLI::IsMember({1, 3}))->capture_default_str();
+  sweep->add_option("--views", sw.views, "Fused views per ROI: 1, 2 and/or 3")->delimiter(',')
+      ->check(CLI::IsMember({1, 2, 3}))->capture_default_str();
   sweep->add_option("--cull", sw.culls, "Culling: contact and/or box (see detect --cull)")->delimiter(',')
       ->capture_default_str();
   sweep->add_option("--theta-step", sw.theta_step, "Longitude step, degrees")->check(CLI::Range(1.0, 360.0))

@@ -45,13 +45,11 @@ std::optional<Cull> parse_cull(const std::string& text) {
 std::size_t fused_view_frames(const DetectOptions& o, ViewFrame out[3]) {
   const ViewFrame f = view_frame(o.theta, o.phi);
   out[0] = f;
-  if (o.views == 1) return 1;
-  if (o.views == 3) {
-    out[1] = ViewFrame{f.v, f.d, f.u};
-    out[2] = ViewFrame{f.d, f.u, f.v};
-    return 3;
-  }
-  throw std::invalid_argument("peelcd: views must be 1 or 3");
+  if (o.views < 1 || o.views > 3) throw std::invalid_argument("peelcd: views must be 1, 2 or 3");
+  // Along d, then along u, then along v: each view is the previous one turned a quarter turn.
+  if (o.views >= 2) out[1] = ViewFrame{f.v, f.d, f.u};
+  if (o.views == 3) out[2] = ViewFrame{f.d, f.u, f.v};
+  return std::size_t(o.views);
 }
 
 std::vector<ViewFrame> fused_view_frames(const DetectOptions& o) {

@@ -58,15 +58,16 @@ struct DetectOptions {
   // dzdx_k| + |dzdy_k+1 - dzdy_k|), i.e. when the two surfaces' planes meet within `slope`
   // texels of the texel centre. 0 = the paper's constant epsilon.
   double slope = 1.0;
-  // Views fused per ROI: 1 = d(theta, phi) only; 3 = d and the frame's u and v axes (three
-  // orthogonal views); the PCS of all views are united before the narrow phase.
+  // Views fused per ROI: 1 = d(theta, phi) only; 2 = d and the frame's u axis; 3 = d, u and v
+  // (three orthogonal views); the PCS of all views are united before the narrow phase. Two
+  // views see every intersection segment at >= 1/sqrt(2) of its length, three at >= sqrt(2/3).
   int views = 3;
   Peeler peeler = Peeler::abuffer;  // chosen on peelcd bench (docs/performance.md)
   Cull cull = Cull::contact;         // chosen on peelcd bench and sweep (docs/performance.md)
   Resolve resolve = Resolve::automatic;  // single-pass peeler only
 };
 
-// The view frames a ROI is peeled along for `options` (1 or 3 of them).
+// The view frames a ROI is peeled along for `options` (1, 2 or 3 of them).
 std::vector<ViewFrame> fused_view_frames(const DetectOptions& options);
 // The same into `out` (room for 3); returns the count. Allocates nothing.
 std::size_t fused_view_frames(const DetectOptions& options, ViewFrame out[3]);

@@ -787,8 +787,8 @@ void Pipeline::detect(const std::vector<Object>& objects, const DetectOptions& o
   if (opt.resolution == 0 && (opt.budget <= 0 || opt.budget > s.max_texture))
     throw std::invalid_argument("peelcd::gl::Pipeline::detect(): budget " + std::to_string(opt.budget) +
                                 " is outside 1.." + std::to_string(s.max_texture));
-  if (opt.views != 1 && opt.views != 3)
-    throw std::invalid_argument("peelcd::gl::Pipeline::detect(): views must be 1 or 3");
+  if (opt.views < 1 || opt.views > 3)
+    throw std::invalid_argument("peelcd::gl::Pipeline::detect(): views must be 1, 2 or 3");
   if (!(opt.slope >= 0.0) || !std::isfinite(opt.slope))
     throw std::invalid_argument("peelcd::gl::Pipeline::detect(): slope must be finite and >= 0");
   if (!(opt.epsilon >= 0.0) || !std::isfinite(opt.epsilon))
@@ -934,8 +934,10 @@ void Pipeline::detect(const std::vector<Object>& objects, const DetectOptions& o
   out.timings.total = ms_since(t_total);
 }
 
-double Pipeline::floor_ms(const std::vector<Object>& objects, const DetectOptions& opt) {
+double Pipeline::floor_ms(const std::vector<Object>& objects, const DetectOptions& opt,
+                          std::vector<double>* per_view) {
   Impl& s = *impl_;
+  if (per_view) per_view->assign(std::size_t(std::max(opt.views, 0)), 0.0);
   std::vector<Aabb> boxes;
   for (const Object& o : objects) boxes.push_back(bounds(o.mesh));
   const auto pairs = overlapping_pairs(boxes);
@@ -981,7 +983,9 @@ double Pipeline::floor_ms(const std::vector<Object>& objects, const DetectOption
       s.gl.BindVertexArray(s.vao);
       for (int slot = 0; slot < 2; ++slot) s.draw(slot, s.u_model_floor);
       s.gl.Finish();
-      ms += ms_since(t0);
+      const double view_ms = ms_since(t0);
+      ms += view_ms;
+      if (per_view) (*per_view)[v] += view_ms;
       s.gl.BindFramebuffer(GL_FRAMEBUFFER, 0);
       s.check("the floor draw");
     }

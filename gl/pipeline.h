@@ -54,8 +54,10 @@ class Pipeline {
   // testing and a fragment shader that does nothing; returns the milliseconds of those draws
   // (to glFinish), excluding culling, gathering and upload. With options.cull == Cull::box, every
   // triangle touching the overlap box (the paper's ROI: the floor of the benchmark); with
-  // Cull::contact, the triangles culling keeps, in the shrunk box.
-  double floor_ms(const std::vector<Object>& objects, const DetectOptions& options);
+  // Cull::contact, the triangles culling keeps, in the shrunk box. With `per_view`, also the
+  // milliseconds of each view (summed over the ROIs; the first k of them are the floor of k views).
+  double floor_ms(const std::vector<Object>& objects, const DetectOptions& options,
+                  std::vector<double>* per_view = nullptr);
 
   // Debugging and goldens: while `sink` is set, detect() appends one CapturedView per ROI view
   // it peels (reading every layer back, which costs a full texture transfer per layer).

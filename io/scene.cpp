@@ -129,7 +129,7 @@ Scene parse_scene(const std::string& text, const std::string& path, const std::s
   }
   if (root.contains("views")) {
     const json& j = root["views"];
-    if (!j.is_number_integer() || (j.get<long long>() != 1 && j.get<long long>() != 3)) c.fail("views", "must be 1 or 3");
+    if (!j.is_number_integer() || j.get<long long>() < 1 || j.get<long long>() > 3) c.fail("views", "must be 1, 2 or 3");
     opt.views = j.get<int>();
   }
   if (root.contains("slope")) {

@@ -54,6 +54,8 @@ expect("unknown resolve option" 2 "--resolve: unknown resolve \"fancy\"" detect 
 file(WRITE ${WORK}/badcull.json "{\"objects\":[{\"mesh\":\"${FIXTURES}/meshes/bunny_3k.obj\"}],\"cull\":\"fancy\"}")
 expect("unknown culling in scene" 2 "cull: unknown culling \"fancy\"" detect ${WORK}/badcull.json)
 expect("box culling, host resolve" 0 "cull=box" detect ${scene} --res 64 --cull box --resolve host --check)
+expect("two fused views" 0 "views=2 .*exact reference: 228 pairs" detect ${scene} --res 64 --views 2 --check)
+expect("four fused views" 2 "--views" detect ${scene} --views 4)
 file(WRITE ${WORK}/nomesh.json "{\"objects\":[{\"mesh\":\"gone.obj\"},{\"mesh\":\"gone2.obj\"}]}")
 expect("missing mesh" 2 "gone.obj': no such file" detect ${WORK}/nomesh.json)
 expect("zero resolution" 2 "--res" detect ${scene} --res 0)

@@ -1,3 +1,4 @@
+#include "core/frame.h"
 #include "core/view.h"
 
 #include <catch2/catch.hpp>
@@ -25,6 +26,36 @@ TEST_CASE("view frames are right-handed and orthonormal for every direction, pol
       CHECK_THAT(f.u.dot(f.d), WithinAbs(0, 1e-12));
       CHECK((f.u.cross(f.v) - f.d).norm() < 1e-12);
     }
+}
+
+TEST_CASE("fused views look along d, then u, then v; two views are the first two of three", "[view]") {
+  for (const auto& [theta, phi] : std::vector<std::pair<double, double>>{{0, 0}, {45, 30}, {200, -90}}) {
+    DetectOptions o;
+    o.theta = theta;
+    o.phi = phi;
+    const ViewFrame f = view_frame(theta, phi);
+    std::vector<std::vector<ViewFrame>> by_count;
+    for (int views = 1; views <= 3; ++views) {
+      o.views = views;
+      by_count.push_back(fused_view_frames(o));
+      REQUIRE(by_count.back().size() == std::size_t(views));
+    }
+    const std::vector<ViewFrame>& three = by_count[2];
+    CHECK((three[0].d - f.d).norm() == 0.0);
+    CHECK((three[1].d - f.u).norm() == 0.0);
+    CHECK((three[2].d - f.v).norm() == 0.0);
+    for (const ViewFrame& g : three) CHECK((g.u.cross(g.v) - g.d).norm() < 1e-12);  // right-handed
+    for (int views = 1; views <= 2; ++views)
+      for (int k = 0; k < views; ++k) {
+        CHECK(by_count[views - 1][k].d == three[k].d);
+        CHECK(by_count[views - 1][k].u == three[k].u);
+      }
+  }
+  DetectOptions bad;
+  for (int views : {0, 4}) {
+    bad.views = views;
+    CHECK_THROWS_AS(fused_view_frames(bad), std::invalid_argument);
+  }
 }
 
 TEST_CASE("the ROI view maps every corner of the ROI box into the clip cube", "[view]") {

@@ -33,6 +33,13 @@ TEST_CASE("a scene with only objects takes every default", "[scene]") {
   CHECK(s.options.epsilon == 0.0);
 }
 
+TEST_CASE("a scene may fuse 1, 2 or 3 views", "[scene]") {
+  for (int views = 1; views <= 3; ++views) {
+    const std::string json = R"({"objects":[{"mesh":"a.obj"}],"views":)" + std::to_string(views) + "}";
+    CHECK(parse_scene(json, "s.json", "dir").options.views == views);
+  }
+}
+
 TEST_CASE("the default scene file parses to design.md's configuration", "[scene]") {
   const Scene s = load_scene(std::string(PEELCD_FIXTURES) + "/scenes/bunny_dragon.json");
   REQUIRE(s.objects.size() == 2);
@@ -63,6 +70,9 @@ TEST_CASE("bad scenes name the file, the key and the problem", "[scene]") {
   CHECK_THAT(error_of(R"({"objects":[{"mesh":"a.obj"}],"budget":0})"), Catch::Contains("budget: must be positive"));
   CHECK_THAT(error_of(R"({"objects":[{"mesh":"a.obj"}],"epsilon":-1})"), Catch::Contains("epsilon"));
   CHECK_THAT(error_of(R"({"objects":[{"mesh":"a.obj"}],"view":{"phi":100}})"), Catch::Contains("view.phi"));
+  CHECK_THAT(error_of(R"({"objects":[{"mesh":"a.obj"}],"views":4})"), Catch::Contains("views: must be 1, 2 or 3"));
+  CHECK_THAT(error_of(R"({"objects":[{"mesh":"a.obj"}],"views":0})"), Catch::Contains("views: must be 1, 2 or 3"));
+  CHECK_THAT(error_of(R"({"objects":[{"mesh":"a.obj"}],"views":2.5})"), Catch::Contains("views: must be 1, 2 or 3"));
   CHECK_THAT(error_of(R"({"objects":[{"mesh":"a.obj","transform":{"translate":[1,2]}}]})"),
              Catch::Contains("translate: must be an array of 3 numbers"));
   CHECK_THAT(error_of(R"({"objects":[{"mesh":"a.obj","transform":{"scale":0}}]})"), Catch::Contains("scale: must be positive"));
