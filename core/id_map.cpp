@@ -54,8 +54,58 @@ void IdMap::rebuild(const Mesh& mesh, IdMode mode) {
   offsets_.swap(scratch_);
 }
 
+namespace {
+int bits_for(std::uint32_t max_value) {
+  int bits = 0;
+  while (bits < 32 && (max_value >> bits) != 0u) ++bits;
+  return bits;
+}
+}  // namespace
+
+void sort_unique_pairs(std::vector<std::uint64_t>& keys, std::vector<std::uint64_t>& scratch) {
+  constexpr int kDigit = 11;
+  constexpr std::size_t kBuckets = std::size_t(1) << kDigit;
+  if (keys.size() < 512) {  // a radix pass costs a histogram of kBuckets: not worth it
+    std::sort(keys.begin(), keys.end());
+    keys.erase(std::unique(keys.begin(), keys.end()), keys.end());
+    return;
+  }
+  std::uint32_t max_a = 0, max_b = 0;
+  for (const std::uint64_t k : keys) max_a = std::max(max_a, pair_a(k)), max_b = std::max(max_b, pair_b(k));
+  // Compact keys: a << bits_b | b keeps the order of (a, b) in bits_a + bits_b bits.
+  const int bits_b = bits_for(max_b), bits = bits_for(max_a) + bits_b;
+  for (std::uint64_t& k : keys) k = (std::uint64_t(pair_a(k)) << bits_b) | pair_b(k);
+  scratch.resize(keys.size());
+  std::size_t count[kBuckets];
+  for (int shift = 0; shift < bits; shift += kDigit) {
+    std::fill(count, count + kBuckets, std::size_t(0));
+    for (const std::uint64_t k : keys) ++count[(k >> shift) & (kBuckets - 1)];
+    std::size_t sum = 0;
+    for (std::size_t& c : count) {
+      const std::size_t n = c;
+      c = sum;
+      sum += n;
+    }
+    for (const std::uint64_t k : keys) scratch[count[(k >> shift) & (kBuckets - 1)]++] = k;
+    keys.swap(scratch);
+  }
+  // Back to pack_pair keys, dropping repeats (now adjacent).
+  const std::uint64_t mask_b = bits_b == 0 ? 0 : (~std::uint64_t(0) >> (64 - bits_b));
+  std::size_t n = 0;
+  for (std::size_t i = 0; i < keys.size(); ++i)
+    if (i == 0 || keys[i] != keys[i - 1]) keys[n++] = keys[i];
+  keys.resize(n);
+  for (std::uint64_t& k : keys) k = pack_pair(std::uint32_t(k >> bits_b), std::uint32_t(k & mask_b));
+}
+
 void expand_pcs(const std::vector<IdPair>& pcs, const IdMap& a, const IdMap& b,
                 std::vector<std::uint64_t>& out) {
+  std::vector<std::uint64_t> scratch;
+  expand_pcs(pcs, a, b, out, scratch);
+}
+
+void expand_pcs(const std::vector<IdPair>& pcs, const IdMap& a, const IdMap& b, std::vector<std::uint64_t>& out,
+                std::vector<std::uint64_t>& scratch) {
   for (const IdPair& p : pcs) {
     if (p.a >= a.id_count() || p.b >= b.id_count())
       throw std::out_of_range("peelcd::expand_pcs(): triangle ID out of range");
@@ -63,8 +113,7 @@ void expand_pcs(const std::vector<IdPair>& pcs, const IdMap& a, const IdMap& b,
       for (const std::uint32_t* tb = b.begin(p.b); tb != b.end(p.b); ++tb)
         out.push_back(pack_pair(*ta, *tb));
   }
-  std::sort(out.begin(), out.end());
-  out.erase(std::unique(out.begin(), out.end()), out.end());
+  sort_unique_pairs(out, scratch);
 }
 
 }  // namespace peelcd

@@ -59,8 +59,16 @@ inline std::uint32_t pair_a(std::uint64_t p) { return std::uint32_t(p >> 32); }
 inline std::uint32_t pair_b(std::uint64_t p) { return std::uint32_t(p & 0xffffffffu); }
 
 // Expands ID pairs into candidate triangle pairs T(a) x T(b), appended to `out`, then sorts and
-// de-duplicates `out`. IDs out of range are an error (std::out_of_range).
+// de-duplicates `out`. IDs out of range are an error (std::out_of_range). `scratch` is reused
+// storage (no allocation once grown); the overload without it allocates its own.
+void expand_pcs(const std::vector<IdPair>& pcs, const IdMap& a, const IdMap& b, std::vector<std::uint64_t>& out,
+                std::vector<std::uint64_t>& scratch);
 void expand_pcs(const std::vector<IdPair>& pcs, const IdMap& a, const IdMap& b,
                 std::vector<std::uint64_t>& out);
+
+// Sorts `keys` (pack_pair values) ascending and drops repeats: a least-significant-digit radix
+// sort over only the bits the keys use (two passes for meshes below 2^11 triangles per side,
+// four below 2^22), std::sort for short lists. `scratch` is reused storage.
+void sort_unique_pairs(std::vector<std::uint64_t>& keys, std::vector<std::uint64_t>& scratch);
 
 }  // namespace peelcd

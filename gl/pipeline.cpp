@@ -102,7 +102,7 @@ struct Pipeline::Impl {
   std::size_t shape_uploads = 0;
   GLint u_model_peel = -1, u_model_ab = -1, u_model_floor = -1;
   std::vector<IdPair> pcs, pcs_all;
-  std::vector<std::uint64_t> candidates;
+  std::vector<std::uint64_t> candidates, candidate_scratch, pcs_keys;
   ContactCull cull;
   // The host resolve (Resolve::host): triangle ID by draw order per slot, and the threads.
   std::vector<std::uint32_t> ids_by_order[2];
@@ -915,14 +915,18 @@ void Pipeline::detect(const std::vector<Object>& objects, const DetectOptions& o
     if (r.triangles_drawn_a == 0 || r.triangles_drawn_b == 0) continue;
 
     t0 = Clock::now();
-    std::sort(all_pcs.begin(), all_pcs.end());
-    all_pcs.erase(std::unique(all_pcs.begin(), all_pcs.end()), all_pcs.end());
+    // Sorted and unique through the radix sort of packed pairs (the views repeat most PCS).
+    s.pcs_keys.clear();
+    for (const IdPair& p : all_pcs) s.pcs_keys.push_back(pack_pair(p.a, p.b));
+    sort_unique_pairs(s.pcs_keys, s.candidate_scratch);
+    all_pcs.clear();
+    for (const std::uint64_t k : s.pcs_keys) all_pcs.push_back(IdPair{pair_a(k), pair_b(k)});
     r.pcs_count = all_pcs.size();
     r.pcs.assign(all_pcs.begin(), all_pcs.end());
     s.map_a.rebuild(ma, opt.ids);
     s.map_b.rebuild(mb, opt.ids);
     s.candidates.clear();
-    expand_pcs(all_pcs, s.map_a, s.map_b, s.candidates);
+    expand_pcs(all_pcs, s.map_a, s.map_b, s.candidates, s.candidate_scratch);
     r.candidates = s.candidates.size();
     narrow_phase(ma, mb, s.candidates, r.colliding);
     out.timings.cpu += ms_since(t0);

@@ -2,6 +2,10 @@
 
 #include <catch2/catch.hpp>
 
+#include <algorithm>
+#include <random>
+#include <tuple>
+
 using namespace peelcd;
 
 // A fan around vertex 0 (the paper's Fig. 7): four triangles, three of which end in vertex 0.
@@ -47,6 +51,28 @@ TEST_CASE("PCS expand to de-duplicated candidate pairs T(a) x T(b)", "[ids]") {
   CHECK(out == expected);
   std::vector<std::uint64_t> bad;
   CHECK_THROWS_AS(expand_pcs({{9, 0}}, pa, ub, bad), std::out_of_range);
+}
+
+TEST_CASE("candidate pairs sort and de-duplicate like std::sort + std::unique, at every key width", "[ids]") {
+  std::mt19937_64 rng(7);
+  std::vector<std::uint64_t> scratch;
+  // (triangles of A, of B, keys): short lists (std::sort), 1 to 32 bits per side, many repeats.
+  for (const auto& [na, nb, n] : std::vector<std::tuple<std::uint64_t, std::uint64_t, std::size_t>>{
+           {1, 1, 5000}, {3, 1000, 100}, {574, 1858, 20000}, {1, 1u << 20, 3000}, {1u << 31, 7, 4000},
+           {std::uint64_t(1) << 32, std::uint64_t(1) << 32, 5000}, {50, 60, 100000}}) {
+    std::vector<std::uint64_t> keys;
+    for (std::size_t i = 0; i < n; ++i) keys.push_back(pack_pair(std::uint32_t(rng() % na), std::uint32_t(rng() % nb)));
+    for (std::size_t i = 0; i < n / 4; ++i) keys.push_back(keys[rng() % n]);  // repeats
+    std::vector<std::uint64_t> expected = keys;
+    std::sort(expected.begin(), expected.end());
+    expected.erase(std::unique(expected.begin(), expected.end()), expected.end());
+    sort_unique_pairs(keys, scratch);
+    INFO(na << " x " << nb << ", " << n << " keys");
+    CHECK(keys == expected);
+  }
+  std::vector<std::uint64_t> none;
+  sort_unique_pairs(none, scratch);
+  CHECK(none.empty());
 }
 
 TEST_CASE("ID modes parse from their names only", "[ids]") {
