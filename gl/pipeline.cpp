@@ -59,7 +59,7 @@ struct Pipeline::Impl {
   GLuint vao = 0, vbo[2] = {0, 0};
   std::size_t vbo_capacity[2] = {0, 0};  // in vertices
   GLuint layer_tex[2] = {0, 0}, run_tex = 0, depth_rb = 0, fbo[2] = {0, 0}, bare_fbo = 0;
-  int layer_size = 0;
+  int layer_size = 0, bare_size = 0;
   GLuint query = 0, pcs_buffer = 0;
   std::uint32_t pcs_capacity = 0;
   std::size_t passes_this_frame = 0, pcs_readbacks = 0;
@@ -219,6 +219,7 @@ struct Pipeline::Impl {
     gl.DeleteQueries(1, &query);
     gl.DeleteBuffers(1, &pcs_buffer);
     release_layers();
+    if (bare_fbo) gl.DeleteFramebuffers(1, &bare_fbo);
   }
 
   void check(const char* where) {
@@ -280,15 +281,20 @@ struct Pipeline::Impl {
   }
 
   // The k-buffer for `texels` texels with `view_slots` fragments each: 4 bytes of count per
-  // texel, 16 bytes per fragment. Grows only (steady state allocates nothing).
+  // texel, 16 bytes per fragment. Grows only (steady state allocates nothing), and always to
+  // the largest tile seen so far with the most slots asked for (within the largest storage
+  // block): the tile changes with the number of ROIs from frame to frame, and a small deep tile
+  // followed by a large one would otherwise grow it twice.
   void ensure_kbuffer(std::size_t texels, std::size_t view_slots) {
     if (texels > kbuffer_texels) {
       gl.NamedBufferData(count_buffer, GLsizeiptr(texels * 4), nullptr, GL_DYNAMIC_COPY);
       kbuffer_texels = texels;
       gl.TextureBuffer(count_tex, GL_R32UI, count_buffer);
     }
-    if (texels * view_slots > kbuffer_fragments) {
-      kbuffer_fragments = texels * view_slots;
+    const std::size_t most = std::min(max_storage_block / 16, fetchable());
+    const std::size_t wanted = std::max(texels * view_slots, std::min(kbuffer_texels * view_slots, most));
+    if (wanted > kbuffer_fragments) {
+      kbuffer_fragments = wanted;
       gl.NamedBufferData(fragment_buffer, GLsizeiptr(kbuffer_fragments * 16), nullptr, GL_DYNAMIC_COPY);
       gl.TextureBuffer(fragment_tex, GL_RGBA32UI, fragment_buffer);
     }
@@ -297,7 +303,6 @@ struct Pipeline::Impl {
   void release_layers() {
     if (!layer_size) return;
     gl.DeleteFramebuffers(2, fbo);
-    gl.DeleteFramebuffers(1, &bare_fbo);
     gl.DeleteTextures(2, layer_tex);
     gl.DeleteTextures(1, &run_tex);
     gl.DeleteRenderbuffers(1, &depth_rb);
@@ -324,15 +329,24 @@ struct Pipeline::Impl {
       if (gl.CheckNamedFramebufferStatus(fbo[i], GL_FRAMEBUFFER) != GL_FRAMEBUFFER_COMPLETE)
         throw GlError("peelcd::gl::Pipeline: layer framebuffer of " + std::to_string(n) + "^2 is incomplete");
     }
-    // The k-buffer draw writes storage buffers only: a framebuffer without attachments (no
-    // colour or depth tiles for a software rasterizer to load and store).
-    gl.CreateFramebuffers(1, &bare_fbo);
+    layer_size = n;
+    check("layer allocation");
+  }
+
+  // The k-buffer draw writes storage buffers only: a framebuffer without attachments (no
+  // colour or depth tiles for a software rasterizer to load and store). Only its size changes
+  // with the tile: the layer textures, which the k-buffer does not need, are left alone
+  // (reallocating them cost ~10 ms per change of tile size under llvmpipe, where the number of
+  // ROIs, hence the tile, changes from frame to frame).
+  void ensure_bare_fbo(int n) {
+    if (bare_fbo == 0) gl.CreateFramebuffers(1, &bare_fbo);
+    if (n == bare_size) return;
     gl.NamedFramebufferParameteri(bare_fbo, GL_FRAMEBUFFER_DEFAULT_WIDTH, n);
     gl.NamedFramebufferParameteri(bare_fbo, GL_FRAMEBUFFER_DEFAULT_HEIGHT, n);
     if (gl.CheckNamedFramebufferStatus(bare_fbo, GL_FRAMEBUFFER) != GL_FRAMEBUFFER_COMPLETE)
       throw GlError("peelcd::gl::Pipeline: attachment-less framebuffer of " + std::to_string(n) + "^2 is incomplete");
-    layer_size = n;
-    check("layer allocation");
+    bare_size = n;
+    check("framebuffer resize");
   }
 
   // Calls emit(t, k, local) for every corner k of every triangle t of `mesh` whose box touches
@@ -486,7 +500,7 @@ struct Pipeline::Impl {
     if (view_slots == 0 || std::max(vbo_corners(0), vbo_corners(1)) > fetchable())
       return peel(view, epsilon_world, opt, first_slot, r, t);
     const auto t_gpu = Clock::now();
-    ensure_layers(n);
+    ensure_bare_fbo(n);
     ensure_kbuffer(texels, view_slots);
     const GLuint zero = 0;
     gl.ClearNamedBufferSubData(count_buffer, GL_R32UI, 0, GLsizeiptr(texels * 4), GL_RED_INTEGER, GL_UNSIGNED_INT,
@@ -557,6 +571,7 @@ struct Pipeline::Impl {
       captured->slope = float(opt.slope);
       const GLuint zero[4] = {0, 0, 0, 0};
       gl.Uniform1i(u_rs_append, 0);
+      ensure_layers(n);
       gl.BindImageTexture(2, layer_tex[0], 0, GL_FALSE, 0, GL_WRITE_ONLY, GL_RGBA32UI);
       for (int k = 0; k < r.layers; ++k) {
         gl.ClearTexImage(layer_tex[0], 0, GL_RGBA_INTEGER, GL_UNSIGNED_INT, zero);

@@ -49,10 +49,11 @@ def bench_default_table(path):
         if name.startswith("floor"):
             continue
         rows.append("| %s | %s |" % (name, " | ".join(v + [""] * (7 - len(v)))))
-    rows.append("| floor: one bare draw of the overlap box's triangles, 3 views / 1 view | %s / %s | | | | | | |" % (
-        b["floor: 1 bare draw x 3 views"][0], b["floor: 1 bare draw x 1 view"][0]))
-    rows.append("| floor: one bare draw of the culled triangles, 3 views / 1 view | %s / %s | | | | | | |" % (
-        b["floor: culled, 1 draw x 3 views"][0], b["floor: culled, 1 draw x 1 view"][0]))
+    rows.append("| floor: one bare draw of the overlap box's triangles, 3 / 2 / 1 views | %s / %s / %s | | | | | | |" % (
+        b["floor: 1 bare draw x 3 views"][0], b["floor: 1 bare draw x 2 views"][0], b["floor: 1 bare draw x 1 view"][0]))
+    rows.append("| floor: one bare draw of the culled triangles, 3 / 2 / 1 views | %s / %s / %s | | | | | | |" % (
+        b["floor: culled, 1 draw x 3 views"][0], b["floor: culled, 1 draw x 2 views"][0],
+        b["floor: culled, 1 draw x 1 view"][0]))
     return "\n".join(rows)
 
 
@@ -85,14 +86,14 @@ def peeler_table(paths):
 
 
 def phase_table(path):
-    """Per phase of a dynamic scene: medians and the ratios of the default and of one view with
-    full peeling against CGAL, FCL and the floor with the same number of views."""
+    """Per phase of a dynamic scene: medians and the ratios of the default (3 views), 2 views and
+    1 view with full peeling against CGAL, FCL and the floor with the same number of views."""
     lines = open(path).read().split("\n")
     start = next(i for i, l in enumerate(lines) if l.startswith("per phase"))
     head = lines[start + 1]  # "phase" in 7 characters, then one column per 10 (" %9s")
     cols = [head[i:i + 10].strip() for i in range(7, len(head), 10)]
-    rows = ["| phase | default ms | 1 view, full ms | CGAL ms | FCL ms | default x CGAL | x FCL | x floor "
-            "| 1 view, full x CGAL | x FCL | x floor |", "|" + "---|" * 11]
+    rows = ["| phase | CGAL ms | FCL ms | default ms | x CGAL | x FCL | x floor | 2 views ms | x CGAL | x FCL "
+            "| x floor | 1 view ms | x CGAL | x FCL | x floor |", "|" + "---|" * 15]
     for line in lines[start + 2:]:
         if not line.startswith("("):
             continue
@@ -100,11 +101,13 @@ def phase_table(path):
         if parts[1:3] == ["no", "frames"]:
             continue
         v = dict(zip(cols, map(float, parts[1:])))
-        d, f, cg, fc = v["default"], v["1v full"], v["CGAL"], v["FCL"]
-        f3, f1 = v["floor x3"], v["floor x1"]
+        cg, fc = v["CGAL"], v["FCL"]
         ratio = lambda a, b: "%.2f" % (a / b) if b > 0 else "-"
-        rows.append("| %s | %.2f | %.2f | %.2f | %.2f | %s | %s | %s | %s | %s | %s |" % (
-            parts[0], d, f, cg, fc, ratio(d, cg), ratio(d, fc), ratio(d, f3), ratio(f, cg), ratio(f, fc), ratio(f, f1)))
+        cells = [parts[0], "%.2f" % cg, "%.2f" % fc]
+        for config, floor in (("default", "floor x3"), ("2v full", "floor x2"), ("1v full", "floor x1")):
+            t = v[config]
+            cells += ["%.2f" % t, ratio(t, cg), ratio(t, fc), ratio(t, v[floor])]
+        rows.append("| " + " | ".join(cells) + " |")
     return "\n".join(rows)
 
 
@@ -113,16 +116,20 @@ def targets_text(path):
     b = bench_methods(path)
     d, f = b["peelcd default (3 views)"], b["peelcd 1 view, full peeling"]
     h = b["peelcd default, half the resolution"]
+    t = b["peelcd 2 views, full peeling"]
     cg, fc = b["CGAL box_intersection_d + exact"][0], b["FCL 0.7 AABB tree built per frame"][0]
     return ("In this run the default (three views, full peeling, %s ms, %s miss) takes %sx CGAL (%s ms),\n"
             "%sx FCL (%s ms) and %sx the floor (%s ms; %sx the floor of the triangles it draws, %s ms);\n"
             "one view with full peeling (%s ms, %s miss) takes %sx CGAL, %sx FCL and %sx the floor\n"
-            "(%s ms; %sx its own, %s ms); the default at half the tile side (128²: %s ms, %s miss) takes\n"
-            "%sx CGAL, %sx FCL and %sx the floor." % (
+            "(%s ms; %sx its own, %s ms); two views with full peeling (%s ms, %s miss) take %sx CGAL,\n"
+            "%sx FCL and %sx the floor (%s ms; %sx its own, %s ms); the default at half the tile side\n"
+            "(128²: %s ms, %s miss) takes %sx CGAL, %sx FCL and %sx the floor." % (
                 d[0], d[1], d[3], cg, d[4], fc, d[5], b["floor: 1 bare draw x 3 views"][0], d[6],
                 b["floor: culled, 1 draw x 3 views"][0],
                 f[0], f[1], f[3], f[4], f[5], b["floor: 1 bare draw x 1 view"][0], f[6],
-                b["floor: culled, 1 draw x 1 view"][0], h[0], h[1], h[3], h[4], h[5]))
+                b["floor: culled, 1 draw x 1 view"][0],
+                t[0], t[1], t[3], t[4], t[5], b["floor: 1 bare draw x 2 views"][0], t[6],
+                b["floor: culled, 1 draw x 2 views"][0], h[0], h[1], h[3], h[4], h[5]))
 
 
 def main():
