@@ -43,7 +43,7 @@ struct DetectArgs {
   int res = 0;  // 0 = not given
   std::string ids, peel, peeler, cull, resolve;
   double slope = NAN;
-  double theta = NAN, phi = NAN, epsilon = NAN;
+  double theta = NAN, phi = NAN, epsilon = NAN, edge_texels = NAN;
   std::string json_out;
   int repeat = 1;
   int views = 0;  // 0 = not given
@@ -82,6 +82,7 @@ DetectOptions merged_options(const Scene& scene, const DetectArgs& a) {
   if (!std::isnan(a.theta)) o.theta = a.theta;
   if (!std::isnan(a.phi)) o.phi = a.phi;
   if (!std::isnan(a.epsilon)) o.epsilon = a.epsilon;
+  if (!std::isnan(a.edge_texels)) o.edge_texels = a.edge_texels;
   return o;
 }
 
@@ -705,6 +706,10 @@ void add_frame_options(CLI::App* c, DetectArgs& d) {
   c->add_option("--phi", d.phi, "View latitude, degrees, in [-90, 90]")->check(CLI::Range(-90.0, 90.0));
   c->add_option("--epsilon", d.epsilon, "PCS depth threshold in world units (default: one texel)")
       ->check(CLI::PositiveNumber);
+  c->add_option("--edge-texels", d.edge_texels,
+                "Sharing the budget with contact culling, a ROI's tile is at most K texels per median edge of its "
+                "triangles across the culled region (default 12; 0 = always the budget's share)")
+      ->check(CLI::NonNegativeNumber);
   c->add_option("--backend", d.backend, "GL backend: osmesa (software reference) or egl (GPU, or Mesa without one)")
       ->capture_default_str();
 }

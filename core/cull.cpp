@@ -2,6 +2,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <utility>
 
 namespace peelcd {
 namespace {
@@ -147,6 +148,7 @@ void cull_to_contact_region(const Mesh& a, const Mesh& b, const Aabb& roi, Conta
   out.kept_a.clear();
   out.kept_b.clear();
   out.box = Aabb{};
+  out.median_edge = 0.0;
   if (roi.empty()) return;
   gather(a, roi, out.outcodes, out.entries_a, out.boxes_a);
   if (!out.entries_a.empty()) gather(b, roi, out.outcodes, out.entries_b, out.boxes_b);
@@ -191,6 +193,18 @@ void cull_to_contact_region(const Mesh& a, const Mesh& b, const Aabb& roi, Conta
   for (const Entry& e : out.entries_b) out.kept_b.push_back(e.tri);
   out.stats.kept_a = out.kept_a.size();
   out.stats.kept_b = out.kept_b.size();
+  // The size of the contact's features, for edge_tile_resolution(): each kept triangle's mean
+  // edge, the median over both objects (the finer mesh, having more triangles here, weighs more).
+  out.edges.clear();
+  for (const auto& [m, kept] : {std::pair{&a, &out.kept_a}, std::pair{&b, &out.kept_b}})
+    for (const std::uint32_t t : *kept) {
+      const Vec3 &p = m->vertices[m->triangles[t][0]], &q = m->vertices[m->triangles[t][1]],
+                 &r = m->vertices[m->triangles[t][2]];
+      out.edges.push_back(((p - q).norm() + (q - r).norm() + (r - p).norm()) / 3.0);
+    }
+  const auto mid = out.edges.begin() + std::ptrdiff_t(out.edges.size() / 2);
+  std::nth_element(out.edges.begin(), mid, out.edges.end());
+  out.median_edge = *mid;
 }
 
 }  // namespace peelcd

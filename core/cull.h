@@ -32,6 +32,7 @@ struct CullStats {
 struct ContactCull {
   std::vector<std::uint32_t> kept_a, kept_b;  // triangle indices kept, ascending
   Aabb box;                                   // the shrunk ROI; empty() when nothing is kept
+  double median_edge = 0.0;                   // median of the kept triangles' mean edge lengths
   CullStats stats;
 
   // Scratch.
@@ -43,6 +44,7 @@ struct ContactCull {
   std::vector<Aabb> boxes_a, boxes_b;  // each entry's triangle box, parallel to entries_*
   std::vector<std::uint64_t> cells_a, cells_b;  // occupancy bitsets
   std::vector<std::uint8_t> outcodes;           // per vertex of the mesh being gathered
+  std::vector<double> edges;
 };
 
 // Grid cells per round: about kCullCellsPerTriangle times the triangles still in play, at most
@@ -52,7 +54,7 @@ constexpr std::size_t kMaxCullCells = std::size_t(1) << 18;
 constexpr int kMaxCullRounds = 3;
 
 // Fills `out` with the triangles of `a` and `b` (world space) that may touch the other object
-// inside `roi`, and the shrunk ROI.
+// inside `roi`, the shrunk ROI and the kept triangles' median edge length.
 void cull_to_contact_region(const Mesh& a, const Mesh& b, const Aabb& roi, ContactCull& out);
 
 }  // namespace peelcd

@@ -3,6 +3,7 @@
 #include "core/view.h"
 
 #include <algorithm>
+#include <cmath>
 #include <stdexcept>
 
 namespace peelcd {
@@ -56,6 +57,15 @@ std::vector<ViewFrame> fused_view_frames(const DetectOptions& o) {
   ViewFrame f[3];
   const std::size_t n = fused_view_frames(o, f);
   return std::vector<ViewFrame>(f, f + n);
+}
+
+int edge_tile_resolution(int share, const Aabb& region, double median_edge, double edge_texels) {
+  if (!(edge_texels > 0.0) || !(median_edge > 0.0) || !std::isfinite(median_edge) || region.empty()) return share;
+  const Vec3 extent = region.hi - region.lo;
+  const double texels = std::ceil(edge_texels * extent.maxCoeff() / median_edge);
+  if (!(texels < double(share))) return share;  // also NaN-safe
+  const int n = std::max(16, int(std::ceil(texels / 16.0)) * 16);
+  return std::min(n, share);
 }
 
 int tile_resolution(int budget, std::size_t roi_count) {

@@ -65,6 +65,11 @@ struct DetectOptions {
   Peeler peeler = Peeler::abuffer;  // chosen on peelcd bench (docs/performance.md)
   Cull cull = Cull::contact;         // chosen on peelcd bench and sweep (docs/performance.md)
   Resolve resolve = Resolve::automatic;  // single-pass peeler only
+  // Sharing the budget (resolution == 0) with Cull::contact, a ROI's tile is at most the side
+  // that gives the median edge of its kept triangles `edge_texels` texels
+  // (edge_tile_resolution()): a contact between large triangles needs fewer texels than its
+  // share of the budget. 0 = always the share. Chosen on docs/performance.md's measurements.
+  double edge_texels = 12.0;
 };
 
 // The view frames a ROI is peeled along for `options` (1, 2 or 3 of them).
@@ -76,6 +81,12 @@ std::size_t fused_view_frames(const DetectOptions& options, ViewFrame out[3]);
 // power-of-two fraction of `budget` such that the tiles fit (1 ROI: budget; 2-4: budget/2; ...),
 // never below 16.
 int tile_resolution(int budget, std::size_t roi_count);
+
+// The tile side for a ROI whose region (the culled box) is `region` and whose triangles' median
+// edge is `median_edge`: `edge_texels` texels per median edge across the region's longest side,
+// rounded up to a multiple of 16, at least 16, at most `share` (the budget's tile). `share`
+// itself when edge_texels is 0 or the edge is not positive and finite.
+int edge_tile_resolution(int share, const Aabb& region, double median_edge, double edge_texels);
 
 struct PairResult {
   std::size_t object_a = 0, object_b = 0;  // indices into the frame's objects, a < b

@@ -808,6 +808,8 @@ void Pipeline::detect(const std::vector<Object>& objects, const DetectOptions& o
     throw std::invalid_argument("peelcd::gl::Pipeline::detect(): slope must be finite and >= 0");
   if (!(opt.epsilon >= 0.0) || !std::isfinite(opt.epsilon))
     throw std::invalid_argument("peelcd::gl::Pipeline::detect(): epsilon must be finite and >= 0 (0 = one texel)");
+  if (!(opt.edge_texels >= 0.0) || !std::isfinite(opt.edge_texels))
+    throw std::invalid_argument("peelcd::gl::Pipeline::detect(): edge_texels must be finite and >= 0 (0 = the budget's share)");
 
   // A layer texel stores object << 31 | ID + 1 (shaders/peel.frag): IDs must stay below 2^31 - 1.
   for (const Object& o : objects)
@@ -870,11 +872,12 @@ void Pipeline::detect(const std::vector<Object>& objects, const DetectOptions& o
       if (r.region.empty()) continue;  // no triangle of one object near the other: no contact
       only_a = &s.cull.kept_a;
       only_b = &s.cull.kept_b;
+      if (opt.resolution == 0) r.resolution = edge_tile_resolution(n, r.region, s.cull.median_edge, opt.edge_texels);
     }
     std::vector<IdPair>& all_pcs = s.pcs_all;
     all_pcs.clear();
     for (std::size_t v = 0; v < frame_count; ++v) {
-      const RoiView view = make_padded_roi_view(r.region, boxes[ia], boxes[ib], frames[v], n);
+      const RoiView view = make_padded_roi_view(r.region, boxes[ia], boxes[ib], frames[v], r.resolution);
       if (v == 0) r.epsilon = opt.epsilon > 0.0 ? opt.epsilon : view.texel();
 
       t0 = Clock::now();
@@ -969,21 +972,23 @@ double Pipeline::floor_ms(const std::vector<Object>& objects, const DetectOption
   for (const auto& [ia, ib] : pairs) {
     Aabb roi = intersection(boxes[ia], boxes[ib]);
     const std::vector<std::uint32_t>*only_a = nullptr, *only_b = nullptr;
-    if (opt.cull == Cull::contact) {  // the triangles detect() would draw (culling not timed)
+    int tile = n;
+    if (opt.cull == Cull::contact) {  // the triangles and tile detect() would draw (culling not timed)
       cull_to_contact_region(objects[ia].mesh, objects[ib].mesh, roi, s.cull);
       if (s.cull.box.empty()) continue;
       roi = s.cull.box;
       only_a = &s.cull.kept_a;
       only_b = &s.cull.kept_b;
+      if (opt.resolution == 0) tile = edge_tile_resolution(n, roi, s.cull.median_edge, opt.edge_texels);
     }
     for (std::size_t v = 0; v < frame_count; ++v) {
-      const RoiView view = make_padded_roi_view(roi, boxes[ia], boxes[ib], frames[v], n);
+      const RoiView view = make_padded_roi_view(roi, boxes[ia], boxes[ib], frames[v], tile);
       s.prepare(objects[ia], view, only_a, opt.ids, 0);
       s.prepare(objects[ib], view, only_b, opt.ids, 1);
       if (s.corners(0) == 0 || s.corners(1) == 0) continue;
       s.upload(0);
       s.upload(1);
-      s.ensure_layers(n);
+      s.ensure_layers(tile);
       s.gl.Finish();
       const auto t0 = Clock::now();
       const std::array<float, 16> m = view.clip_from_local();
@@ -993,7 +998,7 @@ double Pipeline::floor_ms(const std::vector<Object>& objects, const DetectOption
       s.gl.Uniform3f(s.u_floor_lo, float(lo.x()), float(lo.y()), float(lo.z()));
       s.gl.Uniform3f(s.u_floor_hi, float(hi.x()), float(hi.y()), float(hi.z()));
       s.gl.BindFramebuffer(GL_FRAMEBUFFER, s.fbo[0]);
-      s.gl.Viewport(0, 0, n, n);
+      s.gl.Viewport(0, 0, tile, tile);
       s.gl.Enable(GL_DEPTH_TEST);
       s.gl.DepthFunc(GL_LESS);
       for (int i = 0; i < 6; ++i) s.gl.Enable(GL_CLIP_DISTANCE0 + i);

@@ -52,7 +52,7 @@ Scene parse_scene(const std::string& text, const std::string& path, const std::s
   } catch (const json::exception& e) {  // a syntax error, or a number out of range (fuzzing)
     throw InputError("peelcd::load_scene(): '" + path + "': malformed JSON: " + e.what());
   }
-  c.only_keys(root, "the scene", {"objects", "view", "resolution", "budget", "ids", "epsilon", "peel", "slope", "views", "cull"});
+  c.only_keys(root, "the scene", {"objects", "view", "resolution", "budget", "ids", "epsilon", "peel", "slope", "views", "cull", "edge_texels"});
   Scene scene;
   scene.path = path;
   if (!root.contains("objects")) c.fail("the scene", "missing key \"objects\"");
@@ -135,6 +135,10 @@ Scene parse_scene(const std::string& text, const std::string& path, const std::s
   if (root.contains("slope")) {
     opt.slope = c.number(root["slope"], "slope");
     if (opt.slope < 0) c.fail("slope", "must be >= 0 (0 = constant epsilon)");
+  }
+  if (root.contains("edge_texels")) {
+    opt.edge_texels = c.number(root["edge_texels"], "edge_texels");
+    if (opt.edge_texels < 0) c.fail("edge_texels", "must be >= 0 (0 = the budget's share)");
   }
   return scene;
 }

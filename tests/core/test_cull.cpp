@@ -133,3 +133,16 @@ TEST_CASE("contact-region culling drops what is far from the other object", "[cu
     check_conservative(a, b);
   }
 }
+
+TEST_CASE("contact-region culling reports the kept triangles' median edge", "[cull]") {
+  // Two grids of right isosceles triangles crossing: legs 0.1 (A) and 0.4 (B). A keeps more
+  // triangles near the line of contact, so the median is A's mean edge, (2 + sqrt 2) / 3 * 0.1.
+  const Mesh a = make_grid(Vec3(-1, -1, 0), Vec3(2, 0, 0), Vec3(0, 2, 0), 20, 20);
+  const Mesh b = make_grid(Vec3(-1, 0.05, -1), Vec3(2, 0, 0), Vec3(0, 0, 2), 5, 5);
+  ContactCull cull;
+  cull_to_contact_region(a, b, intersection(bounds(a), bounds(b)), cull);
+  REQUIRE(cull.kept_a.size() > cull.kept_b.size());
+  CHECK_THAT(cull.median_edge, Catch::Matchers::WithinRel((2.0 + std::sqrt(2.0)) / 3.0 * 0.1, 1e-12));
+  cull_to_contact_region(a, make_box(Vec3(5, 5, 5), Vec3(6, 6, 6)), intersection(bounds(a), bounds(b)), cull);
+  CHECK(cull.median_edge == 0.0);  // nothing kept
+}

@@ -193,6 +193,7 @@ TEST_CASE("repeated frames reuse GL objects and give identical answers", "[gl]")
   DetectOptions opt;
   opt.theta = 10;
   opt.phi = 5;
+  opt.edge_texels = 0;  // the whole budget, whatever the triangles' size
   const FrameResult f1 = test_pipeline().detect(two(a, b), opt);
   opt.resolution = 64;  // a different tile size in between reallocates the layers
   test_pipeline().detect(two(a, b), opt);
@@ -210,12 +211,31 @@ TEST_CASE("many ROIs share the texture budget", "[gl]") {
   std::vector<Object> objects;
   for (int i = 0; i < 6; ++i)  // a row of overlapping spheres: 5 ROIs
     objects.push_back({"s" + std::to_string(i), make_uv_sphere(Vec3(1.5 * i, 0, 0), 1.0, 8, 16), {}});
-  const FrameResult f = test_pipeline().detect(objects, DetectOptions{});
+  DetectOptions share;
+  share.edge_texels = 0;  // every ROI takes its share of the budget
+  const FrameResult f = test_pipeline().detect(objects, share);
   REQUIRE(f.pairs.size() == 5);
   for (const PairResult& p : f.pairs) {
     CHECK(p.resolution == 128);
     CHECK(p.object_b == p.object_a + 1);
     CHECK_FALSE(p.colliding.empty());
+  }
+  // By default a ROI takes no more than 12 texels per median edge of its triangles: these
+  // coarse spheres need far less than their share, and lose nothing by it.
+  const FrameResult g = test_pipeline().detect(objects, DetectOptions{});
+  REQUIRE(g.pairs.size() == 5);
+  for (std::size_t i = 0; i < 5; ++i) {
+    const PairResult& p = g.pairs[i];
+    ContactCull cull;
+    cull_to_contact_region(objects[p.object_a].mesh, objects[p.object_b].mesh, p.roi, cull);
+    CHECK(p.resolution == edge_tile_resolution(128, cull.box, cull.median_edge, 12.0));
+    CHECK(p.resolution < 128);
+    const Score s = score(exact_colliding_pairs(objects[p.object_a].mesh, objects[p.object_b].mesh), p.colliding);
+    CHECK(s.false_contacts == 0);
+    CHECK(s.found >= score(exact_colliding_pairs(objects[p.object_a].mesh, objects[p.object_b].mesh),
+                           f.pairs[i].colliding).found);
+    std::printf("spheres %zu-%zu: tile %d (share 128), found %zu of %zu\n", p.object_a, p.object_b, p.resolution,
+                s.found, s.exact);
   }
 }
 

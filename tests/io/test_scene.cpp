@@ -33,6 +33,12 @@ TEST_CASE("a scene with only objects takes every default", "[scene]") {
   CHECK(s.options.epsilon == 0.0);
 }
 
+TEST_CASE("a scene may set the texels per median edge", "[scene]") {
+  CHECK(parse_scene(R"({"objects":[{"mesh":"a.obj"}],"edge_texels":6.5})", "s.json", "dir").options.edge_texels == 6.5);
+  CHECK(parse_scene(R"({"objects":[{"mesh":"a.obj"}],"edge_texels":0})", "s.json", "dir").options.edge_texels == 0.0);
+  CHECK(parse_scene(R"({"objects":[{"mesh":"a.obj"}]})", "s.json", "dir").options.edge_texels == DetectOptions{}.edge_texels);
+}
+
 TEST_CASE("a scene may fuse 1, 2 or 3 views", "[scene]") {
   for (int views = 1; views <= 3; ++views) {
     const std::string json = R"({"objects":[{"mesh":"a.obj"}],"views":)" + std::to_string(views) + "}";
@@ -71,6 +77,8 @@ TEST_CASE("bad scenes name the file, the key and the problem", "[scene]") {
   CHECK_THAT(error_of(R"({"objects":[{"mesh":"a.obj"}],"epsilon":-1})"), Catch::Contains("epsilon"));
   CHECK_THAT(error_of(R"({"objects":[{"mesh":"a.obj"}],"view":{"phi":100}})"), Catch::Contains("view.phi"));
   CHECK_THAT(error_of(R"({"objects":[{"mesh":"a.obj"}],"views":4})"), Catch::Contains("views: must be 1, 2 or 3"));
+  CHECK_THAT(error_of(R"({"objects":[{"mesh":"a.obj"}],"edge_texels":-1})"), Catch::Contains("edge_texels: must be >= 0"));
+  CHECK_THAT(error_of(R"({"objects":[{"mesh":"a.obj"}],"edge_texels":"many"})"), Catch::Contains("edge_texels: must be a number"));
   CHECK_THAT(error_of(R"({"objects":[{"mesh":"a.obj"}],"views":0})"), Catch::Contains("views: must be 1, 2 or 3"));
   CHECK_THAT(error_of(R"({"objects":[{"mesh":"a.obj"}],"views":2.5})"), Catch::Contains("views: must be 1, 2 or 3"));
   CHECK_THAT(error_of(R"({"objects":[{"mesh":"a.obj","transform":{"translate":[1,2]}}]})"),
