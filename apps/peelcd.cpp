@@ -456,6 +456,11 @@ int run_bench(const BenchArgs& a) {
   else
     half.budget = std::max(16, half.budget / 2);
   configs.push_back({"peelcd default, half the resolution", "half res", half});
+  if (base.resolution > 0) {  // a scene file at a forced tile: also what detect does by default
+    DetectOptions shared = base;
+    shared.resolution = 0;
+    configs.push_back({"peelcd default, budget, tile by edge", "edge tile", shared});
+  }
   DetectOptions three_alt = base;
   three_alt.peel = PeelMode::alternate;
   configs.push_back({"peelcd 3 views, alternate peeling", "3v alt", three_alt});
