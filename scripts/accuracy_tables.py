@@ -8,6 +8,8 @@ and <!-- END name --> markers; text outside the markers is left alone.
 import re
 import sys
 
+from doc_tables import rewrite_marked
+
 SWEEPS = ["paper", "beat", "fused", "alt3", "cull", "default", "views2"]
 
 # The paper's Fig. 8 (average / maximum / minimum miss ratio over its views).
@@ -92,14 +94,7 @@ def main():
         "cull": config_table(rows, cull, True),
         "views": config_table(rows, views, True),
     }
-    text = open(doc).read()
-    for name, table in tables.items():
-        pattern = re.compile(r"(<!-- BEGIN %s -->\n).*?(\n<!-- END %s -->)" % (name, name), re.S)
-        if not pattern.search(text):
-            sys.exit("accuracy_tables.py: %s has no markers for %s" % (doc, name))
-        text = pattern.sub(lambda m: m.group(1) + table + m.group(2), text)
-    open(doc, "w").write(text)
-    print("rewrote %d tables in %s" % (len(tables), doc))
+    rewrite_marked(doc, tables, "accuracy_tables.py")
 
 
 if __name__ == "__main__":

@@ -8,6 +8,8 @@ usage: performance_tables.py DOC DIR
 import re
 import sys
 
+from doc_tables import rewrite_marked
+
 
 def simulate_rows(path):
     """Rows of the per-phase summary of `peelcd simulate`, ours and the paper's."""
@@ -145,14 +147,7 @@ def main():
         "peelers": peeler_table([("default scene 256²", d + "/bench_default.txt"),
                                  ("test1", d + "/bench_test1.txt"), ("test2", d + "/bench_test2.txt")]),
     }
-    text = open(doc).read()
-    for name, table in tables.items():
-        pattern = re.compile(r"(<!-- BEGIN %s -->\n).*?(\n<!-- END %s -->)" % (name, name), re.S)
-        if not pattern.search(text):
-            sys.exit("performance_tables.py: %s has no markers for %s" % (doc, name))
-        text = pattern.sub(lambda m: m.group(1) + table + m.group(2), text)
-    open(doc, "w").write(text)
-    print("rewrote %d tables in %s" % (len(tables), doc))
+    rewrite_marked(doc, tables, "performance_tables.py")
 
 
 if __name__ == "__main__":
