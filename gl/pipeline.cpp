@@ -334,10 +334,9 @@ struct Pipeline::Impl {
   }
 
   // The k-buffer draw writes storage buffers only: a framebuffer without attachments (no
-  // colour or depth tiles for a software rasterizer to load and store). Only its size changes
-  // with the tile: the layer textures, which the k-buffer does not need, are left alone
-  // (reallocating them cost ~10 ms per change of tile size under llvmpipe, where the number of
-  // ROIs, hence the tile, changes from frame to frame).
+  // colour or depth tiles for a software rasterizer to load and store). Only its size follows
+  // the tile (which changes with the number of ROIs and their triangles' size); the layer
+  // textures, which the k-buffer does not need, are not reallocated for it.
   void ensure_bare_fbo(int n) {
     if (bare_fbo == 0) gl.CreateFramebuffers(1, &bare_fbo);
     if (n == bare_size) return;
