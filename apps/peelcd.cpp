@@ -691,10 +691,35 @@ int run_sweep_command(const SweepArgs& a) {
   return 0;
 }
 
+// Number checks with messages a person can read. CLI11's own let "nan" through (every
+// comparison with NaN is false; a NaN here would read as "not given") and print the range up
+// to DBL_MAX in full.
+CLI::Validator finite_number(bool (*ok)(double), const char* need, const char* name) {
+  return CLI::Validator(
+      [ok, need](std::string& text) -> std::string {
+        double v = 0.0;
+        std::size_t used = 0;
+        try {
+          v = std::stod(text, &used);
+        } catch (const std::out_of_range&) {
+          return "Value " + text + " is not a finite number";
+        } catch (const std::exception&) {
+          return "Value " + text + " is not a number";
+        }
+        if (used != text.size()) return "Value " + text + " is not a number";
+        if (!std::isfinite(v)) return "Value " + text + " is not a finite number";
+        return ok(v) ? std::string() : "Value " + text + " " + need;
+      },
+      name);
+}
+const CLI::Validator kFinite = finite_number([](double) { return true; }, "", "FINITE");
+const CLI::Validator kPositive = finite_number([](double v) { return v > 0.0; }, "is not positive", "POSITIVE");
+const CLI::Validator kNonNegative = finite_number([](double v) { return v >= 0.0; }, "is negative", "NONNEGATIVE");
+
 // The options that shape a frame, shared by detect and dump (they override the scene file's).
 void add_frame_options(CLI::App* c, DetectArgs& d) {
   c->add_option("--res", d.res, "Forced N x N texture per ROI (default: share a 512^2 budget)")
-      ->check(CLI::PositiveNumber);
+      ->check(kPositive);
   c->add_option("--ids", d.ids, "Triangle ID mode: ring (last vertex, whole one-ring; default), paper (last-vertex IDs, T(v) sets) or unique");
   c->add_option("--peel", d.peel, "Peel mode: full (every surface; default) or alternate (the paper's)");
   c->add_option("--peeler", d.peeler, "How layers are made: abuffer (one draw into a per-texel k-buffer of fragments; default) "
@@ -704,17 +729,17 @@ void add_frame_options(CLI::App* c, DetectArgs& d) {
   c->add_option("--resolve", d.resolve, "Where the k-buffer becomes layers and PCS: auto (host on a software renderer such as "
                                         "llvmpipe, else gpu; default), gpu (a compute pass) or host (mapped, resolved on the CPU)");
   c->add_option("--slope", d.slope, "Slope-following epsilon, in texels (default 1; 0 = the paper's constant epsilon)")
-      ->check(CLI::NonNegativeNumber);
+      ->check(kNonNegative);
   c->add_option("--views", d.views, "Views fused per ROI: 3 (three orthogonal views; default), 2 (along d and u) or 1 (along d)")
       ->check(CLI::IsMember({1, 2, 3}));
-  c->add_option("--theta", d.theta, "View longitude, degrees");
-  c->add_option("--phi", d.phi, "View latitude, degrees, in [-90, 90]")->check(CLI::Range(-90.0, 90.0));
+  c->add_option("--theta", d.theta, "View longitude, degrees")->check(kFinite);
+  c->add_option("--phi", d.phi, "View latitude, degrees, in [-90, 90]")->check(kFinite)->check(CLI::Range(-90.0, 90.0));
   c->add_option("--epsilon", d.epsilon, "PCS depth threshold in world units (default: one texel)")
-      ->check(CLI::PositiveNumber);
+      ->check(kPositive);
   c->add_option("--edge-texels", d.edge_texels,
                 "Sharing the budget with contact culling, a ROI's tile is at most K texels per median edge of its "
                 "triangles across the culled region (default 12; 0 = always the budget's share)")
-      ->check(CLI::NonNegativeNumber);
+      ->check(kNonNegative);
   c->add_option("--backend", d.backend, "GL backend: osmesa (software reference) or egl (GPU, or Mesa without one)")
       ->capture_default_str();
 }
@@ -733,7 +758,7 @@ int main(int argc, char** argv) {
   add_frame_options(detect, d);
   detect->add_option("--json", d.json_out, "Write the JSON report to FILE, or - for stdout");
   detect->add_option("--repeat", d.repeat, "Run the frame N times and report median timings")
-      ->check(CLI::PositiveNumber);
+      ->check(kPositive);
   detect->add_flag("--check", d.check, "Also run the exact all-pairs reference and print the miss ratio");
   detect->add_flag("--quiet", d.quiet, "No human summary");
 
@@ -768,14 +793,14 @@ int main(int argc, char** argv) {
   compare->add_option("--peeler", gc.peeler, "abuffer or multipass (default: the default, abuffer)");
   compare->add_option("--resolve", gc.resolve, "auto, gpu or host: where the k-buffer is resolved (default: auto)");
   compare->add_option("--repeat", gc.repeat, "Run and compare each case N times in one process (determinism)")
-      ->check(CLI::PositiveNumber)->capture_default_str();
+      ->check(kPositive)->capture_default_str();
   SimArgs si;
   CLI::App* simulate = app.add_subcommand(
       "simulate", "Run the paper's dynamic scenes (test1: a walking raptor among 40 billiard balls; test2: a "
                   "tearing cloth with 40 falling objects) and print per-frame nCTP, counters and stage times, "
                   "and a summary per phase beside the paper's Tables 1 and 2");
   simulate->add_option("test", si.test, "test1 or test2")->required()->check(CLI::IsMember({"test1", "test2"}));
-  simulate->add_option("--frames", si.frames, "Frames")->check(CLI::PositiveNumber)->capture_default_str();
+  simulate->add_option("--frames", si.frames, "Frames")->check(kPositive)->capture_default_str();
   add_frame_options(simulate, si.detect);
   simulate->add_flag("--no-rigid", si.no_rigid, "Pass the rigid objects as plain triangles (no shape caching)");
   simulate->add_option("--csv", si.csv, "Write one row per frame to FILE, or - for stdout");
@@ -786,10 +811,10 @@ int main(int argc, char** argv) {
                "the bare-draw floor side by side on the same frames; print medians, miss ratios and ratios");
   benchmark->add_option("scene", be.scene, "test1, test2 or a scene file")->capture_default_str();
   benchmark->add_option("--frames", be.frames, "Frames (of the test scene; repeats of a scene file)")
-      ->check(CLI::PositiveNumber)->capture_default_str();
+      ->check(kPositive)->capture_default_str();
   benchmark->add_option("--res", be.res, "Texture size per ROI for peelcd; 0 = share the 512^2 budget "
                                          "(default: 256 for a scene file, 0 for test1/test2)")
-      ->check(CLI::NonNegativeNumber);
+      ->check(kNonNegative);
   benchmark->add_option("--backend", be.backend, "GL backend: osmesa or egl")->capture_default_str();
   benchmark->add_option("--csv", be.csv, "Write one row per (frame, method) to FILE, or - for stdout");
 
@@ -798,7 +823,7 @@ int main(int argc, char** argv) {
       "sweep", "Measure accuracy and run time over view directions and configurations against the "
                "exact reference; prints a summary per configuration (average/max/min miss ratio)");
   sweep->add_option("scene", sw.scene, "Scene JSON file")->required();
-  sweep->add_option("--res", sw.res, "Resolutions (comma-separated)")->delimiter(',')->check(CLI::PositiveNumber)
+  sweep->add_option("--res", sw.res, "Resolutions (comma-separated)")->delimiter(',')->check(kPositive)
       ->capture_default_str();
   sweep->add_option("--ids", sw.ids, "ID modes: unique, paper, ring (comma-separated)")->delimiter(',')
       ->capture_default_str();
@@ -807,14 +832,14 @@ int main(int argc, char** argv) {
                     "peeling, slope epsilon), full (full peeling, slope epsilon)")
       ->delimiter(',')->capture_default_str();
   sweep->add_option("--slope", sw.slopes, "Slope-epsilon factors for the non-paper modes")->delimiter(',')
-      ->check(CLI::NonNegativeNumber)->capture_default_str();
+      ->check(kNonNegative)->capture_default_str();
   sweep->add_option("--views", sw.views, "Fused views per ROI: 1, 2 and/or 3")->delimiter(',')
       ->check(CLI::IsMember({1, 2, 3}))->capture_default_str();
   sweep->add_option("--cull", sw.culls, "Culling: contact and/or box (see detect --cull)")->delimiter(',')
       ->capture_default_str();
-  sweep->add_option("--theta-step", sw.theta_step, "Longitude step, degrees")->check(CLI::Range(1.0, 360.0))
-      ->capture_default_str();
-  sweep->add_option("--phi-step", sw.phi_step, "Latitude step, degrees")->check(CLI::Range(1.0, 90.0))
+  sweep->add_option("--theta-step", sw.theta_step, "Longitude step, degrees")->check(kFinite)
+      ->check(CLI::Range(1.0, 360.0))->capture_default_str();
+  sweep->add_option("--phi-step", sw.phi_step, "Latitude step, degrees")->check(kFinite)->check(CLI::Range(1.0, 90.0))
       ->capture_default_str();
   sweep->add_option("--backend", sw.backend, "GL backend: osmesa or egl")->capture_default_str();
   sweep->add_option("--csv", sw.csv, "Write one row per (configuration, view) to FILE, or - for stdout");
