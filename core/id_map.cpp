@@ -24,6 +24,7 @@ std::optional<IdMode> parse_id_mode(const std::string& text) {
 IdMap::IdMap(const Mesh& mesh, IdMode mode) { rebuild(mesh, mode); }
 
 void IdMap::rebuild(const Mesh& mesh, IdMode mode) {
+  if (built_ && mode == mode_ && mesh.vertices.size() == built_vertices_ && mesh.triangles == built_from_) return;
   mode_ = mode;
   const std::size_t f = mesh.triangles.size();
   const std::size_t ids = mode == IdMode::unique ? f : mesh.vertices.size();
@@ -52,6 +53,9 @@ void IdMap::rebuild(const Mesh& mesh, IdMode mode) {
   scratch_[ids] = std::uint32_t(out);
   tris_.resize(out);
   offsets_.swap(scratch_);
+  built_from_.assign(mesh.triangles.begin(), mesh.triangles.end());
+  built_vertices_ = mesh.vertices.size();
+  built_ = true;
 }
 
 namespace {

@@ -30,6 +30,8 @@ class IdMap {
   IdMap() = default;
   IdMap(const Mesh& mesh, IdMode mode);
   // Rebuilds the map for `mesh` in place, reusing storage (no allocation once it has grown).
+  // The map depends on the triangles and the vertex count only: when both (and the mode) are
+  // those of the last build, as for a rigid or deforming mesh from frame to frame, it is kept.
   void rebuild(const Mesh& mesh, IdMode mode);
 
   IdMode mode() const { return mode_; }
@@ -43,6 +45,9 @@ class IdMap {
   std::vector<std::uint32_t> offsets_;  // id_count() + 1
   std::vector<std::uint32_t> tris_;
   std::vector<std::uint32_t> fill_, scratch_;
+  std::vector<Tri> built_from_;  // the triangles of the last build
+  std::size_t built_vertices_ = 0;
+  bool built_ = false;
 };
 
 // A PCS as read back: one ID of object A and one of object B.

@@ -93,3 +93,24 @@ TEST_CASE("ring IDs stand for the whole one-ring of the last vertex", "[ids]") {
   degenerate.triangles.push_back({2, 2, 0});  // repeated corner: listed once
   CHECK(IdMap(degenerate, IdMode::ring).triangles(2) == std::vector<std::uint32_t>{0, 1, 4});
 }
+
+TEST_CASE("a rebuild keeps the map while the triangles and the mode stay, and follows any change", "[ids]") {
+  Mesh m = fan();
+  IdMap map(m, IdMode::ring);
+  for (Vec3& p : m.vertices) p *= 2.0;  // a deforming mesh: same connectivity, same map
+  map.rebuild(m, IdMode::ring);
+  CHECK(map.triangles(1) == std::vector<std::uint32_t>{0, 3});
+  map.rebuild(m, IdMode::paper);  // the mode changes the map
+  CHECK(map.triangles(1) == std::vector<std::uint32_t>{3});
+  m.triangles[3] = {0, 4, 2};  // a triangle changes in place, same count (a fracture)
+  map.rebuild(m, IdMode::paper);
+  CHECK(map.triangles(1).empty());
+  CHECK(map.triangles(2) == std::vector<std::uint32_t>{3});
+  m.vertices.push_back(Vec3(5, 5, 5));  // one more vertex: one more ID
+  map.rebuild(m, IdMode::paper);
+  CHECK(map.id_count() == 6);
+  m.triangles.push_back({1, 5, 5});
+  map.rebuild(m, IdMode::ring);
+  CHECK(map.triangles(5) == std::vector<std::uint32_t>{4});
+  CHECK(map.triangles(1) == std::vector<std::uint32_t>{0, 4});
+}
