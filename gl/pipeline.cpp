@@ -451,6 +451,16 @@ struct Pipeline::Impl {
     }
   }
 
+  // Contact-region culling of one object pair into `cull` (kept triangles, shrunk box) and the
+  // tile that box gets (`share`, or less by edge_tile_resolution() when sharing the budget):
+  // what detect() peels and floor_ms() times. 0 when nothing is kept (no contact possible).
+  int cull_pair(const Mesh& a, const Mesh& b, const Aabb& roi, const DetectOptions& opt, int share) {
+    cull_to_contact_region(a, b, roi, cull);
+    if (cull.box.empty()) return 0;
+    if (opt.resolution > 0) return share;
+    return edge_tile_resolution(share, cull.box, cull.median_edge, opt.edge_texels);
+  }
+
   // Draws slot `slot` with the current program, whose roi_from_object is at `u_model`.
   void draw(int slot, GLint u_model) {
     static const float identity[16] = {1, 0, 0, 0, 0, 1, 0, 0, 0, 0, 1, 0, 0, 0, 0, 1};
@@ -863,15 +873,15 @@ void Pipeline::detect(const std::vector<Object>& objects, const DetectOptions& o
     const std::vector<std::uint32_t>*only_a = nullptr, *only_b = nullptr;
     if (opt.cull == Cull::contact) {
       t0 = Clock::now();
-      cull_to_contact_region(ma, mb, r.roi, s.cull);
+      const int tile = s.cull_pair(ma, mb, r.roi, opt, n);
       out.timings.aabb += ms_since(t0);
       r.region = s.cull.box;
       r.triangles_in_roi_a = s.cull.stats.in_roi_a;
       r.triangles_in_roi_b = s.cull.stats.in_roi_b;
-      if (r.region.empty()) continue;  // no triangle of one object near the other: no contact
+      if (tile == 0) continue;  // no triangle of one object near the other: no contact
       only_a = &s.cull.kept_a;
       only_b = &s.cull.kept_b;
-      if (opt.resolution == 0) r.resolution = edge_tile_resolution(n, r.region, s.cull.median_edge, opt.edge_texels);
+      r.resolution = tile;
     }
     std::vector<IdPair>& all_pcs = s.pcs_all;
     all_pcs.clear();
@@ -973,12 +983,11 @@ double Pipeline::floor_ms(const std::vector<Object>& objects, const DetectOption
     const std::vector<std::uint32_t>*only_a = nullptr, *only_b = nullptr;
     int tile = n;
     if (opt.cull == Cull::contact) {  // the triangles and tile detect() would draw (culling not timed)
-      cull_to_contact_region(objects[ia].mesh, objects[ib].mesh, roi, s.cull);
-      if (s.cull.box.empty()) continue;
+      tile = s.cull_pair(objects[ia].mesh, objects[ib].mesh, roi, opt, n);
+      if (tile == 0) continue;
       roi = s.cull.box;
       only_a = &s.cull.kept_a;
       only_b = &s.cull.kept_b;
-      if (opt.resolution == 0) tile = edge_tile_resolution(n, roi, s.cull.median_edge, opt.edge_texels);
     }
     for (std::size_t v = 0; v < frame_count; ++v) {
       const RoiView view = make_padded_roi_view(roi, boxes[ia], boxes[ib], frames[v], tile);
