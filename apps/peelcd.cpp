@@ -5,7 +5,9 @@
 #include "eval/sweep.h"
 #include "gl/pipeline.h"
 #include "gl_egl/egl_context.h"
+#if PEELCD_HAVE_OSMESA
 #include "gl_osmesa/osmesa_context.h"
+#endif
 #include "io/error.h"
 #include "io/result_json.h"
 #include "io/scene.h"
@@ -33,7 +35,9 @@ constexpr int kExitBadInput = 2;
 
 // The GL context of a run: OSMesa (the deterministic reference) or EGL without a window.
 std::unique_ptr<gl::Context> make_context(const std::string& backend) {
+#if PEELCD_HAVE_OSMESA
   if (backend == "osmesa") return std::make_unique<gl::OsmesaContext>();
+#endif
   if (backend == "egl") return std::make_unique<gl::EglContext>();
   throw InputError("peelcd: --backend: unknown backend \"" + backend + "\" (expected osmesa or egl)");
 }
