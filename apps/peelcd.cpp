@@ -1,17 +1,21 @@
 // peelcd: image-space collision detection through alternate surface peeling.
-#include "core/reference.h"
-#include "bench/peers.h"
-#include "eval/scenes.h"
-#include "eval/sweep.h"
-#include "gl/pipeline.h"
-#include "gl_egl/egl_context.h"
+#include "peelcd/core/reference.h"
+#include "peelcd/bench/peers.h"
+#include "peelcd/eval/scenes.h"
+#include "peelcd/eval/sweep.h"
+#include "peelcd/bench/floor.h"
+#include "peelcd/core/cpu_stage.h"
+#include "peelcd/core/detector.h"
+#include "peelcd/gl/gl_stage.h"
+#include "peelcd/version.h"
+#include "peelcd/gl_egl/egl_context.h"
 #if PEELCD_HAVE_OSMESA
-#include "gl_osmesa/osmesa_context.h"
+#include "peelcd/gl_osmesa/osmesa_context.h"
 #endif
-#include "io/error.h"
-#include "io/result_json.h"
-#include "io/scene.h"
-#include "oracle/dump.h"
+#include "peelcd/io/error.h"
+#include "peelcd/io/result_json.h"
+#include "peelcd/io/scene.h"
+#include "peelcd/oracle/dump.h"
 
 #include <CLI/CLI.hpp>
 
@@ -33,13 +37,39 @@ using namespace peelcd;
 
 constexpr int kExitBadInput = 2;
 
-// The GL context of a run: OSMesa (the deterministic reference) or EGL without a window.
-std::unique_ptr<gl::Context> make_context(const std::string& backend) {
+// The image stage of a run and the detector over it: GL on OSMesa (the deterministic
+// reference) or EGL without a window, or the CPU model (no GL).
+struct Runner {
+  std::shared_ptr<ImageStage> stage;
+  gl::GlImageStage* gl = nullptr;  // the GL stage, or null for the CPU stage
+  std::unique_ptr<Detector> detector;
+
+  const std::string& backend() const { return stage->backend(); }
+  const std::string& renderer() const { return stage->renderer(); }
+  // GL stage options of one configuration (ignored by the CPU stage).
+  void use(const gl::GlOptions& options) {
+    if (gl) gl->set_options(options);
+  }
+};
+
+Runner make_runner(const std::string& backend, const gl::GlOptions& options = {}) {
+  Runner r;
+  std::shared_ptr<gl::Context> context;
 #if PEELCD_HAVE_OSMESA
-  if (backend == "osmesa") return std::make_unique<gl::OsmesaContext>();
+  if (backend == "osmesa") context = std::make_shared<gl::OsmesaContext>();
 #endif
-  if (backend == "egl") return std::make_unique<gl::EglContext>();
-  throw InputError("peelcd: --backend: unknown backend \"" + backend + "\" (expected osmesa or egl)");
+  if (backend == "egl") context = std::make_shared<gl::EglContext>();
+  if (context) {
+    auto stage = std::make_shared<gl::GlImageStage>(context, options);
+    r.gl = stage.get();
+    r.stage = stage;
+  } else if (backend == "cpu") {
+    r.stage = std::make_shared<CpuImageStage>();
+  } else {
+    throw InputError("peelcd: --backend: unknown backend \"" + backend + "\" (expected osmesa, egl or cpu)");
+  }
+  r.detector = std::make_unique<Detector>(r.stage);
+  return r;
 }
 
 struct DetectArgs {
@@ -70,6 +100,15 @@ Peeler peeler_option(const std::string& text) {
   return parsed(text, parse_peeler, "peelcd: --peeler: unknown peeler", "abuffer or multipass");
 }
 
+// GL stage options: the scene file's, overridden by the command line's.
+gl::GlOptions merged_gl_options(const Scene& scene, const std::string& peeler, const std::string& resolve) {
+  gl::GlOptions o = scene.gl;
+  if (!peeler.empty()) o.peeler = peeler_option(peeler);
+  if (!resolve.empty())
+    o.resolve = parsed(resolve, parse_resolve, "peelcd: --resolve: unknown resolve", "auto, gpu or host");
+  return o;
+}
+
 // Command-line values override the scene file's.
 DetectOptions merged_options(const Scene& scene, const DetectArgs& a) {
   DetectOptions o = scene.options;
@@ -77,10 +116,7 @@ DetectOptions merged_options(const Scene& scene, const DetectArgs& a) {
   if (!a.ids.empty()) o.ids = parsed(a.ids, parse_id_mode, "peelcd detect: --ids: unknown ID mode", "paper, ring or unique");
   if (!a.peel.empty())
     o.peel = parsed(a.peel, parse_peel_mode, "peelcd detect: --peel: unknown peel mode", "full or alternate");
-  if (!a.peeler.empty()) o.peeler = peeler_option(a.peeler);
   if (!a.cull.empty()) o.cull = parsed(a.cull, parse_cull, "peelcd detect: --cull: unknown culling", "contact or box");
-  if (!a.resolve.empty())
-    o.resolve = parsed(a.resolve, parse_resolve, "peelcd detect: --resolve: unknown resolve", "auto, gpu or host");
   if (!std::isnan(a.slope)) o.slope = a.slope;
   if (a.views) o.views = a.views;
   if (!std::isnan(a.theta)) o.theta = a.theta;
@@ -120,12 +156,11 @@ int run_detect(const DetectArgs& a) {
   const DetectOptions opt = merged_options(scene, a);
   const std::vector<Object> objects = load_objects(scene);
 
-  const auto context = make_context(a.backend);
-  gl::Pipeline pipeline(*context);
+  Runner runner = make_runner(a.backend, merged_gl_options(scene, a.peeler, a.resolve));
   FrameResult result;
   std::vector<Timings> runs;
   for (int i = 0; i < std::max(1, a.repeat); ++i) {
-    result = pipeline.detect(objects, opt);
+    result = runner.detector->detect(objects, opt);
     runs.push_back(result.timings);
   }
   if (runs.size() > 1) {  // report per-stage medians over the repeated frames
@@ -140,7 +175,7 @@ int run_detect(const DetectArgs& a) {
 
   if (!a.quiet) {
     std::printf("peelcd detect: %s  (%zu objects, %s, %s)\n", a.scene.c_str(), objects.size(),
-                context->backend().c_str(), result.renderer.c_str());
+                runner.backend().c_str(), result.renderer.c_str());
     std::printf("view theta=%g phi=%g  views=%d  ids=%s  peel=%s  slope=%g  cull=%s\n", opt.theta, opt.phi, opt.views,
                 to_string(opt.ids), to_string(opt.peel), opt.slope, to_string(opt.cull));
     if (result.pairs.empty()) std::printf("no overlapping bounding boxes: no GL work\n");
@@ -176,22 +211,27 @@ int run_detect(const DetectArgs& a) {
 }
 
 // One frame with every layer captured: the dump of `scene` under `opt` on `backend`.
-oracle::Dump capture_frame(const std::vector<Object>& objects, const DetectOptions& opt, const std::string& backend,
-                           gl::Pipeline& pipeline) {
-  std::vector<gl::CapturedView> captured;
-  pipeline.capture_layers(&captured);
-  const FrameResult result = pipeline.detect(objects, opt);
-  pipeline.capture_layers(nullptr);
-  return oracle::make_dump(result, captured, objects, opt, pipeline.renderer(), pipeline.version(), backend);
+oracle::Dump capture_frame(const std::vector<Object>& objects, const DetectOptions& opt, Runner& runner) {
+  std::vector<CapturedView> captured;
+  runner.detector->capture_layers(&captured);
+  FrameResult result;
+  try {
+    result = runner.detector->detect(objects, opt);
+  } catch (...) {
+    runner.detector->capture_layers(nullptr);
+    throw;
+  }
+  runner.detector->capture_layers(nullptr);
+  return oracle::make_dump(result, captured, objects, opt, runner.stage->renderer(), runner.stage->version(),
+                           runner.backend());
 }
 
 int run_dump(const DetectArgs& a, const std::string& out) {
   const Scene scene = load_scene(a.scene);
   const DetectOptions opt = merged_options(scene, a);
   const std::vector<Object> objects = load_objects(scene);
-  const auto context = make_context(a.backend);
-  gl::Pipeline pipeline(*context);
-  const oracle::Dump dump = capture_frame(objects, opt, context->backend(), pipeline);
+  Runner runner = make_runner(a.backend, merged_gl_options(scene, a.peeler, a.resolve));
+  const oracle::Dump dump = capture_frame(objects, opt, runner);
   oracle::write_dump(dump, out, true);
   std::size_t layers = 0, views = 0;
   for (const auto& p : dump.pairs)
@@ -232,12 +272,12 @@ std::string case_scene(const GoldenArgs& a, const std::string& name) {
 
 int run_golden_record(const GoldenArgs& a) {
   // Goldens come from the reference backend only.
-  const auto context = make_context("osmesa");
-  gl::Pipeline pipeline(*context);
+  Runner runner = make_runner("osmesa");
   for (const std::string& name : golden_cases(a)) {
     const Scene scene = load_scene(case_scene(a, name));
     const std::vector<Object> objects = load_objects(scene);
-    const oracle::Dump dump = capture_frame(objects, scene.options, context->backend(), pipeline);
+    runner.use(scene.gl);
+    const oracle::Dump dump = capture_frame(objects, scene.options, runner);
     const std::string dir = a.dir + "/" + name + "/expected", fresh = dir + ".new";
     std::error_code ec;
     std::filesystem::remove_all(fresh, ec);
@@ -253,26 +293,22 @@ int run_golden_record(const GoldenArgs& a) {
 }
 
 int run_golden_compare(const GoldenArgs& a) {
-  const auto context = make_context(a.backend);
-  gl::Pipeline pipeline(*context);
-  const std::string renderer = pipeline.renderer();
+  Runner runner = make_runner(a.backend);
+  const std::string renderer = runner.renderer();
   oracle::Tier tier = renderer.find("llvmpipe") != std::string::npos ? oracle::Tier::exact : oracle::Tier::hardware;
   if (a.tier == "exact") tier = oracle::Tier::exact;
   else if (a.tier == "hardware") tier = oracle::Tier::hardware;
   else if (a.tier != "auto") throw InputError("peelcd golden compare: --tier: unknown tier \"" + a.tier + "\" (expected auto, exact or hardware)");
-  std::printf("golden compare: backend %s, %s, %s tier\n", context->backend().c_str(), renderer.c_str(),
+  std::printf("golden compare: backend %s, %s, %s tier\n", runner.backend().c_str(), renderer.c_str(),
               oracle::to_string(tier));
   int failed = 0;
   for (const std::string& name : golden_cases(a)) {
     Scene scene = load_scene(case_scene(a, name));
-    if (!a.peeler.empty()) scene.options.peeler = peeler_option(a.peeler);
-    if (!a.resolve.empty())
-      scene.options.resolve =
-          parsed(a.resolve, parse_resolve, "peelcd golden compare: --resolve: unknown resolve", "auto, gpu or host");
+    runner.use(merged_gl_options(scene, a.peeler, a.resolve));
     const std::vector<Object> objects = load_objects(scene);
     const oracle::Dump expected = oracle::read_dump(a.dir + "/" + name + "/expected");
     for (int run = 0; run < std::max(1, a.repeat); ++run) {
-      const oracle::Dump actual = capture_frame(objects, scene.options, context->backend(), pipeline);
+      const oracle::Dump actual = capture_frame(objects, scene.options, runner);
       const oracle::Comparison c = oracle::compare_dumps(expected, actual, tier);
       const std::string label = a.repeat > 1 ? name + " (run " + std::to_string(run + 1) + ")" : name;
       if (c.ok()) {
@@ -350,13 +386,12 @@ int run_simulate(const SimArgs& a) {
   const auto seq = make_sequence(a.test, a.frames, !a.no_rigid);
   Scene defaults;
   const DetectOptions opt = merged_options(defaults, a.detect);
-  const auto context = make_context(a.detect.backend);
-  gl::Pipeline pipeline(*context);
+  Runner runner = make_runner(a.detect.backend, merged_gl_options(Scene{}, a.detect.peeler, a.detect.resolve));
   std::vector<Object> objects;
   std::string csv = "frame,phase,triangles,rois,rois_peeled,triangles_uploaded,triangles_indexed,shape_uploads,gl_passes,pcs_readbacks,nctp,found,"
                     "false_contacts,aabb_ms,upload_ms,gpu_ms,readback_ms,cpu_ms,total_ms\n";
   std::printf("peelcd simulate %s: %zu frames, %s, ids=%s peel=%s slope=%g views=%d res=%s\n", seq->name().c_str(),
-              seq->frames(), pipeline.renderer().c_str(), to_string(opt.ids), to_string(opt.peel), opt.slope,
+              seq->frames(), runner.renderer().c_str(), to_string(opt.ids), to_string(opt.peel), opt.slope,
               opt.views, opt.resolution ? std::to_string(opt.resolution).c_str() : ("budget " + std::to_string(opt.budget)).c_str());
   std::printf("%5s %5s %7s %5s %6s %8s %8s %6s %6s %5s %6s %6s %6s %5s %7s %8s %8s %8s %8s\n", "frame", "phase",
               "tris", "ROIs", "peeled", "uploaded", "indexed", "shapes", "passes", "reads", "nCTP", "found", "miss%",
@@ -370,7 +405,7 @@ int run_simulate(const SimArgs& a) {
   FrameResult r;  // reused frame after frame, as an application would
   for (std::size_t f = 0; f < seq->frames(); ++f) {
     seq->frame(f, objects);
-    pipeline.detect(objects, opt, r);
+    runner.detector->detect(objects, opt, r);
     const bench::PeerFrame exact = bench::cgal_frame(objects);
     const Score sc = score_frame(r, exact);
     false_total += sc.false_contacts;
@@ -431,15 +466,16 @@ int run_bench(const BenchArgs& a) {
   } else {
     fixed = load_objects(load_scene(a.scene));
   }
-  const auto context = make_context(a.backend);
-  gl::Pipeline pipeline(*context);
-  if (a.res > 0 && a.res > pipeline.max_resolution())
+  Runner runner = make_runner(a.backend);
+  if (!runner.gl) throw InputError("peelcd bench: --backend cpu: the benchmark times GL stages (use osmesa or egl)");
+  if (a.res > 0 && a.res > runner.stage->max_resolution())
     throw InputError("peelcd bench: --res " + std::to_string(a.res) + " is above GL_MAX_TEXTURE_SIZE");
 
   struct Config {
     std::string name;
     std::string column;  // its column in the per-phase table
     DetectOptions opt;
+    gl::GlOptions gl;
   };
   std::vector<Config> configs;
   DetectOptions base;
@@ -448,12 +484,12 @@ int run_bench(const BenchArgs& a) {
   DetectOptions box = base;
   box.cull = Cull::box;
   configs.push_back({"peelcd default, box culling", "box cull", box});
-  DetectOptions gpu_resolve = base;
+  gl::GlOptions gpu_resolve;
   gpu_resolve.resolve = Resolve::gpu;
-  configs.push_back({"peelcd default, GPU resolve", "gpu rslv", gpu_resolve});
-  DetectOptions multi = base;
+  configs.push_back({"peelcd default, GPU resolve", "gpu rslv", base, gpu_resolve});
+  gl::GlOptions multi;
   multi.peeler = Peeler::multipass;
-  configs.push_back({"peelcd default, multi-pass", "multipass", multi});
+  configs.push_back({"peelcd default, multi-pass", "multipass", base, multi});
   DetectOptions half = base;  // half the tile side: the texels culling saves
   if (half.resolution > 0)
     half.resolution = std::max(16, half.resolution / 2);
@@ -482,9 +518,7 @@ int run_bench(const BenchArgs& a) {
   paper.slope = 0.0;
   paper.cull = Cull::box;
   configs.push_back({"peelcd paper config", "paper", paper});
-  DetectOptions paper_multi = paper;
-  paper_multi.peeler = Peeler::multipass;
-  configs.push_back({"peelcd paper config, multi-pass", "paper mp", paper_multi});
+  configs.push_back({"peelcd paper config, multi-pass", "paper mp", paper, multi});
 
   // The floors: one bare draw per view of every triangle touching the overlap box (the paper's
   // ROI), and of the triangles contact culling keeps (what the default configurations draw);
@@ -512,7 +546,10 @@ int run_bench(const BenchArgs& a) {
   // whichever configuration meets them first. The timed pass is the steady state.
   for (std::size_t f = 0; f < (seq ? frames : std::min<std::size_t>(frames, 1)); ++f) {
     if (seq) seq->frame(f, objects);
-    for (std::size_t c = 0; c < configs.size(); ++c) pipeline.detect(seq ? objects : fixed, configs[c].opt, results[c]);
+    for (std::size_t c = 0; c < configs.size(); ++c) {
+      runner.use(configs[c].gl);
+      runner.detector->detect(seq ? objects : fixed, configs[c].opt, results[c]);
+    }
   }
   Progress progress;
   for (std::size_t f = 0; f < frames; ++f) {
@@ -523,7 +560,8 @@ int run_bench(const BenchArgs& a) {
     std::vector<double> t(methods);
     std::vector<Score> s(methods);
     for (std::size_t c = 0; c < configs.size(); ++c) {
-      pipeline.detect(obj, configs[c].opt, results[c]);
+      runner.use(configs[c].gl);
+      runner.detector->detect(obj, configs[c].opt, results[c]);
       t[c] = results[c].timings.total;
       s[c] = score_frame(results[c], exact);
     }
@@ -545,7 +583,8 @@ int run_bench(const BenchArgs& a) {
     const DetectOptions* floors[2] = {&floor3, &cfloor3};
     for (std::size_t i = 0; i < 2; ++i) {
       std::vector<double> per_view;
-      pipeline.floor_ms(obj, *floors[i], &per_view);
+      runner.use(gl::GlOptions{});
+      bench::floor_ms(*runner.detector, *runner.gl, obj, *floors[i], &per_view);
       for (std::size_t k = 0; k < 3; ++k) {  // 3, 2, 1 views
         double sum = 0.0;
         for (std::size_t v = 0; v < 3 - k; ++v) sum += per_view[v];
@@ -580,7 +619,7 @@ int run_bench(const BenchArgs& a) {
   std::printf("peelcd bench: %s, %zu frames, %s, %s (%s), medians per frame after an untimed pass\n", a.scene.c_str(), frames,
               base.resolution ? (std::to_string(base.resolution) + "^2 per ROI").c_str()
                               : ("a " + std::to_string(base.budget) + "^2 budget shared by the ROIs").c_str(),
-              context->backend().c_str(), pipeline.renderer().c_str());
+              runner.backend().c_str(), runner.renderer().c_str());
   std::printf("%-36s %10s %8s %7s %8s %8s %8s %8s\n", "method", "median ms", "miss", "false", "x CGAL", "x FCL", "x floor",
               "x own fl");
   for (std::size_t m = 0; m < methods; ++m) {
@@ -659,16 +698,15 @@ int run_sweep_command(const SweepArgs& a) {
       }
     }
   const auto directions = sweep_directions(a.theta_step, a.phi_step);
-  const auto context = make_context(a.backend);
-  gl::Pipeline pipeline(*context);
+  Runner runner = make_runner(a.backend);
   for (int res : a.res)
-    if (res > pipeline.max_resolution())
+    if (res > runner.stage->max_resolution())
       throw InputError("peelcd sweep: --res " + std::to_string(res) + " is above GL_MAX_TEXTURE_SIZE " +
-                       std::to_string(pipeline.max_resolution()));
-  const auto rows = run_sweep(pipeline, objects, configs, directions, Progress{});
+                       std::to_string(runner.stage->max_resolution()));
+  const auto rows = run_sweep(*runner.detector, objects, configs, directions, Progress{});
 
   std::printf("sweep: %s, %zu views per configuration (theta step %g, phi step %g), %s\n", a.scene.c_str(),
-              directions.size(), a.theta_step, a.phi_step, pipeline.renderer().c_str());
+              directions.size(), a.theta_step, a.phi_step, runner.renderer().c_str());
   std::printf("%-46s %9s %9s %9s %6s %11s %6s %11s %11s\n", "configuration", "avg miss", "max miss", "min miss",
               "false", "candidates", "eff", "median ms", "mean ms");
   for (std::size_t c = 0; c < configs.size(); ++c) {
@@ -744,7 +782,7 @@ void add_frame_options(CLI::App* c, DetectArgs& d) {
                 "Sharing the budget with contact culling, a ROI's tile is at most K texels per median edge of its "
                 "triangles across the culled region (default 12; 0 = always the budget's share)")
       ->check(kNonNegative);
-  c->add_option("--backend", d.backend, "GL backend: osmesa (software reference) or egl (GPU, or Mesa without one)")
+  c->add_option("--backend", d.backend, "Image stage: osmesa (software GL, the reference), egl (GPU, or Mesa without one) or cpu (no GL)")
       ->capture_default_str();
 }
 
@@ -753,6 +791,7 @@ void add_frame_options(CLI::App* c, DetectArgs& d) {
 int main(int argc, char** argv) {
   CLI::App app{"peelcd: image-space collision detection between triangle meshes through "
                "alternate surface peeling (OSMesa reference backend)"};
+  app.set_version_flag("--version", std::string("peelcd ") + PEELCD_VERSION_STRING);
   app.require_subcommand(1);
   DetectArgs d;
   CLI::App* detect = app.add_subcommand(

@@ -1,7 +1,7 @@
-#include "bench/peers.h"
+#include "peelcd/bench/peers.h"
 
-#include "core/broad_phase.h"
-#include "core/reference.h"
+#include "peelcd/core/broad_phase.h"
+#include "peelcd/core/reference.h"
 
 #include <fcl/geometry/bvh/BVH_model.h>
 #include <fcl/narrowphase/collision.h>

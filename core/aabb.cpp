@@ -1,4 +1,4 @@
-#include "core/aabb.h"
+#include "peelcd/core/aabb.h"
 
 namespace peelcd {
 

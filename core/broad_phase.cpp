@@ -1,4 +1,4 @@
-#include "core/broad_phase.h"
+#include "peelcd/core/broad_phase.h"
 
 #include <algorithm>
 #include <numeric>

@@ -1,4 +1,4 @@
-#include "core/cpu_peel.h"
+#include "peelcd/core/cpu_peel.h"
 
 #include <algorithm>
 #include <cmath>

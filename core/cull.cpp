@@ -1,4 +1,4 @@
-#include "core/cull.h"
+#include "peelcd/core/cull.h"
 
 #include <algorithm>
 #include <cmath>

@@ -1,6 +1,6 @@
-#include "core/frame.h"
+#include "peelcd/core/frame.h"
 
-#include "core/view.h"
+#include "peelcd/core/view.h"
 
 #include <algorithm>
 #include <cmath>
@@ -16,24 +16,6 @@ std::optional<PeelMode> parse_peel_mode(const std::string& text) {
   return std::nullopt;
 }
 
-const char* to_string(Peeler peeler) { return peeler == Peeler::abuffer ? "abuffer" : "multipass"; }
-
-std::optional<Peeler> parse_peeler(const std::string& text) {
-  if (text == "abuffer" || text == "single-pass") return Peeler::abuffer;
-  if (text == "multipass") return Peeler::multipass;
-  return std::nullopt;
-}
-
-const char* to_string(Resolve resolve) {
-  return resolve == Resolve::gpu ? "gpu" : resolve == Resolve::host ? "host" : "auto";
-}
-
-std::optional<Resolve> parse_resolve(const std::string& text) {
-  if (text == "auto") return Resolve::automatic;
-  if (text == "gpu") return Resolve::gpu;
-  if (text == "host") return Resolve::host;
-  return std::nullopt;
-}
 
 const char* to_string(Cull cull) { return cull == Cull::contact ? "contact" : "box"; }
 

@@ -1,4 +1,4 @@
-#include "core/kbuffer.h"
+#include "peelcd/core/kbuffer.h"
 
 #include <algorithm>
 #include <cmath>

@@ -1,4 +1,4 @@
-#include "core/mesh.h"
+#include "peelcd/core/mesh.h"
 
 #include <Eigen/Geometry>
 #include <cmath>

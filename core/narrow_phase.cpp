@@ -1,8 +1,8 @@
-#include "core/narrow_phase.h"
+#include "peelcd/core/narrow_phase.h"
 
-#include "core/aabb.h"
+#include "peelcd/core/aabb.h"
 
-#include "core/id_map.h"
+#include "peelcd/core/id_map.h"
 
 #include <CGAL/Cartesian_converter.h>
 #include <CGAL/Exact_predicates_exact_constructions_kernel.h>

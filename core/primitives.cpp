@@ -1,4 +1,4 @@
-#include "core/primitives.h"
+#include "peelcd/core/primitives.h"
 
 #include <cmath>
 #include <stdexcept>

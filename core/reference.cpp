@@ -1,7 +1,7 @@
-#include "core/reference.h"
+#include "peelcd/core/reference.h"
 
-#include "core/id_map.h"
-#include "core/narrow_phase.h"
+#include "peelcd/core/id_map.h"
+#include "peelcd/core/narrow_phase.h"
 
 #include <CGAL/Box_intersection_d/Box_with_info_d.h>
 #include <CGAL/box_intersection_d.h>

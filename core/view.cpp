@@ -1,4 +1,4 @@
-#include "core/view.h"
+#include "peelcd/core/view.h"
 
 #include <Eigen/Geometry>
 #include <cmath>

@@ -1,4 +1,4 @@
-#include "core/worker_pool.h"
+#include "peelcd/core/worker_pool.h"
 
 #include <algorithm>
 

@@ -1,8 +1,8 @@
-#include "eval/scenes.h"
+#include "peelcd/eval/scenes.h"
 
-#include "core/aabb.h"
-#include "core/primitives.h"
-#include "io/mesh_io.h"
+#include "peelcd/core/aabb.h"
+#include "peelcd/core/primitives.h"
+#include "peelcd/io/mesh_io.h"
 
 #include <algorithm>
 #include <cmath>

@@ -1,7 +1,7 @@
-#include "eval/sweep.h"
+#include "peelcd/eval/sweep.h"
 
-#include "core/broad_phase.h"
-#include "core/reference.h"
+#include "peelcd/core/broad_phase.h"
+#include "peelcd/core/reference.h"
 
 #include <algorithm>
 #include <map>
@@ -30,7 +30,7 @@ std::vector<std::pair<double, double>> sweep_directions(double theta_step, doubl
   return out;
 }
 
-std::vector<SweepRow> run_sweep(gl::Pipeline& pipeline, const std::vector<Object>& objects,
+std::vector<SweepRow> run_sweep(Detector& detector, const std::vector<Object>& objects,
                                 const std::vector<SweepConfig>& configs,
                                 const std::vector<std::pair<double, double>>& directions,
                                 const std::function<void(std::size_t, std::size_t)>& progress) {
@@ -54,7 +54,7 @@ std::vector<SweepRow> run_sweep(gl::Pipeline& pipeline, const std::vector<Object
     for (const auto& [theta, phi] : directions) {
       opt.theta = theta;
       opt.phi = phi;
-      const FrameResult f = pipeline.detect(objects, opt);
+      const FrameResult f = detector.detect(objects, opt);
       SweepRow row;
       row.config = c;
       row.theta = theta;

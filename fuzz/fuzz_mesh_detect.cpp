@@ -1,11 +1,11 @@
 // Fuzzes mesh loading plus one frame of detection: the input's first byte picks the format
 // (OBJ, PLY, STL, OFF), the rest is the file. A mesh that loads is fitted into [-1, 1]^3 and
 // collided with a sphere on OSMesa at 32^2. Every input must end in a result or an InputError.
-#include "core/primitives.h"
-#include "gl/pipeline.h"
-#include "gl_osmesa/osmesa_context.h"
-#include "io/error.h"
-#include "io/mesh_io.h"
+#include "peelcd/core/primitives.h"
+#include "peelcd/gl/pipeline.h"
+#include "peelcd/gl_osmesa/osmesa_context.h"
+#include "peelcd/io/error.h"
+#include "peelcd/io/mesh_io.h"
 
 #include <unistd.h>
 
@@ -15,8 +15,7 @@
 
 namespace {
 peelcd::gl::Pipeline& pipeline() {
-  static peelcd::gl::OsmesaContext context;
-  static peelcd::gl::Pipeline p(context);
+  static peelcd::gl::Pipeline p(std::make_shared<peelcd::gl::OsmesaContext>());
   return p;
 }
 }  // namespace

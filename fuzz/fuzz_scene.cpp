@@ -1,6 +1,6 @@
 // Fuzzes the scene parser: any input is either a scene or an InputError, never a crash.
-#include "io/error.h"
-#include "io/scene.h"
+#include "peelcd/io/error.h"
+#include "peelcd/io/scene.h"
 
 #include <cstddef>
 #include <cstdint>

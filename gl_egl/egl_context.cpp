@@ -1,4 +1,4 @@
-#include "gl_egl/egl_context.h"
+#include "peelcd/gl_egl/egl_context.h"
 
 #include <EGL/egl.h>
 #include <EGL/eglext.h>
@@ -12,6 +12,10 @@ struct EglContext::Impl {
   EGLDisplay display = EGL_NO_DISPLAY;
   EGLContext context = EGL_NO_CONTEXT;
   std::string platform;
+  // The caller's context, current before make_current() (EGL_NO_CONTEXT: none to give back).
+  EGLDisplay prev_display = EGL_NO_DISPLAY;
+  EGLSurface prev_draw = EGL_NO_SURFACE, prev_read = EGL_NO_SURFACE;
+  EGLContext prev_context = EGL_NO_CONTEXT;
 };
 
 namespace {
@@ -77,7 +81,8 @@ EglContext::EglContext(Platform platform) : impl_(std::make_unique<Impl>()) {
     throw GlError("peelcd::gl::EglContext: no EGL platform gives an OpenGL 4.5 core context without a surface "
                   "(tried " + std::string(platform == Platform::surfaceless ? "" : "device ") +
                   (platform == Platform::device ? "" : "surfaceless") + ")");
-  make_current();
+  if (!eglMakeCurrent(impl_->display, EGL_NO_SURFACE, EGL_NO_SURFACE, impl_->context))
+    throw GlError("peelcd::gl::EglContext: eglMakeCurrent failed");
 }
 
 EglContext::~EglContext() {
@@ -91,8 +96,25 @@ EglContext::~EglContext() {
 }
 
 void EglContext::make_current() {
-  if (!eglMakeCurrent(impl_->display, EGL_NO_SURFACE, EGL_NO_SURFACE, impl_->context))
+  const EGLContext current = eglGetCurrentContext();
+  impl_->prev_context = EGL_NO_CONTEXT;
+  if (current == impl_->context) return;  // already current: nothing to switch or give back
+  if (current != EGL_NO_CONTEXT) {
+    impl_->prev_context = current;
+    impl_->prev_display = eglGetCurrentDisplay();
+    impl_->prev_draw = eglGetCurrentSurface(EGL_DRAW);
+    impl_->prev_read = eglGetCurrentSurface(EGL_READ);
+  }
+  if (!eglMakeCurrent(impl_->display, EGL_NO_SURFACE, EGL_NO_SURFACE, impl_->context)) {
+    impl_->prev_context = EGL_NO_CONTEXT;
     throw GlError("peelcd::gl::EglContext: eglMakeCurrent failed");
+  }
+}
+
+void EglContext::restore_previous() noexcept {
+  if (impl_->prev_context == EGL_NO_CONTEXT) return;
+  eglMakeCurrent(impl_->prev_display, impl_->prev_draw, impl_->prev_read, impl_->prev_context);
+  impl_->prev_context = EGL_NO_CONTEXT;
 }
 
 ProcAddress EglContext::proc_address(const char* name) { return reinterpret_cast<ProcAddress>(eglGetProcAddress(name)); }

@@ -1,4 +1,4 @@
-#include "gl_osmesa/osmesa_context.h"
+#include "peelcd/gl_osmesa/osmesa_context.h"
 
 #include <GL/osmesa.h>
 
@@ -7,6 +7,10 @@ namespace peelcd::gl {
 struct OsmesaContext::Impl {
   OSMesaContext ctx = nullptr;
   unsigned char pixel[4] = {0, 0, 0, 0};
+  // The caller's context, current before make_current(), and its colour buffer.
+  OSMesaContext prev = nullptr;
+  GLint prev_width = 0, prev_height = 0, prev_format = 0;
+  void* prev_buffer = nullptr;
 };
 
 OsmesaContext::OsmesaContext() : impl_(std::make_unique<Impl>()) {
@@ -20,7 +24,8 @@ OsmesaContext::OsmesaContext() : impl_(std::make_unique<Impl>()) {
   if (!impl_->ctx)
     throw GlError("peelcd::gl::OsmesaContext: cannot create an OpenGL 4.5 core context "
                   "(is libosmesa6 installed, with llvmpipe?)");
-  make_current();
+  if (!OSMesaMakeCurrent(impl_->ctx, impl_->pixel, GL_UNSIGNED_BYTE, 1, 1))
+    throw GlError("peelcd::gl::OsmesaContext: OSMesaMakeCurrent failed");
 }
 
 OsmesaContext::~OsmesaContext() {
@@ -28,8 +33,24 @@ OsmesaContext::~OsmesaContext() {
 }
 
 void OsmesaContext::make_current() {
-  if (!OSMesaMakeCurrent(impl_->ctx, impl_->pixel, GL_UNSIGNED_BYTE, 1, 1))
+  const OSMesaContext current = OSMesaGetCurrentContext();
+  impl_->prev = nullptr;
+  if (current == impl_->ctx) return;  // already current: nothing to switch or give back
+  if (current && OSMesaGetColorBuffer(current, &impl_->prev_width, &impl_->prev_height, &impl_->prev_format,
+                                      &impl_->prev_buffer))
+    impl_->prev = current;
+  if (!OSMesaMakeCurrent(impl_->ctx, impl_->pixel, GL_UNSIGNED_BYTE, 1, 1)) {
+    impl_->prev = nullptr;
     throw GlError("peelcd::gl::OsmesaContext: OSMesaMakeCurrent failed");
+  }
+}
+
+// The caller's buffer is given back as GL_UNSIGNED_BYTE (the common case; OSMesa does not tell
+// the type a buffer was bound with).
+void OsmesaContext::restore_previous() noexcept {
+  if (!impl_->prev) return;
+  OSMesaMakeCurrent(impl_->prev, impl_->prev_buffer, GL_UNSIGNED_BYTE, impl_->prev_width, impl_->prev_height);
+  impl_->prev = nullptr;
 }
 
 ProcAddress OsmesaContext::proc_address(const char* name) {

@@ -1,6 +1,6 @@
-#include "io/mesh_io.h"
+#include "peelcd/io/mesh_io.h"
 
-#include "io/error.h"
+#include "peelcd/io/error.h"
 
 #include <assimp/Importer.hpp>
 #include <assimp/postprocess.h>

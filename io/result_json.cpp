@@ -1,4 +1,7 @@
-#include "io/result_json.h"
+#include "peelcd/io/result_json.h"
+
+#include "peelcd/io/options_json.h"
+#include "peelcd/version.h"
 
 namespace peelcd {
 
@@ -36,13 +39,9 @@ nlohmann::json to_json(const FrameResult& r, const std::vector<Object>& objects,
                      {"segments", segments},
                      {"kinds", kinds}});
   }
-  return {{"renderer", r.renderer},
-          {"view", {{"theta", o.theta}, {"phi", o.phi}}},
-          {"ids", to_string(o.ids)},
-          {"peel", to_string(o.peel)},
-          {"slope", o.slope},
-          {"cull", to_string(o.cull)},
-          {"views", o.views},
+  return {{"peelcd_version", PEELCD_VERSION_STRING},
+          {"renderer", r.renderer},
+          {"options", options_to_json(o)},
           {"pairs", pairs},
           {"colliding_pairs", total},
           {"gl_passes", r.gl_passes},

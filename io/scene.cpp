@@ -1,7 +1,7 @@
-#include "io/scene.h"
+#include "peelcd/io/scene.h"
 
-#include "io/error.h"
-#include "io/mesh_io.h"
+#include "peelcd/io/error.h"
+#include "peelcd/io/mesh_io.h"
 
 #include <nlohmann/json.hpp>
 
@@ -52,7 +52,8 @@ Scene parse_scene(const std::string& text, const std::string& path, const std::s
   } catch (const json::exception& e) {  // a syntax error, or a number out of range (fuzzing)
     throw InputError("peelcd::load_scene(): '" + path + "': malformed JSON: " + e.what());
   }
-  c.only_keys(root, "the scene", {"objects", "view", "resolution", "budget", "ids", "epsilon", "peel", "slope", "views", "cull", "edge_texels"});
+  c.only_keys(root, "the scene", {"objects", "view", "resolution", "budget", "ids", "epsilon", "peel", "slope", "views", "cull", "edge_texels",
+                                    "peeler", "resolve"});
   Scene scene;
   scene.path = path;
   if (!root.contains("objects")) c.fail("the scene", "missing key \"objects\"");
@@ -139,6 +140,18 @@ Scene parse_scene(const std::string& text, const std::string& path, const std::s
   if (root.contains("edge_texels")) {
     opt.edge_texels = c.number(root["edge_texels"], "edge_texels");
     if (opt.edge_texels < 0) c.fail("edge_texels", "must be >= 0 (0 = the budget's share)");
+  }
+  if (root.contains("peeler")) {
+    const std::string peeler = c.string(root["peeler"], "peeler");
+    const auto p = parse_peeler(peeler);
+    if (!p) c.fail("peeler", "unknown peeler \"" + peeler + "\" (expected abuffer or multipass)");
+    scene.gl.peeler = *p;
+  }
+  if (root.contains("resolve")) {
+    const std::string resolve = c.string(root["resolve"], "resolve");
+    const auto r = parse_resolve(resolve);
+    if (!r) c.fail("resolve", "unknown resolve \"" + resolve + "\" (expected auto, gpu or host)");
+    scene.gl.resolve = *r;
   }
   return scene;
 }

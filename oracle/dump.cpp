@@ -1,7 +1,9 @@
-#include "oracle/dump.h"
+#include "peelcd/oracle/dump.h"
 
-#include "io/error.h"
-#include "oracle/viewer.h"
+#include "peelcd/io/error.h"
+#include "peelcd/io/options_json.h"
+#include "peelcd/version.h"
+#include "peelcd/oracle/viewer.h"
 
 #include <algorithm>
 #include <cmath>
@@ -110,7 +112,7 @@ bool near_edge(const std::vector<std::uint32_t>& layer, int n, int x, int y, int
 
 const char* to_string(Tier tier) { return tier == Tier::exact ? "exact" : "hardware"; }
 
-Dump make_dump(const FrameResult& frame, const std::vector<gl::CapturedView>& captured,
+Dump make_dump(const FrameResult& frame, const std::vector<CapturedView>& captured,
                const std::vector<Object>& objects, const DetectOptions& o, const std::string& renderer,
                const std::string& gl_version, const std::string& backend) {
   Dump d;
@@ -118,10 +120,7 @@ Dump make_dump(const FrameResult& frame, const std::vector<gl::CapturedView>& ca
   d.gl_version = gl_version;
   d.backend = backend;
   d.shader_hash = gl::shader_sources_hash();
-  d.options = {{"theta", o.theta}, {"phi", o.phi},       {"resolution", o.resolution},
-               {"budget", o.budget}, {"ids", to_string(o.ids)}, {"epsilon", o.epsilon},
-               {"peel", to_string(o.peel)}, {"slope", o.slope}, {"views", o.views},
-               {"cull", to_string(o.cull)}};
+  d.options = options_to_json(o);
   for (std::size_t i = 0; i < frame.pairs.size(); ++i) {
     const PairResult& r = frame.pairs[i];
     DumpPair p;
@@ -136,7 +135,7 @@ Dump make_dump(const FrameResult& frame, const std::vector<gl::CapturedView>& ca
       p.colliding.push_back({c.tri_a, c.tri_b});
       p.kinds.push_back(to_string(c.kind));
     }
-    for (const gl::CapturedView& c : captured) {
+    for (const CapturedView& c : captured) {
       if (c.pair != i) continue;
       DumpView v;
       v.view = c.view;
@@ -182,7 +181,8 @@ void write_dump(const Dump& d, const std::string& dir, bool previews) {
   fs::remove_all(tmp, ec);
   try {
     fs::create_directories(tmp);
-    nlohmann::json meta = {{"renderer", d.renderer}, {"gl_version", d.gl_version}, {"backend", d.backend},
+    nlohmann::json meta = {{"peelcd_version", PEELCD_VERSION_STRING}, {"renderer", d.renderer},
+                           {"gl_version", d.gl_version}, {"backend", d.backend},
                            {"shader_hash", d.shader_hash}, {"options", d.options}};
     nlohmann::json pairs = nlohmann::json::array();
     for (const DumpPair& p : d.pairs) {
@@ -299,7 +299,10 @@ Comparison compare_dumps(const Dump& e, const Dump& a, Tier tier, std::size_t ma
     c.notes.push_back("shader sources changed since the golden was recorded (hash " + e.shader_hash + ", now " +
                       a.shader_hash + ")");
   if (e.renderer != a.renderer) c.notes.push_back("renderer: golden \"" + e.renderer + "\", now \"" + a.renderer + "\"");
-  if (e.options != a.options) c.failures.push_back("options differ: golden " + e.options.dump() + ", now " + a.options.dump());
+  // Options both dumps record must agree (a dump from an older writer may record fewer).
+  for (const auto& [key, value] : e.options.items())
+    if (a.options.contains(key) && a.options[key] != value)
+      c.failures.push_back("option \"" + key + "\" differs: golden " + value.dump() + ", now " + a.options[key].dump());
   if (e.pairs.size() != a.pairs.size()) {
     c.failures.push_back("ROI count differs: golden " + std::to_string(e.pairs.size()) + ", now " +
                          std::to_string(a.pairs.size()));

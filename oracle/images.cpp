@@ -1,6 +1,6 @@
 // EXR layers (OpenEXR), PNG previews (libpng).
-#include "io/error.h"
-#include "oracle/dump.h"
+#include "peelcd/io/error.h"
+#include "peelcd/oracle/dump.h"
 
 #include <OpenEXR/ImfChannelList.h>
 #include <OpenEXR/ImfFrameBuffer.h>

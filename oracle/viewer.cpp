@@ -1,4 +1,4 @@
-#include "oracle/viewer.h"
+#include "peelcd/oracle/viewer.h"
 
 #include <sstream>
 

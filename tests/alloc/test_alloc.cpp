@@ -4,9 +4,9 @@
 // second must not allocate. (A new maximum of PCS or contacts grows a buffer once, geometrically.)
 // Counted: every operator new in this process (replaced below). Not counted: the GL driver's
 // own malloc calls inside GL functions, which peelcd does not control.
-#include "core/primitives.h"
-#include "gl/pipeline.h"
-#include "gl_osmesa/osmesa_context.h"
+#include "peelcd/core/primitives.h"
+#include "peelcd/gl/pipeline.h"
+#include "peelcd/gl_osmesa/osmesa_context.h"
 
 #include <catch2/catch.hpp>
 
@@ -39,8 +39,7 @@ void operator delete[](void* p, std::size_t) noexcept { std::free(p); }
 using namespace peelcd;
 
 TEST_CASE("a steady stream of frames allocates nothing", "[alloc]") {
-  gl::OsmesaContext context;
-  gl::Pipeline pipeline(context);
+  gl::Pipeline pipeline(std::make_shared<gl::OsmesaContext>());
   // Two spheres and a rigid ball moving a little every frame: two ROIs, contacts every frame.
   const Mesh big = make_uv_sphere(Vec3(0, 0, 0), 1.0, 16, 32);
   auto ball = std::make_shared<const Mesh>(make_uv_sphere(Vec3(0, 0, 0), 0.6, 12, 24));
@@ -58,8 +57,8 @@ TEST_CASE("a steady stream of frames allocates nothing", "[alloc]") {
       objects[1].mesh.vertices[i] = small.vertices[i] * (1.0 + 0.02 * phase);
   };
   for (Peeler peeler : {Peeler::abuffer, Peeler::multipass}) {
+    pipeline.set_gl_options({peeler});
     DetectOptions opt;
-    opt.peeler = peeler;
     opt.resolution = 128;
     FrameResult result;
     for (int f = 0; f < 5; ++f) {  // warm-up: one period; buffers grow to their working size

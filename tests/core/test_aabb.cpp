@@ -1,6 +1,6 @@
-#include "core/broad_phase.h"
-#include "core/frame.h"
-#include "core/primitives.h"
+#include "peelcd/core/broad_phase.h"
+#include "peelcd/core/frame.h"
+#include "peelcd/core/primitives.h"
 
 #include <catch2/catch.hpp>
 

@@ -1,5 +1,5 @@
-#include "core/cpu_peel.h"
-#include "core/primitives.h"
+#include "peelcd/core/cpu_peel.h"
+#include "peelcd/core/primitives.h"
 
 #include <catch2/catch.hpp>
 

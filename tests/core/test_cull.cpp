@@ -1,10 +1,10 @@
 // Contact-region culling (core/cull.h) must never drop a triangle of a colliding pair, whatever
 // the scale, offset or degeneracy; it must drop what is far from the other object.
 #include "adversarial.h"
-#include "core/cull.h"
-#include "core/id_map.h"
-#include "core/primitives.h"
-#include "core/reference.h"
+#include "peelcd/core/cull.h"
+#include "peelcd/core/id_map.h"
+#include "peelcd/core/primitives.h"
+#include "peelcd/core/reference.h"
 
 #include <catch2/catch.hpp>
 

@@ -1,4 +1,4 @@
-#include "core/id_map.h"
+#include "peelcd/core/id_map.h"
 
 #include <catch2/catch.hpp>
 

@@ -1,4 +1,4 @@
-#include "core/narrow_phase.h"
+#include "peelcd/core/narrow_phase.h"
 
 #include <catch2/catch.hpp>
 

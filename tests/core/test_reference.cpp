@@ -1,7 +1,7 @@
-#include "core/id_map.h"
-#include "core/narrow_phase.h"
-#include "core/primitives.h"
-#include "core/reference.h"
+#include "peelcd/core/id_map.h"
+#include "peelcd/core/narrow_phase.h"
+#include "peelcd/core/primitives.h"
+#include "peelcd/core/reference.h"
 
 #include <catch2/catch.hpp>
 

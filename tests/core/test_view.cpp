@@ -1,5 +1,5 @@
-#include "core/frame.h"
-#include "core/view.h"
+#include "peelcd/core/frame.h"
+#include "peelcd/core/view.h"
 
 #include <catch2/catch.hpp>
 

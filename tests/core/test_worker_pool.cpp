@@ -1,6 +1,6 @@
 // The worker pool (core/worker_pool.h) runs every lane once per job and rethrows a lane's
 // exception; the host resolve's lanes run on it.
-#include "core/worker_pool.h"
+#include "peelcd/core/worker_pool.h"
 
 #include <catch2/catch.hpp>
 

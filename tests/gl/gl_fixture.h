@@ -1,11 +1,11 @@
 #pragma once
 // One OSMesa context and pipeline per test process, reused by every test (as an application
 // would reuse them across frames).
-#include "core/cpu_peel.h"
-#include "core/reference.h"
-#include "gl/pipeline.h"
-#include "gl_egl/egl_context.h"
-#include "gl_osmesa/osmesa_context.h"
+#include "peelcd/core/cpu_peel.h"
+#include "peelcd/core/reference.h"
+#include "peelcd/gl/pipeline.h"
+#include "peelcd/gl_egl/egl_context.h"
+#include "peelcd/gl_osmesa/osmesa_context.h"
 
 #include <cstdlib>
 #include <memory>
@@ -23,16 +23,28 @@ inline std::string test_backend() {
   return b ? b : "osmesa";
 }
 
-inline gl::Context& test_context() {
-  static const std::unique_ptr<gl::Context> context =
-      test_backend() == "egl" ? std::unique_ptr<gl::Context>(new gl::EglContext())
-                              : std::unique_ptr<gl::Context>(new gl::OsmesaContext());
-  return *context;
+inline std::shared_ptr<gl::Context> test_context() {
+  static const std::shared_ptr<gl::Context> context =
+      test_backend() == "egl" ? std::shared_ptr<gl::Context>(std::make_shared<gl::EglContext>())
+                              : std::shared_ptr<gl::Context>(std::make_shared<gl::OsmesaContext>());
+  return context;
 }
 
 inline gl::Pipeline& test_pipeline() {  // the pipeline of the backend under test
   static gl::Pipeline pipeline(test_context());
   return pipeline;
+}
+
+// Runs `fn` with the test pipeline's peeler set to `peeler`, then sets the default back.
+template <class F>
+auto with_peeler(Peeler peeler, F&& fn) {
+  gl::GlOptions o;
+  o.peeler = peeler;
+  test_pipeline().set_gl_options(o);
+  struct Reset {
+    ~Reset() { test_pipeline().set_gl_options(gl::GlOptions{}); }
+  } reset;
+  return fn();
 }
 
 inline Score score(const std::vector<std::uint64_t>& exact, const std::vector<Contact>& reported) {

@@ -2,7 +2,7 @@
 // pointers resolved from the current context, so both run side by side. On llvmpipe both must
 // give bit-identical results: the same PCS and the same contacts.
 #include "gl_fixture.h"
-#include "io/scene.h"
+#include "peelcd/io/scene.h"
 
 #include <catch2/catch.hpp>
 
@@ -10,11 +10,11 @@ using namespace peelcd;
 using namespace peelcd::test;
 
 TEST_CASE("OSMesa and EGL (llvmpipe) in one process give identical PCS and contacts", "[backends]") {
-  gl::OsmesaContext osmesa;
+  auto osmesa = std::make_shared<gl::OsmesaContext>();
   gl::Pipeline reference(osmesa);
-  gl::EglContext egl;
+  auto egl = std::make_shared<gl::EglContext>();
   gl::Pipeline other(egl);
-  INFO("EGL platform " << egl.backend() << ", renderer " << other.renderer());
+  INFO("EGL platform " << egl->backend() << ", renderer " << other.renderer());
   if (other.renderer().find("llvmpipe") == std::string::npos) {
     WARN("EGL runs on " << other.renderer() << ", not llvmpipe: bit-identity is not expected; skipped");
     return;

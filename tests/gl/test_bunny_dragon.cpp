@@ -1,7 +1,7 @@
 // The default scene (design.md section 4) at 256^2 with paper IDs, over several views: no false
 // contact ever, and the miss ratio of the default configuration under 15% in every view.
 #include "gl_fixture.h"
-#include "io/scene.h"
+#include "peelcd/io/scene.h"
 
 #include <catch2/catch.hpp>
 

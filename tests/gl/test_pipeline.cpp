@@ -1,5 +1,5 @@
-#include "core/cull.h"
-#include "core/primitives.h"
+#include "peelcd/core/cull.h"
+#include "peelcd/core/primitives.h"
 #include "gl_fixture.h"
 
 #include <catch2/catch.hpp>
@@ -22,9 +22,9 @@ struct Run {
 };
 
 // One view (the CPU model peels one), whatever the options say.
-Run run(const Mesh& a, const Mesh& b, DetectOptions opt) {
+Run run(const Mesh& a, const Mesh& b, DetectOptions opt, Peeler peeler = Peeler::abuffer) {
   opt.views = 1;
-  const FrameResult f = test_pipeline().detect(two(a, b), opt);
+  const FrameResult f = with_peeler(peeler, [&] { return test_pipeline().detect(two(a, b), opt); });
   REQUIRE(f.pairs.size() == 1);
   Run r;
   r.gpu = f.pairs[0];
@@ -71,14 +71,14 @@ TEST_CASE("two axis-aligned boxes crossing", "[gl]") {
   opt.cull = Cull::box;  // the whole overlap box, as the paper peels it
 
   SECTION("full peeling: entry and exit layers, PCS on the rim, every contact longer than a texel found") {
-    opt.peeler = GENERATE(Peeler::multipass, Peeler::abuffer);
-    INFO("peeler " << to_string(opt.peeler));
-    const Run r = run(a, b, opt);
+    const Peeler peeler = GENERATE(Peeler::multipass, Peeler::abuffer);
+    INFO("peeler " << to_string(peeler));
+    const Run r = run(a, b, opt, peeler);
     // Two surfaces per ray inside the ROI, and near the rim a third: B's side just beyond A's
     // face, in the ROI's padding (core/view.h, kRoiPadTexels).
     CHECK(r.gpu.layers == 3);
     // Multi-pass: the layers and the empty pass that ends the ROI; A-buffer: one draw.
-    CHECK(r.gpu.passes == (opt.peeler == Peeler::multipass ? 4 : 1));
+    CHECK(r.gpu.passes == (peeler == Peeler::multipass ? 4 : 1));
     CHECK(r.gpu.pcs == r.cpu.pcs);
     for (const IdPair& p : r.gpu.pcs) {
       CHECK((p.a == 10 || p.a == 11));  // A's x = 1 face (core/primitives.cpp)
@@ -92,11 +92,11 @@ TEST_CASE("two axis-aligned boxes crossing", "[gl]") {
     CHECK(r.score.missed <= 4);
   }
   SECTION("contact culling keeps the two crossing faces and finds the same contacts in a smaller box") {
-    opt.peeler = GENERATE(Peeler::multipass, Peeler::abuffer);
-    INFO("peeler " << to_string(opt.peeler));
-    const Run whole = run(a, b, opt);
+    const Peeler peeler = GENERATE(Peeler::multipass, Peeler::abuffer);
+    INFO("peeler " << to_string(peeler));
+    const Run whole = run(a, b, opt, peeler);
     opt.cull = Cull::contact;
-    const Run r = run(a, b, opt);
+    const Run r = run(a, b, opt, peeler);
     // In the ROI: A's x = 1 face (2 triangles), B's 4 side faces (8) and B's x = 0.5 face (2),
     // which lies inside A, far from A's surface: dropped.
     CHECK(r.gpu.triangles_in_roi_a == 2);
@@ -266,7 +266,9 @@ TEST_CASE("a rigid object's shape is uploaded once, then moved by its pose", "[g
     return std::make_pair(test_pipeline().detect(objects, opt), objects);
   };
   for (Peeler peeler : {Peeler::abuffer, Peeler::multipass}) {
-    opt.peeler = peeler;
+    gl::GlOptions o;
+    o.peeler = peeler;
+    test_pipeline().set_gl_options(o);
     INFO("peeler " << to_string(peeler));
     // Several poses: the shape goes up once (or not at all, if an earlier section left it
     // cached); afterwards only indices, and the answers match the plain world-space path.
@@ -289,6 +291,7 @@ TEST_CASE("a rigid object's shape is uploaded once, then moved by its pose", "[g
     }
     CHECK(uploads <= 1);
   }
+  test_pipeline().set_gl_options(gl::GlOptions{});
   // A new shape (the old one released) is uploaded again.
   ball = std::make_shared<const Mesh>(make_uv_sphere(Vec3(0, 0, 0), 0.7, 10, 20));
   CHECK(frame(Vec3(0.9, 0.4, 0.2), true).first.shape_uploads == 1);
@@ -328,11 +331,10 @@ TEST_CASE("texels deeper than the k-buffer: it grows and matches multi-pass", "[
   const auto [a, b] = interleaved_stacks();
   gl::Pipeline fresh(test_context());  // its k-buffer starts at the default depth
   DetectOptions opt = stacks_view(64);
-  std::vector<gl::CapturedView> single, multi;
-  opt.peeler = Peeler::abuffer;
+  std::vector<CapturedView> single, multi;
   fresh.capture_layers(&single);
   const FrameResult fs = fresh.detect(two(a, b), opt);
-  opt.peeler = Peeler::multipass;
+  fresh.set_gl_options({Peeler::multipass});
   fresh.capture_layers(&multi);
   const FrameResult fm = fresh.detect(two(a, b), opt);
   fresh.capture_layers(nullptr);
@@ -355,9 +357,8 @@ TEST_CASE("a k-buffer larger than a storage block falls back to multi-pass", "[g
   const auto [a, b] = interleaved_stacks();
   gl::Pipeline fresh(test_context());
   DetectOptions opt = stacks_view(768);
-  opt.peeler = Peeler::abuffer;
   const FrameResult fs = fresh.detect(two(a, b), opt);
-  opt.peeler = Peeler::multipass;
+  fresh.set_gl_options({Peeler::multipass});
   const FrameResult fm = fresh.detect(two(a, b), opt);
   REQUIRE(fs.pairs.size() == 1);
   REQUIRE(fm.pairs.size() == 1);

@@ -1,8 +1,8 @@
 // Numerical stability of the image stage: answers invariant under translation and scaling,
 // depth resolution at its documented boundary, triangle IDs beyond 2^24.
-#include "core/primitives.h"
+#include "peelcd/core/primitives.h"
 #include "gl_fixture.h"
-#include "io/scene.h"
+#include "peelcd/io/scene.h"
 
 #include <catch2/catch.hpp>
 

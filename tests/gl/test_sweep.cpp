@@ -1,8 +1,8 @@
 // A coarse accuracy sweep of the default scene (the long sweeps are commands, see
 // docs/accuracy.md): the relations that must hold, and the documented bounds of the default.
-#include "eval/sweep.h"
+#include "peelcd/eval/sweep.h"
 #include "gl_fixture.h"
-#include "io/scene.h"
+#include "peelcd/io/scene.h"
 
 #include <catch2/catch.hpp>
 
@@ -39,7 +39,7 @@ TEST_CASE("coarse sweep of bunny vs dragon: relations and bounds", "[sweep]") {
   };
   const auto directions = sweep_directions(90, 60);  // 10 views, poles included
   REQUIRE(directions.size() == 10);
-  const auto rows = run_sweep(test_pipeline(), objects, configs, directions);
+  const auto rows = run_sweep(test_pipeline().detector(), objects, configs, directions);
   REQUIRE(rows.size() == configs.size() * directions.size());
 
   std::vector<SweepSummary> s;

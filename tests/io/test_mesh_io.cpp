@@ -1,5 +1,5 @@
-#include "io/error.h"
-#include "io/mesh_io.h"
+#include "peelcd/io/error.h"
+#include "peelcd/io/mesh_io.h"
 
 #include <catch2/catch.hpp>
 

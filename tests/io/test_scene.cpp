@@ -1,5 +1,5 @@
-#include "io/error.h"
-#include "io/scene.h"
+#include "peelcd/io/error.h"
+#include "peelcd/io/scene.h"
 
 #include <catch2/catch.hpp>
 

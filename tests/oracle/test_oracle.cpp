@@ -1,6 +1,6 @@
 // Layer images, dumps and the golden comparison, on synthetic layers (no GL).
-#include "io/error.h"
-#include "oracle/dump.h"
+#include "peelcd/io/error.h"
+#include "peelcd/oracle/dump.h"
 
 #include <catch2/catch.hpp>
 

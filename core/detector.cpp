@@ -1,0 +1,335 @@
+#include "peelcd/core/detector.h"
+
+#include "peelcd/core/broad_phase.h"
+#include "peelcd/core/cull.h"
+
+#include <algorithm>
+#include <chrono>
+#include <cmath>
+#include <stdexcept>
+#include <string>
+
+namespace peelcd {
+namespace {
+
+using Clock = std::chrono::steady_clock;
+double ms_since(Clock::time_point t0) {
+  return std::chrono::duration<double, std::milli>(Clock::now() - t0).count();
+}
+
+std::string object_label(const Object& o, std::size_t i) {
+  return "object " + std::to_string(i) + (o.name.empty() ? "" : " '" + o.name + "'");
+}
+
+// Gives the caller's context back when the frame ends, also on an exception.
+struct FrameScope {
+  ImageStage* stage = nullptr;
+  ~FrameScope() {
+    if (stage) stage->end_frame();
+  }
+};
+
+}  // namespace
+
+void validate_objects(const std::vector<Object>& objects) {
+  // Messages are built only on failure: a valid frame allocates nothing here.
+  for (std::size_t i = 0; i < objects.size(); ++i) {
+    const Object& o = objects[i];
+    const Mesh& m = o.mesh;
+    const auto fail = [&](const std::string& problem) {
+      throw std::invalid_argument("peelcd: " + object_label(o, i) + problem);
+    };
+    for (std::size_t v = 0; v < m.vertices.size(); ++v)
+      if (!m.vertices[v].allFinite()) fail(": vertex " + std::to_string(v) + " has a NaN or infinite coordinate");
+    const std::size_t n = m.vertices.size();
+    for (std::size_t f = 0; f < m.triangles.size(); ++f)
+      for (std::uint32_t v : m.triangles[f])
+        if (v >= n)
+          fail(": triangle " + std::to_string(f) + " uses vertex " + std::to_string(v) + " but the mesh has " +
+               std::to_string(n) + " vertices");
+    // A layer texel stores object << 31 | ID + 1: IDs must stay below 2^31 - 1.
+    if (std::max(m.triangles.size(), m.vertices.size()) >= 0x7fffffffu)
+      fail(" has 2^31 - 1 or more triangles or vertices; IDs hold 31 bits");
+    if (o.rigid) {
+      if (!o.rigid->shape) fail(": rigid motion without a shape");
+      if (o.rigid->shape->triangles.size() != m.triangles.size())
+        fail(": its rigid shape has " + std::to_string(o.rigid->shape->triangles.size()) + " triangles, its world mesh " +
+             std::to_string(m.triangles.size()));
+      if (!o.rigid->pose.matrix().allFinite()) fail(": its pose has a NaN or infinite entry");
+    }
+  }
+}
+
+void validate_options(const DetectOptions& opt, int max_resolution) {
+  const char* where = "peelcd: options: ";
+  if (opt.resolution < 0 || opt.resolution > max_resolution)
+    throw std::invalid_argument(std::string(where) + "resolution " + std::to_string(opt.resolution) + " is outside 1.." +
+                                std::to_string(max_resolution) +
+                                " (the image stage's largest view: GL_MAX_TEXTURE_SIZE on GL; 0 = share the budget)");
+  if (opt.resolution == 0 && (opt.budget <= 0 || opt.budget > max_resolution))
+    throw std::invalid_argument(std::string(where) + "budget " + std::to_string(opt.budget) + " is outside 1.." +
+                                std::to_string(max_resolution) + " (the image stage's largest view)");
+  if (opt.views < 1 || opt.views > 3) throw std::invalid_argument(std::string(where) + "views must be 1, 2 or 3");
+  if (!std::isfinite(opt.theta) || !std::isfinite(opt.phi))
+    throw std::invalid_argument(std::string(where) + "theta and phi must be finite");
+  if (!(opt.slope >= 0.0) || !std::isfinite(opt.slope))
+    throw std::invalid_argument(std::string(where) + "slope must be finite and >= 0");
+  if (!(opt.epsilon >= 0.0) || !std::isfinite(opt.epsilon))
+    throw std::invalid_argument(std::string(where) + "epsilon must be finite and >= 0 (0 = one texel)");
+  if (!(opt.edge_texels >= 0.0) || !std::isfinite(opt.edge_texels))
+    throw std::invalid_argument(std::string(where) + "edge_texels must be finite and >= 0 (0 = the budget's share)");
+}
+
+double triangles_in_view(const Mesh& mesh, const RoiView& view, const std::vector<std::uint32_t>* only,
+                         std::vector<std::uint32_t>& out) {
+  out.clear();
+  double min_depth = view.half_depth;
+  const Aabb& box = view.box;
+  const std::size_t count = only ? only->size() : mesh.triangles.size();
+  for (std::size_t i = 0; i < count; ++i) {
+    const auto t = only ? (*only)[i] : std::uint32_t(i);
+    const Tri& f = mesh.triangles[t];
+    const Vec3& a = mesh.vertices[f[0]];
+    const Vec3& b = mesh.vertices[f[1]];
+    const Vec3& c = mesh.vertices[f[2]];
+    const Vec3 lo = a.cwiseMin(b).cwiseMin(c), hi = a.cwiseMax(b).cwiseMax(c);
+    if ((hi.array() < box.lo.array()).any() || (lo.array() > box.hi.array()).any()) continue;
+    out.push_back(t);
+    for (int k = 0; k < 3; ++k) {
+      const Vec3 local = mesh.vertices[f[k]] - view.center;
+      min_depth = std::min(min_depth, std::max(-view.half_depth, local.dot(view.frame.d)));
+    }
+  }
+  return min_depth;
+}
+
+struct Detector::Impl {
+  std::vector<Aabb> boxes;
+  std::vector<std::pair<std::size_t, std::size_t>> object_pairs;
+  std::vector<std::size_t> order;
+  ContactCull cull;
+  std::vector<std::uint32_t> tris[2];
+  PeelResult peeled;
+  std::vector<IdPair> pcs_all;
+  std::vector<std::uint64_t> candidates, candidate_scratch, pcs_keys;
+  IdMap map_a, map_b;
+  std::vector<CapturedView>* capture = nullptr;
+
+  // Contact-region culling of one object pair into `cull` and the tile its box gets (`share`,
+  // or less by edge_tile_resolution() when sharing the budget). 0 when nothing is kept.
+  int cull_pair(const Mesh& a, const Mesh& b, const Aabb& roi, const DetectOptions& opt, int share) {
+    cull_to_contact_region(a, b, roi, cull);
+    if (cull.box.empty()) return 0;
+    if (opt.resolution > 0) return share;
+    return edge_tile_resolution(share, cull.box, cull.median_edge, opt.edge_texels);
+  }
+};
+
+Detector::Detector(std::shared_ptr<ImageStage> stage) : stage_(std::move(stage)), impl_(std::make_unique<Impl>()) {
+  if (!stage_) throw std::invalid_argument("peelcd::Detector: no image stage");
+}
+Detector::~Detector() = default;
+
+void Detector::capture_layers(std::vector<CapturedView>* sink) { impl_->capture = sink; }
+
+FrameResult Detector::detect(const std::vector<Object>& objects, const DetectOptions& opt) {
+  FrameResult out;
+  detect(objects, opt, out);
+  return out;
+}
+
+void Detector::detect(const std::vector<Object>& objects, const DetectOptions& opt, FrameResult& out) {
+  Impl& s = *impl_;
+  ImageStage& stage = *stage_;
+  validate_options(opt, stage.max_resolution());
+  validate_objects(objects);
+
+  // `out` is reused: its vectors keep their capacity (tests/alloc/test_alloc.cpp counts it).
+  out.timings = Timings{};
+  out.gl_passes = out.rois_peeled = out.triangles_uploaded = out.triangles_indexed = out.shape_uploads = 0;
+  out.pcs_readbacks = 0;
+  const auto t_total = Clock::now();
+
+  auto t0 = Clock::now();
+  s.boxes.clear();
+  for (const Object& o : objects) s.boxes.push_back(bounds(o.mesh));
+  overlapping_pairs(s.boxes, s.object_pairs, s.order);
+  const auto& pairs = s.object_pairs;
+  out.timings.aabb = ms_since(t0);
+
+  FrameScope scope;
+  if (!pairs.empty()) {
+    stage.begin_frame();
+    scope.stage = &stage;
+  }
+  const std::string& renderer = stage.renderer();
+  if (out.renderer != renderer) out.renderer = renderer;
+  const int n = opt.resolution > 0 ? opt.resolution : tile_resolution(opt.budget, pairs.size());
+  ViewFrame frames[3];
+  const std::size_t frame_count = fused_view_frames(opt, frames);
+
+  std::size_t used = 0;
+  for (const auto& [ia, ib] : pairs) {
+    if (used == out.pairs.size()) out.pairs.emplace_back();
+    PairResult& r = out.pairs[used++];
+    r.pcs.clear();
+    r.colliding.clear();
+    r.layers = r.passes = 0;
+    r.pcs_count = r.candidates = 0;
+    r.triangles_drawn_a = r.triangles_drawn_b = 0;
+    r.object_a = ia;
+    r.object_b = ib;
+    r.roi = intersection(s.boxes[ia], s.boxes[ib]);
+    r.region = r.roi;
+    r.triangles_in_roi_a = r.triangles_in_roi_b = 0;
+    r.resolution = n;
+    r.epsilon = 0.0;
+    r.a_first = false;
+    const Mesh& ma = objects[ia].mesh;
+    const Mesh& mb = objects[ib].mesh;
+    const std::vector<std::uint32_t>*only_a = nullptr, *only_b = nullptr;
+    if (opt.cull == Cull::contact) {
+      t0 = Clock::now();
+      const int tile = s.cull_pair(ma, mb, r.roi, opt, n);
+      out.timings.aabb += ms_since(t0);
+      r.region = s.cull.box;
+      r.triangles_in_roi_a = s.cull.stats.in_roi_a;
+      r.triangles_in_roi_b = s.cull.stats.in_roi_b;
+      if (tile == 0) continue;  // no triangle of one object near the other: no contact
+      only_a = &s.cull.kept_a;
+      only_b = &s.cull.kept_b;
+      r.resolution = tile;
+    }
+    std::vector<IdPair>& all_pcs = s.pcs_all;
+    all_pcs.clear();
+    for (std::size_t v = 0; v < frame_count; ++v) {
+      const RoiView view = make_padded_roi_view(r.region, s.boxes[ia], s.boxes[ib], frames[v], r.resolution);
+      if (v == 0) r.epsilon = opt.epsilon > 0.0 ? opt.epsilon : view.texel();
+
+      t0 = Clock::now();
+      // Each view gathers its own triangles: the pad follows that view's texel size.
+      const double min_a = triangles_in_view(ma, view, only_a, s.tris[0]);
+      const double min_b = triangles_in_view(mb, view, only_b, s.tris[1]);
+      out.timings.upload += ms_since(t0);
+      if (v == 0) {
+        r.triangles_drawn_a = s.tris[0].size();
+        r.triangles_drawn_b = s.tris[1].size();
+        if (opt.cull == Cull::box) {  // nothing culled: what touches the (padded) ROI
+          r.triangles_in_roi_a = r.triangles_drawn_a;
+          r.triangles_in_roi_b = r.triangles_drawn_b;
+        }
+        r.a_first = min_a > min_b;  // the farther object first; ties: B first
+      }
+      if (s.tris[0].empty() || s.tris[1].empty()) continue;  // no contact possible, no image work
+
+      PeelJob job;
+      job.objects[0] = &objects[ia];
+      job.objects[1] = &objects[ib];
+      job.triangles[0] = &s.tris[0];
+      job.triangles[1] = &s.tris[1];
+      job.view = view;
+      job.pair_index = used - 1;
+      job.view_index = int(v);
+      job.ids = opt.ids;
+      job.peel = opt.peel;
+      job.epsilon = r.epsilon;
+      job.slope = opt.slope;
+      job.first = min_a > min_b ? 0 : 1;
+      job.capture = s.capture != nullptr;
+      PeelResult& one = s.peeled;
+      stage.peel(job, one, out.timings);
+      ++out.rois_peeled;
+      out.gl_passes += one.gl_passes;
+      out.pcs_readbacks += one.pcs_readbacks;
+      out.triangles_uploaded += one.triangles_uploaded;
+      out.triangles_indexed += one.triangles_indexed;
+      out.shape_uploads += one.shape_uploads;
+      if (s.capture) {
+        CapturedView& c = s.capture->emplace_back();
+        c.pair = used - 1;
+        c.view = int(v);
+        c.roi = view;
+        c.a_first = min_a > min_b;
+        c.epsilon_window = one.epsilon_window;
+        c.slope = one.slope;
+        c.layers = std::move(one.captured);
+        c.pcs = one.pcs;
+        std::sort(c.pcs.begin(), c.pcs.end());
+        c.pcs.erase(std::unique(c.pcs.begin(), c.pcs.end()), c.pcs.end());
+      }
+      r.layers = std::max(r.layers, one.layers);
+      r.passes += one.peel_passes;
+      all_pcs.insert(all_pcs.end(), one.pcs.begin(), one.pcs.end());
+    }
+    if (r.triangles_drawn_a == 0 || r.triangles_drawn_b == 0) continue;
+
+    t0 = Clock::now();
+    // Sorted and unique through the radix sort of packed pairs (the views repeat most PCS).
+    s.pcs_keys.clear();
+    for (const IdPair& p : all_pcs) s.pcs_keys.push_back(pack_pair(p.a, p.b));
+    sort_unique_pairs(s.pcs_keys, s.candidate_scratch);
+    all_pcs.clear();
+    for (const std::uint64_t k : s.pcs_keys) all_pcs.push_back(IdPair{pair_a(k), pair_b(k)});
+    r.pcs_count = all_pcs.size();
+    r.pcs.assign(all_pcs.begin(), all_pcs.end());
+    s.map_a.rebuild(ma, opt.ids);
+    s.map_b.rebuild(mb, opt.ids);
+    s.candidates.clear();
+    expand_pcs(all_pcs, s.map_a, s.map_b, s.candidates, s.candidate_scratch);
+    r.candidates = s.candidates.size();
+    narrow_phase(ma, mb, s.candidates, r.colliding);
+    out.timings.cpu += ms_since(t0);
+  }
+  out.pairs.resize(used);
+  out.timings.total = ms_since(t_total);
+}
+
+void Detector::for_each_view(const std::vector<Object>& objects, const DetectOptions& opt,
+                             const std::function<void(const PeelJob&)>& fn) {
+  Impl& s = *impl_;
+  validate_options(opt, stage_->max_resolution());
+  validate_objects(objects);
+  std::vector<Aabb> boxes;
+  for (const Object& o : objects) boxes.push_back(bounds(o.mesh));
+  const auto pairs = overlapping_pairs(boxes);
+  const int n = opt.resolution > 0 ? opt.resolution : tile_resolution(opt.budget, pairs.size());
+  ViewFrame frames[3];
+  const std::size_t frame_count = fused_view_frames(opt, frames);
+  std::size_t pair_index = 0;
+  for (const auto& [ia, ib] : pairs) {
+    const std::size_t this_pair = pair_index++;
+    Aabb region = intersection(boxes[ia], boxes[ib]);
+    const std::vector<std::uint32_t>*only_a = nullptr, *only_b = nullptr;
+    int tile = n;
+    if (opt.cull == Cull::contact) {
+      tile = s.cull_pair(objects[ia].mesh, objects[ib].mesh, region, opt, n);
+      if (tile == 0) continue;
+      region = s.cull.box;
+      only_a = &s.cull.kept_a;
+      only_b = &s.cull.kept_b;
+    }
+    double epsilon = opt.epsilon;
+    for (std::size_t v = 0; v < frame_count; ++v) {
+      PeelJob job;
+      job.view = make_padded_roi_view(region, boxes[ia], boxes[ib], frames[v], tile);
+      job.view_index = int(v);
+      if (v == 0 && !(epsilon > 0.0)) epsilon = job.view.texel();
+      const double min_a = triangles_in_view(objects[ia].mesh, job.view, only_a, s.tris[0]);
+      const double min_b = triangles_in_view(objects[ib].mesh, job.view, only_b, s.tris[1]);
+      if (s.tris[0].empty() || s.tris[1].empty()) continue;
+      job.pair_index = this_pair;
+      job.objects[0] = &objects[ia];
+      job.objects[1] = &objects[ib];
+      job.triangles[0] = &s.tris[0];
+      job.triangles[1] = &s.tris[1];
+      job.ids = opt.ids;
+      job.peel = opt.peel;
+      job.epsilon = epsilon;
+      job.slope = opt.slope;
+      job.first = min_a > min_b ? 0 : 1;
+      fn(job);
+    }
+  }
+}
+
+}  // namespace peelcd

@@ -1,0 +1,90 @@
+// The public face of the GL image stage: construction, frame bracketing (the caller's context
+// given back), one job's geometry and peel, and the benchmarks' floor draw.
+#include "stage_impl.h"
+
+namespace peelcd::gl {
+
+std::string shader_sources_hash() { return shaders::shader_sources_hash; }
+
+GlImageStage::GlImageStage(std::shared_ptr<Context> context, GlOptions options) {
+  if (!context) throw GlError("peelcd::gl::GlImageStage: no context");
+  context->make_current();
+  try {
+    impl_ = std::make_unique<Impl>(context, options);
+  } catch (...) {
+    context->restore_previous();
+    throw;
+  }
+  context->restore_previous();
+}
+
+GlImageStage::~GlImageStage() = default;
+
+const GlOptions& GlImageStage::options() const { return impl_->options; }
+void GlImageStage::set_options(const GlOptions& options) {
+  const unsigned workers = impl_->options.workers;  // fixed: the pool's threads exist already
+  impl_->options = options;
+  impl_->options.workers = workers;
+}
+const std::string& GlImageStage::backend() const { return impl_->backend; }
+const std::string& GlImageStage::renderer() const { return impl_->renderer; }
+const std::string& GlImageStage::version() const { return impl_->version; }
+int GlImageStage::max_resolution() const { return impl_->max_texture; }
+Context& GlImageStage::context() { return *impl_->context; }
+
+void GlImageStage::begin_frame() {
+  impl_->context->make_current();
+  impl_->drop_expired_shapes();
+}
+
+void GlImageStage::end_frame() noexcept { impl_->context->restore_previous(); }
+
+void GlImageStage::peel(const PeelJob& job, PeelResult& out, Timings& timings) {
+  Impl& s = *impl_;
+  out.clear();
+  const auto t0 = Clock::now();
+  s.shape_uploads = 0;
+  for (int slot = 0; slot < 2; ++slot) s.prepare(*job.objects[slot], job.view, *job.triangles[slot], job.ids, slot);
+  s.upload(0);
+  s.upload(1);
+  timings.upload += ms_since(t0);
+  for (int slot = 0; slot < 2; ++slot)
+    (s.slot_shape[slot] ? out.triangles_indexed : out.triangles_uploaded) += s.corners(slot) / 3;
+  out.shape_uploads = s.shape_uploads;
+  if (s.options.peeler == Peeler::abuffer) {
+    while (!s.peel_single_pass(job, out, timings)) {
+    }
+  } else {
+    while (!s.peel_multipass(job, out, timings)) {
+    }
+  }
+}
+
+double GlImageStage::floor_draw_ms(const PeelJob& job) {
+  Impl& s = *impl_;
+  for (int slot = 0; slot < 2; ++slot) s.prepare(*job.objects[slot], job.view, *job.triangles[slot], job.ids, slot);
+  s.upload(0);
+  s.upload(1);
+  const int tile = job.view.resolution;
+  s.ensure_layers(tile);
+  s.gl.Finish();
+  const auto t0 = Clock::now();
+  s.gl.UseProgram(s.floor_program);
+  s.set_view_uniforms(s.u_floor_clip, s.u_floor_lo, s.u_floor_hi, job.view);
+  s.gl.BindFramebuffer(GL_FRAMEBUFFER, s.fbo[0]);
+  s.gl.Viewport(0, 0, tile, tile);
+  s.gl.Enable(GL_DEPTH_TEST);
+  s.gl.DepthFunc(GL_LESS);
+  for (int i = 0; i < 6; ++i) s.gl.Enable(GL_CLIP_DISTANCE0 + i);
+  const GLfloat far_depth = 1.0f;
+  s.gl.ClearBufferfv(GL_DEPTH, 0, &far_depth);
+  s.gl.BindVertexArray(s.vao);
+  for (int slot = 0; slot < 2; ++slot) s.draw(slot, s.u_model_floor);
+  s.gl.Finish();
+  const double ms = ms_since(t0);
+  s.gl.BindFramebuffer(GL_FRAMEBUFFER, 0);
+  s.check("the floor draw");
+  return ms;
+}
+
+}  // namespace peelcd::gl

@@ -1,0 +1,163 @@
+// Loading GL through the context, compiling and linking the programs, checking errors.
+#include "stage_impl.h"
+
+#include <algorithm>
+#include <sstream>
+
+namespace peelcd::gl {
+
+GlImageStage::Impl::Impl(std::shared_ptr<Context> ctx, const GlOptions& opt)
+    : context(std::move(ctx)), options(opt), pool(opt.workers) {
+  if (!context) throw GlError("peelcd::gl::GlImageStage: no context");
+  backend = context->backend();
+  const int version_loaded = gladLoadGLContextUserPtr(
+      &gl,
+      [](void* user, const char* name) -> GLADapiproc {
+        return reinterpret_cast<GLADapiproc>(static_cast<Context*>(user)->proc_address(name));
+      },
+      context.get());
+  if (version_loaded == 0 || GLAD_VERSION_MAJOR(version_loaded) * 10 + GLAD_VERSION_MINOR(version_loaded) < 45)
+    throw GlError("peelcd::gl::GlImageStage: the " + context->backend() +
+                  " context does not provide OpenGL 4.5 core");
+  renderer = reinterpret_cast<const char*>(gl.GetString(GL_RENDERER));
+  version = reinterpret_cast<const char*>(gl.GetString(GL_VERSION));
+  for (const char* soft : {"llvmpipe", "softpipe", "swrast"})
+    if (renderer.find(soft) != std::string::npos) software_renderer = true;
+  gl.GetIntegerv(GL_MAX_TEXTURE_SIZE, &max_texture);
+  GLint64 block = 0;
+  gl.GetInteger64v(GL_MAX_SHADER_STORAGE_BLOCK_SIZE, &block);
+  max_storage_block = std::size_t(std::max<GLint64>(block, 0));
+
+  peel_program = link({compile(GL_VERTEX_SHADER, shaders::peel_vert, "peel.vert"),
+                       compile(GL_FRAGMENT_SHADER, shaders::peel_frag, "peel.frag")},
+                      "peel");
+  pcs_program = link({compile(GL_COMPUTE_SHADER, shaders::pcs_comp, "pcs.comp")}, "pcs");
+  // The floor (benchmarks): the peel vertex shader and a fragment shader that does nothing.
+  floor_program = link({compile(GL_VERTEX_SHADER, shaders::peel_vert, "peel.vert"),
+                        compile(GL_FRAGMENT_SHADER, "#version 450 core\nvoid main() {}\n", "floor.frag")},
+                       "floor");
+  abuffer_program = link({compile(GL_VERTEX_SHADER, shaders::peel_vert, "peel.vert"),
+                          compile(GL_FRAGMENT_SHADER, shaders::abuffer_frag, "abuffer.frag")},
+                         "abuffer");
+  resolve_program = link({compile(GL_COMPUTE_SHADER, shaders::abuffer_resolve_comp, "abuffer_resolve.comp")},
+                         "abuffer resolve");
+  u_ab_clip = gl.GetUniformLocation(abuffer_program, "clip_from_local");
+  u_ab_lo = gl.GetUniformLocation(abuffer_program, "box_lo");
+  u_ab_hi = gl.GetUniformLocation(abuffer_program, "box_hi");
+  u_ab_object = gl.GetUniformLocation(abuffer_program, "object_bit");
+  u_model_ab = gl.GetUniformLocation(abuffer_program, "roi_from_object");
+  u_ab_res = gl.GetUniformLocation(abuffer_program, "resolution");
+  u_ab_slots = gl.GetUniformLocation(abuffer_program, "slots");
+  u_rs_slots = gl.GetUniformLocation(resolve_program, "slots");
+  u_rs_eps = gl.GetUniformLocation(resolve_program, "epsilon_window");
+  u_rs_slope = gl.GetUniformLocation(resolve_program, "slope");
+  u_rs_res = gl.GetUniformLocation(resolve_program, "resolution");
+  u_rs_full = gl.GetUniformLocation(resolve_program, "full_peel");
+  u_rs_first = gl.GetUniformLocation(resolve_program, "first_object");
+  u_rs_append = gl.GetUniformLocation(resolve_program, "append_pcs");
+  u_rs_emit = gl.GetUniformLocation(resolve_program, "emit_layer");
+  gl.CreateBuffers(1, &count_buffer);
+  gl.CreateBuffers(1, &fragment_buffer);
+  gl.CreateTextures(GL_TEXTURE_BUFFER, 1, &count_tex);
+  gl.CreateTextures(GL_TEXTURE_BUFFER, 1, &fragment_tex);
+  gl.CreateTextures(GL_TEXTURE_BUFFER, 2, corner_tex);
+  gl.GetIntegerv(GL_MAX_TEXTURE_BUFFER_SIZE, &max_texture_buffer);
+  u_floor_clip = gl.GetUniformLocation(floor_program, "clip_from_local");
+  u_model_floor = gl.GetUniformLocation(floor_program, "roi_from_object");
+  u_floor_lo = gl.GetUniformLocation(floor_program, "box_lo");
+  u_floor_hi = gl.GetUniformLocation(floor_program, "box_hi");
+  u_clip = gl.GetUniformLocation(peel_program, "clip_from_local");
+  u_box_lo = gl.GetUniformLocation(peel_program, "box_lo");
+  u_box_hi = gl.GetUniformLocation(peel_program, "box_hi");
+  u_has_prev = gl.GetUniformLocation(peel_program, "has_previous");
+  u_eps = gl.GetUniformLocation(pcs_program, "epsilon_window");
+  u_object = gl.GetUniformLocation(peel_program, "object_bit");
+  u_slope = gl.GetUniformLocation(pcs_program, "slope");
+  u_res = gl.GetUniformLocation(pcs_program, "resolution");
+  u_track = gl.GetUniformLocation(pcs_program, "track_runs");
+
+  gl.CreateVertexArrays(1, &vao);
+  gl.EnableVertexArrayAttrib(vao, 0);
+  gl.VertexArrayAttribFormat(vao, 0, 3, GL_FLOAT, GL_FALSE, 0);
+  gl.VertexArrayAttribBinding(vao, 0, 0);
+  gl.EnableVertexArrayAttrib(vao, 1);
+  gl.VertexArrayAttribIFormat(vao, 1, 1, GL_UNSIGNED_INT, offsetof(GpuVertex, id));
+  gl.VertexArrayAttribBinding(vao, 1, 0);
+  gl.CreateBuffers(2, vbo);
+  gl.CreateBuffers(2, ibo);
+  u_model_peel = gl.GetUniformLocation(peel_program, "roi_from_object");
+  gl.CreateQueries(GL_ANY_SAMPLES_PASSED, 1, &query);
+  gl.CreateBuffers(1, &pcs_buffer);
+  grow_pcs(1 << 16);
+  check("Pipeline setup");
+}
+
+GlImageStage::Impl::~Impl() {
+  // The caller may have another context current: make ours current, then give theirs back.
+  try {
+    context->make_current();
+  } catch (const GlError&) {
+    return;  // the context is gone: its objects went with it
+  }
+  gl.DeleteProgram(peel_program);
+  gl.DeleteProgram(pcs_program);
+  gl.DeleteProgram(floor_program);
+  gl.DeleteProgram(abuffer_program);
+  gl.DeleteProgram(resolve_program);
+  gl.DeleteBuffers(1, &count_buffer);
+  gl.DeleteBuffers(1, &fragment_buffer);
+  gl.DeleteTextures(1, &count_tex);
+  gl.DeleteTextures(1, &fragment_tex);
+  gl.DeleteTextures(2, corner_tex);
+  gl.DeleteVertexArrays(1, &vao);
+  gl.DeleteBuffers(2, vbo);
+  gl.DeleteBuffers(2, ibo);
+  for (auto& [key, shape] : shapes) gl.DeleteBuffers(1, &shape.vbo);
+  gl.DeleteQueries(1, &query);
+  gl.DeleteBuffers(1, &pcs_buffer);
+  release_layers();
+  if (bare_fbo) gl.DeleteFramebuffers(1, &bare_fbo);
+  context->restore_previous();
+}
+
+void GlImageStage::Impl::check(const char* where) {
+  GLenum err = gl.GetError();
+  if (err == GL_NO_ERROR) return;
+  std::ostringstream msg;
+  msg << "peelcd::gl::GlImageStage: GL error 0x" << std::hex << err << " after " << where;
+  while ((err = gl.GetError()) != GL_NO_ERROR) msg << ", 0x" << err;
+  throw GlError(msg.str());
+}
+
+GLuint GlImageStage::Impl::compile(GLenum type, const char* src, const char* name) {
+  GLuint s = gl.CreateShader(type);
+  gl.ShaderSource(s, 1, &src, nullptr);
+  gl.CompileShader(s);
+  GLint ok = 0;
+  gl.GetShaderiv(s, GL_COMPILE_STATUS, &ok);
+  if (!ok) {
+    char log[4096] = {0};
+    gl.GetShaderInfoLog(s, sizeof log, nullptr, log);
+    gl.DeleteShader(s);
+    throw GlError(std::string("peelcd::gl::GlImageStage: cannot compile shaders/") + name + ": " + log);
+  }
+  return s;
+}
+
+GLuint GlImageStage::Impl::link(std::initializer_list<GLuint> stages, const char* name) {
+  GLuint p = gl.CreateProgram();
+  for (GLuint s : stages) gl.AttachShader(p, s);
+  gl.LinkProgram(p);
+  for (GLuint s : stages) gl.DeleteShader(s);
+  GLint ok = 0;
+  gl.GetProgramiv(p, GL_LINK_STATUS, &ok);
+  if (!ok) {
+    char log[4096] = {0};
+    gl.GetProgramInfoLog(p, sizeof log, nullptr, log);
+    gl.DeleteProgram(p);
+    throw GlError(std::string("peelcd::gl::GlImageStage: cannot link the ") + name + " program: " + log);
+  }
+  return p;
+}
+
+}  // namespace peelcd::gl

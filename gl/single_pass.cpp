@@ -1,0 +1,178 @@
+// The single-pass peeler (Peeler::abuffer): both objects drawn once into a per-texel k-buffer
+// (shaders/abuffer.frag), then the layers and PCS recovered per texel, by a compute pass on the
+// GPU (shaders/abuffer_resolve.comp) or on the host (core/kbuffer.cpp) where GL runs on the CPU.
+#include "stage_impl.h"
+
+#include <algorithm>
+
+namespace peelcd::gl {
+
+// Returns false if a texel had more fragments than slots or the PCS buffer overflowed (grown;
+// the caller peels again). A view whose k-buffer would exceed the largest shader storage block
+// is peeled by multi-pass instead (the same layers and PCS).
+bool GlImageStage::Impl::peel_single_pass(const PeelJob& job, PeelResult& out, Timings& t) {
+  const RoiView& view = job.view;
+  const int n = view.resolution;
+  const std::size_t texels = std::size_t(n) * std::size_t(n);
+  // The resolve fetches the corners through buffer textures too.
+  const std::size_t fitting = fitting_slots(texels);
+  const auto view_slots = std::uint32_t(std::min<std::size_t>(slots, fitting));
+  if (view_slots == 0 || std::max(vbo_corners(0), vbo_corners(1)) > fetchable())
+    return peel_multipass(job, out, t);
+  const auto t_gpu = Clock::now();
+  ensure_bare_fbo(n);
+  ensure_kbuffer(texels, view_slots);
+  const GLuint zero = 0;
+  gl.ClearNamedBufferSubData(count_buffer, GL_R32UI, 0, GLsizeiptr(texels * 4), GL_RED_INTEGER, GL_UNSIGNED_INT,
+                             &zero);
+  const PcsHeader header{0, pcs_capacity, 0, 0};
+  gl.NamedBufferSubData(pcs_buffer, 0, sizeof header, &header);
+  gl.BindBufferBase(GL_SHADER_STORAGE_BUFFER, 0, pcs_buffer);
+  gl.BindBufferBase(GL_SHADER_STORAGE_BUFFER, 1, fragment_buffer);
+  gl.BindBufferBase(GL_SHADER_STORAGE_BUFFER, 2, count_buffer);
+
+  gl.UseProgram(abuffer_program);
+  set_view_uniforms(u_ab_clip, u_ab_lo, u_ab_hi, view);
+  gl.Uniform1i(u_ab_res, n);
+  gl.Uniform1ui(u_ab_slots, view_slots);
+  gl.BindFramebuffer(GL_FRAMEBUFFER, bare_fbo);
+  gl.Viewport(0, 0, n, n);
+  gl.Disable(GL_DEPTH_TEST);
+  gl.Disable(GL_CULL_FACE);
+  gl.ProvokingVertex(GL_LAST_VERTEX_CONVENTION);
+  for (int i = 0; i < 6; ++i) gl.Enable(GL_CLIP_DISTANCE0 + i);
+  gl.BindVertexArray(vao);
+  for (int slot = 0; slot < 2; ++slot) {
+    gl.Uniform1ui(u_ab_object, GLuint(slot));
+    draw(slot, u_model_ab);
+  }
+  gl.BindFramebuffer(GL_FRAMEBUFFER, 0);
+  out.epsilon_window = float(view.world_to_window_depth(job.epsilon));
+  out.slope = float(job.slope);
+  if (options.resolve == Resolve::host || (options.resolve == Resolve::automatic && software_renderer))
+    return resolve_on_host(job, fitting, view_slots, t_gpu, out, t);
+  // The resolve reads what the draw stored through buffer textures (texture fetches).
+  gl.MemoryBarrier(GL_SHADER_STORAGE_BARRIER_BIT | GL_TEXTURE_FETCH_BARRIER_BIT);
+  ++out.gl_passes;
+  check("the k-buffer draw");
+
+  gl.UseProgram(resolve_program);
+  gl.BindTextureUnit(0, count_tex);
+  gl.BindTextureUnit(1, fragment_tex);
+  for (int slot = 0; slot < 2; ++slot) {
+    gl.TextureBuffer(corner_tex[slot], GL_RGBA32UI, slot_shape[slot] ? slot_shape[slot]->vbo : vbo[slot]);
+    gl.BindTextureUnit(GLuint(2 + slot), corner_tex[slot]);
+  }
+  gl.Uniform1f(u_rs_eps, out.epsilon_window);
+  gl.Uniform1f(u_rs_slope, out.slope);
+  gl.Uniform1i(u_rs_res, n);
+  gl.Uniform1ui(u_rs_slots, view_slots);
+  gl.Uniform1i(u_rs_full, job.peel == PeelMode::full);
+  gl.Uniform1ui(u_rs_first, GLuint(job.first));
+  gl.Uniform1i(u_rs_append, 1);
+  gl.Uniform1i(u_rs_emit, -1);
+  gl.DispatchCompute(GLuint((n + 7) / 8), GLuint((n + 7) / 8), 1);
+  gl.MemoryBarrier(GL_BUFFER_UPDATE_BARRIER_BIT | GL_SHADER_STORAGE_BARRIER_BIT);
+  ++out.gl_passes;
+  check("the k-buffer resolve");
+  PcsHeader got{};
+  gl.GetNamedBufferSubData(pcs_buffer, 0, sizeof got, &got);
+  if (got.max_fragments > view_slots) {
+    t.gpu += ms_since(t_gpu);
+    return regrow(got.max_fragments, fitting, job, out, t);
+  }
+  out.layers = int(got.max_layers);
+  out.peel_passes = 1;
+  out.captured.clear();
+  if (job.capture) {
+    const GLuint zero4[4] = {0, 0, 0, 0};
+    gl.Uniform1i(u_rs_append, 0);
+    ensure_layers(n);
+    gl.BindImageTexture(2, layer_tex[0], 0, GL_FALSE, 0, GL_WRITE_ONLY, GL_RGBA32UI);
+    for (int k = 0; k < out.layers; ++k) {
+      gl.ClearTexImage(layer_tex[0], 0, GL_RGBA_INTEGER, GL_UNSIGNED_INT, zero4);
+      gl.Uniform1i(u_rs_emit, k);
+      gl.DispatchCompute(GLuint((n + 7) / 8), GLuint((n + 7) / 8), 1);
+      gl.MemoryBarrier(GL_TEXTURE_UPDATE_BARRIER_BIT | GL_SHADER_IMAGE_ACCESS_BARRIER_BIT);
+      std::vector<std::uint32_t>& texels = out.captured.emplace_back(std::size_t(n) * n * 4);
+      gl.GetTextureImage(layer_tex[0], 0, GL_RGBA_INTEGER, GL_UNSIGNED_INT,
+                         GLsizei(texels.size() * sizeof(std::uint32_t)), texels.data());
+    }
+    check("layer capture");
+  }
+  t.gpu += ms_since(t_gpu);
+  return read_pcs(out, t, &got);
+}
+
+// A texel had `max_fragments`, more than the k-buffer's slots: grow it (with a quarter to
+// spare) and return false (peel again); deeper than any k-buffer that fits (`fitting` slots),
+// this view goes to multi-pass (`slots` stays).
+bool GlImageStage::Impl::regrow(std::uint32_t max_fragments, std::size_t fitting, const PeelJob& job, PeelResult& out,
+                                Timings& t) {
+  const std::size_t wanted = std::min<std::size_t>(std::size_t(max_fragments) * 5 / 4, fitting);
+  if (wanted < max_fragments) return peel_multipass(job, out, t);
+  slots = std::max(slots, std::uint32_t(wanted));
+  return false;
+}
+
+// The second half of peel_single_pass() with Resolve::host: the k-buffer mapped (host memory on
+// a software renderer: no copy) and resolved by core/kbuffer.cpp into the PCS.
+bool GlImageStage::Impl::resolve_on_host(const PeelJob& job, std::size_t fitting, std::uint32_t view_slots,
+                                         Clock::time_point t_gpu, PeelResult& out, Timings& t) {
+  const int n = job.view.resolution;
+  const std::size_t texels = std::size_t(n) * std::size_t(n);
+  ++out.gl_passes;
+  // Triangle IDs by draw order (gl_VertexID / 3, shaders/peel.vert): the provoking (last)
+  // corner's. Arrays: the position in `staging`; a rigid shape: its triangle index.
+  const std::uint32_t* ids[2];
+  for (int slot = 0; slot < 2; ++slot) {
+    if (slot_shape[slot]) {
+      ids[slot] = slot_shape[slot]->provoking_ids.data();
+      continue;
+    }
+    std::vector<std::uint32_t>& by_order = ids_by_order[slot];
+    by_order.resize(staging[slot].size() / 3);
+    for (std::size_t i = 0; i < by_order.size(); ++i) by_order[i] = staging[slot][3 * i + 2].id;
+    ids[slot] = by_order.data();
+  }
+  gl.MemoryBarrier(GL_BUFFER_UPDATE_BARRIER_BIT);
+  const auto t_map = Clock::now();
+  const auto* counts = static_cast<const std::uint32_t*>(
+      gl.MapNamedBufferRange(count_buffer, 0, GLsizeiptr(texels * 4), GL_MAP_READ_BIT));
+  const auto* fragments = static_cast<const KFragment*>(gl.MapNamedBufferRange(
+      fragment_buffer, 0, GLsizeiptr(texels * view_slots * sizeof(KFragment)), GL_MAP_READ_BIT));
+  const double map_ms = ms_since(t_map);  // a wait for the draw, then (llvmpipe) no copy
+  t.readback += map_ms;
+  if (!counts || !fragments) {
+    if (counts) gl.UnmapNamedBuffer(count_buffer);
+    if (fragments) gl.UnmapNamedBuffer(fragment_buffer);
+    check("mapping the k-buffer");
+    throw GlError("peelcd::gl::GlImageStage: mapping the k-buffer failed");
+  }
+  KBuffer kb;
+  kb.counts = counts;
+  kb.fragments = fragments;
+  kb.resolution = n;
+  kb.slots = view_slots;
+  KResolveParams p;
+  p.epsilon_window = out.epsilon_window;
+  p.slope = out.slope;
+  p.full_peel = job.peel == PeelMode::full;
+  p.first_object = std::uint32_t(job.first);
+  p.ids[0] = ids[0];
+  p.ids[1] = ids[1];
+  out.pcs.clear();
+  out.captured.clear();
+  const KResolveResult got = resolver.resolve(kb, p, out.pcs, job.capture ? &out.captured : nullptr);
+  gl.UnmapNamedBuffer(count_buffer);
+  gl.UnmapNamedBuffer(fragment_buffer);
+  check("the host k-buffer resolve");
+  t.gpu += ms_since(t_gpu) - map_ms;
+  if (got.max_fragments > view_slots) return regrow(got.max_fragments, fitting, job, out, t);
+  out.layers = int(got.max_layers);
+  out.peel_passes = 1;
+  if (!out.pcs.empty()) ++out.pcs_readbacks;  // the PCS reach the CPU (no list to read back here)
+  return true;
+}
+
+}  // namespace peelcd::gl

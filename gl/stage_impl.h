@@ -1,0 +1,160 @@
+#pragma once
+// Private to the GL image stage: its state, shared by the files of gl/ that implement it.
+//   programs.cpp     loading GL, compiling and linking the programs, checking errors
+//   resources.cpp    layer textures, framebuffers, the k-buffer and the PCS buffer (grown, reused)
+//   geometry.cpp     a view's triangles into buffers: ROI-local corners, or a rigid shape's indices
+//   multipass.cpp    the multi-pass peeler (one draw per layer) and the PCS readback
+//   single_pass.cpp  the single-pass peeler (k-buffer), its GPU and host resolves
+//   gl_stage.cpp     the public class, the floor draw
+#include "peelcd/core/image_stage.h"
+#include "peelcd/core/kbuffer.h"
+#include "peelcd/core/worker_pool.h"
+#include "peelcd/gl/gl_stage.h"
+
+#include <glad/gl.h>
+
+#include <array>
+#include <chrono>
+#include <initializer_list>
+#include <map>
+#include <memory>
+#include <string>
+#include <vector>
+
+namespace peelcd::shaders {
+extern const char* const peel_vert;
+extern const char* const peel_frag;
+extern const char* const pcs_comp;
+extern const char* const abuffer_frag;
+extern const char* const abuffer_resolve_comp;
+extern const char* const shader_sources_hash;
+}  // namespace peelcd::shaders
+
+namespace peelcd::gl {
+
+using Clock = std::chrono::steady_clock;
+inline double ms_since(Clock::time_point t0) {
+  return std::chrono::duration<double, std::milli>(Clock::now() - t0).count();
+}
+
+// One corner of an uploaded triangle: ROI-local position and the corner's ID.
+struct GpuVertex {
+  float x, y, z;
+  std::uint32_t id;
+};
+static_assert(sizeof(GpuVertex) == 16, "vertex layout is 16 bytes");
+
+// Header of the PCS append buffer; matches PcsBuffer in shaders/pcs.comp and
+// shaders/abuffer_resolve.comp (the multi-pass peeler leaves the last two words alone).
+struct PcsHeader {
+  std::uint32_t count, capacity, max_layers, max_fragments;
+};
+
+// Peel passes per ROI before giving up; each pass strictly increases every live texel's depth,
+// so only a scene with more than this many surfaces along one ray reaches it.
+constexpr int kMaxPasses = 4096;
+
+struct GlImageStage::Impl {
+  std::shared_ptr<Context> context;
+  GlOptions options;
+  GladGLContext gl{};
+  std::string backend, renderer, version;
+  GLint max_texture = 0;
+  std::size_t max_storage_block = 0;  // GL_MAX_SHADER_STORAGE_BLOCK_SIZE, bytes
+  bool software_renderer = false;     // GL runs on the CPU: Resolve::automatic resolves on the host
+
+  // Programs and their uniforms.
+  GLuint peel_program = 0, pcs_program = 0, floor_program = 0, abuffer_program = 0, resolve_program = 0;
+  GLint u_clip = -1, u_box_lo = -1, u_box_hi = -1, u_has_prev = -1, u_object = -1;
+  GLint u_eps = -1, u_slope = -1, u_res = -1, u_track = -1;
+  GLint u_ab_clip = -1, u_ab_lo = -1, u_ab_hi = -1, u_ab_object = -1, u_ab_res = -1, u_ab_slots = -1;
+  GLint u_rs_eps = -1, u_rs_slope = -1, u_rs_res = -1, u_rs_full = -1, u_rs_first = -1, u_rs_append = -1,
+        u_rs_emit = -1, u_rs_slots = -1;
+  GLint u_floor_clip = -1, u_floor_lo = -1, u_floor_hi = -1;
+  GLint u_model_peel = -1, u_model_ab = -1, u_model_floor = -1;
+
+  // Geometry: per slot (0 = A, 1 = B), the corners of a world-space object's triangles in the
+  // view (`staging`, uploaded to `vbo`), or a rigid object's cached shape and the corner indices
+  // of its triangles in the view (`indices`, uploaded to `ibo`).
+  GLuint vao = 0, vbo[2] = {0, 0}, ibo[2] = {0, 0};
+  std::size_t vbo_capacity[2] = {0, 0};  // in vertices
+  std::size_t ibo_capacity[2] = {0, 0};
+  std::vector<GpuVertex> staging[2];
+  std::vector<std::uint32_t> indices[2];
+  struct CachedShape {
+    std::weak_ptr<const Mesh> owner;
+    GLuint vbo = 0;
+    std::size_t corners = 0;  // in the VBO: 3 per triangle of the shape
+    // Each triangle's provoking-corner ID (the host resolve's; an indexed draw's order is the
+    // shape's triangle index, gl_VertexID / 3 of its corners 3t + k).
+    std::vector<std::uint32_t> provoking_ids;
+  };
+  std::map<std::pair<const Mesh*, IdMode>, CachedShape> shapes;
+  const CachedShape* slot_shape[2] = {nullptr, nullptr};
+  std::array<float, 16> slot_model[2];
+  std::size_t shape_uploads = 0;  // during the current job
+
+  // Multi-pass peeling: two ping-pong layer textures sharing one depth buffer, the run-start
+  // texture of full peeling, the occlusion query that ends a ROI.
+  GLuint layer_tex[2] = {0, 0}, run_tex = 0, depth_rb = 0, fbo[2] = {0, 0}, bare_fbo = 0;
+  int layer_size = 0, bare_size = 0;
+  GLuint query = 0;
+  // The PCS append buffer (both peelers).
+  GLuint pcs_buffer = 0;
+  std::uint32_t pcs_capacity = 0;
+  // The k-buffer of the single-pass peeler (shaders/abuffer.frag): per-texel fragment counts
+  // and up to `slots` fragments of 16 bytes per texel; the resolve reads both, and the corners
+  // the objects were drawn from, through buffer textures.
+  GLuint count_buffer = 0, fragment_buffer = 0, count_tex = 0, fragment_tex = 0, corner_tex[2] = {0, 0};
+  GLint max_texture_buffer = 0;  // GL_MAX_TEXTURE_BUFFER_SIZE, texels
+  std::uint32_t slots = 16;
+  std::size_t kbuffer_texels = 0, kbuffer_fragments = 0;
+  // The host resolve (Resolve::host): triangle ID by draw order per slot, and the threads.
+  std::vector<std::uint32_t> ids_by_order[2];
+  WorkerPool pool;
+  KResolver resolver{pool};
+
+  Impl(std::shared_ptr<Context> ctx, const GlOptions& opt);  // programs.cpp
+  ~Impl();
+
+  // programs.cpp
+  void check(const char* where);
+  GLuint compile(GLenum type, const char* src, const char* name);
+  GLuint link(std::initializer_list<GLuint> stages, const char* name);
+
+  // resources.cpp
+  void grow_pcs(std::uint32_t capacity);
+  std::size_t fitting_slots(std::size_t texels) const;
+  std::size_t fetchable() const;
+  void ensure_kbuffer(std::size_t texels, std::size_t view_slots);
+  void release_layers();
+  void ensure_layers(int n);
+  void ensure_bare_fbo(int n);
+
+  // geometry.cpp
+  void prepare(const Object& object, const RoiView& view, const std::vector<std::uint32_t>& triangles, IdMode ids,
+               int slot);
+  const CachedShape& cached_shape(const std::shared_ptr<const Mesh>& shape, IdMode ids);
+  void drop_expired_shapes();
+  void draw(int slot, GLint u_model);
+  void upload(int slot);
+  // Corners in the VBO a slot draws from (its triangles in the view, or a rigid shape's all).
+  std::size_t vbo_corners(int slot) const {
+    return slot_shape[slot] ? slot_shape[slot]->corners : staging[slot].size();
+  }
+  // Corners slot `slot` draws for the current view.
+  std::size_t corners(int slot) const { return slot_shape[slot] ? indices[slot].size() : staging[slot].size(); }
+  void set_view_uniforms(GLint u_clip_, GLint u_lo, GLint u_hi, const RoiView& view);
+
+  // multipass.cpp: peels the job; false if the PCS buffer overflowed (grown: peel again).
+  bool peel_multipass(const PeelJob& job, PeelResult& out, Timings& t);
+  bool read_pcs(PeelResult& out, Timings& t, const PcsHeader* header = nullptr);
+
+  // single_pass.cpp: the same contract.
+  bool peel_single_pass(const PeelJob& job, PeelResult& out, Timings& t);
+  bool regrow(std::uint32_t max_fragments, std::size_t fitting, const PeelJob& job, PeelResult& out, Timings& t);
+  bool resolve_on_host(const PeelJob& job, std::size_t fitting, std::uint32_t view_slots, Clock::time_point t_gpu,
+                       PeelResult& out, Timings& t);
+};
+
+}  // namespace peelcd::gl

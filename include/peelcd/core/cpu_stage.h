@@ -1,0 +1,43 @@
+#pragma once
+// The image stage on the CPU, without GL: a model of what the GL single-pass peeler does, for
+// machines without any GL and as a third oracle beside OSMesa and EGL (peelcd detect --backend
+// cpu). Per view, each triangle is transformed as the vertex shader does (ROI-local floats,
+// the orthographic projection, the viewport), snapped to 1/256 of a texel as llvmpipe's
+// rasterizer does, and sampled at texel centres with exact integer edge functions and a
+// top-left fill rule; every covered texel centre inside the ROI box gives a fragment (depth
+// interpolated on the plane of the snapped triangle, its per-texel slopes). The fragments go into
+// the same k-buffer layout as the GL peeler's and are resolved by the same code
+// (peelcd/core/kbuffer.h): the same layers, PCS test and layer format.
+//
+// It models GL's rules, not a particular driver's arithmetic: on the default scene it gives the
+// same PCS as OSMesa (tests/core/test_cpu_stage.cpp); elsewhere a texel centre that lies within
+// rounding of an edge or of the ROI box may be decided differently.
+#include "peelcd/core/image_stage.h"
+#include "peelcd/core/kbuffer.h"
+
+#include <string>
+#include <vector>
+
+namespace peelcd {
+
+class CpuImageStage final : public ImageStage {
+ public:
+  explicit CpuImageStage(unsigned workers = 1);
+  const std::string& backend() const override { return backend_; }
+  const std::string& renderer() const override { return renderer_; }
+  const std::string& version() const override { return version_; }
+  int max_resolution() const override { return 16384; }
+  void peel(const PeelJob& job, PeelResult& out, Timings& timings) override;
+
+ private:
+  struct Fragment {
+    std::uint32_t texel;
+    KFragment f;
+  };
+  std::string backend_ = "cpu", renderer_ = "peelcd CPU image stage (k-buffer model)", version_ = "1";
+  std::vector<Fragment> fragments_;
+  std::vector<std::uint32_t> counts_, ids_[2];
+  std::vector<KFragment> slots_, scratch_;
+};
+
+}  // namespace peelcd

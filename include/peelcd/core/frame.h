@@ -1,0 +1,113 @@
+#pragma once
+// Request and result of one frame of detection (peelcd/core/detector.h runs it).
+#include "peelcd/core/aabb.h"
+#include "peelcd/core/id_map.h"
+#include "peelcd/core/narrow_phase.h"
+#include "peelcd/core/view.h"
+
+#include <optional>
+#include <string>
+#include <vector>
+
+namespace peelcd {
+
+// How layers are peeled. alternate: the paper's alternate surface peeling (design.md 1.5);
+// full: every surface of both objects, every adjacent A-B couple tested (a superset).
+enum class PeelMode { alternate, full };
+const char* to_string(PeelMode mode);
+std::optional<PeelMode> parse_peel_mode(const std::string& text);
+
+// Which triangles of a ROI are peeled. box: every triangle touching the ROI (the paper's way).
+// contact: contact-region culling (core/cull.h): only the triangles whose boxes share a grid cell
+// of the ROI with the other object's, the ROI shrunk to their boxes' overlap; conservative (no
+// colliding pair is dropped), fewer triangles drawn and a finer tile on the same budget.
+enum class Cull { box, contact };
+const char* to_string(Cull cull);
+std::optional<Cull> parse_cull(const std::string& text);
+
+// Defaults chosen on the accuracy sweeps of docs/accuracy.md and the benchmarks of
+// docs/performance.md (the paper's own configuration is ids = paper, peel = alternate,
+// slope = 0, views = 1, cull = box).
+struct DetectOptions {
+  double theta = 0.0;  // view longitude, degrees
+  double phi = 0.0;    // view latitude, degrees
+  int resolution = 0;  // forced N x N tile per ROI; 0 = share the budget (tile_resolution())
+  int budget = 512;    // the frame's texture budget is budget x budget texels
+  IdMode ids = IdMode::ring;
+  double epsilon = 0.0;  // PCS depth threshold, world units; 0 = one texel of the ROI tile
+                        // (of the culled region's tile with Cull::contact)
+  PeelMode peel = PeelMode::full;  // full: no slower than alternate since the host resolve,
+                                   // and more accurate (docs/performance.md)
+  // Slope-following epsilon: a texel pair is a PCS when |dz| < epsilon + slope * (|dzdx_k+1 -
+  // dzdx_k| + |dzdy_k+1 - dzdy_k|), i.e. when the two surfaces' planes meet within `slope`
+  // texels of the texel centre. 0 = the paper's constant epsilon.
+  double slope = 1.0;
+  // Views fused per ROI: 1 = d(theta, phi) only; 2 = d and the frame's u axis; 3 = d, u and v
+  // (three orthogonal views); the PCS of all views are united before the narrow phase. Two
+  // views see every intersection segment at >= 1/sqrt(2) of its length, three at >= sqrt(2/3).
+  int views = 3;
+  Cull cull = Cull::contact;         // chosen on peelcd bench and sweep (docs/performance.md)
+  // Sharing the budget (resolution == 0) with Cull::contact, a ROI's tile is at most the side
+  // that gives the median edge of its kept triangles `edge_texels` texels
+  // (edge_tile_resolution()): a contact between large triangles needs fewer texels than its
+  // share of the budget. 0 = always the share. Chosen on docs/performance.md's measurements.
+  double edge_texels = 12.0;
+};
+
+// The view frames a ROI is peeled along for `options` (1, 2 or 3 of them).
+std::vector<ViewFrame> fused_view_frames(const DetectOptions& options);
+// The same into `out` (room for 3); returns the count. Allocates nothing.
+std::size_t fused_view_frames(const DetectOptions& options, ViewFrame out[3]);
+
+// Side of each ROI's tile when `roi_count` ROIs share a budget x budget texture: the largest
+// power-of-two fraction of `budget` such that the tiles fit (1 ROI: budget; 2-4: budget/2; ...),
+// never below 16.
+int tile_resolution(int budget, std::size_t roi_count);
+
+// The tile side for a ROI whose region (the culled box) is `region` and whose triangles' median
+// edge is `median_edge`: `edge_texels` texels per median edge across the region's longest side,
+// rounded up to a multiple of 16, at least 16, at most `share` (the budget's tile). `share`
+// itself when edge_texels is 0 or the edge is not positive and finite.
+int edge_tile_resolution(int share, const Aabb& region, double median_edge, double edge_texels);
+
+struct PairResult {
+  std::size_t object_a = 0, object_b = 0;  // indices into the frame's objects, a < b
+  Aabb roi;                                // intersection of the two world AABBs
+  Aabb region;                             // the box peeled: `roi`, or with Cull::contact the
+                                           // ROI shrunk to the kept triangles (empty: none kept)
+  // Triangles touching `roi`, before culling (Cull::box: those touching the padded ROI of the
+  // first view, i.e. the triangles drawn).
+  std::size_t triangles_in_roi_a = 0, triangles_in_roi_b = 0;
+  int resolution = 0;
+  double epsilon = 0.0;                    // world units
+  bool a_first = false;                    // A was peeled first (it was the farther one)
+  std::size_t triangles_drawn_a = 0, triangles_drawn_b = 0;
+  int layers = 0;                          // non-empty logical layers peeled (most of any view)
+  int passes = 0;                          // peel passes drawn (layers + the final empty one), all views
+  std::size_t pcs_count = 0;               // distinct ID pairs read back
+  std::vector<IdPair> pcs;                 // those pairs (ID of A, ID of B), sorted
+  std::size_t candidates = 0;              // distinct triangle pairs tested on the CPU
+  std::vector<Contact> colliding;          // sorted by (tri_a, tri_b)
+};
+
+struct Timings {  // milliseconds, as in the paper's tables
+  double aabb = 0, upload = 0, gpu = 0, readback = 0, cpu = 0, total = 0;
+};
+
+struct FrameResult {
+  std::vector<PairResult> pairs;  // one per overlapping AABB pair, sorted by (a, b)
+  Timings timings;
+  std::size_t gl_passes = 0;      // draw + compute passes issued this frame (0 without a ROI)
+  // What the frame skipped and did (the per-frame counters of peelcd simulate):
+  std::size_t rois_peeled = 0;          // ROI views peeled (a ROI where one object has no
+                                        // triangle inside does no GL work)
+  std::size_t triangles_uploaded = 0;   // triangles whose corners were uploaded (only those
+                                        // touching a ROI)
+  std::size_t triangles_indexed = 0;    // rigid objects' triangles drawn from their cached
+                                        // shape: only indices uploaded
+  std::size_t shape_uploads = 0;        // rigid shapes uploaded (once each; 0 in steady state)
+  std::size_t pcs_readbacks = 0;        // PCS lists read back (none when a ROI's count is 0)
+  std::string renderer;           // GL_RENDERER of the context that ran it
+};
+
+}  // namespace peelcd

@@ -1,0 +1,72 @@
+#pragma once
+// The image stage: what a backend must do for the detector (peelcd/core/detector.h). Given one
+// ROI view of two objects and the triangles of each that touch it, peel the layers and return
+// the PCS (and the layers themselves when asked to capture them). Everything else of a frame
+// (broad phase, culling, tiles, views, ID expansion, the exact narrow phase) is the detector's.
+//
+// Implementations: gl::GlImageStage (peelcd/gl/gl_stage.h: OSMesa, EGL; single-pass and
+// multi-pass peelers) and CpuImageStage (peelcd/core/cpu_stage.h: no GL at all).
+#include "peelcd/core/frame.h"
+#include "peelcd/core/view.h"
+
+#include <cstdint>
+#include <string>
+#include <vector>
+
+namespace peelcd {
+
+// One ROI view to peel. Object 0 is the pair's A, object 1 its B.
+struct PeelJob {
+  const Object* objects[2] = {nullptr, nullptr};
+  // The triangles of each object to draw, ascending: those whose box touches view.box (after
+  // contact culling). Never empty when a stage is called.
+  const std::vector<std::uint32_t>* triangles[2] = {nullptr, nullptr};
+  RoiView view;                    // the padded ROI view (box, frame, resolution)
+  std::size_t pair_index = 0;      // the object pair (FrameResult::pairs) and fused view (0..2)
+  int view_index = 0;              // this job belongs to
+  IdMode ids = IdMode::ring;
+  PeelMode peel = PeelMode::full;
+  double epsilon = 0.0;            // PCS depth threshold, world units
+  double slope = 0.0;              // slope factor of the PCS test (DetectOptions::slope)
+  int first = 1;                   // the object alternate peeling starts with (0 = A, 1 = B)
+  bool capture = false;            // also fill PeelResult::captured with every layer
+};
+
+// What a stage returns for one job.
+struct PeelResult {
+  std::vector<IdPair> pcs;         // (ID of A, ID of B), any order, repeats allowed
+  int layers = 0;                  // non-empty logical layers
+  int peel_passes = 0;             // peel passes drawn (multi-pass: layers + 1; single pass: 1)
+  float epsilon_window = 0.0f;     // the PCS threshold in window depth, as the test applied it
+  float slope = 0.0f;              // the slope factor, as the test applied it
+  // Counters of the work done (FrameResult's).
+  std::size_t gl_passes = 0, pcs_readbacks = 0, triangles_uploaded = 0, triangles_indexed = 0, shape_uploads = 0;
+  // With PeelJob::capture: every logical layer in peel order, N*N texels of 4 words each
+  // (depth bits, object << 31 | ID + 1 (0 = empty), dz/dx bits, dz/dy bits), rows bottom to top.
+  std::vector<std::vector<std::uint32_t>> captured;
+
+  void clear() {
+    pcs.clear();
+    captured.clear();
+    layers = peel_passes = 0;
+    epsilon_window = slope = 0.0f;
+    gl_passes = pcs_readbacks = triangles_uploaded = triangles_indexed = shape_uploads = 0;
+  }
+};
+
+class ImageStage {
+ public:
+  virtual ~ImageStage() = default;
+  virtual const std::string& backend() const = 0;   // "osmesa", "egl-device", "egl-surfaceless", "cpu"
+  virtual const std::string& renderer() const = 0;  // GL_RENDERER, or a description of the CPU model
+  virtual const std::string& version() const = 0;   // GL_VERSION, or the CPU model's version
+  virtual int max_resolution() const = 0;    // the largest N of an N x N view
+  // Bracket the jobs of one frame (a GL stage makes its context current in begin_frame() and
+  // gives the caller's current context back in end_frame()).
+  virtual void begin_frame() {}
+  virtual void end_frame() noexcept {}
+  // Peels `job` into `out` (cleared first). Adds its time to `timings` (upload, gpu, readback).
+  virtual void peel(const PeelJob& job, PeelResult& out, Timings& timings) = 0;
+};
+
+}  // namespace peelcd

@@ -1,0 +1,49 @@
+#pragma once
+// Exact triangle/triangle tests. The yes/no answer uses CGAL's exact predicates
+// (Exact_predicates_inexact_constructions_kernel), so it does not depend on vertex order,
+// triangle order or rounding. Degenerate triangles (collinear or repeated vertices) are tested
+// as the segment or point they are. The intersection segment is constructed in double.
+#include "peelcd/core/mesh.h"
+
+#include <array>
+#include <vector>
+
+namespace peelcd {
+
+using TriangleCorners = std::array<Vec3, 3>;
+
+// How two intersecting triangles meet, decided with exact predicates:
+//   crossing:   each triangle has corners strictly on both sides of the other's plane (they
+//               penetrate);
+//   touching:   not coplanar, and one triangle lies on one closed side of the other's plane
+//               (contact without penetration: a vertex, an edge or a face resting on the other);
+//   coplanar:   all six corners in one plane, overlapping;
+//   degenerate: one of the triangles has no area (collinear or repeated corners).
+enum class ContactKind { crossing, touching, coplanar, degenerate };
+const char* to_string(ContactKind kind);
+
+struct Contact {
+  std::uint32_t tri_a = 0, tri_b = 0;  // triangle indices in A's and B's file order
+  Vec3 p = Vec3::Zero(), q = Vec3::Zero();  // intersection segment (p == q for a point)
+  ContactKind kind = ContactKind::crossing;
+};
+
+inline TriangleCorners corners(const Mesh& m, std::uint32_t t) {
+  return {m.vertices[m.triangles[t][0]], m.vertices[m.triangles[t][1]], m.vertices[m.triangles[t][2]]};
+}
+
+bool triangles_intersect(const TriangleCorners& a, const TriangleCorners& b);
+
+// Kind of contact of two intersecting triangles (undefined if they are disjoint).
+ContactKind classify_contact(const TriangleCorners& a, const TriangleCorners& b);
+
+// Segment of the intersection of two intersecting triangles. For a coplanar overlap (a
+// polygon) it is the polygon's longest chord among its vertices. Undefined if they are disjoint.
+std::pair<Vec3, Vec3> intersection_segment(const TriangleCorners& a, const TriangleCorners& b);
+
+// Tests every candidate pair (packed with pack_pair(triA, triB), see id_map.h) and appends
+// the colliding ones to `out` in candidate order.
+void narrow_phase(const Mesh& a, const Mesh& b, const std::vector<std::uint64_t>& candidates,
+                  std::vector<Contact>& out);
+
+}  // namespace peelcd

@@ -1,0 +1,20 @@
+#pragma once
+// Exact all-pairs reference (no sampling): CGAL box_intersection_d over per-triangle boxes, then
+// the exact triangle test of narrow_phase.h. It defines nCTP and the miss ratio.
+#include "peelcd/core/narrow_phase.h"
+
+#include <vector>
+
+namespace peelcd {
+
+// Colliding triangle pairs of A and B, packed with pack_pair(triA, triB), sorted.
+std::vector<std::uint64_t> exact_colliding_pairs(const Mesh& a, const Mesh& b);
+
+// Reported contacts against the exact set: every miss and every false contact counts.
+struct Score {
+  std::size_t exact = 0, found = 0, missed = 0, false_contacts = 0;
+  double miss_ratio() const { return exact ? double(missed) / double(exact) : 0.0; }
+};
+Score score_contacts(const std::vector<std::uint64_t>& exact, const std::vector<Contact>& reported);
+
+}  // namespace peelcd

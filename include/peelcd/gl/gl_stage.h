@@ -1,0 +1,59 @@
+#pragma once
+// The image stage over any GL 4.5 core context (OSMesa, EGL, or the caller's own): triangles
+// of one ROI view uploaded in ROI-local floats, layers peeled by the single-pass k-buffer peeler
+// (default) or the multi-pass peeler, PCS found on the GPU (or on the host where GL itself runs on
+// the CPU) and read back. GL objects (programs, buffers, textures) are created once and reused
+// across views and frames; rigid objects' shapes stay on the GPU while their owner holds them.
+//
+// GL is called only through function pointers resolved from the context
+// (Context::proc_address), so several stages on different platforms live in one process.
+// Thread safety: one thread at a time per stage (see peelcd/core/detector.h).
+#include "peelcd/core/image_stage.h"
+#include "peelcd/gl/context.h"
+#include "peelcd/gl/options.h"
+
+#include <memory>
+#include <string>
+
+namespace peelcd::gl {
+
+// A hash of the embedded shader sources (the first 16 hex digits of their SHA-256), recorded with
+// goldens and dumps.
+std::string shader_sources_hash();
+
+class GlImageStage final : public ImageStage {
+ public:
+  // Makes `context` current, loads GL through it and compiles the programs, then gives the
+  // caller's current context back. The stage shares ownership of the context: it lives as long
+  // as the stage. Throws GlError (no GL 4.5 core, a shader that does not compile).
+  explicit GlImageStage(std::shared_ptr<Context> context, GlOptions options = {});
+  ~GlImageStage() override;
+  GlImageStage(const GlImageStage&) = delete;
+  GlImageStage& operator=(const GlImageStage&) = delete;
+
+  // The peeler and resolve may change between frames (the worker count is fixed at construction).
+  const GlOptions& options() const;
+  void set_options(const GlOptions& options);
+
+  const std::string& backend() const override;   // the context's platform
+  const std::string& renderer() const override;  // GL_RENDERER
+  const std::string& version() const override;   // GL_VERSION
+  int max_resolution() const override;           // GL_MAX_TEXTURE_SIZE
+  void begin_frame() override;
+  void end_frame() noexcept override;
+  void peel(const PeelJob& job, PeelResult& out, Timings& timings) override;
+
+  // Benchmarks: the floor under any image-space method on this context. The job's triangles
+  // uploaded (not timed), then drawn once with depth testing and a fragment shader that does
+  // nothing; returns the milliseconds of that draw (to glFinish). Call between begin_frame()
+  // and end_frame().
+  double floor_draw_ms(const PeelJob& job);
+
+  Context& context();
+
+ private:
+  struct Impl;
+  std::unique_ptr<Impl> impl_;
+};
+
+}  // namespace peelcd::gl

@@ -1,0 +1,50 @@
+#pragma once
+// Settings of the GL image stage (peelcd/gl/gl_stage.h) that the backend-neutral detector does
+// not know about. No GL here: scene files and the command line parse them too.
+#include <optional>
+#include <string>
+
+namespace peelcd {
+
+// How the layers are produced on the GPU; both give the same layers and PCS, bit for bit
+// (the goldens check it). multipass: one draw per layer with a strict depth test against the
+// previous layer (the paper's way). abuffer: both objects drawn once into per-texel fragment
+// lists, the layers recovered per texel by one compute pass (shaders/abuffer_resolve.comp).
+enum class Peeler { multipass, abuffer };
+
+// Where the single-pass peeler's k-buffer is resolved into layers and PCS: gpu (a compute pass,
+// shaders/abuffer_resolve.comp; the PCS list is read back), host (the k-buffer is mapped and
+// resolved by core/kbuffer.h: the same layers and PCS), or automatic: host where GL renders on
+// the CPU (llvmpipe, softpipe: the buffers are host memory already), gpu elsewhere.
+enum class Resolve { automatic, gpu, host };
+
+inline const char* to_string(Peeler peeler) { return peeler == Peeler::abuffer ? "abuffer" : "multipass"; }
+
+inline std::optional<Peeler> parse_peeler(const std::string& text) {
+  if (text == "abuffer" || text == "single-pass") return Peeler::abuffer;
+  if (text == "multipass") return Peeler::multipass;
+  return std::nullopt;
+}
+
+inline const char* to_string(Resolve resolve) {
+  return resolve == Resolve::gpu ? "gpu" : resolve == Resolve::host ? "host" : "auto";
+}
+
+inline std::optional<Resolve> parse_resolve(const std::string& text) {
+  if (text == "auto") return Resolve::automatic;
+  if (text == "gpu") return Resolve::gpu;
+  if (text == "host") return Resolve::host;
+  return std::nullopt;
+}
+
+namespace gl {
+
+struct GlOptions {
+  Peeler peeler = Peeler::abuffer;        // chosen on peelcd bench (docs/performance.md)
+  Resolve resolve = Resolve::automatic;   // single-pass peeler only
+  // Threads of the host resolve (Resolve::host): 0 = the hardware's threads, at most 8.
+  unsigned workers = 0;
+};
+
+}  // namespace gl
+}  // namespace peelcd

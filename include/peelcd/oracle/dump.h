@@ -1,0 +1,137 @@
+#pragma once
+// Layer dumps and goldens (design.md section 5): every logical layer of every ROI view of one
+// frame, losslessly, with the PCS, the colliding pairs and the metadata that produced them.
+//
+// On disk (peelcd dump --out DIR, and fixtures/golden/<case>/expected/):
+//   DIR/meta.json                          renderer, GL version, options, shader hash, per view geometry
+//   DIR/index.html                         the viewer (dumps only; self-contained)
+//   DIR/<pair>/pcs.txt                     the pair's PCS over all views: "idA idB", sorted
+//   DIR/<pair>/colliding.txt               "triA triB kind", sorted
+//   DIR/<pair>/view<v>/pcs.txt             that view's PCS
+//   DIR/<pair>/view<v>/layer<kk>.exr       layer kk: Z (FLOAT, window depth), id (UINT, ID + 1,
+//                                          0 = empty), object (UINT, 0 = A, 1 = B), dzdx, dzdy (FLOAT)
+//   DIR/<pair>/view<v>/layer<kk>.png       preview (dumps only): depth | IDs, PCS texels marked
+// EXR rows run top to bottom (row 0 = the top of the image, as image viewers show it).
+#include "peelcd/core/frame.h"
+#include "peelcd/core/detector.h"
+#include "peelcd/gl/gl_stage.h"
+
+#include <nlohmann/json.hpp>
+
+#include <array>
+#include <cstdint>
+#include <string>
+#include <vector>
+
+namespace peelcd::oracle {
+
+struct DumpView {
+  std::string dir;  // relative to the dump root, e.g. "pair0_bunny_dragon/view0"
+  int view = 0;
+  int resolution = 0;
+  bool a_first = false;
+  float epsilon_window = 0, slope = 0;
+  nlohmann::json geometry;  // centre, u, v, d, half_uv, half_depth, box (for the record)
+  std::vector<std::vector<std::uint32_t>> layers;  // N*N*4 words each, GL row order (bottom first)
+  std::vector<IdPair> pcs;
+};
+
+struct DumpPair {
+  std::string dir;  // e.g. "pair0_bunny_dragon"
+  std::string name_a, name_b;
+  std::size_t object_a = 0, object_b = 0;
+  double epsilon = 0;
+  std::vector<IdPair> pcs;
+  std::vector<std::array<std::uint32_t, 2>> colliding;
+  std::vector<std::string> kinds;  // ContactKind of each colliding pair
+  std::vector<DumpView> views;
+};
+
+struct Dump {
+  std::string renderer, gl_version, backend, shader_hash;
+  nlohmann::json options;  // the DetectOptions of the frame
+  std::vector<DumpPair> pairs;
+};
+
+// Builds a dump from a frame and the views captured while it ran (Detector::capture_layers).
+Dump make_dump(const FrameResult& frame, const std::vector<CapturedView>& captured,
+               const std::vector<Object>& objects, const DetectOptions& options, const std::string& renderer,
+               const std::string& gl_version, const std::string& backend);
+
+// Writes `dump` to `dir` (created; must not exist or be empty). `previews` adds the PNG layer
+// previews and index.html. Everything is written into a temporary sibling folder that is
+// renamed at the end, so a failure leaves nothing behind. Throws InputError.
+void write_dump(const Dump& dump, const std::string& dir, bool previews);
+
+// Reads a dump written by write_dump (previews are ignored). Throws InputError.
+Dump read_dump(const std::string& dir);
+
+// The texels of layer `k` of `view` where it and layer k-1 are of different objects and close
+// enough for the PCS test of shaders/pcs.comp (recomputed on the CPU; used to mark previews).
+std::vector<bool> pcs_texels(const DumpView& view, std::size_t k);
+
+// Layer word accessors (shaders/peel.frag layout).
+inline bool texel_empty(const std::vector<std::uint32_t>& layer, std::size_t i) { return layer[4 * i + 1] == 0; }
+inline std::uint32_t texel_object(const std::vector<std::uint32_t>& layer, std::size_t i) { return layer[4 * i + 1] >> 31; }
+inline std::uint32_t texel_id1(const std::vector<std::uint32_t>& layer, std::size_t i) { return layer[4 * i + 1] & 0x7fffffffu; }
+
+// ---- images ----
+// Writes one layer as EXR (see the layout above); reads it back into N*N*4 words. Throw InputError.
+void write_layer_exr(const std::string& path, const std::vector<std::uint32_t>& layer, int n);
+std::vector<std::uint32_t> read_layer_exr(const std::string& path, int& n);
+// An 8-bit RGB image, rows top to bottom, written as PNG. Throws InputError.
+struct Rgb {
+  int width = 0, height = 0;
+  std::vector<std::uint8_t> pixels;  // width * height * 3
+  Rgb(int w, int h) : width(w), height(h), pixels(std::size_t(w) * h * 3, 0) {}
+  void set(int x, int y, std::array<std::uint8_t, 3> c) {
+    std::uint8_t* p = &pixels[(std::size_t(y) * width + x) * 3];
+    p[0] = c[0], p[1] = c[1], p[2] = c[2];
+  }
+};
+void write_png(const std::string& path, const Rgb& image);
+std::vector<std::uint8_t> encode_png(const Rgb& image);
+// The preview of one layer: depth in grey (near = bright) | IDs in a stable palette, with the
+// texels in `marks` (may be empty) in magenta on both halves.
+Rgb layer_preview(const std::vector<std::uint32_t>& layer, int n, const std::vector<bool>& marks);
+
+// ---- goldens ----
+// How a backend is compared with the OSMesa goldens (design.md section 5).
+//   exact:    llvmpipe in any context (OSMesa, EGL surfaceless): every layer word equal, the same
+//             layer counts, the same PCS and colliding pairs.
+//   hardware: another rasterizer: see kIdSilhouetteTexels and kDepthUlps in dump.cpp; every
+//             golden colliding pair must be found; PCS and layer counts may differ (listed).
+enum class Tier { exact, hardware };
+const char* to_string(Tier tier);
+
+struct TexelDifference {
+  std::string view_dir;
+  std::size_t layer = 0;
+  int x = 0, y = 0;  // image coordinates, y = 0 at the top (as in the EXR and PNG files)
+  std::string channel, expected, actual;
+};
+
+struct Comparison {
+  std::vector<std::string> failures;  // structural differences, PCS, pairs: one line each
+  std::vector<std::string> notes;     // differences that do not fail the tier
+  std::size_t differing_texels = 0;   // beyond the tier's tolerance
+  std::size_t tolerated_texels = 0;   // within it (hardware tier)
+  std::vector<TexelDifference> first; // the first differing texels, in (view, layer, y, x) order
+  struct LayerCount {
+    std::string view_dir;
+    std::size_t layer;
+    std::size_t differing, tolerated;
+  };
+  std::vector<LayerCount> per_layer;  // layers with any difference
+  bool ok() const { return failures.empty() && differing_texels == 0; }
+};
+
+Comparison compare_dumps(const Dump& expected, const Dump& actual, Tier tier, std::size_t max_listed = 10);
+
+// Human report (the same text compare prints) plus, for up to `max_layers` differing layers,
+// <view>_layer<kk>_{expected,actual,error}.png in `dir` (created). Returns the report text.
+std::string write_report(const Dump& expected, const Dump& actual, const Comparison& comparison,
+                         const std::string& case_name, const std::string& dir, std::size_t max_layers = 4);
+std::string report_text(const Comparison& comparison, const std::string& case_name, Tier tier);
+
+}  // namespace peelcd::oracle
