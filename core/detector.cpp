@@ -32,9 +32,16 @@ struct FrameScope {
 }  // namespace
 
 void validate_objects(const std::vector<Object>& objects) {
+  for (std::size_t i = 0; i < objects.size(); ++i) validate_object(objects[i], i);
+}
+
+void validate_objects(const std::vector<const Object*>& objects) {
+  for (std::size_t i = 0; i < objects.size(); ++i) validate_object(*objects[i], i);
+}
+
+void validate_object(const Object& o, std::size_t i) {
   // Messages are built only on failure: a valid frame allocates nothing here.
-  for (std::size_t i = 0; i < objects.size(); ++i) {
-    const Object& o = objects[i];
+  {
     const Mesh& m = o.mesh;
     const auto fail = [&](const std::string& problem) {
       throw std::invalid_argument("peelcd: " + object_label(o, i) + problem);
@@ -103,7 +110,15 @@ double triangles_in_view(const Mesh& mesh, const RoiView& view, const std::vecto
   return min_depth;
 }
 
+// The frame's objects through pointers (no copy of any mesh).
+struct ObjectRefs {
+  const std::vector<const Object*>& p;
+  const Object& operator[](std::size_t i) const { return *p[i]; }
+  std::size_t size() const { return p.size(); }
+};
+
 struct Detector::Impl {
+  std::vector<const Object*> pointers;
   std::vector<Aabb> boxes;
   std::vector<std::pair<std::size_t, std::size_t>> object_pairs;
   std::vector<std::size_t> order;
@@ -139,10 +154,20 @@ FrameResult Detector::detect(const std::vector<Object>& objects, const DetectOpt
 }
 
 void Detector::detect(const std::vector<Object>& objects, const DetectOptions& opt, FrameResult& out) {
+  std::vector<const Object*>& ptrs = impl_->pointers;
+  ptrs.clear();
+  for (const Object& o : objects) ptrs.push_back(&o);
+  detect(ptrs, opt, out);
+}
+
+void Detector::detect(const std::vector<const Object*>& object_ptrs, const DetectOptions& opt, FrameResult& out) {
   Impl& s = *impl_;
+  const ObjectRefs objects{object_ptrs};
   ImageStage& stage = *stage_;
   validate_options(opt, stage.max_resolution());
-  validate_objects(objects);
+  for (const Object* o : object_ptrs)
+    if (!o) throw std::invalid_argument("peelcd::Detector::detect(): a null object");
+  validate_objects(object_ptrs);
 
   // `out` is reused: its vectors keep their capacity (tests/alloc/test_alloc.cpp counts it).
   out.timings = Timings{};
@@ -152,7 +177,7 @@ void Detector::detect(const std::vector<Object>& objects, const DetectOptions& o
 
   auto t0 = Clock::now();
   s.boxes.clear();
-  for (const Object& o : objects) s.boxes.push_back(bounds(o.mesh));
+  for (std::size_t i = 0; i < objects.size(); ++i) s.boxes.push_back(bounds(objects[i].mesh));
   overlapping_pairs(s.boxes, s.object_pairs, s.order);
   const auto& pairs = s.object_pairs;
   out.timings.aabb = ms_since(t0);

@@ -34,6 +34,8 @@ struct CapturedView {
 // as its world mesh. Throws std::invalid_argument naming the object (index and name) and the
 // problem. Empty meshes are allowed (they overlap nothing).
 void validate_objects(const std::vector<Object>& objects);
+void validate_objects(const std::vector<const Object*>& objects);
+void validate_object(const Object& object, std::size_t index);
 
 // Checks the options (ranges, finiteness) against a stage whose largest view is
 // `max_resolution`. Throws std::invalid_argument naming the option.
@@ -60,6 +62,8 @@ class Detector {
   // The same into `out`, reusing its storage: with the same number of overlapping pairs frame
   // after frame, the detector allocates nothing (the stage may, inside its driver).
   void detect(const std::vector<Object>& objects, const DetectOptions& options, FrameResult& out);
+  // The same over objects held elsewhere (no copy of any mesh; none may be null).
+  void detect(const std::vector<const Object*>& objects, const DetectOptions& options, FrameResult& out);
 
   // While `sink` is set, detect() appends one CapturedView per ROI view it peels (the stage
   // reads every layer back). nullptr (the default) turns capture off.

@@ -1,0 +1,31 @@
+#pragma once
+// peelcd: image-space collision detection between triangle meshes through surface peeling.
+// The umbrella header: the core API (meshes, options, the detector, the collision API, the CPU
+// image stage), mesh and scene files, and the GL stage with the contexts this installation has.
+// Finer-grained headers live beside it (peelcd/core/..., peelcd/gl/..., peelcd/io/...).
+#include "peelcd/version.h"
+
+#include "peelcd/core/collision.h"
+#include "peelcd/core/cpu_stage.h"
+#include "peelcd/core/detector.h"
+#include "peelcd/core/frame.h"
+#include "peelcd/core/image_stage.h"
+#include "peelcd/core/mesh.h"
+#include "peelcd/core/narrow_phase.h"
+#include "peelcd/core/reference.h"
+
+#if __has_include("peelcd/io/mesh_io.h")
+#include "peelcd/io/mesh_io.h"
+#include "peelcd/io/scene.h"
+#endif
+#if __has_include("peelcd/gl/gl_stage.h")
+#include "peelcd/gl/context.h"
+#include "peelcd/gl/gl_stage.h"
+#include "peelcd/gl/pipeline.h"
+#endif
+#if __has_include("peelcd/gl_egl/egl_context.h")
+#include "peelcd/gl_egl/egl_context.h"
+#endif
+#if __has_include("peelcd/gl_osmesa/osmesa_context.h")
+#include "peelcd/gl_osmesa/osmesa_context.h"
+#endif

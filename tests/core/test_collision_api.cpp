@@ -1,0 +1,116 @@
+// The public collision API through the CPU image stage (no GL): per-pair collide(), persistent
+// rigid and deforming objects, the world, and the errors bad input gives.
+#include "peelcd/core/collision.h"
+#include "peelcd/core/cpu_stage.h"
+#include "peelcd/core/primitives.h"
+#include "peelcd/core/reference.h"
+
+#include <catch2/catch.hpp>
+
+using namespace peelcd;
+
+namespace {
+
+std::shared_ptr<Detector> cpu_detector() { return std::make_shared<Detector>(std::make_shared<CpuImageStage>()); }
+
+Mesh moved(const Mesh& m, const Eigen::Affine3d& pose) {
+  Mesh w = m;
+  for (Vec3& v : w.vertices) v = pose * v;
+  return w;
+}
+
+}  // namespace
+
+TEST_CASE("collide(): two spheres, rigid objects and plain meshes agree and report only exact pairs", "[api]") {
+  auto detector = cpu_detector();
+  const Mesh sphere = make_uv_sphere(Vec3(0, 0, 0), 1.0, 12, 24);
+  const auto geometry = std::make_shared<const CollisionGeometry>(sphere, "sphere");
+  const Eigen::Affine3d pa = Eigen::Affine3d::Identity();
+  const Eigen::Affine3d pb(Eigen::Translation3d(1.3, 0.4, 0.2) * Eigen::AngleAxisd(0.4, Vec3(0, 1, 0)));
+  CollisionObject a(geometry, pa, "a"), b(geometry, pb, "b");
+  CollisionRequest request;
+  CollisionResult r1, r2;
+  REQUIRE(collide(*detector, a, b, request, r1) > 0);
+  REQUIRE(r1.is_collision());
+  collide(*detector, sphere, pa, sphere, pb, request, r2);
+  REQUIRE(r1.contacts.size() == r2.contacts.size());
+  for (std::size_t i = 0; i < r1.contacts.size(); ++i) {
+    CHECK(r1.contacts[i].tri_a == r2.contacts[i].tri_a);
+    CHECK(r1.contacts[i].tri_b == r2.contacts[i].tri_b);
+  }
+  // Against the exact all-pairs reference: every reported pair is exact (a consistency check:
+  // the narrow phase is exact), and the default configuration finds them all here.
+  const Score s = score_contacts(exact_colliding_pairs(moved(sphere, pa), moved(sphere, pb)), r1.contacts);
+  CHECK(s.false_contacts == 0);
+  CHECK(s.missed == 0);
+  // Moved apart: no contact, no pair.
+  b.set_pose(Eigen::Affine3d(Eigen::Translation3d(5, 0, 0)));
+  CHECK(collide(*detector, a, b, request, r1) == 0);
+  CHECK_FALSE(r1.is_collision());
+}
+
+TEST_CASE("a deforming object is updated in place, without a copy of its mesh", "[api]") {
+  auto detector = cpu_detector();
+  CollisionObject ball = CollisionObject::deforming(make_uv_sphere(Vec3(0, 0, 0), 1.0, 10, 20), "ball");
+  const auto geometry = std::make_shared<const CollisionGeometry>(make_box(Vec3(0.8, -0.5, -0.5), Vec3(2, 0.5, 0.5)));
+  CollisionObject box(geometry, Eigen::Affine3d::Identity(), "box");
+  CollisionWorld world(detector);
+  world.add(&ball);
+  world.add(&box);
+  const Vec3* storage = ball.deforming_vertices().data();
+  std::size_t touching = 0;
+  for (int frame = 0; frame < 5; ++frame) {
+    const double scale = 0.7 + 0.1 * frame;  // the ball grows into the box
+    const Mesh rest = make_uv_sphere(Vec3(0, 0, 0), 1.0, 10, 20);
+    for (std::size_t i = 0; i < rest.vertices.size(); ++i) ball.deforming_vertices()[i] = rest.vertices[i] * scale;
+    const FrameResult& f = world.detect();
+    CHECK(ball.deforming_vertices().data() == storage);   // the same vertex storage
+    CHECK(&ball.world().mesh.vertices[0] == storage);     // the frame read it where it lies
+    const std::size_t n = f.pairs.empty() ? 0 : f.pairs[0].colliding.size();
+    if (scale <= 0.75) CHECK(n == 0);  // 0.7, 0.8 of radius: the box starts at x = 0.8
+    if (scale >= 0.9) CHECK(n > 0);
+    touching += n;
+  }
+  CHECK(touching > 0);
+  CHECK_THROWS_AS(box.deforming_vertices(), std::logic_error);
+  CHECK_THROWS_AS(ball.set_pose(Eigen::Affine3d::Identity()), std::logic_error);
+}
+
+TEST_CASE("bad meshes and poses give exceptions that name the object and the problem", "[api]") {
+  auto detector = cpu_detector();
+  Mesh bad_index = make_box(Vec3(0, 0, 0), Vec3(1, 1, 1));
+  bad_index.triangles[3][1] = 99;
+  CHECK_THROWS_WITH(CollisionGeometry(bad_index, "crate"),
+                    Catch::Contains("'crate'") && Catch::Contains("triangle 3 uses vertex 99") &&
+                        Catch::Contains("8 vertices"));
+  Mesh nan_vertex = make_box(Vec3(0, 0, 0), Vec3(1, 1, 1));
+  nan_vertex.vertices[5].y() = std::nan("");
+  CHECK_THROWS_WITH(CollisionGeometry(nan_vertex, "crate"),
+                    Catch::Contains("'crate'") && Catch::Contains("vertex 5 has a NaN or infinite coordinate"));
+  Mesh inf_vertex = make_box(Vec3(0, 0, 0), Vec3(1, 1, 1));
+  inf_vertex.vertices[2].z() = HUGE_VAL;
+  CHECK_THROWS_WITH(CollisionGeometry(inf_vertex, "crate"), Catch::Contains("vertex 2 has a NaN or infinite"));
+
+  // Through the detector: a deforming object turned bad between frames is refused, named.
+  CollisionObject blob = CollisionObject::deforming(make_uv_sphere(Vec3(0, 0, 0), 1.0, 8, 16), "blob");
+  CollisionObject other = CollisionObject::deforming(make_uv_sphere(Vec3(1.2, 0.3, 0.1), 0.8, 8, 16), "other");
+  CollisionRequest request;
+  CollisionResult result;
+  CHECK(collide(*detector, blob, other, request, result) > 0);
+  blob.deforming_mesh().triangles[0][0] = 1000;
+  CHECK_THROWS_WITH(collide(*detector, blob, other, request, result),
+                    Catch::Contains("object 0 'blob'") && Catch::Contains("triangle 0 uses vertex 1000"));
+  blob.deforming_mesh().triangles[0][0] = 0;
+  blob.deforming_vertices()[0].x() = std::nan("");
+  CHECK_THROWS_WITH(collide(*detector, blob, other, request, result),
+                    Catch::Contains("object 0 'blob'") && Catch::Contains("NaN or infinite"));
+  // A pose with infinities.
+  const auto g = std::make_shared<const CollisionGeometry>(make_box(Vec3(0, 0, 0), Vec3(1, 1, 1)), "g");
+  CollisionObject rigid(g, Eigen::Affine3d::Identity(), "lid");
+  Eigen::Affine3d inf_pose = Eigen::Affine3d::Identity();
+  inf_pose.translation().x() = HUGE_VAL;
+  CHECK_THROWS_WITH(rigid.set_pose(inf_pose), Catch::Contains("'lid'") && Catch::Contains("NaN or infinite"));
+  // Impossible options name the option.
+  request.options.resolution = 1 << 20;
+  CHECK_THROWS_WITH(collide(*detector, rigid, other, request, result), Catch::Contains("resolution 1048576"));
+}
