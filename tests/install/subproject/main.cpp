@@ -1,0 +1,2 @@
+#include <peelcd/core/detector.h>
+int main() { return 0; }

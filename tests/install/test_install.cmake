@@ -1,0 +1,31 @@
+# Installs the build into a fresh prefix, then builds and runs the standalone examples
+# (examples/, find_package(peelcd)) against it, and checks peelcd.pc with pkg-config.
+#   -DBUILD=<peelcd build dir> -DSOURCE=<peelcd source dir> -DWORK=<scratch dir>
+file(REMOVE_RECURSE ${WORK})
+set(prefix ${WORK}/prefix)
+function(run)
+  execute_process(COMMAND ${ARGN} RESULT_VARIABLE rc OUTPUT_VARIABLE out ERROR_VARIABLE err)
+  if(NOT rc EQUAL 0)
+    message(FATAL_ERROR "failed (${rc}): ${ARGN}\n${out}\n${err}")
+  endif()
+  set(last_output "${out}" PARENT_SCOPE)
+endfunction()
+run(${CMAKE_COMMAND} --install ${BUILD} --prefix ${prefix})
+foreach(f include/peelcd/peelcd.h include/peelcd/version.h include/peelcd/core/detector.h
+          lib/cmake/peelcd/peelcdConfig.cmake lib/cmake/peelcd/peelcdConfigVersion.cmake
+          lib/pkgconfig/peelcd.pc share/doc/peelcd/LICENSE)
+  if(NOT EXISTS ${prefix}/${f})
+    message(FATAL_ERROR "not installed: ${f}")
+  endif()
+endforeach()
+run(${CMAKE_COMMAND} -S ${SOURCE}/examples -B ${WORK}/examples -DCMAKE_PREFIX_PATH=${prefix} -DCMAKE_BUILD_TYPE=Release)
+run(${CMAKE_COMMAND} --build ${WORK}/examples -j 2)
+run(${WORK}/examples/two_meshes)
+message(STATUS "${last_output}")
+run(${WORK}/examples/animation)
+message(STATUS "${last_output}")
+find_program(PKG_CONFIG pkg-config REQUIRED)
+set(ENV{PKG_CONFIG_PATH} ${prefix}/lib/pkgconfig)
+run(${PKG_CONFIG} --modversion peelcd)
+message(STATUS "pkg-config: peelcd ${last_output}")
+run(${PKG_CONFIG} --cflags --libs peelcd)
