@@ -81,8 +81,9 @@ EglContext::EglContext(Platform platform) : impl_(std::make_unique<Impl>()) {
     throw GlError("peelcd::gl::EglContext: no EGL platform gives an OpenGL 4.5 core context without a surface "
                   "(tried " + std::string(platform == Platform::surfaceless ? "" : "device ") +
                   (platform == Platform::device ? "" : "surfaceless") + ")");
-  if (!eglMakeCurrent(impl_->display, EGL_NO_SURFACE, EGL_NO_SURFACE, impl_->context))
-    throw GlError("peelcd::gl::EglContext: eglMakeCurrent failed");
+  // Made current once to prove it works, then the caller's context (if any) is current again.
+  make_current();
+  restore_previous();
 }
 
 EglContext::~EglContext() {

@@ -24,8 +24,9 @@ OsmesaContext::OsmesaContext() : impl_(std::make_unique<Impl>()) {
   if (!impl_->ctx)
     throw GlError("peelcd::gl::OsmesaContext: cannot create an OpenGL 4.5 core context "
                   "(is libosmesa6 installed, with llvmpipe?)");
-  if (!OSMesaMakeCurrent(impl_->ctx, impl_->pixel, GL_UNSIGNED_BYTE, 1, 1))
-    throw GlError("peelcd::gl::OsmesaContext: OSMesaMakeCurrent failed");
+  // Made current once to prove it works, then the caller's context (if any) is current again.
+  make_current();
+  restore_previous();
 }
 
 OsmesaContext::~OsmesaContext() {

@@ -79,7 +79,7 @@ std::string hex(std::uint32_t w) {
   return buf;
 }
 
-// Hardware tier tolerances (design.md section 5).
+// Hardware tier tolerances (docs/design.md section 5).
 // IDs may differ within this many texels of a silhouette or triangle edge of the golden layer:
 // rasterizers snap vertices to different sub-texel grids, so a texel whose centre lies within
 // rounding of an edge can be covered by either side.

@@ -1,5 +1,5 @@
 // The host resolve of the k-buffer (core/kbuffer.h) against layers worked out by hand from the
-// rules of shaders/abuffer_resolve.comp (and design.md): nearest first, strictly behind the
+// rules of shaders/abuffer_resolve.comp (and docs/design.md): nearest first, strictly behind the
 // previous layer, depth ties to the earlier draw, alternate objects or any object.
 #include "peelcd/core/kbuffer.h"
 

@@ -1,4 +1,4 @@
-// OSMesa and EGL in one process (design.md section 6): the pipeline calls GL only through
+// OSMesa and EGL in one process (docs/design.md section 6): the pipeline calls GL only through
 // pointers resolved from the current context, so both run side by side. On llvmpipe both must
 // give bit-identical results: the same PCS and the same contacts.
 #include "gl_fixture.h"

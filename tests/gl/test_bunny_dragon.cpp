@@ -1,4 +1,4 @@
-// The default scene (design.md section 4) at 256^2 with paper IDs, over several views: no false
+// The default scene (docs/design.md section 4) at 256^2 with paper IDs, over several views: no false
 // contact ever, and the miss ratio of the default configuration under 15% in every view.
 #include "gl_fixture.h"
 #include "peelcd/io/scene.h"
@@ -23,7 +23,7 @@ const std::vector<std::uint64_t>& exact() {
 const std::vector<std::pair<double, double>> kViews = {{0, 0}, {90, 0}, {45, 30}, {0, 90}, {200, -40}, {300, 60}, {150, -90}};
 }  // namespace
 
-TEST_CASE("bunny vs dragon: the exact reference finds design.md's 228 pairs", "[bunny_dragon]") {
+TEST_CASE("bunny vs dragon: the exact reference finds docs/design.md's 228 pairs", "[bunny_dragon]") {
   CHECK(exact().size() == 228);
 }
 

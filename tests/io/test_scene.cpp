@@ -46,7 +46,7 @@ TEST_CASE("a scene may fuse 1, 2 or 3 views", "[scene]") {
   }
 }
 
-TEST_CASE("the default scene file parses to design.md's configuration", "[scene]") {
+TEST_CASE("the default scene file parses to docs/design.md's configuration", "[scene]") {
   const Scene s = load_scene(std::string(PEELCD_FIXTURES) + "/scenes/bunny_dragon.json");
   REQUIRE(s.objects.size() == 2);
   CHECK(s.objects[1].transform.scale == 2.5);

@@ -1,6 +1,6 @@
 #pragma once
 // A CPU model of the image stage: casts one ray per texel centre through a ROI, collects every
-// hit of both objects inside the ROI box, and applies the layer rules of design.md section 1.5
+// hit of both objects inside the ROI box, and applies the layer rules of docs/design.md section 1.5
 // (alternate peeling) or of the `full` mode (every surface; every adjacent A-B couple). It is
 // an independent oracle for the GL pipeline's layers and PCS, up to rasterization rules at
 // triangle edges (a texel centre exactly on a shared edge is owned by one triangle in GL and

@@ -11,7 +11,7 @@
 
 namespace peelcd {
 
-// How layers are peeled. alternate: the paper's alternate surface peeling (design.md 1.5);
+// How layers are peeled. alternate: the paper's alternate surface peeling (docs/design.md 1.5);
 // full: every surface of both objects, every adjacent A-B couple tested (a superset).
 enum class PeelMode { alternate, full };
 const char* to_string(PeelMode mode);

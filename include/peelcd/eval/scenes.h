@@ -1,5 +1,5 @@
 #pragma once
-// The paper's two dynamic test scenes as frame sequences (design.md section 3, Tables 1 and 2).
+// The paper's two dynamic test scenes as frame sequences (docs/design.md section 3, Tables 1 and 2).
 // No physics: the motion is scripted so that contact rises over four phases, and every frame is
 // a fresh set of world-space meshes (peelcd precomputes nothing, so a deforming or fracturing
 // mesh costs the same as a rigid one).

@@ -1,5 +1,5 @@
 #pragma once
-// Layer dumps and goldens (design.md section 5): every logical layer of every ROI view of one
+// Layer dumps and goldens (docs/design.md section 5): every logical layer of every ROI view of one
 // frame, losslessly, with the PCS, the colliding pairs and the metadata that produced them.
 //
 // On disk (peelcd dump --out DIR, and fixtures/golden/<case>/expected/):
@@ -96,7 +96,7 @@ std::vector<std::uint8_t> encode_png(const Rgb& image);
 Rgb layer_preview(const std::vector<std::uint32_t>& layer, int n, const std::vector<bool>& marks);
 
 // ---- goldens ----
-// How a backend is compared with the OSMesa goldens (design.md section 5).
+// How a backend is compared with the OSMesa goldens (docs/design.md section 5).
 //   exact:    llvmpipe in any context (OSMesa, EGL surfaceless): every layer word equal, the same
 //             layer counts, the same PCS and colliding pairs.
 //   hardware: another rasterizer: see kIdSilhouetteTexels and kDepthUlps in dump.cpp; every
