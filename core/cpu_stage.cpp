@@ -32,8 +32,6 @@ struct Corner {
 
 }  // namespace
 
-CpuImageStage::CpuImageStage(unsigned workers) { (void)workers; }
-
 void CpuImageStage::peel(const PeelJob& job, PeelResult& out, Timings& timings) {
   out.clear();
   const auto t0 = Clock::now();
@@ -116,7 +114,6 @@ void CpuImageStage::peel(const PeelJob& job, PeelResult& out, Timings& timings) 
       const int j1 = int(std::min<std::int64_t>(n - 1, floor_div(max_y)));
       if (i0 > i1 || j0 > j1) continue;
       // Depth and position planes over the snapped triangle, per texel.
-      const double inv = 1.0 / double(area);
       const double ax = double(a.fx) / kSubTexel, ay = double(a.fy) / kSubTexel;
       const double bx = double(b.fx) / kSubTexel - ax, by = double(b.fy) / kSubTexel - ay;
       const double dx_ = double(d.fx) / kSubTexel - ax, dy_ = double(d.fy) / kSubTexel - ay;
@@ -125,7 +122,6 @@ void CpuImageStage::peel(const PeelJob& job, PeelResult& out, Timings& timings) 
         gx = ((vb - va) * dy_ - (vd - va) * by) / det;
         gy = ((vd - va) * bx - (vb - va) * dx_) / det;
       };
-      (void)inv;
       double zx, zy;
       plane(a.z, b.z, d.z, zx, zy);
       Eigen::Vector3d px, py;

@@ -22,7 +22,7 @@ namespace peelcd {
 
 class CpuImageStage final : public ImageStage {
  public:
-  explicit CpuImageStage(unsigned workers = 1);
+  CpuImageStage() = default;  // one thread: the calling one
   const std::string& backend() const override { return backend_; }
   const std::string& renderer() const override { return renderer_; }
   const std::string& version() const override { return version_; }
