@@ -6,6 +6,7 @@
 // golden case handling moved into oracle/, is the open remainder of the library issue.
 #include "peelcd/core/reference.h"
 #include "peelcd/bench/peers.h"
+#include "peelcd/eval/classes.h"
 #include "peelcd/eval/scenes.h"
 #include "peelcd/eval/sweep.h"
 #include "peelcd/bench/floor.h"
@@ -82,7 +83,9 @@ struct DetectArgs {
   int res = 0;  // 0 = not given
   std::string ids, peel, peeler, cull, resolve;
   double slope = NAN;
-  double theta = NAN, phi = NAN, epsilon = NAN, edge_texels = NAN;
+  double theta = NAN, phi = NAN, roll = NAN, epsilon = NAN, edge_texels = NAN;
+  bool conservative = false, no_conservative = false, paper = false;
+  double max_miss = NAN;  // percent; NaN = report only
   std::string json_out;
   int repeat = 1;
   int views = 0;  // 0 = not given
@@ -117,6 +120,18 @@ gl::GlOptions merged_gl_options(const Scene& scene, const std::string& peeler, c
 // Command-line values override the scene file's.
 DetectOptions merged_options(const Scene& scene, const DetectArgs& a) {
   DetectOptions o = scene.options;
+  if (a.conservative && a.no_conservative)
+    throw InputError("peelcd: --conservative and --no-conservative contradict each other");
+  if (a.paper) {  // the paper's configuration, at the scene's resolution and budget
+    const DetectOptions p = paper_options();
+    const int res = o.resolution, budget = o.budget;
+    o = p;
+    o.resolution = res;
+    o.budget = budget;
+  }
+  if (a.conservative) o.conservative = true;
+  if (a.no_conservative) o.conservative = false;
+  if (!std::isnan(a.roll)) o.roll = a.roll;
   if (a.res > 0) o.resolution = a.res;
   if (!a.ids.empty()) o.ids = parsed(a.ids, parse_id_mode, "peelcd detect: --ids: unknown ID mode", "paper, ring or unique");
   if (!a.peel.empty())
@@ -124,6 +139,8 @@ DetectOptions merged_options(const Scene& scene, const DetectArgs& a) {
   if (!a.cull.empty()) o.cull = parsed(a.cull, parse_cull, "peelcd detect: --cull: unknown culling", "contact or box");
   if (!std::isnan(a.slope)) o.slope = a.slope;
   if (a.views) o.views = a.views;
+  // --theta/--phi alone turn the paper's frame (roll 0) there, as a scene's "view" does.
+  if ((!std::isnan(a.theta) || !std::isnan(a.phi)) && std::isnan(a.roll)) o.roll = 0.0;
   if (!std::isnan(a.theta)) o.theta = a.theta;
   if (!std::isnan(a.phi)) o.phi = a.phi;
   if (!std::isnan(a.epsilon)) o.epsilon = a.epsilon;
@@ -178,11 +195,23 @@ int run_detect(const DetectArgs& a) {
                       med(&Timings::readback), med(&Timings::cpu), med(&Timings::total)};
   }
 
+  Score total;
+  if (a.quiet && a.check)  // the figures are still needed for --max-miss
+    for (const PairResult& p : result.pairs) {
+      const Score sc = score_contacts(exact_colliding_pairs(objects[p.object_a].mesh, objects[p.object_b].mesh),
+                                      p.colliding);
+      total.exact += sc.exact;
+      total.missed += sc.missed;
+    }
   if (!a.quiet) {
     std::printf("peelcd detect: %s  (%zu objects, %s, %s)\n", a.scene.c_str(), objects.size(),
                 runner.backend().c_str(), result.renderer.c_str());
-    std::printf("view theta=%g phi=%g  views=%d  ids=%s  peel=%s  slope=%g  cull=%s\n", opt.theta, opt.phi, opt.views,
-                to_string(opt.ids), to_string(opt.peel), opt.slope, to_string(opt.cull));
+    if (opt.conservative)
+      std::printf("conservative  view theta=%g phi=%g roll=%g  views=%d  ids=%s  cull=%s\n", opt.theta, opt.phi, opt.roll,
+                  opt.views, to_string(opt.ids), to_string(opt.cull));
+    else
+      std::printf("point sampling  view theta=%g phi=%g roll=%g  views=%d  ids=%s  peel=%s  slope=%g  cull=%s\n", opt.theta,
+                  opt.phi, opt.roll, opt.views, to_string(opt.ids), to_string(opt.peel), opt.slope, to_string(opt.cull));
     if (result.pairs.empty()) std::printf("no overlapping bounding boxes: no GL work\n");
     for (const PairResult& p : result.pairs) {
       std::printf("%s x %s: ROI %dx%d, eps %.3g, drawn %zu+%zu of %zu+%zu tris, %d layers, %zu PCS, %zu candidates, %zu colliding\n",
@@ -202,6 +231,8 @@ int run_detect(const DetectArgs& a) {
       if (a.check) {
         const Score sc = score_contacts(exact_colliding_pairs(objects[p.object_a].mesh, objects[p.object_b].mesh),
                                         p.colliding);
+        total.exact += sc.exact;
+        total.missed += sc.missed;
         std::printf("  exact reference: %zu pairs; found %zu, missed %zu (miss ratio %.2f%%), false contacts %zu\n",
                     sc.exact, sc.found, sc.missed, 100.0 * sc.miss_ratio(), sc.false_contacts);
       }
@@ -212,6 +243,14 @@ int run_detect(const DetectArgs& a) {
                 t.aabb, t.upload, t.gpu, t.readback, t.cpu, t.total);
   }
   if (!a.json_out.empty()) write_output(a.json_out, to_json(result, objects, opt).dump(2));
+  if (a.check && !a.quiet)
+    std::printf("check: %zu exact pairs, %zu missed (miss ratio %.4f%%)\n", total.exact, total.missed,
+                100.0 * total.miss_ratio());
+  if (a.check && !std::isnan(a.max_miss) && 100.0 * total.miss_ratio() > a.max_miss) {
+    std::fprintf(stderr, "peelcd detect: miss ratio %.4f%% is above --max-miss %g%%\n", 100.0 * total.miss_ratio(),
+                 a.max_miss);
+    return 3;
+  }
   return 0;
 }
 
@@ -485,16 +524,13 @@ int run_bench(const BenchArgs& a) {
   std::vector<Config> configs;
   DetectOptions base;
   base.resolution = a.res >= 0 ? a.res : (seq ? 0 : 256);
-  configs.push_back({"peelcd default (3 views)", "default", base});
+  configs.push_back({"peelcd default (conservative, 1 view)", "default", base});
   DetectOptions box = base;
   box.cull = Cull::box;
   configs.push_back({"peelcd default, box culling", "box cull", box});
   gl::GlOptions gpu_resolve;
   gpu_resolve.resolve = Resolve::gpu;
   configs.push_back({"peelcd default, GPU resolve", "gpu rslv", base, gpu_resolve});
-  gl::GlOptions multi;
-  multi.peeler = Peeler::multipass;
-  configs.push_back({"peelcd default, multi-pass", "multipass", base, multi});
   DetectOptions half = base;  // half the tile side: the texels culling saves
   if (half.resolution > 0)
     half.resolution = std::max(16, half.resolution / 2);
@@ -506,13 +542,23 @@ int run_bench(const BenchArgs& a) {
     shared.resolution = 0;
     configs.push_back({"peelcd default, budget, tile by edge", "edge tile", shared});
   }
-  DetectOptions three_alt = base;
+  // Point sampling (the paper's image stage, with this project's culling, views and slope
+  // epsilon): the default of 0.2.0, three views along the world axes.
+  DetectOptions point = base;
+  point.conservative = false;
+  point.theta = point.phi = point.roll = 0.0;
+  point.views = 3;
+  configs.push_back({"peelcd point sampling, 3 views", "point 3v", point});
+  gl::GlOptions multi;
+  multi.peeler = Peeler::multipass;
+  configs.push_back({"peelcd point sampling, multi-pass", "multipass", point, multi});
+  DetectOptions three_alt = point;
   three_alt.peel = PeelMode::alternate;
   configs.push_back({"peelcd 3 views, alternate peeling", "3v alt", three_alt});
-  DetectOptions two = base;
+  DetectOptions two = point;
   two.views = 2;
   configs.push_back({"peelcd 2 views, full peeling", "2v full", two});
-  DetectOptions one = base;
+  DetectOptions one = point;
   one.views = 1;
   configs.push_back({"peelcd 1 view, full peeling", "1v full", one});
   DetectOptions one_alt = one;
@@ -528,7 +574,7 @@ int run_bench(const BenchArgs& a) {
   // The floors: one bare draw per view of every triangle touching the overlap box (the paper's
   // ROI), and of the triangles contact culling keeps (what the default configurations draw);
   // drawn along the three views, the floor of k views is the time of the first k.
-  DetectOptions floor3 = base, cfloor3 = base;
+  DetectOptions floor3 = point, cfloor3 = point;
   floor3.cull = Cull::box;
   cfloor3.cull = Cull::contact;
   const std::size_t methods = configs.size() + 8;  // + CGAL, FCL, six floors
@@ -686,16 +732,18 @@ int run_sweep_command(const SweepArgs& a) {
       const auto ids = parse_id_mode(ids_name);
       if (!ids) throw InputError("peelcd sweep: --ids: unknown ID mode \"" + ids_name + "\" (expected paper, ring or unique)");
       for (const std::string& mode : a.modes) {
-        if (mode != "paper" && mode != "alternate" && mode != "full")
-          throw InputError("peelcd sweep: --mode: unknown mode \"" + mode + "\" (expected paper, alternate or full)");
+        if (mode != "paper" && mode != "alternate" && mode != "full" && mode != "conservative")
+          throw InputError("peelcd sweep: --mode: unknown mode \"" + mode +
+                           "\" (expected paper, alternate, full or conservative)");
         for (int views : a.views)
-          for (double slope : mode == "paper" ? std::vector<double>{0.0} : a.slopes)
+          for (double slope : mode == "paper" || mode == "conservative" ? std::vector<double>{0.0} : a.slopes)
             for (const std::string& cull_name : a.culls) {
               SweepConfig c;
               c.cull = parsed(cull_name, parse_cull, "peelcd sweep: --cull: unknown culling", "contact or box");
               c.resolution = res;
               c.ids = *ids;
               c.peel = mode == "full" ? PeelMode::full : PeelMode::alternate;
+              c.conservative = mode == "conservative";
               c.slope = slope;
               c.views = views;
               configs.push_back(c);
@@ -777,7 +825,18 @@ void add_frame_options(CLI::App* c, DetectArgs& d) {
                                         "llvmpipe, else gpu; default), gpu (a compute pass) or host (mapped, resolved on the CPU)");
   c->add_option("--slope", d.slope, "Slope-following epsilon, in texels (default 1; 0 = the paper's constant epsilon)")
       ->check(kNonNegative);
-  c->add_option("--views", d.views, "Views fused per ROI: 3 (three orthogonal views; default), 2 (along d and u) or 1 (along d)")
+  c->add_flag("--conservative", d.conservative,
+              "Conservative image stage (the default): every texel a triangle touches, depth intervals, every "
+              "overlapping couple a PCS; no colliding pair can be missed (docs/accuracy.md)");
+  c->add_flag("--no-conservative", d.no_conservative,
+              "Point sampling at texel centres with the epsilon test (the paper's image stage; may miss pairs)");
+  c->add_flag("--paper", d.paper,
+              "The paper's configuration: point sampling, alternate peeling, paper IDs, constant epsilon, one view "
+              "along world x, no culling (other options given override it)");
+  c->add_option("--roll", d.roll, "Turn of the view frame's u and v axes about d, degrees (default 30 with the "
+                                  "default theta 31, phi 51; 0 when --theta or --phi is given)")
+      ->check(kFinite);
+  c->add_option("--views", d.views, "Views fused per ROI: 1 (along d; default), 2 (along d and u) or 3 (d, u and v, three orthogonal views)")
       ->check(CLI::IsMember({1, 2, 3}));
   c->add_option("--theta", d.theta, "View longitude, degrees")->check(kFinite);
   c->add_option("--phi", d.phi, "View latitude, degrees, in [-90, 90]")->check(kFinite)->check(CLI::Range(-90.0, 90.0));
@@ -789,6 +848,51 @@ void add_frame_options(CLI::App* c, DetectArgs& d) {
       ->check(kNonNegative);
   c->add_option("--backend", d.backend, "Image stage: osmesa (software GL, the reference), egl (GPU, or Mesa without one) or cpu (no GL)")
       ->capture_default_str();
+}
+
+struct ClassesArgs {
+  std::string backend = "osmesa";
+  int repeat = 5;
+  int grid = 20;
+  std::string only;
+};
+
+// The configurations docs/accuracy.md compares on every class.
+std::vector<std::pair<std::string, DetectOptions>> class_configs() {
+  std::vector<std::pair<std::string, DetectOptions>> out;
+  out.emplace_back("paper", paper_options());
+  DetectOptions old;  // the point-sampling default before conservative mode (0.2.0)
+  old.conservative = false;
+  old.theta = old.phi = old.roll = 0.0;
+  old.views = 3;
+  out.emplace_back("point, axis frame, 3 views", old);
+  DetectOptions point;
+  point.conservative = false;
+  point.views = 3;
+  out.emplace_back("point, generic frame, 3 views", point);
+  out.emplace_back("default (conservative)", DetectOptions{});
+  DetectOptions tight;
+  tight.resolution = 16;
+  out.emplace_back("conservative, 16^2 tiles", tight);
+  return out;
+}
+
+int run_classes(const ClassesArgs& a) {
+  Runner runner = make_runner(a.backend, gl::GlOptions{});
+  std::printf("peelcd classes: %s (%s); median of %d frames; grid %dx%d\n", runner.backend().c_str(),
+              runner.renderer().c_str(), a.repeat, a.grid, a.grid);
+  std::printf("%-24s %-32s %7s %7s %7s %9s %9s %11s %9s\n", "class", "configuration", "exact", "found", "missed",
+              "miss %", "len miss%", "candidates", "ms");
+  for (const GeometryClass& g : geometry_classes(a.grid)) {
+    if (!a.only.empty() && g.name != a.only) continue;
+    for (const auto& [name, opt] : class_configs()) {
+      const ClassRow r = measure_class(*runner.detector, g, name, opt, a.repeat);
+      std::printf("%-24s %-32s %7zu %7zu %7zu %9.3f %9.3f %11zu %9.2f\n", g.name.c_str(), name.c_str(), r.exact, r.found,
+                  r.missed, 100.0 * r.miss_ratio(), 100.0 * r.missed_length_share(), r.candidates, r.median_ms);
+      std::fflush(stdout);
+    }
+  }
+  return 0;
 }
 
 }  // namespace
@@ -807,7 +911,13 @@ int main(int argc, char** argv) {
   detect->add_option("--json", d.json_out, "Write the JSON report to FILE, or - for stdout");
   detect->add_option("--repeat", d.repeat, "Run the frame N times and report median timings")
       ->check(kPositive);
-  detect->add_flag("--check", d.check, "Also run the exact all-pairs reference and print the miss ratio");
+  CLI::Option* check_flag =
+      detect->add_flag("--check", d.check, "Also run the exact all-pairs reference and print the miss ratio");
+  detect->add_option("--max-miss", d.max_miss,
+                     "With --check: exit 3 when the frame's miss ratio (missed / exact pairs, all object pairs) is "
+                     "above PCT percent (default: report only)")
+      ->check(CLI::Range(0.0, 100.0))
+      ->needs(check_flag);
   detect->add_flag("--quiet", d.quiet, "No human summary");
 
   DetectArgs du;
@@ -877,7 +987,7 @@ int main(int argc, char** argv) {
       ->capture_default_str();
   sweep->add_option("--mode", sw.modes,
                     "Modes: paper (alternate peeling, constant epsilon: the paper), alternate (alternate "
-                    "peeling, slope epsilon), full (full peeling, slope epsilon)")
+                    "peeling, slope epsilon), full (full peeling, slope epsilon), conservative (intervals)")
       ->delimiter(',')->capture_default_str();
   sweep->add_option("--slope", sw.slopes, "Slope-epsilon factors for the non-paper modes")->delimiter(',')
       ->check(kNonNegative)->capture_default_str();
@@ -892,6 +1002,18 @@ int main(int argc, char** argv) {
   sweep->add_option("--backend", sw.backend, "GL backend: osmesa or egl")->capture_default_str();
   sweep->add_option("--csv", sw.csv, "Write one row per (configuration, view) to FILE, or - for stdout");
   sweep->add_option("--plot", sw.plot, "Write heat maps and the run-time-against-miss-ratio plot to DIR (matplotlib)");
+
+  ClassesArgs ca;
+  CLI::App* classes = app.add_subcommand(
+      "classes", "Measure every configuration of docs/accuracy.md on the built-in classes of geometry (crossing "
+                 "and touching boxes, a floor, coincident copies, zero-area triangles, a needle, open and "
+                 "self-intersecting meshes, a crowded grid) against the exact reference");
+  classes->add_option("--backend", ca.backend, "Image stage: osmesa, egl or cpu")->capture_default_str();
+  classes->add_option("--repeat", ca.repeat, "Frames per measurement (median time)")->check(kPositive)
+      ->capture_default_str();
+  classes->add_option("--grid", ca.grid, "Side of the crowded grid (N x N spheres)")->check(CLI::Range(2, 64))
+      ->capture_default_str();
+  classes->add_option("--class", ca.only, "Only the class of this name");
 
   try {
     app.parse(argc, argv);
@@ -911,6 +1033,7 @@ int main(int argc, char** argv) {
     if (*record) return run_golden_record(gr);
     if (*compare) return run_golden_compare(gc);
     if (*sweep) return run_sweep_command(sw);
+    if (*classes) return run_classes(ca);
   } catch (const InputError& e) {
     std::fprintf(stderr, "error: %s\n", e.what());
     return kExitBadInput;

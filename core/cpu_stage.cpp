@@ -1,5 +1,7 @@
 #include "peelcd/core/cpu_stage.h"
 
+#include "peelcd/core/conservative.h"
+
 #include <algorithm>
 #include <chrono>
 #include <cmath>
@@ -63,25 +65,43 @@ void CpuImageStage::peel(const PeelJob& job, PeelResult& out, Timings& timings) 
       const std::uint32_t t = tris[order];
       ids[order] = corner_id(rigid ? *object.rigid->shape : mesh, t, 2, job.ids);
       Corner c[3];
+      conservative::Triangle ct;
+      float err[3] = {0.0f, 0.0f, 0.0f};  // |M| P + |M_t| per clip coordinate (the margins)
       for (int k = 0; k < 3; ++k) {
-        Eigen::Vector3f p;
+        Eigen::Vector3f p, mag;
         if (rigid) {
           const Vec3& s = object.rigid->shape->vertices[object.rigid->shape->triangles[t][k]];
-          const Eigen::Vector4f q = model * Eigen::Vector4f(float(s.x()), float(s.y()), float(s.z()), 1.0f);
+          const Eigen::Vector4f sv(float(s.x()), float(s.y()), float(s.z()), 1.0f);
+          const Eigen::Vector4f q = model * sv;
           p = q.head<3>();
+          mag = model.block<3, 3>(0, 0).cwiseAbs() * sv.head<3>().cwiseAbs() + model.block<3, 1>(0, 3).cwiseAbs();
         } else {
           const Vec3 local = mesh.vertices[mesh.triangles[t][k]] - view.center;
           p = Eigen::Vector3f(float(local.x()), float(local.y()), float(local.z()));
+          mag = p.cwiseAbs();
         }
         c[k].local = p.cast<double>();
         const float cx = m[0] * p.x() + m[4] * p.y() + m[8] * p.z() + m[12];
         const float cy = m[1] * p.x() + m[5] * p.y() + m[9] * p.z() + m[13];
         const float cz = m[2] * p.x() + m[6] * p.y() + m[10] * p.z() + m[14];
+        if (job.conservative) {
+          for (int r = 0; r < 3; ++r)
+            err[r] = std::max(err[r], std::fabs(m[r]) * mag.x() + std::fabs(m[4 + r]) * mag.y() +
+                                          std::fabs(m[8 + r]) * mag.z() + std::fabs(m[12 + r]));
+          ct.x[k] = (cx + 1.0f) * (0.5f * float(n));
+          ct.y[k] = (cy + 1.0f) * (0.5f * float(n));
+          ct.z[k] = 0.5f * cz + 0.5f;
+        }
         c[k].x = (double(cx) + 1.0) * half_n;
         c[k].y = (double(cy) + 1.0) * half_n;
         c[k].z = float(0.5 * double(cz) + 0.5);
         c[k].fx = std::llround((c[k].x - 0.5) * kSubTexel);
         c[k].fy = std::llround((c[k].y - 0.5) * kSubTexel);
+      }
+      if (job.conservative) {
+        conservative::set_margins(ct, err[0], err[1], err[2], n);
+        raster_conservative(ct, n, (std::uint32_t(slot) << 31) | std::uint32_t(order));
+        continue;
       }
       // Orientation: both windings are drawn (no face culling).
       std::int64_t area = (c[1].fx - c[0].fx) * (c[2].fy - c[0].fy) - (c[2].fx - c[0].fx) * (c[1].fy - c[0].fy);
@@ -178,6 +198,7 @@ void CpuImageStage::peel(const PeelJob& job, PeelResult& out, Timings& timings) 
   p.slope = out.slope;
   p.full_peel = job.peel == PeelMode::full;
   p.first_object = std::uint32_t(job.first);
+  p.conservative = job.conservative;
   p.ids[0] = ids_[0].data();
   p.ids[1] = ids_[1].data();
   const KResolveResult got = resolve_kbuffer(kb, p, out.pcs, scratch_, job.capture ? &out.captured : nullptr);
@@ -185,6 +206,21 @@ void CpuImageStage::peel(const PeelJob& job, PeelResult& out, Timings& timings) 
   out.peel_passes = 1;
   out.triangles_uploaded = job.triangles[0]->size() + job.triangles[1]->size();
   timings.gpu += ms_since(t1);
+}
+
+void CpuImageStage::raster_conservative(const conservative::Triangle& t, int n, std::uint32_t key) {
+  const float h = 0.5f + t.mx;
+  const float xmin = std::min({t.x[0], t.x[1], t.x[2]}) - h, xmax = std::max({t.x[0], t.x[1], t.x[2]}) + h;
+  const float ymin = std::min({t.y[0], t.y[1], t.y[2]}) - h, ymax = std::max({t.y[0], t.y[1], t.y[2]}) + h;
+  if (!(xmax >= 0.0f && ymax >= 0.0f && xmin <= float(n) && ymin <= float(n))) return;
+  const int i0 = std::max(0, int(std::floor(xmin)) - 1), i1 = std::min(n - 1, int(std::floor(std::min(xmax, float(n)))) + 1);
+  const int j0 = std::max(0, int(std::floor(ymin)) - 1), j1 = std::min(n - 1, int(std::floor(std::min(ymax, float(n)))) + 1);
+  for (int j = j0; j <= j1; ++j)
+    for (int i = i0; i <= i1; ++i) {
+      float lo, hi;
+      if (!conservative::texel_interval(t, i, j, lo, hi)) continue;
+      fragments_.push_back({std::uint32_t(j) * std::uint32_t(n) + std::uint32_t(i), KFragment{bits(lo), key, bits(hi), 0u}});
+    }
 }
 
 }  // namespace peelcd

@@ -2,6 +2,7 @@
 
 #include "peelcd/core/broad_phase.h"
 #include "peelcd/core/cull.h"
+#include "peelcd/core/reference.h"
 
 #include <algorithm>
 #include <chrono>
@@ -117,8 +118,21 @@ struct ObjectRefs {
   std::size_t size() const { return p.size(); }
 };
 
+// One overlapping pair's plan: its ROI, what contact culling kept, its tile.
+struct PairPlan {
+  std::size_t a = 0, b = 0;
+  Aabb roi, region;
+  std::size_t in_roi_a = 0, in_roi_b = 0;
+  bool culled_out = false;  // one object has nothing near the other: no contact, no image work
+  int tile = 0;
+  std::vector<std::uint32_t> kept_a, kept_b;
+};
+
 struct Detector::Impl {
   std::vector<const Object*> pointers;
+  std::vector<PairPlan> plans;
+  std::vector<int> needs, tiles;
+  std::vector<std::uint64_t> direct;  // views resolved exhaustively: triangle pairs, not IDs
   std::vector<Aabb> boxes;
   std::vector<std::pair<std::size_t, std::size_t>> object_pairs;
   std::vector<std::size_t> order;
@@ -130,13 +144,42 @@ struct Detector::Impl {
   IdMap map_a, map_b;
   std::vector<CapturedView>* capture = nullptr;
 
-  // Contact-region culling of one object pair into `cull` and the tile its box gets (`share`,
-  // or less by edge_tile_resolution() when sharing the budget). 0 when nothing is kept.
-  int cull_pair(const Mesh& a, const Mesh& b, const Aabb& roi, const DetectOptions& opt, int share) {
-    cull_to_contact_region(a, b, roi, cull);
-    if (cull.box.empty()) return 0;
-    if (opt.resolution > 0) return share;
-    return edge_tile_resolution(share, cull.box, cull.median_edge, opt.edge_texels);
+  // The plans of the frame's overlapping pairs (s.object_pairs): culling, then the tiles. With
+  // Cull::contact and a shared budget, each ROI asks for the side that gives its kept triangles'
+  // median edge `edge_texels` texels, and the budget is shared by need (allocate_tiles()).
+  template <class Objects>
+  void plan(const Objects& objects, const DetectOptions& opt) {
+    const auto& pairs = object_pairs;
+    if (plans.size() < pairs.size()) plans.resize(pairs.size());
+    needs.clear();
+    const int equal = opt.resolution > 0 ? opt.resolution : tile_resolution(opt.budget, pairs.size());
+    for (std::size_t i = 0; i < pairs.size(); ++i) {
+      PairPlan& p = plans[i];
+      p.a = pairs[i].first;
+      p.b = pairs[i].second;
+      p.roi = intersection(boxes[p.a], boxes[p.b]);
+      p.region = p.roi;
+      p.in_roi_a = p.in_roi_b = 0;
+      p.culled_out = false;
+      p.tile = equal;
+      p.kept_a.clear();
+      p.kept_b.clear();
+      if (opt.cull != Cull::contact) continue;
+      cull_to_contact_region(objects[p.a].mesh, objects[p.b].mesh, p.roi, cull);
+      p.region = cull.box;
+      p.in_roi_a = cull.stats.in_roi_a;
+      p.in_roi_b = cull.stats.in_roi_b;
+      p.culled_out = cull.box.empty();
+      p.kept_a.assign(cull.kept_a.begin(), cull.kept_a.end());
+      p.kept_b.assign(cull.kept_b.begin(), cull.kept_b.end());
+      if (opt.resolution == 0 && !p.culled_out)
+        needs.push_back(edge_tile_resolution(opt.budget, cull.box, cull.median_edge, opt.edge_texels));
+    }
+    if (opt.cull != Cull::contact || opt.resolution > 0) return;
+    allocate_tiles(opt.budget, needs, tiles);
+    std::size_t next = 0;
+    for (std::size_t i = 0; i < pairs.size(); ++i)
+      if (!plans[i].culled_out) plans[i].tile = tiles[next++];
   }
 };
 
@@ -189,12 +232,16 @@ void Detector::detect(const std::vector<const Object*>& object_ptrs, const Detec
   }
   const std::string& renderer = stage.renderer();
   if (out.renderer != renderer) out.renderer = renderer;
-  const int n = opt.resolution > 0 ? opt.resolution : tile_resolution(opt.budget, pairs.size());
+  t0 = Clock::now();
+  s.plan(objects, opt);
+  out.timings.aabb += ms_since(t0);
   ViewFrame frames[3];
   const std::size_t frame_count = fused_view_frames(opt, frames);
 
   std::size_t used = 0;
-  for (const auto& [ia, ib] : pairs) {
+  for (std::size_t pi = 0; pi < pairs.size(); ++pi) {
+    const PairPlan& plan = s.plans[pi];
+    const std::size_t ia = plan.a, ib = plan.b;
     if (used == out.pairs.size()) out.pairs.emplace_back();
     PairResult& r = out.pairs[used++];
     r.pcs.clear();
@@ -204,29 +251,21 @@ void Detector::detect(const std::vector<const Object*>& object_ptrs, const Detec
     r.triangles_drawn_a = r.triangles_drawn_b = 0;
     r.object_a = ia;
     r.object_b = ib;
-    r.roi = intersection(s.boxes[ia], s.boxes[ib]);
-    r.region = r.roi;
-    r.triangles_in_roi_a = r.triangles_in_roi_b = 0;
-    r.resolution = n;
+    r.roi = plan.roi;
+    r.region = plan.region;
+    r.triangles_in_roi_a = plan.in_roi_a;
+    r.triangles_in_roi_b = plan.in_roi_b;
+    r.resolution = plan.tile;
     r.epsilon = 0.0;
     r.a_first = false;
+    if (plan.culled_out) continue;  // no triangle of one object near the other: no contact
     const Mesh& ma = objects[ia].mesh;
     const Mesh& mb = objects[ib].mesh;
-    const std::vector<std::uint32_t>*only_a = nullptr, *only_b = nullptr;
-    if (opt.cull == Cull::contact) {
-      t0 = Clock::now();
-      const int tile = s.cull_pair(ma, mb, r.roi, opt, n);
-      out.timings.aabb += ms_since(t0);
-      r.region = s.cull.box;
-      r.triangles_in_roi_a = s.cull.stats.in_roi_a;
-      r.triangles_in_roi_b = s.cull.stats.in_roi_b;
-      if (tile == 0) continue;  // no triangle of one object near the other: no contact
-      only_a = &s.cull.kept_a;
-      only_b = &s.cull.kept_b;
-      r.resolution = tile;
-    }
+    const std::vector<std::uint32_t>* only_a = opt.cull == Cull::contact ? &plan.kept_a : nullptr;
+    const std::vector<std::uint32_t>* only_b = opt.cull == Cull::contact ? &plan.kept_b : nullptr;
     std::vector<IdPair>& all_pcs = s.pcs_all;
     all_pcs.clear();
+    s.direct.clear();
     for (std::size_t v = 0; v < frame_count; ++v) {
       const RoiView view = make_padded_roi_view(r.region, s.boxes[ia], s.boxes[ib], frames[v], r.resolution);
       if (v == 0) r.epsilon = opt.epsilon > 0.0 ? opt.epsilon : view.texel();
@@ -261,6 +300,7 @@ void Detector::detect(const std::vector<const Object*>& object_ptrs, const Detec
       job.slope = opt.slope;
       job.first = min_a > min_b ? 0 : 1;
       job.capture = s.capture != nullptr;
+      job.conservative = opt.conservative;
       PeelResult& one = s.peeled;
       stage.peel(job, one, out.timings);
       ++out.rois_peeled;
@@ -269,6 +309,11 @@ void Detector::detect(const std::vector<const Object*>& object_ptrs, const Detec
       out.triangles_uploaded += one.triangles_uploaded;
       out.triangles_indexed += one.triangles_indexed;
       out.shape_uploads += one.shape_uploads;
+      if (one.exhaustive) {  // the stage could not resolve the view: every couple of boxes
+        t0 = Clock::now();
+        box_overlap_pairs(ma, s.tris[0], mb, s.tris[1], s.direct);
+        out.timings.cpu += ms_since(t0);
+      }
       if (s.capture) {
         CapturedView& c = s.capture->emplace_back();
         c.pair = used - 1;
@@ -301,6 +346,10 @@ void Detector::detect(const std::vector<const Object*>& object_ptrs, const Detec
     s.map_b.rebuild(mb, opt.ids);
     s.candidates.clear();
     expand_pcs(all_pcs, s.map_a, s.map_b, s.candidates, s.candidate_scratch);
+    if (!s.direct.empty()) {
+      s.candidates.insert(s.candidates.end(), s.direct.begin(), s.direct.end());
+      sort_unique_pairs(s.candidates, s.candidate_scratch);
+    }
     r.candidates = s.candidates.size();
     narrow_phase(ma, mb, s.candidates, r.colliding);
     out.timings.cpu += ms_since(t0);
@@ -309,40 +358,36 @@ void Detector::detect(const std::vector<const Object*>& object_ptrs, const Detec
   out.timings.total = ms_since(t_total);
 }
 
-void Detector::for_each_view(const std::vector<Object>& objects, const DetectOptions& opt,
+void Detector::for_each_view(const std::vector<Object>& objects_in, const DetectOptions& opt,
                              const std::function<void(const PeelJob&)>& fn) {
   Impl& s = *impl_;
   validate_options(opt, stage_->max_resolution());
-  validate_objects(objects);
-  std::vector<Aabb> boxes;
-  for (const Object& o : objects) boxes.push_back(bounds(o.mesh));
-  const auto pairs = overlapping_pairs(boxes);
-  const int n = opt.resolution > 0 ? opt.resolution : tile_resolution(opt.budget, pairs.size());
+  validate_objects(objects_in);
+  std::vector<const Object*> ptrs;
+  for (const Object& o : objects_in) ptrs.push_back(&o);
+  const ObjectRefs objects{ptrs};
+  s.boxes.clear();
+  for (const Object& o : objects_in) s.boxes.push_back(bounds(o.mesh));
+  overlapping_pairs(s.boxes, s.object_pairs, s.order);
+  s.plan(objects, opt);
   ViewFrame frames[3];
   const std::size_t frame_count = fused_view_frames(opt, frames);
-  std::size_t pair_index = 0;
-  for (const auto& [ia, ib] : pairs) {
-    const std::size_t this_pair = pair_index++;
-    Aabb region = intersection(boxes[ia], boxes[ib]);
-    const std::vector<std::uint32_t>*only_a = nullptr, *only_b = nullptr;
-    int tile = n;
-    if (opt.cull == Cull::contact) {
-      tile = s.cull_pair(objects[ia].mesh, objects[ib].mesh, region, opt, n);
-      if (tile == 0) continue;
-      region = s.cull.box;
-      only_a = &s.cull.kept_a;
-      only_b = &s.cull.kept_b;
-    }
+  for (std::size_t pi = 0; pi < s.object_pairs.size(); ++pi) {
+    const PairPlan& plan = s.plans[pi];
+    if (plan.culled_out) continue;
+    const std::size_t ia = plan.a, ib = plan.b;
+    const std::vector<std::uint32_t>* only_a = opt.cull == Cull::contact ? &plan.kept_a : nullptr;
+    const std::vector<std::uint32_t>* only_b = opt.cull == Cull::contact ? &plan.kept_b : nullptr;
     double epsilon = opt.epsilon;
     for (std::size_t v = 0; v < frame_count; ++v) {
       PeelJob job;
-      job.view = make_padded_roi_view(region, boxes[ia], boxes[ib], frames[v], tile);
+      job.view = make_padded_roi_view(plan.region, s.boxes[ia], s.boxes[ib], frames[v], plan.tile);
       job.view_index = int(v);
       if (v == 0 && !(epsilon > 0.0)) epsilon = job.view.texel();
       const double min_a = triangles_in_view(objects[ia].mesh, job.view, only_a, s.tris[0]);
       const double min_b = triangles_in_view(objects[ib].mesh, job.view, only_b, s.tris[1]);
       if (s.tris[0].empty() || s.tris[1].empty()) continue;
-      job.pair_index = this_pair;
+      job.pair_index = pi;
       job.objects[0] = &objects[ia];
       job.objects[1] = &objects[ib];
       job.triangles[0] = &s.tris[0];
@@ -352,6 +397,7 @@ void Detector::for_each_view(const std::vector<Object>& objects, const DetectOpt
       job.epsilon = epsilon;
       job.slope = opt.slope;
       job.first = min_a > min_b ? 0 : 1;
+      job.conservative = opt.conservative;
       fn(job);
     }
   }

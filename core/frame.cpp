@@ -26,7 +26,7 @@ std::optional<Cull> parse_cull(const std::string& text) {
 }
 
 std::size_t fused_view_frames(const DetectOptions& o, ViewFrame out[3]) {
-  const ViewFrame f = view_frame(o.theta, o.phi);
+  const ViewFrame f = view_frame(o.theta, o.phi, o.roll);
   out[0] = f;
   if (o.views < 1 || o.views > 3) throw std::invalid_argument("peelcd: views must be 1, 2 or 3");
   // Along d, then along u, then along v: each view is the previous one turned a quarter turn.
@@ -48,6 +48,30 @@ int edge_tile_resolution(int share, const Aabb& region, double median_edge, doub
   if (!(texels < double(share))) return share;  // also NaN-safe
   const int n = std::max(16, int(std::ceil(texels / 16.0)) * 16);
   return std::min(n, share);
+}
+
+DetectOptions paper_options() {
+  DetectOptions o;
+  o.conservative = false;
+  o.theta = o.phi = o.roll = 0.0;
+  o.ids = IdMode::paper;
+  o.peel = PeelMode::alternate;
+  o.slope = 0.0;
+  o.views = 1;
+  o.cull = Cull::box;
+  o.edge_texels = 0.0;
+  return o;
+}
+
+void allocate_tiles(int budget, const std::vector<int>& needs, std::vector<int>& tiles) {
+  tiles.assign(needs.begin(), needs.end());
+  double area = 0.0;
+  for (const int n : needs) area += double(n) * double(n);
+  const double total = double(budget) * double(budget);
+  if (!(area > total)) return;
+  const double scale = std::sqrt(total / area);
+  for (int& t : tiles) t = std::max(16, int(std::floor(double(t) * scale / 16.0)) * 16);
+  for (std::size_t i = 0; i < tiles.size(); ++i) tiles[i] = std::min(tiles[i], needs[i]);
 }
 
 int tile_resolution(int budget, std::size_t roi_count) {

@@ -33,10 +33,39 @@ void test_pair(const Layer& t0, const Layer& t1, const KResolveParams& p, std::v
   if (pcs.empty() || !(pcs.back() == pair)) pcs.push_back(pair);
 }
 
-// (depth, object << 31 | draw order): the order the compute resolve picks fragments in.
-bool before(const KFragment& x, const KFragment& y) {
+// (depth, rank << 31 | draw order) with rank = object ^ flip: the order the compute resolve picks
+// fragments in. Alternate peeling ranks the first object's fragments before the other's at equal
+// depth (flip = first object), full peeling object A's (flip = 0), so that of two fragments of
+// different objects at the same depth both become layers (docs/design.md 1.5, ties).
+bool before(const KFragment& x, const KFragment& y, std::uint32_t flip) {
   const float zx = as_float(x.depth), zy = as_float(y.depth);
-  return zx < zy || (zx == zy && x.key < y.key);
+  return zx < zy || (zx == zy && (x.key ^ flip) < (y.key ^ flip));
+}
+
+// Conservative mode: every fragment of the texel is a layer, in (lower depth, object, draw order)
+// order; every two of different objects whose closed intervals overlap are a PCS.
+void resolve_intervals(const std::vector<KFragment>& sorted, std::uint32_t n, const KResolveParams& p,
+                       std::size_t texel, std::size_t texels, std::vector<IdPair>& pcs,
+                       std::vector<std::vector<std::uint32_t>>* layers) {
+  for (std::uint32_t i = 0; i < n; ++i) {
+    const KFragment& f = sorted[i];
+    const std::uint32_t object = f.key >> 31;
+    if (layers) {
+      if (layers->size() <= i) layers->emplace_back(texels * 4, 0u);
+      std::uint32_t* out = (*layers)[i].data() + 4 * texel;
+      out[0] = f.depth, out[1] = (object << 31) | (p.ids[object][f.key & 0x7fffffffu] + 1u), out[2] = f.dzdx;
+      out[3] = 0u;
+    }
+    const float hi = as_float(f.dzdx);
+    for (std::uint32_t j = i + 1; j < n && !(as_float(sorted[j].depth) > hi); ++j) {
+      const std::uint32_t other = sorted[j].key >> 31;
+      if (other == object) continue;
+      const std::uint32_t id_i = p.ids[object][f.key & 0x7fffffffu];
+      const std::uint32_t id_j = p.ids[other][sorted[j].key & 0x7fffffffu];
+      const IdPair pair = object == 0u ? IdPair{id_i, id_j} : IdPair{id_j, id_i};
+      if (pcs.empty() || !(pcs.back() == pair)) pcs.push_back(pair);
+    }
+  }
 }
 
 // Texels [first, last) of the k-buffer.
@@ -54,24 +83,35 @@ KResolveResult resolve_range(const KBuffer& kb, const KResolveParams& p, std::si
     }
     if (n == 0) continue;
     if (n == 1 && !layers) {  // one surface: layer 0 or nothing, no pair
-      if (p.full_peel || (kb.fragments[t].key >> 31) == p.first_object) result.max_layers = std::max(result.max_layers, 1u);
+      if (p.full_peel || p.conservative || (kb.fragments[t].key >> 31) == p.first_object)
+        result.max_layers = std::max(result.max_layers, 1u);
       continue;
     }
+    const std::uint32_t flip = p.full_peel || p.conservative ? 0u : p.first_object << 31;
     // Insertion sort: a texel holds a handful of fragments.
     for (std::uint32_t i = 0; i < n; ++i) {
       const KFragment f = kb.fragments[std::size_t(i) * texels + t];
       std::uint32_t j = i;
-      for (; j > 0 && before(f, sorted[j - 1]); --j) sorted[j] = sorted[j - 1];
+      for (; j > 0 && before(f, sorted[j - 1], flip); --j) sorted[j] = sorted[j - 1];
       sorted[j] = f;
+    }
+    if (p.conservative) {
+      resolve_intervals(sorted, n, p, t, texels, pcs, layers);
+      result.max_layers = std::max(result.max_layers, n);
+      continue;
     }
     Layer prev, run_start;
     std::uint32_t k = 0;
     for (std::uint32_t i = 0; i < n; ++k) {
-      // Layer k: the first fragment (in sorted order) of the wanted object strictly behind
-      // layer k - 1; everything before position i is not behind it.
+      // Layer k: the first fragment (in sorted order) of the wanted object behind layer k - 1 in
+      // (depth, rank) order; everything before position i is not behind it. What follows i is
+      // behind it unless it has layer k - 1's depth and object (full peeling; alternate peeling
+      // wants the other object, which at that depth sorts after layer k - 1 only if it ranks
+      // higher).
       const std::uint32_t want = p.full_peel ? 2u : ((p.first_object + k) & 1u);
       const float prev_z = as_float(prev.depth);
-      while (i < n && ((k > 0 && !(as_float(sorted[i].depth) > prev_z)) ||
+      const std::uint32_t prev_object = prev.key >> 31;
+      while (i < n && ((k > 0 && as_float(sorted[i].depth) == prev_z && (sorted[i].key >> 31) == prev_object) ||
                        (want != 2u && (sorted[i].key >> 31) != want)))
         ++i;
       if (i == n) break;

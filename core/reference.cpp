@@ -12,6 +12,18 @@ namespace peelcd {
 namespace {
 using Box = CGAL::Box_intersection_d::Box_with_info_d<double, 3, std::uint32_t>;
 
+Box triangle_box(const Mesh& m, std::uint32_t t) {
+  double lo[3], hi[3];
+  for (int k = 0; k < 3; ++k) {
+    lo[k] = hi[k] = m.vertices[m.triangles[t][0]][k];
+    for (int c = 1; c < 3; ++c) {
+      lo[k] = std::min(lo[k], m.vertices[m.triangles[t][c]][k]);
+      hi[k] = std::max(hi[k], m.vertices[m.triangles[t][c]][k]);
+    }
+  }
+  return Box(lo, hi, t);
+}
+
 std::vector<Box> triangle_boxes(const Mesh& m) {
   std::vector<Box> boxes;
   boxes.reserve(m.triangles.size());
@@ -41,6 +53,19 @@ std::vector<std::uint64_t> exact_colliding_pairs(const Mesh& a, const Mesh& b) {
   std::sort(out.begin(), out.end());
   out.erase(std::unique(out.begin(), out.end()), out.end());
   return out;
+}
+
+void box_overlap_pairs(const Mesh& a, const std::vector<std::uint32_t>& ta, const Mesh& b,
+                       const std::vector<std::uint32_t>& tb, std::vector<std::uint64_t>& out) {
+  std::vector<Box> ba, bb;
+  ba.reserve(ta.size());
+  bb.reserve(tb.size());
+  for (const std::uint32_t t : ta) ba.push_back(triangle_box(a, t));
+  for (const std::uint32_t t : tb) bb.push_back(triangle_box(b, t));
+  // Closed boxes: touching boxes are reported (CGAL's default is half-open).
+  CGAL::box_intersection_d(ba.begin(), ba.end(), bb.begin(), bb.end(),
+                           [&](const Box& x, const Box& y) { out.push_back(pack_pair(x.info(), y.info())); },
+                           std::ptrdiff_t(10), CGAL::Box_intersection_d::CLOSED);
 }
 
 Score score_contacts(const std::vector<std::uint64_t>& exact, const std::vector<Contact>& reported) {

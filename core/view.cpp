@@ -12,13 +12,19 @@ Vec3 view_direction(double theta_deg, double phi_deg) {
   return Vec3(std::cos(p) * std::cos(t), std::cos(p) * std::sin(t), std::sin(p)).normalized();
 }
 
-ViewFrame view_frame(double theta_deg, double phi_deg) {
+ViewFrame view_frame(double theta_deg, double phi_deg, double roll_deg) {
   ViewFrame f;
   f.d = view_direction(theta_deg, phi_deg);
   // Helper "up" axis: world z unless d is nearly parallel to it (the poles).
   const Vec3 up = std::abs(f.d.z()) < 0.9 ? Vec3(0, 0, 1) : Vec3(1, 0, 0);
   f.u = up.cross(f.d).normalized();
   f.v = f.d.cross(f.u).normalized();
+  if (roll_deg != 0.0) {
+    const double r = roll_deg * M_PI / 180.0, c = std::cos(r), s = std::sin(r);
+    const Vec3 u = f.u, v = f.v;
+    f.u = (c * u + s * v).normalized();
+    f.v = f.d.cross(f.u).normalized();
+  }
   return f;
 }
 

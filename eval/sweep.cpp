@@ -16,6 +16,7 @@ std::string SweepConfig::label() const {
 }
 
 std::string SweepConfig::mode() const {
+  if (conservative) return "conservative";
   if (peel == PeelMode::full) return "full";
   return slope == 0.0 ? "paper" : "alternate";
 }
@@ -45,6 +46,8 @@ std::vector<SweepRow> run_sweep(Detector& detector, const std::vector<Object>& o
   const std::size_t total = configs.size() * directions.size();
   for (std::size_t c = 0; c < configs.size(); ++c) {
     DetectOptions opt;
+    opt.roll = 0.0;  // directions turn the paper's frame
+    opt.conservative = configs[c].conservative;
     opt.resolution = configs[c].resolution;
     opt.ids = configs[c].ids;
     opt.peel = configs[c].peel;

@@ -51,7 +51,10 @@ void GlImageStage::peel(const PeelJob& job, PeelResult& out, Timings& timings) {
   for (int slot = 0; slot < 2; ++slot)
     (s.slot_shape[slot] ? out.triangles_indexed : out.triangles_uploaded) += s.corners(slot) / 3;
   out.shape_uploads = s.shape_uploads;
-  if (s.options.peeler == Peeler::abuffer) {
+  if (job.conservative) {  // intervals need every fragment at once: the k-buffer
+    while (!s.peel_conservative(job, out, timings)) {
+    }
+  } else if (s.options.peeler == Peeler::abuffer) {
     while (!s.peel_single_pass(job, out, timings)) {
     }
   } else {

@@ -16,6 +16,7 @@ bool GlImageStage::Impl::peel_multipass(const PeelJob& job, PeelResult& out, Tim
 
   gl.UseProgram(peel_program);
   set_view_uniforms(u_clip, u_box_lo, u_box_hi, view);
+  gl.Uniform1ui(u_rank_flip, job.peel == PeelMode::full ? 0u : GLuint(job.first));
   gl.UseProgram(pcs_program);
   out.epsilon_window = float(view.world_to_window_depth(job.epsilon));
   out.slope = float(job.slope);

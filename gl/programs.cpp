@@ -41,6 +41,22 @@ GlImageStage::Impl::Impl(std::shared_ptr<Context> ctx, const GlOptions& opt)
                          "abuffer");
   resolve_program = link({compile(GL_COMPUTE_SHADER, shaders::abuffer_resolve_comp, "abuffer_resolve.comp")},
                          "abuffer resolve");
+  cons_program = link({compile(GL_VERTEX_SHADER, shaders::conservative_vert, "conservative.vert"),
+                       compile(GL_GEOMETRY_SHADER, shaders::conservative_geom, "conservative.geom"),
+                       compile(GL_FRAGMENT_SHADER, shaders::conservative_frag, "conservative.frag")},
+                      "conservative");
+  cons_resolve_program =
+      link({compile(GL_COMPUTE_SHADER, shaders::conservative_resolve_comp, "conservative_resolve.comp")},
+           "conservative resolve");
+  u_cs_clip = gl.GetUniformLocation(cons_program, "clip_from_local");
+  u_cs_model = gl.GetUniformLocation(cons_program, "roi_from_object");
+  u_cs_res = gl.GetUniformLocation(cons_program, "resolution");
+  u_cs_slots = gl.GetUniformLocation(cons_program, "slots");
+  u_cs_object = gl.GetUniformLocation(cons_program, "object_bit");
+  u_cr_res = gl.GetUniformLocation(cons_resolve_program, "resolution");
+  u_cr_slots = gl.GetUniformLocation(cons_resolve_program, "slots");
+  u_cr_append = gl.GetUniformLocation(cons_resolve_program, "append_pcs");
+  u_cr_emit = gl.GetUniformLocation(cons_resolve_program, "emit_layer");
   u_ab_clip = gl.GetUniformLocation(abuffer_program, "clip_from_local");
   u_ab_lo = gl.GetUniformLocation(abuffer_program, "box_lo");
   u_ab_hi = gl.GetUniformLocation(abuffer_program, "box_hi");
@@ -70,6 +86,7 @@ GlImageStage::Impl::Impl(std::shared_ptr<Context> ctx, const GlOptions& opt)
   u_box_lo = gl.GetUniformLocation(peel_program, "box_lo");
   u_box_hi = gl.GetUniformLocation(peel_program, "box_hi");
   u_has_prev = gl.GetUniformLocation(peel_program, "has_previous");
+  u_rank_flip = gl.GetUniformLocation(peel_program, "rank_flip");
   u_eps = gl.GetUniformLocation(pcs_program, "epsilon_window");
   u_object = gl.GetUniformLocation(peel_program, "object_bit");
   u_slope = gl.GetUniformLocation(pcs_program, "slope");
@@ -104,6 +121,8 @@ GlImageStage::Impl::~Impl() {
   gl.DeleteProgram(floor_program);
   gl.DeleteProgram(abuffer_program);
   gl.DeleteProgram(resolve_program);
+  gl.DeleteProgram(cons_program);
+  gl.DeleteProgram(cons_resolve_program);
   gl.DeleteBuffers(1, &count_buffer);
   gl.DeleteBuffers(1, &fragment_buffer);
   gl.DeleteTextures(1, &count_tex);

@@ -110,6 +110,12 @@ bool GlImageStage::Impl::peel_single_pass(const PeelJob& job, PeelResult& out, T
 bool GlImageStage::Impl::regrow(std::uint32_t max_fragments, std::size_t fitting, const PeelJob& job, PeelResult& out,
                                 Timings& t) {
   const std::size_t wanted = std::min<std::size_t>(std::size_t(max_fragments) * 5 / 4, fitting);
+  if (wanted < max_fragments && job.conservative) {  // no multi-pass form of intervals
+    out.pcs.clear();
+    out.captured.clear();
+    out.exhaustive = true;
+    return true;
+  }
   if (wanted < max_fragments) return peel_multipass(job, out, t);
   slots = std::max(slots, std::uint32_t(wanted));
   return false;
@@ -159,6 +165,7 @@ bool GlImageStage::Impl::resolve_on_host(const PeelJob& job, std::size_t fitting
   p.slope = out.slope;
   p.full_peel = job.peel == PeelMode::full;
   p.first_object = std::uint32_t(job.first);
+  p.conservative = job.conservative;
   p.ids[0] = ids[0];
   p.ids[1] = ids[1];
   out.pcs.clear();
@@ -173,6 +180,102 @@ bool GlImageStage::Impl::resolve_on_host(const PeelJob& job, std::size_t fitting
   out.peel_passes = 1;
   if (!out.pcs.empty()) ++out.pcs_readbacks;  // the PCS reach the CPU (no list to read back here)
   return true;
+}
+
+}  // namespace peelcd::gl
+
+namespace peelcd::gl {
+
+// Conservative mode: both objects drawn once through shaders/conservative.{vert,geom,frag} into
+// the k-buffer (depth intervals), resolved by shaders/conservative_resolve.comp or on the host.
+bool GlImageStage::Impl::peel_conservative(const PeelJob& job, PeelResult& out, Timings& t) {
+  const RoiView& view = job.view;
+  const int n = view.resolution;
+  const std::size_t texels = std::size_t(n) * std::size_t(n);
+  const std::size_t fitting = fitting_slots(texels);
+  const auto view_slots = std::uint32_t(std::min<std::size_t>(slots, fitting));
+  if (view_slots == 0 || std::max(vbo_corners(0), vbo_corners(1)) > fetchable()) {
+    out.exhaustive = true;  // no k-buffer of this view fits: the detector tests the boxes
+    return true;
+  }
+  const auto t_gpu = Clock::now();
+  ensure_bare_fbo(n);
+  ensure_kbuffer(texels, view_slots);
+  const GLuint zero = 0;
+  gl.ClearNamedBufferSubData(count_buffer, GL_R32UI, 0, GLsizeiptr(texels * 4), GL_RED_INTEGER, GL_UNSIGNED_INT,
+                             &zero);
+  const PcsHeader header{0, pcs_capacity, 0, 0};
+  gl.NamedBufferSubData(pcs_buffer, 0, sizeof header, &header);
+  gl.BindBufferBase(GL_SHADER_STORAGE_BUFFER, 0, pcs_buffer);
+  gl.BindBufferBase(GL_SHADER_STORAGE_BUFFER, 1, fragment_buffer);
+  gl.BindBufferBase(GL_SHADER_STORAGE_BUFFER, 2, count_buffer);
+
+  gl.UseProgram(cons_program);
+  const std::array<float, 16> m = view.clip_from_local();
+  gl.UniformMatrix4fv(u_cs_clip, 1, GL_FALSE, m.data());
+  gl.Uniform1i(u_cs_res, n);
+  gl.Uniform1ui(u_cs_slots, view_slots);
+  gl.BindFramebuffer(GL_FRAMEBUFFER, bare_fbo);
+  gl.Viewport(0, 0, n, n);
+  gl.Disable(GL_DEPTH_TEST);
+  gl.Disable(GL_CULL_FACE);
+  for (int i = 0; i < 6; ++i) gl.Disable(GL_CLIP_DISTANCE0 + i);  // the intervals clip in depth
+  gl.BindVertexArray(vao);
+  for (int slot = 0; slot < 2; ++slot) {
+    gl.Uniform1ui(u_cs_object, GLuint(slot));
+    draw(slot, u_cs_model);
+  }
+  gl.BindFramebuffer(GL_FRAMEBUFFER, 0);
+  out.epsilon_window = 0.0f;
+  out.slope = 0.0f;
+  if (options.resolve == Resolve::host || (options.resolve == Resolve::automatic && software_renderer))
+    return resolve_on_host(job, fitting, view_slots, t_gpu, out, t);
+  gl.MemoryBarrier(GL_SHADER_STORAGE_BARRIER_BIT | GL_TEXTURE_FETCH_BARRIER_BIT);
+  ++out.gl_passes;
+  check("the conservative k-buffer draw");
+
+  gl.UseProgram(cons_resolve_program);
+  gl.BindTextureUnit(0, count_tex);
+  gl.BindTextureUnit(1, fragment_tex);
+  for (int slot = 0; slot < 2; ++slot) {
+    gl.TextureBuffer(corner_tex[slot], GL_RGBA32UI, slot_shape[slot] ? slot_shape[slot]->vbo : vbo[slot]);
+    gl.BindTextureUnit(GLuint(2 + slot), corner_tex[slot]);
+  }
+  gl.Uniform1i(u_cr_res, n);
+  gl.Uniform1ui(u_cr_slots, view_slots);
+  gl.Uniform1i(u_cr_append, 1);
+  gl.Uniform1i(u_cr_emit, -1);
+  gl.DispatchCompute(GLuint((n + 7) / 8), GLuint((n + 7) / 8), 1);
+  gl.MemoryBarrier(GL_BUFFER_UPDATE_BARRIER_BIT | GL_SHADER_STORAGE_BARRIER_BIT);
+  ++out.gl_passes;
+  check("the conservative resolve");
+  PcsHeader got{};
+  gl.GetNamedBufferSubData(pcs_buffer, 0, sizeof got, &got);
+  if (got.max_fragments > view_slots) {
+    t.gpu += ms_since(t_gpu);
+    return regrow(got.max_fragments, fitting, job, out, t);
+  }
+  out.layers = int(got.max_layers);
+  out.peel_passes = 1;
+  out.captured.clear();
+  if (job.capture) {
+    const GLuint zero4[4] = {0, 0, 0, 0};
+    gl.Uniform1i(u_cr_append, 0);
+    ensure_layers(n);
+    gl.BindImageTexture(2, layer_tex[0], 0, GL_FALSE, 0, GL_WRITE_ONLY, GL_RGBA32UI);
+    for (int k = 0; k < out.layers; ++k) {
+      gl.ClearTexImage(layer_tex[0], 0, GL_RGBA_INTEGER, GL_UNSIGNED_INT, zero4);
+      gl.Uniform1i(u_cr_emit, k);
+      gl.DispatchCompute(GLuint((n + 7) / 8), GLuint((n + 7) / 8), 1);
+      gl.MemoryBarrier(GL_TEXTURE_UPDATE_BARRIER_BIT | GL_SHADER_IMAGE_ACCESS_BARRIER_BIT);
+      std::vector<std::uint32_t>& texels_out = out.captured.emplace_back(std::size_t(n) * n * 4);
+      gl.GetTextureImage(layer_tex[0], 0, GL_RGBA_INTEGER, GL_UNSIGNED_INT,
+                         GLsizei(texels_out.size() * sizeof(std::uint32_t)), texels_out.data());
+    }
+    check("conservative layer capture");
+  }
+  t.gpu += ms_since(t_gpu);
+  return read_pcs(out, t, &got);
 }
 
 }  // namespace peelcd::gl

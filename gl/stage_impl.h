@@ -27,6 +27,10 @@ extern const char* const peel_frag;
 extern const char* const pcs_comp;
 extern const char* const abuffer_frag;
 extern const char* const abuffer_resolve_comp;
+extern const char* const conservative_vert;
+extern const char* const conservative_geom;
+extern const char* const conservative_frag;
+extern const char* const conservative_resolve_comp;
 extern const char* const shader_sources_hash;
 }  // namespace peelcd::shaders
 
@@ -70,6 +74,10 @@ struct GlImageStage::Impl {
   GLint u_ab_clip = -1, u_ab_lo = -1, u_ab_hi = -1, u_ab_object = -1, u_ab_res = -1, u_ab_slots = -1;
   GLint u_rs_eps = -1, u_rs_slope = -1, u_rs_res = -1, u_rs_full = -1, u_rs_first = -1, u_rs_append = -1,
         u_rs_emit = -1, u_rs_slots = -1;
+  GLuint cons_program = 0, cons_resolve_program = 0;  // conservative mode
+  GLint u_cs_clip = -1, u_cs_model = -1, u_cs_res = -1, u_cs_slots = -1, u_cs_object = -1;
+  GLint u_cr_res = -1, u_cr_slots = -1, u_cr_append = -1, u_cr_emit = -1;
+  GLint u_rank_flip = -1;
   GLint u_floor_clip = -1, u_floor_lo = -1, u_floor_hi = -1;
   GLint u_model_peel = -1, u_model_ab = -1, u_model_floor = -1;
 
@@ -153,6 +161,9 @@ struct GlImageStage::Impl {
   // single_pass.cpp: the same contract.
   bool peel_single_pass(const PeelJob& job, PeelResult& out, Timings& t);
   bool regrow(std::uint32_t max_fragments, std::size_t fitting, const PeelJob& job, PeelResult& out, Timings& t);
+  // Conservative mode (shaders/conservative.*): false as peel_single_pass(); a view deeper than
+  // any k-buffer that fits is marked PeelResult::exhaustive.
+  bool peel_conservative(const PeelJob& job, PeelResult& out, Timings& t);
   bool resolve_on_host(const PeelJob& job, std::size_t fitting, std::uint32_t view_slots, Clock::time_point t_gpu,
                        PeelResult& out, Timings& t);
 };

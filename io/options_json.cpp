@@ -3,7 +3,7 @@
 namespace peelcd {
 
 nlohmann::json options_to_json(const DetectOptions& o) {
-  return {{"theta", o.theta},   {"phi", o.phi},         {"resolution", o.resolution},     {"budget", o.budget},
+  return {{"conservative", o.conservative}, {"theta", o.theta},   {"phi", o.phi}, {"roll", o.roll},         {"resolution", o.resolution},     {"budget", o.budget},
           {"ids", to_string(o.ids)}, {"epsilon", o.epsilon}, {"peel", to_string(o.peel)}, {"slope", o.slope},
           {"views", o.views},   {"cull", to_string(o.cull)}, {"edge_texels", o.edge_texels}};
 }

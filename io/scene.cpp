@@ -52,7 +52,7 @@ Scene parse_scene(const std::string& text, const std::string& path, const std::s
   } catch (const json::exception& e) {  // a syntax error, or a number out of range (fuzzing)
     throw InputError("peelcd::load_scene(): '" + path + "': malformed JSON: " + e.what());
   }
-  c.only_keys(root, "the scene", {"objects", "view", "resolution", "budget", "ids", "epsilon", "peel", "slope", "views", "cull", "edge_texels",
+  c.only_keys(root, "the scene", {"objects", "conservative", "view", "resolution", "budget", "ids", "epsilon", "peel", "slope", "views", "cull", "edge_texels",
                                     "peeler", "resolve"});
   Scene scene;
   scene.path = path;
@@ -91,9 +91,12 @@ Scene parse_scene(const std::string& text, const std::string& path, const std::s
   DetectOptions& opt = scene.options;
   if (root.contains("view")) {
     const json& v = root["view"];
-    c.only_keys(v, "view", {"theta", "phi"});
+    c.only_keys(v, "view", {"theta", "phi", "roll"});
+    // A view that names theta or phi means the paper's frame turned there: roll 0 unless given.
+    if (v.contains("theta") || v.contains("phi")) opt.roll = 0.0;
     if (v.contains("theta")) opt.theta = c.number(v["theta"], "view.theta");
     if (v.contains("phi")) opt.phi = c.number(v["phi"], "view.phi");
+    if (v.contains("roll")) opt.roll = c.number(v["roll"], "view.roll");
     if (opt.phi < -90 || opt.phi > 90) c.fail("view.phi", "must be within [-90, 90] degrees");
   }
   const auto positive_int = [&](const char* key, int& out, bool zero_ok) {
@@ -136,6 +139,10 @@ Scene parse_scene(const std::string& text, const std::string& path, const std::s
   if (root.contains("slope")) {
     opt.slope = c.number(root["slope"], "slope");
     if (opt.slope < 0) c.fail("slope", "must be >= 0 (0 = constant epsilon)");
+  }
+  if (root.contains("conservative")) {
+    if (!root["conservative"].is_boolean()) c.fail("conservative", "must be true or false");
+    opt.conservative = root["conservative"].get<bool>();
   }
   if (root.contains("edge_texels")) {
     opt.edge_texels = c.number(root["edge_texels"], "edge_texels");

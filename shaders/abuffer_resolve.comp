@@ -2,10 +2,11 @@
 // Single-pass peeling, step 2: per texel, the layers of design.md recovered from the fragments
 // stored by shaders/abuffer.frag, exactly as the multi-pass peel (shaders/peel.frag) builds
 // them: layer 0 is the nearest fragment of the first object (alternate) or of both (full);
-// layer k+1 the nearest fragment of the next object (alternate) or of either (full) strictly
-// behind layer k; the texel ends at the first layer with no such fragment. Depth ties go to the
-// earlier-drawn fragment, as GL_LESS does: object A's draw before B's, then the triangle drawn
-// first.
+// layer k+1 the nearest fragment of the next object (alternate) or of either (full) behind
+// layer k in (depth, rank) order (rank = object ^ first object in alternate peeling, the object
+// in full peeling: a fragment of the other object at the same depth is behind it); the texel
+// ends at the first layer with no such fragment. Depth ties between candidates go to the lower
+// rank, then the earlier-drawn triangle, as GL_LESS does with object A drawn first.
 // The PCS test between adjacent layers is shaders/pcs.comp's, run start included.
 layout(local_size_x = 8, local_size_y = 8) in;
 
@@ -60,18 +61,20 @@ void main() {
   int k = 0;
   // Fragments per texel are few: each layer rescans them for the first, in (depth, object,
   // draw order) order, of the wanted object strictly behind the previous layer.
+  uint flip = full_peel ? 0u : (first_object << 31);
   for (;; ++k) {
     uint want = full_peel ? 2u : ((first_object + uint(k)) & 1u);
     float prev_z = uintBitsToFloat(prev.x);
+    uint prev_rank = (prev.y ^ flip) >> 31;
     bool found = false;
     uvec4 best = uvec4(0u);
     for (uint i = texel; i < end; i += texels) {
       uvec4 f = texelFetch(fragment_tex, int(i));
       float z = uintBitsToFloat(f.x);
-      if (k > 0 && !(z > prev_z)) continue;
+      if (k > 0 && !(z > prev_z || (z == prev_z && ((f.y ^ flip) >> 31) > prev_rank))) continue;
       if (want != 2u && (f.y >> 31) != want) continue;
-      // Equal depth: the earlier draw wins (object A, then the lower draw order): f.y's order.
-      if (!found || z < uintBitsToFloat(best.x) || (z == uintBitsToFloat(best.x) && f.y < best.y)) {
+      // Equal depth: the lower rank, then the earlier draw wins: (f.y ^ flip)'s order.
+      if (!found || z < uintBitsToFloat(best.x) || (z == uintBitsToFloat(best.x) && (f.y ^ flip) < (best.y ^ flip))) {
         best = f;
         found = true;
       }

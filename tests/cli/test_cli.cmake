@@ -24,6 +24,13 @@ expect("sweep help" 0 "--theta-step" sweep --help)
 expect("no subcommand" 2 "subcommand" )
 expect("default scene" 0 "bunny x dragon: .* colliding" detect ${scene})
 expect("default scene, checked" 0 "exact reference: 228 pairs.*false contacts 0" detect ${scene} --check)
+# --check can fail: --max-miss turns a miss ratio above it into exit 3 (the paper's configuration
+# misses pairs on this scene; the default, conservative, misses none).
+expect("max-miss exceeded" 3 "above --max-miss 1%" detect ${scene} --paper --check --max-miss 1)
+expect("max-miss held" 0 "check: 228 exact pairs, 0 missed" detect ${scene} --check --max-miss 0)
+expect("max-miss needs check" 2 "requires --check" detect ${scene} --max-miss 1)
+expect("contradicting flags" 2 "contradict" detect ${scene} --conservative --no-conservative)
+expect("conservative is the default" 0 "^[^\n]*\n?conservative  view theta=31 phi=51 roll=30" detect ${scene})
 
 # JSON report
 expect("json report" 0 "" detect ${scene} --res 128 --json ${WORK}/out.json --quiet)
@@ -105,7 +112,7 @@ expect("sweep: bad mode" 2 "unknown mode \"fancy\"" sweep ${scene} --mode fancy)
 # Layer dumps: every layer of every view as EXR and PNG, the PCS, meta.json, the viewer.
 expect("dump help" 0 "--out" dump --help)
 expect("golden help" 0 "compare" golden --help)
-expect("dump" 0 "1 ROIs, 3 views" dump ${scene} --res 64 --out ${WORK}/dump)
+expect("dump" 0 "1 ROIs, 3 views" dump ${scene} --res 64 --views 3 --out ${WORK}/dump)
 foreach(f meta.json index.html pair0_bunny_dragon/pcs.txt pair0_bunny_dragon/colliding.txt
         pair0_bunny_dragon/view0/layer00.exr pair0_bunny_dragon/view0/layer00.png pair0_bunny_dragon/view2/pcs.txt)
   if(NOT EXISTS ${WORK}/dump/${f})

@@ -1,6 +1,7 @@
 // The host resolve of the k-buffer (core/kbuffer.h) against layers worked out by hand from the
-// rules of shaders/abuffer_resolve.comp (and docs/design.md): nearest first, strictly behind the
-// previous layer, depth ties to the earlier draw, alternate objects or any object.
+// rules of shaders/abuffer_resolve.comp (and docs/design.md): nearest first, behind the previous
+// layer in (depth, rank) order (a fragment of the other object at the same depth is behind it),
+// depth ties among candidates to the lower rank and the earlier draw, alternate objects or any.
 #include "peelcd/core/kbuffer.h"
 
 #include <catch2/catch.hpp>
@@ -35,7 +36,7 @@ struct Fixture {
   }
   Fixture() {
     // Texel 0, in draw-completion order: A(0.5, order 1), B(0.3, order 0), A(0.3, order 2),
-    // B(0.7, order 1). Sorted: A.3 (A draws first: it wins the tie), B.3, A.5, B.7.
+    // B(0.7, order 1). Sorted (full peeling): A.3 (A ranks first at equal depth), B.3, A.5, B.7.
     add(0, 0.5f, 1);
     add(0, 0.3f, kB | 0);
     add(0, 0.3f, 2);
@@ -69,26 +70,28 @@ TEST_CASE("the host k-buffer resolve peels every surface in depth order (full pe
   std::vector<IdPair> pcs;
   std::vector<std::vector<std::uint32_t>> layers;
   const KResolveResult r = f.resolve(p, pcs, &layers);
-  // Texel 0: A.3 (ID 12), then A.5 (B.3 is not strictly behind A.3), then B.7.
-  CHECK(r.max_layers == 3);
+  // Texel 0: A.3 (ID 12), B.3 (ID 20: the same depth, the other object: behind it), A.5, B.7.
+  CHECK(r.max_layers == 4);
   CHECK(r.max_fragments == 5);  // texel 1 overflowed: it gives no layers, the host grows
-  REQUIRE(layers.size() == 3);
+  REQUIRE(layers.size() == 4);
   CHECK(layers[0][0] == bits(0.3f));
   CHECK(layers[0][1] == 12u + 1u);
-  CHECK(layers[1][0] == bits(0.5f));
-  CHECK(layers[1][1] == 11u + 1u);
-  CHECK(layers[2][0] == bits(0.7f));
-  CHECK(layers[2][1] == (kB | (21u + 1u)));
+  CHECK(layers[1][0] == bits(0.3f));
+  CHECK(layers[1][1] == (kB | (20u + 1u)));
+  CHECK(layers[2][0] == bits(0.5f));
+  CHECK(layers[2][1] == 11u + 1u);
+  CHECK(layers[3][0] == bits(0.7f));
+  CHECK(layers[3][1] == (kB | (21u + 1u)));
   CHECK(layers[0][4 * 1 + 1] == 0u);  // the overflowed texel
   CHECK(layers[0][4 * 2 + 1] == 0u);  // the empty texel
   CHECK(layers[0][4 * 3 + 1] == (kB | (20u + 1u)));
   CHECK(layers[1][4 * 3 + 1] == 0u);
-  // A.5 -> B.7 (dz 0.2 < 0.3) is a PCS; the run start A.3 -> B.7 (dz 0.4) is tested, not close.
-  CHECK(sorted(pcs) == std::vector<IdPair>{{11, 21}});
+  // A.3 -> B.3 (dz 0: touching surfaces), B.3 -> A.5 and A.5 -> B.7 (dz 0.2 < 0.3).
+  CHECK(sorted(pcs) == std::vector<IdPair>{{11, 20}, {11, 21}, {12, 20}});
   pcs.clear();
-  p.epsilon_window = 0.5f;
+  p.epsilon_window = 0.1f;
   f.resolve(p, pcs, nullptr);
-  CHECK(sorted(pcs) == std::vector<IdPair>{{11, 21}, {12, 21}});
+  CHECK(sorted(pcs) == std::vector<IdPair>{{12, 20}});  // only the tie
 }
 
 TEST_CASE("the host k-buffer resolve alternates objects (alternate peeling)", "[kbuffer]") {
@@ -97,26 +100,28 @@ TEST_CASE("the host k-buffer resolve alternates objects (alternate peeling)", "[
   p.epsilon_window = 0.3f;
   std::vector<IdPair> pcs;
   std::vector<std::vector<std::uint32_t>> layers;
-  SECTION("B first: B.3, A.5, B.7") {
+  SECTION("B first: B.3, A.3 (the tie: A ranks after B here), B.7") {
     p.first_object = 1;
     const KResolveResult r = f.resolve(p, pcs, &layers);
     CHECK(r.max_layers == 3);
     REQUIRE(layers.size() == 3);
     CHECK(layers[0][1] == (kB | 21u));
-    CHECK(layers[1][1] == 12u);
+    CHECK(layers[1][1] == 13u);
     CHECK(layers[2][1] == (kB | 22u));
     CHECK(layers[0][4 * 3 + 1] == (kB | 21u));  // texel 3's B fragment is layer 0
-    CHECK(sorted(pcs) == std::vector<IdPair>{{11, 20}, {11, 21}});
+    CHECK(sorted(pcs) == std::vector<IdPair>{{12, 20}});  // A.3 -> B.7 is 0.4 apart
   }
-  SECTION("A first: A.3, then B.7 (B.3 is not strictly behind); texel 3 has no A: no layers") {
+  SECTION("A first: A.3, B.3 (the tie), A.5, B.7; texel 3 has no A: no layers") {
     p.first_object = 0;
     const KResolveResult r = f.resolve(p, pcs, &layers);
-    CHECK(r.max_layers == 2);
-    REQUIRE(layers.size() == 2);
+    CHECK(r.max_layers == 4);
+    REQUIRE(layers.size() == 4);
     CHECK(layers[0][1] == 13u);
-    CHECK(layers[1][1] == (kB | 22u));
+    CHECK(layers[1][1] == (kB | 21u));
+    CHECK(layers[2][1] == 12u);
+    CHECK(layers[3][1] == (kB | 22u));
     CHECK(layers[0][4 * 3 + 1] == 0u);
-    CHECK(pcs.empty());  // dz 0.4 > 0.3
+    CHECK(sorted(pcs) == std::vector<IdPair>{{11, 20}, {11, 21}, {12, 20}});
   }
 }
 
@@ -130,8 +135,40 @@ TEST_CASE("the host k-buffer resolve follows the slopes (slope-following epsilon
   p.epsilon_window = 0.05f;
   std::vector<IdPair> pcs;
   f.resolve(p, pcs, nullptr);
-  CHECK(pcs.empty());  // 0.2 > 0.05 and no slope term
-  p.slope = 1.0f;      // 0.2 < 0.05 + 1 * |0.1 - (-0.1)|
+  CHECK(sorted(pcs) == std::vector<IdPair>{{12, 20}});  // texel 2: 0.2 > 0.05, no slope term
+  pcs.clear();
+  p.slope = 1.0f;  // 0.2 < 0.05 + 1 * |0.1 - (-0.1)|
   f.resolve(p, pcs, nullptr);
-  CHECK(sorted(pcs) == std::vector<IdPair>{{10, 21}});
+  CHECK(sorted(pcs) == std::vector<IdPair>{{10, 21}, {12, 20}});
+}
+
+TEST_CASE("the host k-buffer resolve of depth intervals (conservative mode)", "[kbuffer][conservative]") {
+  // Fragments hold [lo, hi]: every overlapping couple of different objects is a PCS, whatever
+  // lies between them; every fragment is a layer, in (lo, object, order) order.
+  Fixture f;
+  KResolveParams p;
+  p.conservative = true;
+  f.counts[0] = f.counts[1] = f.counts[3] = 0;
+  const auto add = [&](std::size_t texel, float lo, float hi, std::uint32_t key) {
+    const std::uint32_t s = f.counts[texel]++;
+    f.fragments[s * Fixture::kTexels + texel] = {bits(lo), key, bits(hi), 0u};
+  };
+  add(0, 0.2f, 0.6f, 0);       // A, ID 10: overlaps B.5 and B.55 (not adjacent to the latter)
+  add(0, 0.3f, 0.35f, 1);      // A, ID 11: overlaps nothing of B
+  add(0, 0.5f, 0.55f, kB | 0);  // B, ID 20
+  add(0, 0.6f, 0.9f, kB | 1);   // B, ID 21: touches A's [0.2, 0.6] at 0.6 (closed intervals)
+  add(3, 0.1f, 0.2f, kB | 0);
+  std::vector<IdPair> pcs;
+  std::vector<std::vector<std::uint32_t>> layers;
+  const KResolveResult r = f.resolve(p, pcs, &layers);
+  CHECK(r.max_layers == 4);
+  REQUIRE(layers.size() == 4);
+  CHECK(layers[0][0] == bits(0.2f));
+  CHECK(layers[0][1] == 11u);
+  CHECK(layers[0][2] == bits(0.6f));
+  CHECK(layers[1][1] == 12u);
+  CHECK(layers[2][1] == (kB | 21u));
+  CHECK(layers[3][1] == (kB | 22u));
+  CHECK(layers[0][4 * 3 + 1] == (kB | 21u));
+  CHECK(sorted(pcs) == std::vector<IdPair>{{10, 20}, {10, 21}});
 }

@@ -61,7 +61,7 @@ Run run(const Mesh& a, const Mesh& b, DetectOptions opt, Peeler peeler = Peeler:
 TEST_CASE("two axis-aligned boxes crossing", "[gl]") {
   const Mesh a = make_box(Vec3(0, 0, 0), Vec3(1, 1, 1));
   const Mesh b = make_box(Vec3(0.5, 0.25, 0.25), Vec3(1.5, 0.75, 0.75));
-  DetectOptions opt;
+  DetectOptions opt = point_sampling();
   opt.theta = 30;
   opt.phi = 20;
   opt.resolution = 128;
@@ -126,7 +126,7 @@ TEST_CASE("a tilted plane through a sphere", "[gl]") {
   const Mesh sphere = make_uv_sphere(Vec3(0, 0, 0), 1.0, 24, 48);
   // Open grid through the sphere, tilted so its box is not flat: z = 0.1 + 0.2 x.
   const Mesh plane = make_grid(Vec3(-1.5, -1.5, -0.2), Vec3(3, 0, 0.6), Vec3(0, 3, 0), 12, 12);
-  DetectOptions opt;
+  DetectOptions opt = point_sampling();
   opt.theta = 20;
   opt.phi = 50;
   opt.resolution = 256;
@@ -153,7 +153,7 @@ TEST_CASE("an open quad through a closed mesh", "[gl]") {
   Mesh quad;  // two triangles, x from -2 to 2, slanted in y-z
   quad.vertices = {Vec3(-2, -2, -0.5), Vec3(2, -2, -0.5), Vec3(2, 2, 0.7), Vec3(-2, 2, 0.7)};
   quad.triangles = {{0, 1, 2}, {0, 2, 3}};
-  DetectOptions opt;
+  DetectOptions opt = point_sampling();
   opt.theta = 75;
   opt.phi = -30;
   opt.resolution = 256;
@@ -170,7 +170,7 @@ TEST_CASE("an open quad through a closed mesh", "[gl]") {
 TEST_CASE("no overlapping boxes means no GL work at all", "[gl]") {
   const Mesh a = make_box(Vec3(0, 0, 0), Vec3(1, 1, 1));
   const Mesh b = make_box(Vec3(2, 0, 0), Vec3(3, 1, 1));
-  const FrameResult f = test_pipeline().detect(two(a, b), DetectOptions{});
+  const FrameResult f = test_pipeline().detect(two(a, b), point_sampling());
   CHECK(f.pairs.empty());
   CHECK(f.gl_passes == 0);
 }
@@ -179,7 +179,7 @@ TEST_CASE("overlapping boxes without contact peel but report nothing", "[gl]") {
   // Two spheres whose boxes overlap at a corner while the surfaces stay apart (Fig. 2-b).
   const Mesh a = make_uv_sphere(Vec3(0, 0, 0), 1.0, 12, 24);
   const Mesh b = make_uv_sphere(Vec3(1.9, 1.9, 0), 1.0, 12, 24);
-  DetectOptions opt;
+  DetectOptions opt = point_sampling();
   opt.resolution = 64;
   const FrameResult f = test_pipeline().detect(two(a, b), opt);
   REQUIRE(f.pairs.size() == 1);
@@ -190,7 +190,7 @@ TEST_CASE("overlapping boxes without contact peel but report nothing", "[gl]") {
 TEST_CASE("repeated frames reuse GL objects and give identical answers", "[gl]") {
   const Mesh a = make_uv_sphere(Vec3(0, 0, 0), 1.0, 16, 32);
   const Mesh b = make_uv_sphere(Vec3(0.9, 0.4, 0.2), 0.7, 12, 24);
-  DetectOptions opt;
+  DetectOptions opt = point_sampling();
   opt.theta = 10;
   opt.phi = 5;
   opt.edge_texels = 0;  // the whole budget, whatever the triangles' size
@@ -211,40 +211,41 @@ TEST_CASE("many ROIs share the texture budget", "[gl]") {
   std::vector<Object> objects;
   for (int i = 0; i < 6; ++i)  // a row of overlapping spheres: 5 ROIs
     objects.push_back({"s" + std::to_string(i), make_uv_sphere(Vec3(1.5 * i, 0, 0), 1.0, 8, 16), {}});
-  DetectOptions share;
+  DetectOptions share = point_sampling();
   share.edge_texels = 0;  // every ROI takes its share of the budget
   const FrameResult f = test_pipeline().detect(objects, share);
   REQUIRE(f.pairs.size() == 5);
+  // Five equal needs of the whole budget: each side scaled by 1/sqrt(5), to a multiple of 16.
   for (const PairResult& p : f.pairs) {
-    CHECK(p.resolution == 128);
+    CHECK(p.resolution == 224);
     CHECK(p.object_b == p.object_a + 1);
     CHECK_FALSE(p.colliding.empty());
   }
   // By default a ROI takes no more than 12 texels per median edge of its triangles: these
   // coarse spheres need far less than their share, and lose nothing by it.
-  const FrameResult g = test_pipeline().detect(objects, DetectOptions{});
+  const FrameResult g = test_pipeline().detect(objects, point_sampling());
   REQUIRE(g.pairs.size() == 5);
   for (std::size_t i = 0; i < 5; ++i) {
     const PairResult& p = g.pairs[i];
     ContactCull cull;
     cull_to_contact_region(objects[p.object_a].mesh, objects[p.object_b].mesh, p.roi, cull);
-    CHECK(p.resolution == edge_tile_resolution(128, cull.box, cull.median_edge, 12.0));
-    CHECK(p.resolution < 128);
+    CHECK(p.resolution == edge_tile_resolution(512, cull.box, cull.median_edge, 12.0));  // all fit the budget
+    CHECK(p.resolution < 224);
     const Score s = score(exact_colliding_pairs(objects[p.object_a].mesh, objects[p.object_b].mesh), p.colliding);
     CHECK(s.false_contacts == 0);
     CHECK(s.found >= score(exact_colliding_pairs(objects[p.object_a].mesh, objects[p.object_b].mesh),
                            f.pairs[i].colliding).found);
-    std::printf("spheres %zu-%zu: tile %d (share 128), found %zu of %zu\n", p.object_a, p.object_b, p.resolution,
+    std::printf("spheres %zu-%zu: tile %d (equal share 224), found %zu of %zu\n", p.object_a, p.object_b, p.resolution,
                 s.found, s.exact);
   }
 }
 
 TEST_CASE("impossible options are refused with a clear error", "[gl]") {
   const std::vector<Object> objs = two(make_box(Vec3(0, 0, 0), Vec3(1, 1, 1)), make_box(Vec3(0.5, 0, 0), Vec3(2, 1, 1)));
-  DetectOptions opt;
+  DetectOptions opt = point_sampling();
   opt.resolution = test_pipeline().max_resolution() + 1;
   CHECK_THROWS_WITH(test_pipeline().detect(objs, opt), Catch::Contains("GL_MAX_TEXTURE_SIZE"));
-  opt = DetectOptions{};
+  opt = point_sampling();
   opt.epsilon = -1;
   CHECK_THROWS_AS(test_pipeline().detect(objs, opt), std::invalid_argument);
 }
@@ -252,7 +253,7 @@ TEST_CASE("impossible options are refused with a clear error", "[gl]") {
 TEST_CASE("a rigid object's shape is uploaded once, then moved by its pose", "[gl]") {
   auto ball = std::make_shared<const Mesh>(make_uv_sphere(Vec3(0, 0, 0), 0.7, 12, 24));
   const Mesh big = make_uv_sphere(Vec3(0, 0, 0), 1.0, 16, 32);
-  DetectOptions opt;
+  DetectOptions opt = point_sampling();
   opt.theta = 10;
   opt.phi = 5;
   opt.resolution = 128;
@@ -318,7 +319,7 @@ static std::pair<Mesh, Mesh> interleaved_stacks() {
 
 // One oblique view of the stacks with full peeling: every surface is a layer.
 static DetectOptions stacks_view(int resolution) {
-  DetectOptions opt;
+  DetectOptions opt = point_sampling();
   opt.resolution = resolution;
   opt.views = 1;
   opt.theta = 20;

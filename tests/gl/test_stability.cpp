@@ -36,7 +36,7 @@ std::size_t symmetric_difference(const std::vector<IdPair>& a, const std::vector
 
 TEST_CASE("translated and scaled scenes give the same pairs and PCS", "[stability]") {
   const std::vector<Object> scene = load_objects(load_scene(std::string(PEELCD_FIXTURES) + "/scenes/bunny_dragon.json"));
-  DetectOptions opt;
+  DetectOptions opt = point_sampling();
   opt.resolution = 256;
   opt.views = 1;
   opt.theta = 30;
@@ -87,7 +87,7 @@ TEST_CASE("depth resolution: parallel surfaces just above and below one float ul
     for (Vec3& p : m.vertices) p += Vec3(offset, 0, offset) / 2.0;
     return m;
   };
-  DetectOptions opt;
+  DetectOptions opt = point_sampling();
   opt.theta = 0;
   opt.phi = 45;
   opt.resolution = 64;
@@ -97,7 +97,15 @@ TEST_CASE("depth resolution: parallel surfaces just above and below one float ul
   const PairResult above = test_pipeline().detect({{"a", plane(0), {}}, {"b", plane(8 * ulp_world * std::sqrt(2.0)), {}}}, opt).pairs.at(0);
   const PairResult below = test_pipeline().detect({{"a", plane(0), {}}, {"b", plane(0.05 * ulp_world * std::sqrt(2.0)), {}}}, opt).pairs.at(0);
   CHECK(above.layers == 2);  // 8 ulps apart: two layers
-  CHECK(below.layers == 1);  // 0.05 ulp apart: the same float depth, not strictly behind
+  // 0.05 ulp apart: the same float depth. Both surfaces still become layers (a tie between
+  // different objects is kept), and the two planes are a PCS at depth difference 0.
+  CHECK(below.layers == 2);
+  CHECK(below.pcs_count > 0);
+  // Alternate peeling keeps the tie too, whichever object goes first.
+  opt.peel = PeelMode::alternate;
+  const PairResult alt = test_pipeline().detect({{"a", plane(0), {}}, {"b", plane(0.05 * ulp_world * std::sqrt(2.0)), {}}}, opt).pairs.at(0);
+  CHECK(alt.layers == 2);
+  CHECK(alt.pcs_count > 0);
 }
 
 TEST_CASE("triangle IDs above 2^24 survive (stored as integer bits, not float values)", "[stability]") {
@@ -112,7 +120,7 @@ TEST_CASE("triangle IDs above 2^24 survive (stored as integer bits, not float va
   for (Tri& t : a.triangles)
     for (std::uint32_t& v : t) v += base;
   const Mesh b = make_uv_sphere(Vec3(0.8, 0.3, 0.1), 0.6, 8, 16);
-  DetectOptions opt;
+  DetectOptions opt = point_sampling();
   opt.ids = IdMode::paper;
   opt.resolution = 128;
   opt.views = 1;

@@ -9,9 +9,13 @@
 // the same k-buffer layout as the GL peeler's and are resolved by the same code
 // (peelcd/core/kbuffer.h): the same layers, PCS test and layer format.
 //
+// With PeelJob::conservative, each triangle instead covers every texel its projection touches
+// (peelcd/core/conservative.h, the shaders' arithmetic), with a depth interval per texel.
+//
 // It models GL's rules, not a particular driver's arithmetic: on the default scene it gives the
 // same PCS as OSMesa (tests/core/test_cpu_stage.cpp); elsewhere a texel centre that lies within
 // rounding of an edge or of the ROI box may be decided differently.
+#include "peelcd/core/conservative.h"
 #include "peelcd/core/image_stage.h"
 #include "peelcd/core/kbuffer.h"
 
@@ -34,6 +38,7 @@ class CpuImageStage final : public ImageStage {
     std::uint32_t texel;
     KFragment f;
   };
+  void raster_conservative(const conservative::Triangle& t, int n, std::uint32_t key);
   std::string backend_ = "cpu", renderer_ = "peelcd CPU image stage (k-buffer model)", version_ = "1";
   std::vector<Fragment> fragments_;
   std::vector<std::uint32_t> counts_, ids_[2];

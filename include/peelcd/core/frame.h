@@ -25,14 +25,27 @@ enum class Cull { box, contact };
 const char* to_string(Cull cull);
 std::optional<Cull> parse_cull(const std::string& text);
 
-// Defaults chosen on the accuracy sweeps of docs/accuracy.md and the benchmarks of
-// docs/performance.md (the paper's own configuration is ids = paper, peel = alternate,
-// slope = 0, views = 1, cull = box).
+// Defaults chosen on the per-class accuracy measurements of docs/accuracy.md and the benchmarks
+// of docs/performance.md. The paper's own configuration (paper_options()) is conservative =
+// false, theta = phi = roll = 0, ids = paper, peel = alternate, slope = 0, views = 1, cull = box.
 struct DetectOptions {
-  double theta = 0.0;  // view longitude, degrees
-  double phi = 0.0;    // view latitude, degrees
-  int resolution = 0;  // forced N x N tile per ROI; 0 = share the budget (tile_resolution())
+  // The view frame: d(theta, phi) (degrees of longitude and latitude), its u and v axes turned
+  // by `roll` degrees about d (view_frame()). The default is a fixed generic frame
+  // (docs/accuracy.md, "The view frame"): in each of the three fused views, every plane
+  // perpendicular to a world axis is at least 18 degrees from edge-on, and every plane through
+  // a world axis at 45 degrees to the other two at least 8 degrees. theta = phi = roll = 0 is
+  // the paper's frame, whose three views look along world x, y and z.
+  double theta = 31.0;
+  double phi = 51.0;
+  double roll = 30.0;
+  int resolution = 0;  // forced N x N tile per ROI; 0 = share the budget (allocate_tiles())
   int budget = 512;    // the frame's texture budget is budget x budget texels
+  // Conservative image stage (docs/accuracy.md, "Conservative mode"): every triangle covers
+  // every texel its projection touches, each fragment holds the depth interval its triangle
+  // spans over the texel, and every two fragments of different objects whose intervals overlap
+  // form a PCS. No colliding pair can be missed at any resolution; epsilon, slope, ids' loss and
+  // the peel mode do not apply (every fragment is a layer). One view suffices.
+  bool conservative = true;
   IdMode ids = IdMode::ring;
   double epsilon = 0.0;  // PCS depth threshold, world units; 0 = one texel of the ROI tile
                         // (of the culled region's tile with Cull::contact)
@@ -45,7 +58,7 @@ struct DetectOptions {
   // Views fused per ROI: 1 = d(theta, phi) only; 2 = d and the frame's u axis; 3 = d, u and v
   // (three orthogonal views); the PCS of all views are united before the narrow phase. Two
   // views see every intersection segment at >= 1/sqrt(2) of its length, three at >= sqrt(2/3).
-  int views = 3;
+  int views = 1;
   Cull cull = Cull::contact;         // chosen on peelcd bench and sweep (docs/performance.md)
   // Sharing the budget (resolution == 0) with Cull::contact, a ROI's tile is at most the side
   // that gives the median edge of its kept triangles `edge_texels` texels
@@ -54,15 +67,25 @@ struct DetectOptions {
   double edge_texels = 12.0;
 };
 
+// The paper's configuration (ISVC 2007): alternate peeling of every triangle in the ROI box,
+// constant epsilon of one texel, the paper's IDs, one view along world x, point sampling.
+DetectOptions paper_options();
+
 // The view frames a ROI is peeled along for `options` (1, 2 or 3 of them).
 std::vector<ViewFrame> fused_view_frames(const DetectOptions& options);
 // The same into `out` (room for 3); returns the count. Allocates nothing.
 std::size_t fused_view_frames(const DetectOptions& options, ViewFrame out[3]);
 
-// Side of each ROI's tile when `roi_count` ROIs share a budget x budget texture: the largest
-// power-of-two fraction of `budget` such that the tiles fit (1 ROI: budget; 2-4: budget/2; ...),
-// never below 16.
+// Side of each ROI's tile when `roi_count` ROIs share a budget x budget texture equally: the
+// largest power-of-two fraction of `budget` such that the tiles fit (1 ROI: budget; 2-4:
+// budget/2; ...), never below 16. The paper's way, kept for Cull::box.
 int tile_resolution(int budget, std::size_t roi_count);
+
+// Resolution by need: `needs[i]` is the side ROI i asks for (edge_tile_resolution() with the
+// whole budget as its cap). When the squares fit in budget x budget texels they are granted;
+// otherwise every side is scaled by the same factor so that they fit, rounded down to a multiple
+// of 16, never below 16. Writes `tiles` (same size as `needs`).
+void allocate_tiles(int budget, const std::vector<int>& needs, std::vector<int>& tiles);
 
 // The tile side for a ROI whose region (the culled box) is `region` and whose triangles' median
 // edge is `median_edge`: `edge_texels` texels per median edge across the region's longest side,

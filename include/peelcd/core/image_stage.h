@@ -30,6 +30,10 @@ struct PeelJob {
   double slope = 0.0;              // slope factor of the PCS test (DetectOptions::slope)
   int first = 1;                   // the object alternate peeling starts with (0 = A, 1 = B)
   bool capture = false;            // also fill PeelResult::captured with every layer
+  // Conservative coverage and depth intervals (DetectOptions::conservative): a fragment holds
+  // (lower depth bits, object << 31 | ID + 1, upper depth bits, 0); the PCS are all overlapping
+  // couples of different objects in a texel; `peel`, `epsilon` and `slope` do not apply.
+  bool conservative = false;
 };
 
 // What a stage returns for one job.
@@ -42,10 +46,17 @@ struct PeelResult {
   // Counters of the work done (FrameResult's).
   std::size_t gl_passes = 0, pcs_readbacks = 0, triangles_uploaded = 0, triangles_indexed = 0, shape_uploads = 0;
   // With PeelJob::capture: every logical layer in peel order, N*N texels of 4 words each
-  // (depth bits, object << 31 | ID + 1 (0 = empty), dz/dx bits, dz/dy bits), rows bottom to top.
+  // (depth bits, object << 31 | ID + 1 (0 = empty), dz/dx bits, dz/dy bits), rows bottom to top;
+  // in conservative mode (lower depth bits, object << 31 | ID + 1, upper depth bits, 0), every
+  // fragment of a texel a layer, in (lower depth, object, draw order) order.
   std::vector<std::vector<std::uint32_t>> captured;
+  // The stage could not resolve this view conservatively (a texel deeper than the largest
+  // k-buffer it can hold): the detector tests every couple of the view's triangles whose boxes
+  // overlap instead (`pcs` is then empty). Never set outside conservative mode.
+  bool exhaustive = false;
 
   void clear() {
+    exhaustive = false;
     pcs.clear();
     captured.clear();
     layers = peel_passes = 0;

@@ -14,7 +14,8 @@
 namespace peelcd {
 
 // One stored fragment (shaders/abuffer.frag): depth bits, object << 31 | draw order,
-// dz/dx bits, dz/dy bits.
+// dz/dx bits, dz/dy bits. Conservative (shaders/conservative.frag): lower depth bits,
+// object << 31 | draw order, upper depth bits, 0.
 struct KFragment {
   std::uint32_t depth, key, dzdx, dzdy;
 };
@@ -32,6 +33,9 @@ struct KResolveParams {
   float slope = 0.0f;
   bool full_peel = false;
   std::uint32_t first_object = 0;  // alternate: the object of layer 0
+  // Fragments hold depth intervals (PeelJob::conservative): every fragment is a layer, and
+  // every two fragments of different objects whose intervals overlap are a PCS.
+  bool conservative = false;
   // Triangle ID by draw order, per object (the provoking corner's ID).
   const std::uint32_t* ids[2] = {nullptr, nullptr};
 };

@@ -10,6 +10,11 @@ namespace peelcd {
 // Colliding triangle pairs of A and B, packed with pack_pair(triA, triB), sorted.
 std::vector<std::uint64_t> exact_colliding_pairs(const Mesh& a, const Mesh& b);
 
+// Appends pack_pair(triA, triB) for every triangle of `ta` (of A) and of `tb` (of B) whose
+// closed boxes overlap: the candidates of the exact CPU path (no image stage).
+void box_overlap_pairs(const Mesh& a, const std::vector<std::uint32_t>& ta, const Mesh& b,
+                       const std::vector<std::uint32_t>& tb, std::vector<std::uint64_t>& out);
+
 // Reported contacts against the exact set: every miss and every false contact counts.
 struct Score {
   std::size_t exact = 0, found = 0, missed = 0, false_contacts = 0;

@@ -16,7 +16,10 @@ Vec3 view_direction(double theta_deg, double phi_deg);
 struct ViewFrame {
   Vec3 u, v, d;  // right-handed orthonormal basis, d = viewing direction
 };
-ViewFrame view_frame(double theta_deg, double phi_deg);
+// The frame of view direction d(theta, phi): u = normalize(up x d) with up = world z (world x
+// near the poles), v = d x u; then u and v turned by `roll_deg` about d (counter-clockwise seen
+// along -d). roll = 0 is the paper's frame.
+ViewFrame view_frame(double theta_deg, double phi_deg, double roll_deg = 0.0);
 
 struct RoiView {
   Aabb box;            // the (padded) ROI box, world

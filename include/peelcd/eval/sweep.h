@@ -17,8 +17,9 @@ struct SweepConfig {
   double slope = 1.0;
   int views = 1;
   Cull cull = Cull::contact;
+  bool conservative = false;  // the conservative image stage (ids, peel and slope do not apply)
   std::string label() const;  // e.g. "256 paper full slope=1 views=1 cull=contact"
-  std::string mode() const;   // paper (alternate, slope 0), alternate or full
+  std::string mode() const;   // paper (alternate, slope 0), alternate, full or conservative
 };
 
 // theta over [0, 360) by theta_step, phi over [-90, 90] by phi_step, each pole once.

@@ -1,0 +1,215 @@
+#include "peelcd/eval/classes.h"
+
+#include "peelcd/core/id_map.h"
+#include "peelcd/core/narrow_phase.h"
+
+#include <cmath>
+
+namespace peelcd {
+namespace {
+
+Object object(std::string name, Mesh mesh) {
+  Object o;
+  o.name = std::move(name);
+  o.mesh = std::move(mesh);
+  return o;
+}
+
+// Appends `m` to `into` (one object made of several pieces).
+void append(Mesh& into, const Mesh& m) {
+  const auto base = std::uint32_t(into.vertices.size());
+  into.vertices.insert(into.vertices.end(), m.vertices.begin(), m.vertices.end());
+  for (const Tri& t : m.triangles) into.triangles.push_back({t[0] + base, t[1] + base, t[2] + base});
+}
+
+Mesh moved(Mesh m, const Eigen::Affine3d& pose) {
+  for (Vec3& v : m.vertices) v = pose * v;
+  return m;
+}
+
+}  // namespace
+
+Mesh box_mesh(const Vec3& lo, const Vec3& hi) {
+  Mesh m;
+  for (int i = 0; i < 8; ++i)
+    m.vertices.emplace_back(i & 1 ? hi.x() : lo.x(), i & 2 ? hi.y() : lo.y(), i & 4 ? hi.z() : lo.z());
+  const int quads[6][4] = {{0, 2, 3, 1}, {4, 5, 7, 6}, {0, 1, 5, 4}, {2, 6, 7, 3}, {0, 4, 6, 2}, {1, 3, 7, 5}};
+  for (const auto& q : quads) {
+    m.triangles.push_back({std::uint32_t(q[0]), std::uint32_t(q[1]), std::uint32_t(q[2])});
+    m.triangles.push_back({std::uint32_t(q[0]), std::uint32_t(q[2]), std::uint32_t(q[3])});
+  }
+  return m;
+}
+
+Mesh floor_mesh(int n, double x0, double x1, double y0, double y1, double z) {
+  Mesh m;
+  for (int j = 0; j <= n; ++j)
+    for (int i = 0; i <= n; ++i) m.vertices.emplace_back(x0 + (x1 - x0) * i / n, y0 + (y1 - y0) * j / n, z);
+  const auto at = [n](int i, int j) { return std::uint32_t(j * (n + 1) + i); };
+  for (int j = 0; j < n; ++j)
+    for (int i = 0; i < n; ++i) {
+      m.triangles.push_back({at(i, j), at(i + 1, j), at(i + 1, j + 1)});
+      m.triangles.push_back({at(i, j), at(i + 1, j + 1), at(i, j + 1)});
+    }
+  return m;
+}
+
+Mesh uv_sphere(const Vec3& c, double r, int slices, int stacks) {
+  Mesh m;
+  m.vertices.push_back(c + Vec3(0, 0, -r));
+  for (int s = 1; s < stacks; ++s) {
+    const double phi = -M_PI / 2 + M_PI * s / stacks;
+    for (int k = 0; k < slices; ++k) {
+      const double th = 2 * M_PI * k / slices;
+      m.vertices.push_back(c + r * Vec3(std::cos(phi) * std::cos(th), std::cos(phi) * std::sin(th), std::sin(phi)));
+    }
+  }
+  m.vertices.push_back(c + Vec3(0, 0, r));
+  const auto ring = [slices](int s, int k) { return std::uint32_t(1 + (s - 1) * slices + (k % slices)); };
+  const auto top = std::uint32_t(m.vertices.size() - 1);
+  for (int k = 0; k < slices; ++k) {
+    m.triangles.push_back({0, ring(1, k + 1), ring(1, k)});
+    for (int s = 1; s + 1 < stacks; ++s) {
+      m.triangles.push_back({ring(s, k), ring(s, k + 1), ring(s + 1, k + 1)});
+      m.triangles.push_back({ring(s, k), ring(s + 1, k + 1), ring(s + 1, k)});
+    }
+    m.triangles.push_back({ring(stacks - 1, k), ring(stacks - 1, k + 1), top});
+  }
+  return m;
+}
+
+std::vector<GeometryClass> geometry_classes(int grid_side) {
+  std::vector<GeometryClass> out;
+  // A generic rotation, for the scenes that must not be axis-aligned.
+  Eigen::Affine3d tilt = Eigen::Affine3d::Identity();
+  tilt.rotate(Eigen::AngleAxisd(0.7, Vec3(1, 2, 3).normalized()));
+
+  out.push_back({"crossing boxes",
+                 "two axis-aligned boxes, a bar through a cube: every face edge-on along a world axis",
+                 {object("cube", box_mesh(Vec3(-1, -1, -1), Vec3(1, 1, 1))),
+                  object("bar", box_mesh(Vec3(-2, -0.3, -0.4), Vec3(2, 0.5, 0.3)))}});
+  out.push_back({"touching boxes", "two boxes face to face: coincident faces, no penetration",
+                 {object("left", box_mesh(Vec3(0, 0, 0), Vec3(1, 1, 1))),
+                  object("right", box_mesh(Vec3(1, 0.25, 0.25), Vec3(2, 1.25, 1.25)))}});
+  out.push_back({"box on floor",
+                 "a box resting on a tessellated floor (coincident faces) and a ball sunk into it",
+                 {object("floor", floor_mesh(20, -2, 2, -2, 2, 0)),
+                  object("box", box_mesh(Vec3(-0.5, -0.5, 0), Vec3(0.5, 0.5, 1))),
+                  object("ball", uv_sphere(Vec3(1.2, 1.1, 0.25), 0.4, 24, 12))}});
+  {
+    const Mesh s = moved(uv_sphere(Vec3(0, 0, 0), 1.0, 48, 24), tilt);
+    out.push_back({"coincident copy", "a mesh and its copy at the same pose: every surface coincident",
+                   {object("sphere", s), object("copy", s)}});
+  }
+  {
+    // Zero-area triangles: segments (a, b, b) and collinear triples through the cube's faces, and
+    // points (p, p, p) on them; the exact test treats them as the segment or point they are.
+    Mesh d;
+    for (int i = 0; i < 8; ++i) {
+      const double y = -0.8 + 0.2 * i, z = 0.7 - 0.17 * i;
+      const auto base = std::uint32_t(d.vertices.size());
+      d.vertices.emplace_back(0.5, y, z);
+      d.vertices.emplace_back(1.5, y + 0.05, z - 0.03);
+      d.vertices.emplace_back(1.0, y + 0.025, z - 0.015);  // on the segment: collinear
+      d.triangles.push_back({base, base + 1, base + 1});
+      d.triangles.push_back({base, base + 1, base + 2});
+      const auto p = std::uint32_t(d.vertices.size());
+      d.vertices.emplace_back(-0.6 + 0.15 * i, 1.0, 0.3 - 0.1 * i);  // a point on the face y = 1
+      d.triangles.push_back({p, p, p});
+    }
+    out.push_back({"degenerate triangles", "segments, collinear triples and points crossing or lying on a cube's faces",
+                   {object("cube", moved(box_mesh(Vec3(-1, -1, -1), Vec3(1, 1, 1)), tilt)),
+                    object("slivers", moved(d, tilt))}});
+  }
+  {
+    Mesh needle = box_mesh(Vec3(-1.5, 0.3, 0.2), Vec3(1.5, 0.3001, 0.2001));
+    out.push_back({"needle", "a needle 1e-4 wide through a sphere: thinner than any texel",
+                   {object("sphere", uv_sphere(Vec3(0, 0, 0), 1.0, 32, 16)), object("needle", needle)}});
+  }
+  {
+    // Two perpendicular open sheets crossing each other (self-intersecting, open) and an open
+    // half sphere through both.
+    Mesh sheets = floor_mesh(6, -1, 1, -1, 1, 0.1);
+    Eigen::Affine3d up = Eigen::Affine3d::Identity();
+    up.rotate(Eigen::AngleAxisd(M_PI / 2, Vec3(1, 0, 0)));
+    append(sheets, moved(floor_mesh(6, -1, 1, -1, 1, 0.05), up));
+    Mesh half = uv_sphere(Vec3(0.3, 0.2, 0.0), 0.7, 24, 12);
+    half.triangles.resize(half.triangles.size() / 2);  // the lower half: open along the equator
+    out.push_back({"open self-intersecting", "two crossing open sheets (one object) and an open half sphere",
+                   {object("sheets", moved(sheets, tilt)), object("half sphere", moved(half, tilt))}});
+  }
+  {
+    GeometryClass g{"crowded grid",
+                    std::to_string(grid_side * grid_side) +
+                        " spheres in a grid, each overlapping its neighbours by 1% of its diameter",
+                    {}};
+    for (int j = 0; j < grid_side; ++j)
+      for (int i = 0; i < grid_side; ++i)
+        g.objects.push_back(object("ball " + std::to_string(j * grid_side + i),
+                                   uv_sphere(Vec3(0.99 * i, 0.99 * j, 0.01 * ((i * 7 + j * 3) % 5)), 0.5, 16, 8)));
+    out.push_back(std::move(g));
+  }
+  return out;
+}
+
+double intersection_length(const Mesh& a, const Mesh& b, const std::vector<std::uint64_t>& pairs) {
+  double total = 0.0;
+  for (const std::uint64_t k : pairs) {
+    const auto [p, q] = intersection_segment(corners(a, pair_a(k)), corners(b, pair_b(k)));
+    total += (q - p).norm();
+  }
+  return total;
+}
+
+}  // namespace peelcd
+
+#include "peelcd/core/reference.h"
+
+#include <algorithm>
+
+namespace peelcd {
+
+ClassRow measure_class(Detector& detector, const GeometryClass& g, const std::string& config,
+                       const DetectOptions& options, int repeat) {
+  ClassRow row;
+  row.class_name = g.name;
+  row.config = config;
+  FrameResult result;
+  std::vector<double> ms;
+  for (int i = 0; i < std::max(1, repeat); ++i) {
+    detector.detect(g.objects, options, result);
+    ms.push_back(result.timings.total);
+  }
+  std::sort(ms.begin(), ms.end());
+  row.median_ms = ms[ms.size() / 2];
+  for (const PairResult& p : result.pairs) row.candidates += p.candidates;
+  // Every pair of objects whose boxes overlap (no other pair can touch), also those the frame
+  // culled away.
+  std::vector<Aabb> boxes;
+  for (const Object& o : g.objects) boxes.push_back(bounds(o.mesh));
+  for (std::size_t ia = 0; ia < g.objects.size(); ++ia)
+    for (std::size_t ib = ia + 1; ib < g.objects.size(); ++ib) {
+      if (intersection(boxes[ia], boxes[ib]).empty()) continue;
+      const Mesh& a = g.objects[ia].mesh;
+      const Mesh& b = g.objects[ib].mesh;
+      const std::vector<std::uint64_t> exact = exact_colliding_pairs(a, b);
+      if (exact.empty()) continue;
+      std::vector<Contact> reported;
+      for (const PairResult& p : result.pairs)
+        if (p.object_a == ia && p.object_b == ib) reported = p.colliding;
+      const Score s = score_contacts(exact, reported);
+      row.exact += s.exact;
+      row.found += s.found;
+      row.missed += s.missed;
+      std::vector<std::uint64_t> found;
+      for (const Contact& c : reported) found.push_back(pack_pair(c.tri_a, c.tri_b));
+      std::sort(found.begin(), found.end());
+      std::vector<std::uint64_t> missed;
+      std::set_difference(exact.begin(), exact.end(), found.begin(), found.end(), std::back_inserter(missed));
+      row.exact_length += intersection_length(a, b, exact);
+      row.missed_length += intersection_length(a, b, missed);
+    }
+  return row;
+}
+
+}  // namespace peelcd

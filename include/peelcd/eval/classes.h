@@ -1,0 +1,59 @@
+#pragma once
+// Classes of geometry a collision library meets, as small generated scenes: the accuracy of
+// every configuration is measured and tested on each of them (docs/accuracy.md, "Per class";
+// tests/core/test_classes.cpp; peelcd classes). Every scene is built from closed-form meshes, so
+// its exact contacts are what the construction says (axis-aligned faces, coincident surfaces,
+// zero-area triangles, features thinner than a texel).
+#include "peelcd/core/mesh.h"
+
+#include <string>
+#include <vector>
+
+namespace peelcd {
+
+struct GeometryClass {
+  std::string name;         // short, for tables and test names
+  std::string description;  // what the scene is and why it is hard
+  std::vector<Object> objects;
+};
+
+// Axis-aligned box, 8 corners, 12 triangles, outward-facing.
+Mesh box_mesh(const Vec3& lo, const Vec3& hi);
+// A flat grid of n x n quads (2n^2 triangles) at height z over [x0, x1] x [y0, y1]: an open
+// surface.
+Mesh floor_mesh(int n, double x0, double x1, double y0, double y1, double z);
+// A UV sphere: `slices` around the z axis, `stacks` from pole to pole.
+Mesh uv_sphere(const Vec3& center, double radius, int slices, int stacks);
+
+// The built-in classes, in a fixed order:
+//   crossing boxes, touching boxes, box on floor, coincident copy, degenerate triangles,
+//   needle, open self-intersecting, crowded grid (grid_side^2 spheres in light contact).
+std::vector<GeometryClass> geometry_classes(int grid_side = 10);
+
+// The sum of the lengths of the intersection segments of `pairs` (pack_pair(triA, triB)) of
+// meshes `a` and `b`: the "intersection length" whose missed share docs/accuracy.md reports.
+double intersection_length(const Mesh& a, const Mesh& b, const std::vector<std::uint64_t>& pairs);
+
+}  // namespace peelcd
+
+#include "peelcd/core/detector.h"
+
+namespace peelcd {
+
+// One configuration measured on one class: every object pair's contacts scored against the
+// exact reference (every miss counts), summed over the scene's pairs.
+struct ClassRow {
+  std::string class_name, config;
+  std::size_t exact = 0, found = 0, missed = 0;
+  std::size_t candidates = 0;  // triangle pairs given to the exact test
+  double exact_length = 0.0, missed_length = 0.0;  // intersection length, world units
+  double median_ms = 0.0;                          // FrameResult timings.total, median of the runs
+  double miss_ratio() const { return exact ? double(missed) / double(exact) : 0.0; }
+  double missed_length_share() const { return exact_length > 0 ? missed_length / exact_length : 0.0; }
+};
+
+// Runs `options` on `g` with `detector` `repeat` times and scores the last frame.
+ClassRow measure_class(Detector& detector, const GeometryClass& g, const std::string& config,
+                       const DetectOptions& options, int repeat);
+
+}  // namespace peelcd
