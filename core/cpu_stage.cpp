@@ -213,8 +213,10 @@ void CpuImageStage::raster_conservative(const conservative::Triangle& t, int n, 
   const float xmin = std::min({t.x[0], t.x[1], t.x[2]}) - h, xmax = std::max({t.x[0], t.x[1], t.x[2]}) + h;
   const float ymin = std::min({t.y[0], t.y[1], t.y[2]}) - h, ymax = std::max({t.y[0], t.y[1], t.y[2]}) + h;
   if (!(xmax >= 0.0f && ymax >= 0.0f && xmin <= float(n) && ymin <= float(n))) return;
-  const int i0 = std::max(0, int(std::floor(xmin)) - 1), i1 = std::min(n - 1, int(std::floor(std::min(xmax, float(n)))) + 1);
-  const int j0 = std::max(0, int(std::floor(ymin)) - 1), j1 = std::min(n - 1, int(std::floor(std::min(ymax, float(n)))) + 1);
+  // Clamped to the view in float first: a huge margin (a far rigid shape) must not overflow int.
+  const auto first = [](float v) { return std::max(0, int(std::floor(std::max(v, 0.0f))) - 1); };
+  const auto last = [n](float v) { return std::min(n - 1, int(std::floor(std::min(v, float(n)))) + 1); };
+  const int i0 = first(xmin), i1 = last(xmax), j0 = first(ymin), j1 = last(ymax);
   for (int j = j0; j <= j1; ++j)
     for (int i = i0; i <= i1; ++i) {
       float lo, hi;

@@ -215,7 +215,7 @@ void Detector::detect(const std::vector<const Object*>& object_ptrs, const Detec
   // `out` is reused: its vectors keep their capacity (tests/alloc/test_alloc.cpp counts it).
   out.timings = Timings{};
   out.gl_passes = out.rois_peeled = out.triangles_uploaded = out.triangles_indexed = out.shape_uploads = 0;
-  out.pcs_readbacks = 0;
+  out.pcs_readbacks = out.views_exhaustive = 0;
   const auto t_total = Clock::now();
 
   auto t0 = Clock::now();
@@ -310,6 +310,7 @@ void Detector::detect(const std::vector<const Object*>& object_ptrs, const Detec
       out.triangles_indexed += one.triangles_indexed;
       out.shape_uploads += one.shape_uploads;
       if (one.exhaustive) {  // the stage could not resolve the view: every couple of boxes
+        ++out.views_exhaustive;
         t0 = Clock::now();
         box_overlap_pairs(ma, s.tris[0], mb, s.tris[1], s.direct);
         out.timings.cpu += ms_since(t0);

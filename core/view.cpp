@@ -1,6 +1,7 @@
 #include "peelcd/core/view.h"
 
 #include <Eigen/Geometry>
+#include <algorithm>
 #include <cmath>
 #include <limits>
 #include <stdexcept>
@@ -61,7 +62,11 @@ RoiView make_roi_view(const Aabb& roi, const ViewFrame& frame, int resolution, d
 
 RoiView make_padded_roi_view(const Aabb& roi, const Aabb& a, const Aabb& b, const ViewFrame& frame, int resolution) {
   const double scale = std::max(a.extent().norm(), b.extent().norm());
-  const double floor = 1e-6 * scale + std::numeric_limits<double>::min();
+  // Also a few ulps of the coordinates' magnitude: two boxes that are one point far from the
+  // origin (zero-area triangles at the same place) still get a box with extent.
+  const double magnitude = std::max({roi.lo.cwiseAbs().maxCoeff(), roi.hi.cwiseAbs().maxCoeff(), 1e-300});
+  const double floor = std::max(1e-6 * scale + std::numeric_limits<double>::min(),
+                                64.0 * std::numeric_limits<double>::epsilon() * magnitude);
   const RoiView tight = make_roi_view(roi, frame, resolution, floor);
   return make_roi_view(roi, frame, resolution, floor + kRoiPadTexels * tight.texel());
 }

@@ -130,6 +130,8 @@ struct FrameResult {
                                         // shape: only indices uploaded
   std::size_t shape_uploads = 0;        // rigid shapes uploaded (once each; 0 in steady state)
   std::size_t pcs_readbacks = 0;        // PCS lists read back (none when a ROI's count is 0)
+  std::size_t views_exhaustive = 0;     // conservative views no k-buffer could hold: their
+                                        // triangles' box-overlapping couples went to the exact test
   std::string renderer;           // GL_RENDERER of the context that ran it
 };
 
