@@ -546,6 +546,7 @@ int run_bench(const BenchArgs& a) {
   // epsilon): the default of 0.2.0, three views along the world axes.
   DetectOptions point = base;
   point.conservative = false;
+  point.ids = IdMode::ring;
   point.theta = point.phi = point.roll = 0.0;
   point.views = 3;
   configs.push_back({"peelcd point sampling, 3 views", "point 3v", point});
@@ -815,7 +816,7 @@ const CLI::Validator kNonNegative = finite_number([](double v) { return v >= 0.0
 void add_frame_options(CLI::App* c, DetectArgs& d) {
   c->add_option("--res", d.res, "Forced N x N texture per ROI (default: share a 512^2 budget)")
       ->check(kPositive);
-  c->add_option("--ids", d.ids, "Triangle ID mode: ring (last vertex, whole one-ring; default), paper (last-vertex IDs, T(v) sets) or unique");
+  c->add_option("--ids", d.ids, "Triangle ID mode: unique (each triangle its own; default), ring (last vertex, whole one-ring: better for point sampling) or paper (last-vertex IDs, T(v) sets)");
   c->add_option("--peel", d.peel, "Peel mode: full (every surface; default) or alternate (the paper's)");
   c->add_option("--peeler", d.peeler, "How layers are made: abuffer (one draw into a per-texel k-buffer of fragments; default) "
                                       "or multipass (one draw per layer); the same layers either way");
@@ -863,11 +864,13 @@ std::vector<std::pair<std::string, DetectOptions>> class_configs() {
   out.emplace_back("paper", paper_options());
   DetectOptions old;  // the point-sampling default before conservative mode (0.2.0)
   old.conservative = false;
+  old.ids = IdMode::ring;
   old.theta = old.phi = old.roll = 0.0;
   old.views = 3;
   out.emplace_back("point, axis frame, 3 views", old);
   DetectOptions point;
   point.conservative = false;
+  point.ids = IdMode::ring;
   point.views = 3;
   out.emplace_back("point, generic frame, 3 views", point);
   out.emplace_back("default (conservative)", DetectOptions{});

@@ -52,11 +52,12 @@ inline Score score(const std::vector<std::uint64_t>& exact, const std::vector<Co
 }
 
 // The point-sampling configuration the pipeline tests were written for (the default before
-// conservative mode): DetectOptions with conservative = false, the paper's frame (theta = phi =
-// roll = 0) and three fused views.
+// conservative mode): DetectOptions with conservative = false, ring IDs, the paper's frame
+// (theta = phi = roll = 0) and three fused views.
 inline DetectOptions point_sampling() {
   DetectOptions o;
   o.conservative = false;
+  o.ids = IdMode::ring;
   o.theta = o.phi = o.roll = 0.0;
   o.views = 3;
   return o;

@@ -46,7 +46,10 @@ struct DetectOptions {
   // form a PCS. No colliding pair can be missed at any resolution; epsilon, slope, ids' loss and
   // the peel mode do not apply (every fragment is a layer). One view suffices.
   bool conservative = true;
-  IdMode ids = IdMode::ring;
+  // unique: each fragment names its own triangle. With conservative coverage no neighbour has to
+  // be recovered, so the PCS are the candidates (508 against ring IDs' 6,051 on the default
+  // scene, no miss either way). Point sampling misses less with ring IDs (--ids ring).
+  IdMode ids = IdMode::unique;
   double epsilon = 0.0;  // PCS depth threshold, world units; 0 = one texel of the ROI tile
                         // (of the culled region's tile with Cull::contact)
   PeelMode peel = PeelMode::full;  // full: no slower than alternate since the host resolve,
