@@ -2,7 +2,7 @@
 # time and a shader edit triggers a rebuild. Usage:
 #   peelcd_embed_shaders(OUT <cpp> NAMESPACE <ns> FILES <f1> <f2> ...)
 # Each file becomes `extern const char* const <stem>_<ext>` (e.g. peel_frag), plus
-# `shader_sources_hash`, an FNV-1a hash of all sources (goldens record it).
+# `shader_sources_hash`, the first 16 hex digits of the SHA-256 of all sources (goldens record it).
 set(_PEELCD_EMBED_SCRIPT ${CMAKE_CURRENT_LIST_DIR}/embed_shaders_run.cmake)
 
 function(peelcd_embed_shaders)
