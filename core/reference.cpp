@@ -27,17 +27,7 @@ Box triangle_box(const Mesh& m, std::uint32_t t) {
 std::vector<Box> triangle_boxes(const Mesh& m) {
   std::vector<Box> boxes;
   boxes.reserve(m.triangles.size());
-  for (std::uint32_t t = 0; t < m.triangles.size(); ++t) {
-    double lo[3], hi[3];
-    for (int k = 0; k < 3; ++k) {
-      lo[k] = hi[k] = m.vertices[m.triangles[t][0]][k];
-      for (int c = 1; c < 3; ++c) {
-        lo[k] = std::min(lo[k], m.vertices[m.triangles[t][c]][k]);
-        hi[k] = std::max(hi[k], m.vertices[m.triangles[t][c]][k]);
-      }
-    }
-    boxes.emplace_back(lo, hi, t);
-  }
+  for (std::uint32_t t = 0; t < m.triangles.size(); ++t) boxes.push_back(triangle_box(m, t));
   return boxes;
 }
 }  // namespace
