@@ -7,6 +7,51 @@
 
 namespace peelcd::gl {
 
+// Zeroes the k-buffer's counts and the PCS header for an n x n view and binds the buffers the
+// draw and the resolve write (both single-pass peelers).
+void GlImageStage::Impl::start_kbuffer(int n, std::uint32_t view_slots) {
+  const std::size_t texels = std::size_t(n) * std::size_t(n);
+  ensure_bare_fbo(n);
+  ensure_kbuffer(texels, view_slots);
+  const GLuint zero = 0;
+  gl.ClearNamedBufferSubData(count_buffer, GL_R32UI, 0, GLsizeiptr(texels * 4), GL_RED_INTEGER, GL_UNSIGNED_INT,
+                             &zero);
+  const PcsHeader header{0, pcs_capacity, 0, 0};
+  gl.NamedBufferSubData(pcs_buffer, 0, sizeof header, &header);
+  gl.BindBufferBase(GL_SHADER_STORAGE_BUFFER, 0, pcs_buffer);
+  gl.BindBufferBase(GL_SHADER_STORAGE_BUFFER, 1, fragment_buffer);
+  gl.BindBufferBase(GL_SHADER_STORAGE_BUFFER, 2, count_buffer);
+}
+
+// The resolve programs read the k-buffer and the drawn corners (IDs) through buffer textures.
+void GlImageStage::Impl::bind_resolve_inputs() {
+  gl.BindTextureUnit(0, count_tex);
+  gl.BindTextureUnit(1, fragment_tex);
+  for (int slot = 0; slot < 2; ++slot) {
+    gl.TextureBuffer(corner_tex[slot], GL_RGBA32UI, slot_shape[slot] ? slot_shape[slot]->vbo : vbo[slot]);
+    gl.BindTextureUnit(GLuint(2 + slot), corner_tex[slot]);
+  }
+}
+
+// With the resolve program in use: every layer read back, one dispatch per layer that writes
+// only layer k (`u_emit`), appending no PCS (`u_append`).
+void GlImageStage::Impl::capture_resolved(int n, int layers, GLint u_append, GLint u_emit, PeelResult& out) {
+  const GLuint zero4[4] = {0, 0, 0, 0};
+  gl.Uniform1i(u_append, 0);
+  ensure_layers(n);
+  gl.BindImageTexture(2, layer_tex[0], 0, GL_FALSE, 0, GL_WRITE_ONLY, GL_RGBA32UI);
+  for (int k = 0; k < layers; ++k) {
+    gl.ClearTexImage(layer_tex[0], 0, GL_RGBA_INTEGER, GL_UNSIGNED_INT, zero4);
+    gl.Uniform1i(u_emit, k);
+    gl.DispatchCompute(GLuint((n + 7) / 8), GLuint((n + 7) / 8), 1);
+    gl.MemoryBarrier(GL_TEXTURE_UPDATE_BARRIER_BIT | GL_SHADER_IMAGE_ACCESS_BARRIER_BIT);
+    std::vector<std::uint32_t>& texels = out.captured.emplace_back(std::size_t(n) * n * 4);
+    gl.GetTextureImage(layer_tex[0], 0, GL_RGBA_INTEGER, GL_UNSIGNED_INT, GLsizei(texels.size() * sizeof(std::uint32_t)),
+                       texels.data());
+  }
+  check("layer capture");
+}
+
 // Returns false if a texel had more fragments than slots or the PCS buffer overflowed (grown;
 // the caller peels again). A view whose k-buffer would exceed the largest shader storage block
 // is peeled by multi-pass instead (the same layers and PCS).
@@ -20,16 +65,7 @@ bool GlImageStage::Impl::peel_single_pass(const PeelJob& job, PeelResult& out, T
   if (view_slots == 0 || std::max(vbo_corners(0), vbo_corners(1)) > fetchable())
     return peel_multipass(job, out, t);
   const auto t_gpu = Clock::now();
-  ensure_bare_fbo(n);
-  ensure_kbuffer(texels, view_slots);
-  const GLuint zero = 0;
-  gl.ClearNamedBufferSubData(count_buffer, GL_R32UI, 0, GLsizeiptr(texels * 4), GL_RED_INTEGER, GL_UNSIGNED_INT,
-                             &zero);
-  const PcsHeader header{0, pcs_capacity, 0, 0};
-  gl.NamedBufferSubData(pcs_buffer, 0, sizeof header, &header);
-  gl.BindBufferBase(GL_SHADER_STORAGE_BUFFER, 0, pcs_buffer);
-  gl.BindBufferBase(GL_SHADER_STORAGE_BUFFER, 1, fragment_buffer);
-  gl.BindBufferBase(GL_SHADER_STORAGE_BUFFER, 2, count_buffer);
+  start_kbuffer(n, view_slots);
 
   gl.UseProgram(abuffer_program);
   set_view_uniforms(u_ab_clip, u_ab_lo, u_ab_hi, view);
@@ -57,12 +93,7 @@ bool GlImageStage::Impl::peel_single_pass(const PeelJob& job, PeelResult& out, T
   check("the k-buffer draw");
 
   gl.UseProgram(resolve_program);
-  gl.BindTextureUnit(0, count_tex);
-  gl.BindTextureUnit(1, fragment_tex);
-  for (int slot = 0; slot < 2; ++slot) {
-    gl.TextureBuffer(corner_tex[slot], GL_RGBA32UI, slot_shape[slot] ? slot_shape[slot]->vbo : vbo[slot]);
-    gl.BindTextureUnit(GLuint(2 + slot), corner_tex[slot]);
-  }
+  bind_resolve_inputs();
   gl.Uniform1f(u_rs_eps, out.epsilon_window);
   gl.Uniform1f(u_rs_slope, out.slope);
   gl.Uniform1i(u_rs_res, n);
@@ -84,22 +115,7 @@ bool GlImageStage::Impl::peel_single_pass(const PeelJob& job, PeelResult& out, T
   out.layers = int(got.max_layers);
   out.peel_passes = 1;
   out.captured.clear();
-  if (job.capture) {
-    const GLuint zero4[4] = {0, 0, 0, 0};
-    gl.Uniform1i(u_rs_append, 0);
-    ensure_layers(n);
-    gl.BindImageTexture(2, layer_tex[0], 0, GL_FALSE, 0, GL_WRITE_ONLY, GL_RGBA32UI);
-    for (int k = 0; k < out.layers; ++k) {
-      gl.ClearTexImage(layer_tex[0], 0, GL_RGBA_INTEGER, GL_UNSIGNED_INT, zero4);
-      gl.Uniform1i(u_rs_emit, k);
-      gl.DispatchCompute(GLuint((n + 7) / 8), GLuint((n + 7) / 8), 1);
-      gl.MemoryBarrier(GL_TEXTURE_UPDATE_BARRIER_BIT | GL_SHADER_IMAGE_ACCESS_BARRIER_BIT);
-      std::vector<std::uint32_t>& texels = out.captured.emplace_back(std::size_t(n) * n * 4);
-      gl.GetTextureImage(layer_tex[0], 0, GL_RGBA_INTEGER, GL_UNSIGNED_INT,
-                         GLsizei(texels.size() * sizeof(std::uint32_t)), texels.data());
-    }
-    check("layer capture");
-  }
+  if (job.capture) capture_resolved(n, out.layers, u_rs_append, u_rs_emit, out);
   t.gpu += ms_since(t_gpu);
   return read_pcs(out, t, &got);
 }
@@ -199,16 +215,7 @@ bool GlImageStage::Impl::peel_conservative(const PeelJob& job, PeelResult& out, 
     return true;
   }
   const auto t_gpu = Clock::now();
-  ensure_bare_fbo(n);
-  ensure_kbuffer(texels, view_slots);
-  const GLuint zero = 0;
-  gl.ClearNamedBufferSubData(count_buffer, GL_R32UI, 0, GLsizeiptr(texels * 4), GL_RED_INTEGER, GL_UNSIGNED_INT,
-                             &zero);
-  const PcsHeader header{0, pcs_capacity, 0, 0};
-  gl.NamedBufferSubData(pcs_buffer, 0, sizeof header, &header);
-  gl.BindBufferBase(GL_SHADER_STORAGE_BUFFER, 0, pcs_buffer);
-  gl.BindBufferBase(GL_SHADER_STORAGE_BUFFER, 1, fragment_buffer);
-  gl.BindBufferBase(GL_SHADER_STORAGE_BUFFER, 2, count_buffer);
+  start_kbuffer(n, view_slots);
 
   gl.UseProgram(cons_program);
   const std::array<float, 16> m = view.clip_from_local();
@@ -235,12 +242,7 @@ bool GlImageStage::Impl::peel_conservative(const PeelJob& job, PeelResult& out, 
   check("the conservative k-buffer draw");
 
   gl.UseProgram(cons_resolve_program);
-  gl.BindTextureUnit(0, count_tex);
-  gl.BindTextureUnit(1, fragment_tex);
-  for (int slot = 0; slot < 2; ++slot) {
-    gl.TextureBuffer(corner_tex[slot], GL_RGBA32UI, slot_shape[slot] ? slot_shape[slot]->vbo : vbo[slot]);
-    gl.BindTextureUnit(GLuint(2 + slot), corner_tex[slot]);
-  }
+  bind_resolve_inputs();
   gl.Uniform1i(u_cr_res, n);
   gl.Uniform1ui(u_cr_slots, view_slots);
   gl.Uniform1i(u_cr_append, 1);
@@ -258,22 +260,7 @@ bool GlImageStage::Impl::peel_conservative(const PeelJob& job, PeelResult& out, 
   out.layers = int(got.max_layers);
   out.peel_passes = 1;
   out.captured.clear();
-  if (job.capture) {
-    const GLuint zero4[4] = {0, 0, 0, 0};
-    gl.Uniform1i(u_cr_append, 0);
-    ensure_layers(n);
-    gl.BindImageTexture(2, layer_tex[0], 0, GL_FALSE, 0, GL_WRITE_ONLY, GL_RGBA32UI);
-    for (int k = 0; k < out.layers; ++k) {
-      gl.ClearTexImage(layer_tex[0], 0, GL_RGBA_INTEGER, GL_UNSIGNED_INT, zero4);
-      gl.Uniform1i(u_cr_emit, k);
-      gl.DispatchCompute(GLuint((n + 7) / 8), GLuint((n + 7) / 8), 1);
-      gl.MemoryBarrier(GL_TEXTURE_UPDATE_BARRIER_BIT | GL_SHADER_IMAGE_ACCESS_BARRIER_BIT);
-      std::vector<std::uint32_t>& texels_out = out.captured.emplace_back(std::size_t(n) * n * 4);
-      gl.GetTextureImage(layer_tex[0], 0, GL_RGBA_INTEGER, GL_UNSIGNED_INT,
-                         GLsizei(texels_out.size() * sizeof(std::uint32_t)), texels_out.data());
-    }
-    check("conservative layer capture");
-  }
+  if (job.capture) capture_resolved(n, out.layers, u_cr_append, u_cr_emit, out);
   t.gpu += ms_since(t_gpu);
   return read_pcs(out, t, &got);
 }

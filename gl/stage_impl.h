@@ -160,6 +160,9 @@ struct GlImageStage::Impl {
 
   // single_pass.cpp: the same contract.
   bool peel_single_pass(const PeelJob& job, PeelResult& out, Timings& t);
+  void start_kbuffer(int n, std::uint32_t view_slots);
+  void bind_resolve_inputs();
+  void capture_resolved(int n, int layers, GLint u_append, GLint u_emit, PeelResult& out);
   bool regrow(std::uint32_t max_fragments, std::size_t fitting, const PeelJob& job, PeelResult& out, Timings& t);
   // Conservative mode (shaders/conservative.*): false as peel_single_pass(); a view deeper than
   // any k-buffer that fits is marked PeelResult::exhaustive.
