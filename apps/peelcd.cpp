@@ -6,6 +6,7 @@
 // golden case handling moved into oracle/, is the open remainder of the library issue.
 #include "peelcd/core/reference.h"
 #include "peelcd/bench/peers.h"
+#include "peelcd/eval/calibrate.h"
 #include "peelcd/eval/classes.h"
 #include "peelcd/eval/scenes.h"
 #include "peelcd/eval/sweep.h"
@@ -81,7 +82,7 @@ Runner make_runner(const std::string& backend, const gl::GlOptions& options = {}
 struct DetectArgs {
   std::string scene;
   int res = 0;  // 0 = not given
-  std::string ids, peel, peeler, cull, resolve;
+  std::string ids, peel, peeler, cull, resolve, stage;
   double slope = NAN;
   double theta = NAN, phi = NAN, roll = NAN, epsilon = NAN, edge_texels = NAN;
   bool conservative = false, no_conservative = false, paper = false;
@@ -137,6 +138,7 @@ DetectOptions merged_options(const Scene& scene, const DetectArgs& a) {
   if (!a.peel.empty())
     o.peel = parsed(a.peel, parse_peel_mode, "peelcd detect: --peel: unknown peel mode", "full or alternate");
   if (!a.cull.empty()) o.cull = parsed(a.cull, parse_cull, "peelcd detect: --cull: unknown culling", "contact or box");
+  if (!a.stage.empty()) o.stage = parsed(a.stage, parse_stage, "peelcd: --stage: unknown stage", "auto, image or exact");
   if (!std::isnan(a.slope)) o.slope = a.slope;
   if (a.views) o.views = a.views;
   // --theta/--phi alone turn the paper's frame (roll 0) there, as a scene's "view" does.
@@ -212,8 +214,16 @@ int run_detect(const DetectArgs& a) {
     else
       std::printf("point sampling  view theta=%g phi=%g roll=%g  views=%d  ids=%s  peel=%s  slope=%g  cull=%s\n", opt.theta,
                   opt.phi, opt.roll, opt.views, to_string(opt.ids), to_string(opt.peel), opt.slope, to_string(opt.cull));
+    std::printf("stage %s: %zu of %zu ROIs by the exact CPU path, %zu peeled\n", to_string(opt.stage), result.rois_exact,
+                result.pairs.size(), result.pairs.size() - result.rois_exact);
     if (result.pairs.empty()) std::printf("no overlapping bounding boxes: no GL work\n");
     for (const PairResult& p : result.pairs) {
+      if (p.exact_stage) {
+        std::printf("%s x %s: exact CPU path (predicted %.3f ms; image stage %.3f ms), %zu+%zu tris in the ROI, "
+                    "%zu candidates, %zu colliding\n",
+                    objects[p.object_a].name.c_str(), objects[p.object_b].name.c_str(), p.predicted_exact_ms,
+                    p.predicted_image_ms, p.triangles_in_roi_a, p.triangles_in_roi_b, p.candidates, p.colliding.size());
+      } else
       std::printf("%s x %s: ROI %dx%d, eps %.3g, drawn %zu+%zu of %zu+%zu tris, %d layers, %zu PCS, %zu candidates, %zu colliding\n",
                   objects[p.object_a].name.c_str(), objects[p.object_b].name.c_str(), p.resolution,
                   p.resolution, p.epsilon, p.triangles_drawn_a, p.triangles_drawn_b, p.triangles_in_roi_a,
@@ -255,8 +265,11 @@ int run_detect(const DetectArgs& a) {
 }
 
 // One frame with every layer captured: the dump of `scene` under `opt` on `backend`.
-oracle::Dump capture_frame(const std::vector<Object>& objects, const DetectOptions& opt, Runner& runner) {
+// Dumps check the image stage: every ROI is peeled (Stage::image), whatever the router would do.
+oracle::Dump capture_frame(const std::vector<Object>& objects, const DetectOptions& options, Runner& runner) {
   std::vector<CapturedView> captured;
+  DetectOptions opt = options;
+  opt.stage = Stage::image;
   runner.detector->capture_layers(&captured);
   FrameResult result;
   try {
@@ -822,6 +835,9 @@ void add_frame_options(CLI::App* c, DetectArgs& d) {
                                       "or multipass (one draw per layer); the same layers either way");
   c->add_option("--cull", d.cull, "Triangles peeled per ROI: contact (only those sharing a grid cell of the ROI with the "
                                   "other object, the ROI shrunk to them; default) or box (all touching the ROI, the paper's)");
+  c->add_option("--stage", d.stage, "Per ROI: auto (the cheaper of the image stage and the exact CPU path by the "
+                                    "backend's cost model; default of detect), image (always peel) or exact (no image "
+                                    "stage: culling, box overlaps, exact test). dump always peels");
   c->add_option("--resolve", d.resolve, "Where the k-buffer becomes layers and PCS: auto (host on a software renderer such as "
                                         "llvmpipe, else gpu; default), gpu (a compute pass) or host (mapped, resolved on the CPU)");
   c->add_option("--slope", d.slope, "Slope-following epsilon, in texels (default 1; 0 = the paper's constant epsilon)")
@@ -895,6 +911,36 @@ int run_classes(const ClassesArgs& a) {
       std::fflush(stdout);
     }
   }
+  return 0;
+}
+
+struct CalibrateArgs {
+  std::string backend = "osmesa";
+  int repeat = 5;
+  std::vector<int> budgets = {128, 512};
+};
+
+int run_calibrate(const CalibrateArgs& a) {
+  Runner runner = make_runner(a.backend, gl::GlOptions{});
+  std::printf("peelcd calibrate: %s (%s); median of %d frames per stage\n", runner.backend().c_str(),
+              runner.renderer().c_str(), a.repeat);
+  const Calibration cal = calibrate(*runner.detector, PEELCD_MESHES_DIR, a.budgets, a.repeat);
+  std::printf("%-28s %9s %6s %10s %10s %9s %9s %7s\n", "scene", "triangles", "tile", "image ms", "exact ms",
+              "image cand", "exact cand", "faster");
+  for (const CalibrationRow& r : cal.rows)
+    std::printf("%-28s %9zu %6d %10.3f %10.3f %9zu %9zu %7s\n", r.scene.c_str(), r.triangles, r.tile, r.image_ms, r.exact_ms,
+                r.image_candidates, r.exact_candidates, r.image_ms < r.exact_ms ? "image" : "exact");
+  const StageCost in_image = runner.stage->cost(), in_exact = exact_path_cost();
+  std::printf("\nfitted  image: view_ms %.4f  triangle_us %.4f  texel_ns %.4f\n", cal.image.view_ms, cal.image.triangle_us,
+              cal.image.texel_ns);
+  std::printf("fitted  exact: view_ms %.4f  triangle_us %.4f\n", cal.exact.view_ms, cal.exact.triangle_us);
+  std::printf("in use  image: view_ms %.4f  triangle_us %.4f  texel_ns %.4f\n", in_image.view_ms, in_image.triangle_us,
+              in_image.texel_ns);
+  std::printf("in use  exact: view_ms %.4f  triangle_us %.4f\n", in_exact.view_ms, in_exact.triangle_us);
+  std::printf("router with the fitted models: %zu of %zu ROIs on the slower stage, %.3f ms lost of %.3f ms best\n",
+              cal.wrong_fitted, cal.rows.size(), cal.lost_ms_fitted, cal.best_ms);
+  std::printf("router with the models in use: %zu of %zu ROIs on the slower stage, %.3f ms lost of %.3f ms best\n",
+              cal.wrong_in_use, cal.rows.size(), cal.lost_ms_in_use, cal.best_ms);
   return 0;
 }
 
@@ -1018,6 +1064,16 @@ int main(int argc, char** argv) {
       ->capture_default_str();
   classes->add_option("--class", ca.only, "Only the class of this name");
 
+  CalibrateArgs cal;
+  CLI::App* calibrate_cmd = app.add_subcommand(
+      "calibrate", "Time one-ROI scenes through the image stage and the exact CPU path and fit the stage router's "
+                   "cost models (docs/performance.md, \"The stage router\")");
+  calibrate_cmd->add_option("--backend", cal.backend, "Image stage: osmesa, egl or cpu")->capture_default_str();
+  calibrate_cmd->add_option("--repeat", cal.repeat, "Frames per measurement (median)")->check(kPositive)
+      ->capture_default_str();
+  calibrate_cmd->add_option("--budgets", cal.budgets, "Texture budgets to time each scene at")
+      ->check(CLI::Range(16, 16384))->capture_default_str();
+
   try {
     app.parse(argc, argv);
   } catch (const CLI::CallForHelp& e) {
@@ -1037,6 +1093,7 @@ int main(int argc, char** argv) {
     if (*compare) return run_golden_compare(gc);
     if (*sweep) return run_sweep_command(sw);
     if (*classes) return run_classes(ca);
+    if (*calibrate_cmd) return run_calibrate(cal);
   } catch (const InputError& e) {
     std::fprintf(stderr, "error: %s\n", e.what());
     return kExitBadInput;

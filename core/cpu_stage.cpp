@@ -34,6 +34,11 @@ struct Corner {
 
 }  // namespace
 
+StageCost CpuImageStage::cost() const {
+  // Fitted by `peelcd calibrate --backend cpu` (2 cores, 2026-11-23): docs/performance.md.
+  return StageCost{0.0, 1.0, 19.2};
+}
+
 void CpuImageStage::peel(const PeelJob& job, PeelResult& out, Timings& timings) {
   out.clear();
   const auto t0 = Clock::now();

@@ -111,6 +111,34 @@ double triangles_in_view(const Mesh& mesh, const RoiView& view, const std::vecto
   return min_depth;
 }
 
+namespace {
+// Fitted by `peelcd calibrate` (2 cores, 2026-11-23; docs/performance.md): 0.34 us per kept
+// triangle, no fixed part measurable.
+constexpr double kExactViewMs = 0.0;
+constexpr double kExactTriangleUs = 0.34;
+}  // namespace
+
+StageCost exact_path_cost() {
+  // Fitted by `peelcd calibrate` (docs/performance.md, "The stage router").
+  return StageCost{kExactViewMs, kExactTriangleUs, 0.0};
+}
+
+namespace {
+// The triangles of `mesh` whose boxes touch `box` (closed), ascending.
+void triangles_touching(const Mesh& mesh, const Aabb& box, std::vector<std::uint32_t>& out) {
+  out.clear();
+  for (std::uint32_t t = 0; t < mesh.triangles.size(); ++t) {
+    const Tri& f = mesh.triangles[t];
+    const Vec3& a = mesh.vertices[f[0]];
+    const Vec3& b = mesh.vertices[f[1]];
+    const Vec3& c = mesh.vertices[f[2]];
+    const Vec3 lo = a.cwiseMin(b).cwiseMin(c), hi = a.cwiseMax(b).cwiseMax(c);
+    if ((hi.array() < box.lo.array()).any() || (lo.array() > box.hi.array()).any()) continue;
+    out.push_back(t);
+  }
+}
+}  // namespace
+
 // The frame's objects through pointers (no copy of any mesh).
 struct ObjectRefs {
   const std::vector<const Object*>& p;
@@ -125,6 +153,8 @@ struct PairPlan {
   std::size_t in_roi_a = 0, in_roi_b = 0;
   bool culled_out = false;  // one object has nothing near the other: no contact, no image work
   int tile = 0;
+  bool exact = false;  // routed to the exact CPU path
+  double predicted_image = 0.0, predicted_exact = 0.0;
   std::vector<std::uint32_t> kept_a, kept_b;
 };
 
@@ -143,6 +173,8 @@ struct Detector::Impl {
   std::vector<std::uint64_t> candidates, candidate_scratch, pcs_keys;
   IdMap map_a, map_b;
   std::vector<CapturedView>* capture = nullptr;
+  StageCost image_cost;
+  BoxScratch box_scratch;
 
   // The plans of the frame's overlapping pairs (s.object_pairs): culling, then the tiles. With
   // Cull::contact and a shared budget, each ROI asks for the side that gives its kept triangles'
@@ -162,9 +194,20 @@ struct Detector::Impl {
       p.in_roi_a = p.in_roi_b = 0;
       p.culled_out = false;
       p.tile = equal;
+      p.exact = false;
+      p.predicted_image = p.predicted_exact = 0.0;
       p.kept_a.clear();
       p.kept_b.clear();
-      if (opt.cull != Cull::contact) continue;
+      if (opt.cull != Cull::contact) {
+        if (opt.stage == Stage::image) continue;
+        // The router and the exact path need the triangles touching the ROI.
+        triangles_touching(objects[p.a].mesh, p.roi, p.kept_a);
+        triangles_touching(objects[p.b].mesh, p.roi, p.kept_b);
+        p.in_roi_a = p.kept_a.size();
+        p.in_roi_b = p.kept_b.size();
+        p.culled_out = p.kept_a.empty() || p.kept_b.empty();
+        continue;
+      }
       cull_to_contact_region(objects[p.a].mesh, objects[p.b].mesh, p.roi, cull);
       p.region = cull.box;
       p.in_roi_a = cull.stats.in_roi_a;
@@ -175,16 +218,41 @@ struct Detector::Impl {
       if (opt.resolution == 0 && !p.culled_out)
         needs.push_back(edge_tile_resolution(opt.budget, cull.box, cull.median_edge, opt.edge_texels));
     }
-    if (opt.cull != Cull::contact || opt.resolution > 0) return;
-    allocate_tiles(opt.budget, needs, tiles);
-    std::size_t next = 0;
-    for (std::size_t i = 0; i < pairs.size(); ++i)
-      if (!plans[i].culled_out) plans[i].tile = tiles[next++];
+    if (opt.cull == Cull::contact && opt.resolution == 0) {
+      allocate_tiles(opt.budget, needs, tiles);
+      std::size_t next = 0;
+      for (std::size_t i = 0; i < pairs.size(); ++i)
+        if (!plans[i].culled_out) plans[i].tile = tiles[next++];
+    }
+    route(opt);
+  }
+
+  // The stage router: each ROI to the exact CPU path or the image stage, by the stage's cost
+  // model against the exact path's (both linear in the triangles kept, the image stage also in
+  // the tile's texels and per view). Deterministic: the models are constants, not timings.
+  void route(const DetectOptions& opt) {
+    if (opt.stage == Stage::image) return;
+    const StageCost exact = exact_path_cost();
+    const StageCost image = image_cost;
+    const double views = double(opt.views);
+    for (std::size_t i = 0; i < object_pairs.size(); ++i) {
+      PairPlan& p = plans[i];
+      if (p.culled_out) continue;
+      if (opt.stage == Stage::exact) {
+        p.exact = true;
+        continue;
+      }
+      const double n = double(p.kept_a.size() + p.kept_b.size());
+      p.predicted_exact = exact.predict_ms(n, 0.0);
+      p.predicted_image = views * image.predict_ms(n, double(p.tile) * double(p.tile));
+      p.exact = p.predicted_exact <= p.predicted_image;
+    }
   }
 };
 
 Detector::Detector(std::shared_ptr<ImageStage> stage) : stage_(std::move(stage)), impl_(std::make_unique<Impl>()) {
   if (!stage_) throw std::invalid_argument("peelcd::Detector: no image stage");
+  impl_->image_cost = stage_->cost();
 }
 Detector::~Detector() = default;
 
@@ -215,7 +283,7 @@ void Detector::detect(const std::vector<const Object*>& object_ptrs, const Detec
   // `out` is reused: its vectors keep their capacity (tests/alloc/test_alloc.cpp counts it).
   out.timings = Timings{};
   out.gl_passes = out.rois_peeled = out.triangles_uploaded = out.triangles_indexed = out.shape_uploads = 0;
-  out.pcs_readbacks = out.views_exhaustive = 0;
+  out.pcs_readbacks = out.views_exhaustive = out.rois_exact = 0;
   const auto t_total = Clock::now();
 
   auto t0 = Clock::now();
@@ -225,11 +293,7 @@ void Detector::detect(const std::vector<const Object*>& object_ptrs, const Detec
   const auto& pairs = s.object_pairs;
   out.timings.aabb = ms_since(t0);
 
-  FrameScope scope;
-  if (!pairs.empty()) {
-    stage.begin_frame();
-    scope.stage = &stage;
-  }
+  FrameScope scope;  // the stage's frame begins at the first ROI it peels
   const std::string& renderer = stage.renderer();
   if (out.renderer != renderer) out.renderer = renderer;
   t0 = Clock::now();
@@ -258,9 +322,28 @@ void Detector::detect(const std::vector<const Object*>& object_ptrs, const Detec
     r.resolution = plan.tile;
     r.epsilon = 0.0;
     r.a_first = false;
+    r.exact_stage = plan.exact;
+    r.predicted_image_ms = plan.predicted_image;
+    r.predicted_exact_ms = plan.predicted_exact;
     if (plan.culled_out) continue;  // no triangle of one object near the other: no contact
     const Mesh& ma = objects[ia].mesh;
     const Mesh& mb = objects[ib].mesh;
+    if (plan.exact) {  // the exact CPU path: every couple of kept triangles whose boxes overlap
+      t0 = Clock::now();
+      r.resolution = 0;
+      s.candidates.clear();
+      box_overlap_pairs(ma, plan.kept_a, mb, plan.kept_b, s.candidates, &s.box_scratch);
+      sort_unique_pairs(s.candidates, s.candidate_scratch);
+      r.candidates = s.candidates.size();
+      narrow_phase(ma, mb, s.candidates, r.colliding);
+      ++out.rois_exact;
+      out.timings.cpu += ms_since(t0);
+      continue;
+    }
+    if (!scope.stage) {
+      stage.begin_frame();
+      scope.stage = &stage;
+    }
     const std::vector<std::uint32_t>* only_a = opt.cull == Cull::contact ? &plan.kept_a : nullptr;
     const std::vector<std::uint32_t>* only_b = opt.cull == Cull::contact ? &plan.kept_b : nullptr;
     std::vector<IdPair>& all_pcs = s.pcs_all;
@@ -312,7 +395,7 @@ void Detector::detect(const std::vector<const Object*>& object_ptrs, const Detec
       if (one.exhaustive) {  // the stage could not resolve the view: every couple of boxes
         ++out.views_exhaustive;
         t0 = Clock::now();
-        box_overlap_pairs(ma, s.tris[0], mb, s.tris[1], s.direct);
+        box_overlap_pairs(ma, s.tris[0], mb, s.tris[1], s.direct, &s.box_scratch);
         out.timings.cpu += ms_since(t0);
       }
       if (s.capture) {
@@ -375,7 +458,7 @@ void Detector::for_each_view(const std::vector<Object>& objects_in, const Detect
   const std::size_t frame_count = fused_view_frames(opt, frames);
   for (std::size_t pi = 0; pi < s.object_pairs.size(); ++pi) {
     const PairPlan& plan = s.plans[pi];
-    if (plan.culled_out) continue;
+    if (plan.culled_out || plan.exact) continue;
     const std::size_t ia = plan.a, ib = plan.b;
     const std::vector<std::uint32_t>* only_a = opt.cull == Cull::contact ? &plan.kept_a : nullptr;
     const std::vector<std::uint32_t>* only_b = opt.cull == Cull::contact ? &plan.kept_b : nullptr;

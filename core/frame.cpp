@@ -25,6 +25,22 @@ std::optional<Cull> parse_cull(const std::string& text) {
   return std::nullopt;
 }
 
+const char* to_string(Stage stage) {
+  switch (stage) {
+    case Stage::image: return "image";
+    case Stage::exact: return "exact";
+    case Stage::automatic: break;
+  }
+  return "auto";
+}
+
+std::optional<Stage> parse_stage(const std::string& text) {
+  if (text == "image") return Stage::image;
+  if (text == "exact") return Stage::exact;
+  if (text == "auto" || text == "automatic") return Stage::automatic;
+  return std::nullopt;
+}
+
 std::size_t fused_view_frames(const DetectOptions& o, ViewFrame out[3]) {
   const ViewFrame f = view_frame(o.theta, o.phi, o.roll);
   out[0] = f;
@@ -60,6 +76,7 @@ DetectOptions paper_options() {
   o.views = 1;
   o.cull = Cull::box;
   o.edge_texels = 0.0;
+  o.stage = Stage::image;
   return o;
 }
 

@@ -45,9 +45,19 @@ std::vector<std::uint64_t> exact_colliding_pairs(const Mesh& a, const Mesh& b) {
   return out;
 }
 
+struct BoxScratch::Impl {
+  std::vector<Box> a, b;
+};
+BoxScratch::BoxScratch() : impl(std::make_unique<Impl>()) {}
+BoxScratch::~BoxScratch() = default;
+
 void box_overlap_pairs(const Mesh& a, const std::vector<std::uint32_t>& ta, const Mesh& b,
-                       const std::vector<std::uint32_t>& tb, std::vector<std::uint64_t>& out) {
-  std::vector<Box> ba, bb;
+                       const std::vector<std::uint32_t>& tb, std::vector<std::uint64_t>& out, BoxScratch* scratch) {
+  std::vector<Box> own_a, own_b;
+  std::vector<Box>& ba = scratch ? scratch->impl->a : own_a;
+  std::vector<Box>& bb = scratch ? scratch->impl->b : own_b;
+  ba.clear();
+  bb.clear();
   ba.reserve(ta.size());
   bb.reserve(tb.size());
   for (const std::uint32_t t : ta) ba.push_back(triangle_box(a, t));

@@ -46,6 +46,7 @@ std::vector<SweepRow> run_sweep(Detector& detector, const std::vector<Object>& o
   const std::size_t total = configs.size() * directions.size();
   for (std::size_t c = 0; c < configs.size(); ++c) {
     DetectOptions opt;
+    opt.stage = Stage::image;  // a sweep measures the image stage
     opt.roll = 0.0;  // directions turn the paper's frame
     opt.conservative = configs[c].conservative;
     opt.resolution = configs[c].resolution;

@@ -53,7 +53,7 @@ Scene parse_scene(const std::string& text, const std::string& path, const std::s
     throw InputError("peelcd::load_scene(): '" + path + "': malformed JSON: " + e.what());
   }
   c.only_keys(root, "the scene", {"objects", "conservative", "view", "resolution", "budget", "ids", "epsilon", "peel", "slope", "views", "cull", "edge_texels",
-                                    "peeler", "resolve"});
+                                    "stage", "peeler", "resolve"});
   Scene scene;
   scene.path = path;
   if (!root.contains("objects")) c.fail("the scene", "missing key \"objects\"");
@@ -130,6 +130,12 @@ Scene parse_scene(const std::string& text, const std::string& path, const std::s
     const auto mode = parse_cull(cull);
     if (!mode) c.fail("cull", "unknown culling \"" + cull + "\" (expected contact or box)");
     opt.cull = *mode;
+  }
+  if (root.contains("stage")) {
+    const std::string stage = c.string(root["stage"], "stage");
+    const auto mode = parse_stage(stage);
+    if (!mode) c.fail("stage", "unknown stage \"" + stage + "\" (expected auto, image or exact)");
+    opt.stage = *mode;
   }
   if (root.contains("views")) {
     const json& j = root["views"];

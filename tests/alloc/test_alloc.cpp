@@ -56,9 +56,12 @@ TEST_CASE("a steady stream of frames allocates nothing", "[alloc]") {
     for (std::size_t i = 0; i < small.vertices.size(); ++i)  // a deforming object: new vertices
       objects[1].mesh.vertices[i] = small.vertices[i] * (1.0 + 0.02 * phase);
   };
-  for (Peeler peeler : {Peeler::abuffer, Peeler::multipass}) {
+  // Both peelers through the image stage, and the exact CPU path (Stage::exact).
+  for (const auto& [peeler, stage] : {std::pair{Peeler::abuffer, Stage::image}, std::pair{Peeler::multipass, Stage::image},
+                                      std::pair{Peeler::abuffer, Stage::exact}}) {
     pipeline.set_gl_options({peeler});
     DetectOptions opt;
+    opt.stage = stage;
     opt.resolution = 128;
     FrameResult result;
     for (int f = 0; f < 5; ++f) {  // warm-up: one period; buffers grow to their working size
@@ -71,7 +74,7 @@ TEST_CASE("a steady stream of frames allocates nothing", "[alloc]") {
       before = g_allocations.load();
       pipeline.detect(objects, opt, result);
       after = g_allocations.load();
-      INFO("peeler " << to_string(peeler) << ", frame " << f);
+      INFO("peeler " << to_string(peeler) << ", stage " << to_string(stage) << ", frame " << f);
       CHECK(after - before == 0);
       REQUIRE(result.pairs.size() == 2);
       contacts += result.pairs[0].colliding.size() + result.pairs[1].colliding.size();

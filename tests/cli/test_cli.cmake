@@ -32,8 +32,16 @@ expect("max-miss needs check" 2 "requires --check" detect ${scene} --max-miss 1)
 expect("contradicting flags" 2 "contradict" detect ${scene} --conservative --no-conservative)
 expect("conservative is the default" 0 "^[^\n]*\n?conservative  view theta=31 phi=51 roll=30" detect ${scene})
 
+# The stage router: auto (default) sends this ROI to the exact CPU path on llvmpipe (its cost
+# model predicts it cheaper); image and exact force one; both find all 228 pairs.
+expect("stage auto is the default" 0 "stage auto: 1 of 1 ROIs by the exact CPU path" detect ${scene})
+expect("stage image" 0 "stage image: 0 of 1 ROIs by the exact CPU path.*check: 228 exact pairs, 0 missed" detect ${scene} --stage image --check)
+expect("stage exact" 0 "exact CPU path \\(predicted.*check: 228 exact pairs, 0 missed" detect ${scene} --stage exact --check)
+expect("stage exact, paper config" 0 "check: 228 exact pairs, 0 missed" detect ${scene} --paper --stage exact --check)
+expect("unknown stage" 2 "--stage: unknown stage \"fast\"" detect ${scene} --stage fast)
+
 # JSON report
-expect("json report" 0 "" detect ${scene} --res 128 --json ${WORK}/out.json --quiet)
+expect("json report" 0 "" detect ${scene} --res 128 --stage image --json ${WORK}/out.json --quiet)
 file(READ ${WORK}/out.json report)
 string(JSON npairs LENGTH "${report}" pairs)
 string(JSON ncolliding LENGTH "${report}" pairs 0 colliding)
@@ -63,8 +71,8 @@ expect("unknown culling in scene" 2 "cull: unknown culling \"fancy\"" detect ${W
 expect("box culling, host resolve" 0 "cull=box" detect ${scene} --res 64 --cull box --resolve host --check)
 expect("two fused views" 0 "views=2 .*exact reference: 228 pairs" detect ${scene} --res 64 --views 2 --check)
 expect("four fused views" 2 "--views" detect ${scene} --views 4)
-expect("tile by the median edge" 0 "ROI 160x160.*exact reference: 228 pairs; found 228" detect ${scene} --check)
-expect("tile from the budget" 0 "ROI 512x512" detect ${scene} --edge-texels 0)
+expect("tile by the median edge" 0 "ROI 160x160.*exact reference: 228 pairs; found 228" detect ${scene} --stage image --check)
+expect("tile from the budget" 0 "ROI 512x512" detect ${scene} --stage image --edge-texels 0)
 expect("negative edge texels" 2 "--edge-texels: Value -2 is negative" detect ${scene} --edge-texels -2)
 # A NaN or infinite option is refused, not read as "not given" (CLI11's own checks let NaN pass).
 expect("NaN slope" 2 "--slope: Value nan is not a finite number" detect ${scene} --slope nan)

@@ -33,6 +33,7 @@ TEST_CASE("conservative mode misses nothing on any class of geometry (CPU stage)
   for (const GeometryClass& g : geometry_classes(10)) {
     for (const int res : {0, 16, 64}) {  // 0: the default budget, shared by need
       DetectOptions opt;  // the default: conservative
+      opt.stage = Stage::image;  // the image stage is what this checks
       REQUIRE(opt.conservative);
       opt.resolution = res;
       const ClassRow r = measure_class(cpu_detector(), g, "conservative", opt, 1);
@@ -49,11 +50,13 @@ TEST_CASE("the crowded grid shares the budget by need", "[conservative][classes]
   const GeometryClass& grid = classes.back();
   REQUIRE(grid.objects.size() == 144);
   FrameResult f;
-  cpu_detector().detect(grid.objects, DetectOptions{}, f);
+  DetectOptions image;
+  image.stage = Stage::image;
+  cpu_detector().detect(grid.objects, image, f);
   long texels = 0;
   for (const PairResult& p : f.pairs) texels += long(p.resolution) * p.resolution;
   CHECK(texels <= 512L * 512L);  // the budget holds
-  const ClassRow r = measure_class(cpu_detector(), grid, "default", DetectOptions{}, 1);
+  const ClassRow r = measure_class(cpu_detector(), grid, "default", image, 1);
   CHECK(r.exact > 1000);
   CHECK(r.missed == 0);
 }

@@ -60,6 +60,7 @@ inline DetectOptions point_sampling() {
   o.ids = IdMode::ring;
   o.theta = o.phi = o.roll = 0.0;
   o.views = 3;
+  o.stage = Stage::image;  // these tests check the image stage, not the router
   return o;
 }
 

@@ -23,6 +23,7 @@ TEST_CASE("OSMesa and EGL (llvmpipe) in one process give identical PCS and conta
   for (const auto& [theta, phi] : std::vector<std::pair<double, double>>{{0, 0}, {45, 30}, {200, -40}}) {
     for (PeelMode peel : {PeelMode::alternate, PeelMode::full}) {
       DetectOptions opt;
+      opt.stage = Stage::image;  // the image stage is what this checks
       opt.theta = theta;
       opt.phi = phi;
       opt.resolution = 128;

@@ -29,6 +29,7 @@ TEST_CASE("bunny vs dragon: the exact reference finds docs/design.md's 228 pairs
 
 TEST_CASE("bunny vs dragon at 256^2, paper IDs: no false contact, miss ratio under 15% per view", "[bunny_dragon]") {
   DetectOptions opt;  // one view, full peeling, slope-following epsilon, the paper's IDs
+  opt.stage = Stage::image;  // the image stage is what this checks
   opt.resolution = 256;
   opt.ids = IdMode::paper;
   opt.peel = PeelMode::full;
@@ -50,6 +51,7 @@ TEST_CASE("bunny vs dragon at 256^2, paper IDs: no false contact, miss ratio und
 
 TEST_CASE("bunny vs dragon: the paper's mode is reported, and full peeling's PCS contain it", "[bunny_dragon]") {
   DetectOptions paper;
+  paper.stage = Stage::image;  // the image stage is what this checks
   paper.resolution = 256;
   paper.ids = IdMode::paper;
   paper.peel = PeelMode::alternate;
@@ -75,6 +77,7 @@ TEST_CASE("bunny vs dragon: the paper's mode is reported, and full peeling's PCS
 
 TEST_CASE("bunny vs dragon: fused views only add PCS, one view to two to three", "[bunny_dragon]") {
   DetectOptions opt;  // the default configuration at 128^2
+  opt.stage = Stage::image;  // the image stage is what this checks
   opt.resolution = 128;
   for (const auto& [theta, phi] : kViews) {
     opt.theta = theta;

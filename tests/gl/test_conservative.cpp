@@ -17,6 +17,7 @@ TEST_CASE("conservative mode misses nothing on any class of geometry", "[conserv
   for (const GeometryClass& g : geometry_classes(10)) {
     for (const int res : {0, 16, 64}) {
       DetectOptions opt;
+      opt.stage = Stage::image;  // the image stage is what this checks
       REQUIRE(opt.conservative);
       opt.resolution = res;
       const ClassRow r = measure_class(test_pipeline().detector(), g, "conservative", opt, 1);
@@ -32,6 +33,7 @@ TEST_CASE("conservative mode: the GPU resolve and the host resolve give the same
   const std::vector<GeometryClass> classes = geometry_classes(3);
   for (const GeometryClass& g : classes) {
     DetectOptions opt;
+    opt.stage = Stage::image;  // the image stage is what this checks
     opt.resolution = 64;
     std::vector<FrameResult> runs;
     for (const Resolve r : {Resolve::host, Resolve::gpu}) {
@@ -84,6 +86,7 @@ TEST_CASE("a conservative view no k-buffer can hold goes to the exact CPU path",
     }
   }
   DetectOptions opt;
+  opt.stage = Stage::image;  // the image stage is what this checks
   opt.resolution = 1024;
   const FrameResult f = test_pipeline().detect({{"a", a, {}}, {"b", b, {}}}, opt);
   REQUIRE(f.pairs.size() == 1);

@@ -20,6 +20,7 @@ TEST_CASE("the CPU image stage gives the GL stage's PCS on the default scene, vi
   Detector cpu(std::make_shared<CpuImageStage>());
   std::vector<CapturedView> gl_views, cpu_views;
   DetectOptions opt;  // the default configuration
+  opt.stage = Stage::image;  // the image stage is what this checks
   test_pipeline().capture_layers(&gl_views);
   const FrameResult g = test_pipeline().detect(scene, opt);
   test_pipeline().capture_layers(nullptr);
@@ -85,6 +86,7 @@ TEST_CASE("the GL stage shares ownership of its context and gives the caller's c
     counting.reset();  // the caller lets go: the pipeline keeps the context alive
     REQUIRE_FALSE(alive.expired());
     DetectOptions opt;
+    opt.stage = Stage::image;  // the image stage is what this checks
     opt.resolution = 64;
     const FrameResult r = pipeline.detect(objects, opt);
     CHECK_FALSE(r.pairs.at(0).colliding.empty());
@@ -108,6 +110,7 @@ TEST_CASE("an OSMesa context the caller had current is current again after a fra
   const std::vector<Object> objects = {{"a", make_uv_sphere(Vec3(0, 0, 0), 1.0, 8, 16), {}},
                                        {"b", make_uv_sphere(Vec3(1.2, 0.3, 0.1), 0.8, 8, 16), {}}};
   DetectOptions opt;
+  opt.stage = Stage::image;  // the image stage is what this checks
   opt.resolution = 32;
   test_pipeline().detect(objects, opt);
   CHECK(OSMesaGetCurrentContext() == mine);

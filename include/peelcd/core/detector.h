@@ -47,6 +47,10 @@ void validate_options(const DetectOptions& options, int max_resolution);
 double triangles_in_view(const Mesh& mesh, const RoiView& view, const std::vector<std::uint32_t>* only,
                          std::vector<std::uint32_t>& out);
 
+// The exact CPU path's cost model for the stage router (view_ms + triangle_us per kept
+// triangle), fitted by `peelcd calibrate` on the machine docs/performance.md names.
+StageCost exact_path_cost();
+
 class Detector {
  public:
   // The detector shares ownership of its stage (a GL stage owns its context in turn).

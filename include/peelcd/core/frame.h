@@ -25,6 +25,16 @@ enum class Cull { box, contact };
 const char* to_string(Cull cull);
 std::optional<Cull> parse_cull(const std::string& text);
 
+// Which stage tests a ROI (pair of objects whose boxes overlap). image: the image stage (peeled
+// layers -> PCS -> exact test of their candidates). exact: the exact CPU path (the same culling,
+// then every couple of kept triangles whose boxes overlap, CGAL box_intersection_d, then the
+// exact test): no GL work. automatic: per ROI, whichever a cost model calibrated for the image
+// stage's backend (ImageStage::cost()) predicts cheaper (docs/performance.md, "The stage
+// router"). The exact path is exact: routing to it never loses a contact.
+enum class Stage { image, exact, automatic };
+const char* to_string(Stage stage);
+std::optional<Stage> parse_stage(const std::string& text);
+
 // Defaults chosen on the per-class accuracy measurements of docs/accuracy.md and the benchmarks
 // of docs/performance.md. The paper's own configuration (paper_options()) is conservative =
 // false, theta = phi = roll = 0, ids = paper, peel = alternate, slope = 0, views = 1, cull = box.
@@ -68,6 +78,9 @@ struct DetectOptions {
   // (edge_tile_resolution()): a contact between large triangles needs fewer texels than its
   // share of the budget. 0 = always the share. Chosen on docs/performance.md's measurements.
   double edge_texels = 12.0;
+  // Per ROI: image stage, exact CPU path, or the cheaper of the two by the cost model. Dumps,
+  // goldens and sweeps set Stage::image (they check the image stage).
+  Stage stage = Stage::automatic;
 };
 
 // The paper's configuration (ISVC 2007): alternate peeling of every triangle in the ROI box,
@@ -113,6 +126,9 @@ struct PairResult {
   std::size_t pcs_count = 0;               // distinct ID pairs read back
   std::vector<IdPair> pcs;                 // those pairs (ID of A, ID of B), sorted
   std::size_t candidates = 0;              // distinct triangle pairs tested on the CPU
+  bool exact_stage = false;                // tested by the exact CPU path (no image work)
+  // The stage router's predictions for this ROI, milliseconds (0 when it did not route).
+  double predicted_image_ms = 0.0, predicted_exact_ms = 0.0;
   std::vector<Contact> colliding;          // sorted by (tri_a, tri_b)
 };
 
@@ -135,6 +151,7 @@ struct FrameResult {
   std::size_t pcs_readbacks = 0;        // PCS lists read back (none when a ROI's count is 0)
   std::size_t views_exhaustive = 0;     // conservative views no k-buffer could hold: their
                                         // triangles' box-overlapping couples went to the exact test
+  std::size_t rois_exact = 0;           // ROIs the exact CPU path tested (Stage::exact, or routed)
   std::string renderer;           // GL_RENDERER of the context that ran it
 };
 

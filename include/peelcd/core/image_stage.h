@@ -65,6 +65,18 @@ struct PeelResult {
   }
 };
 
+// What one ROI view costs this stage, for the stage router (Stage::automatic): predicted
+// milliseconds = view_ms + triangle_us / 1e3 * triangles drawn + texel_ns / 1e6 * texels of the
+// tile, per view. Calibrated per backend with `peelcd calibrate` (docs/performance.md).
+struct StageCost {
+  double view_ms = 0.0;
+  double triangle_us = 0.0;
+  double texel_ns = 0.0;
+  double predict_ms(double triangles, double texels) const {
+    return view_ms + triangle_us * 1e-3 * triangles + texel_ns * 1e-6 * texels;
+  }
+};
+
 class ImageStage {
  public:
   virtual ~ImageStage() = default;
@@ -72,6 +84,7 @@ class ImageStage {
   virtual const std::string& renderer() const = 0;  // GL_RENDERER, or a description of the CPU model
   virtual const std::string& version() const = 0;   // GL_VERSION, or the CPU model's version
   virtual int max_resolution() const = 0;    // the largest N of an N x N view
+  virtual StageCost cost() const = 0;        // the router's model of this stage
   // Bracket the jobs of one frame (a GL stage makes its context current in begin_frame() and
   // gives the caller's current context back in end_frame()).
   virtual void begin_frame() {}

@@ -3,6 +3,7 @@
 // the exact triangle test of narrow_phase.h. It defines nCTP and the miss ratio.
 #include "peelcd/core/narrow_phase.h"
 
+#include <memory>
 #include <vector>
 
 namespace peelcd {
@@ -12,8 +13,18 @@ std::vector<std::uint64_t> exact_colliding_pairs(const Mesh& a, const Mesh& b);
 
 // Appends pack_pair(triA, triB) for every triangle of `ta` (of A) and of `tb` (of B) whose
 // closed boxes overlap: the candidates of the exact CPU path (no image stage).
+// With `scratch`, the boxes' storage is kept there from call to call (a frame loop allocates
+// nothing once it has grown).
+class BoxScratch {
+ public:
+  BoxScratch();
+  ~BoxScratch();
+  struct Impl;
+  std::unique_ptr<Impl> impl;
+};
 void box_overlap_pairs(const Mesh& a, const std::vector<std::uint32_t>& ta, const Mesh& b,
-                       const std::vector<std::uint32_t>& tb, std::vector<std::uint64_t>& out);
+                       const std::vector<std::uint32_t>& tb, std::vector<std::uint64_t>& out,
+                       BoxScratch* scratch = nullptr);
 
 // Reported contacts against the exact set: every miss and every false contact counts.
 struct Score {

@@ -39,6 +39,9 @@ class GlImageStage final : public ImageStage {
   const std::string& renderer() const override;  // GL_RENDERER
   const std::string& version() const override;   // GL_VERSION
   int max_resolution() const override;           // GL_MAX_TEXTURE_SIZE
+  // The router's model: one for GL on the CPU (llvmpipe, lavapipe), one for a GPU
+  // (docs/performance.md, "The stage router").
+  StageCost cost() const override;
   void begin_frame() override;
   void end_frame() noexcept override;
   void peel(const PeelJob& job, PeelResult& out, Timings& timings) override;
