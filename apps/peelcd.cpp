@@ -36,6 +36,7 @@
 #include <fstream>
 #include <iostream>
 #include <memory>
+#include <thread>
 #include <unistd.h>
 
 namespace {
@@ -395,10 +396,12 @@ struct Progress {
 
 // ---- dynamic scenes and benchmarks ----
 
-std::unique_ptr<Sequence> make_sequence(const std::string& name, std::size_t frames, bool rigid = true) {
+std::unique_ptr<Sequence> make_sequence(const std::string& name, std::size_t frames, bool rigid = true,
+                                        std::size_t objects = 200) {
   if (name == "test1") return make_test1(PEELCD_MESHES_DIR, frames, rigid);
   if (name == "test2") return make_test2(PEELCD_MESHES_DIR, frames, rigid);
-  throw InputError("peelcd: unknown test scene \"" + name + "\" (expected test1 or test2)");
+  if (name == "crowd") return make_crowd(objects, frames, rigid);
+  throw InputError("peelcd: unknown test scene \"" + name + "\" (expected test1, test2 or crowd)");
 }
 
 // The paper's Tables 1 and 2 (GeForce 7900GTX): nCTP, AABB, GPU, readback, CPU, total per phase.
@@ -434,24 +437,25 @@ Score score_frame(const FrameResult& r, const bench::PeerFrame& exact) {
 struct SimArgs {
   std::string test;
   std::size_t frames = 40;
+  std::size_t objects = 200;  // crowd
   bool no_rigid = false;
   DetectArgs detect;
   std::string csv;
 };
 
 int run_simulate(const SimArgs& a) {
-  const auto seq = make_sequence(a.test, a.frames, !a.no_rigid);
+  const auto seq = make_sequence(a.test, a.frames, !a.no_rigid, a.objects);
   Scene defaults;
   const DetectOptions opt = merged_options(defaults, a.detect);
   Runner runner = make_runner(a.detect.backend, merged_gl_options(Scene{}, a.detect.peeler, a.detect.resolve));
   std::vector<Object> objects;
-  std::string csv = "frame,phase,triangles,rois,rois_peeled,triangles_uploaded,triangles_indexed,shape_uploads,gl_passes,pcs_readbacks,nctp,found,"
+  std::string csv = "frame,phase,triangles,rois,rois_exact,rois_peeled,triangles_uploaded,triangles_indexed,shape_uploads,gl_passes,pcs_readbacks,nctp,found,"
                     "false_contacts,aabb_ms,upload_ms,gpu_ms,readback_ms,cpu_ms,total_ms\n";
   std::printf("peelcd simulate %s: %zu frames, %s, ids=%s peel=%s slope=%g views=%d res=%s\n", seq->name().c_str(),
               seq->frames(), runner.renderer().c_str(), to_string(opt.ids), to_string(opt.peel), opt.slope,
               opt.views, opt.resolution ? std::to_string(opt.resolution).c_str() : ("budget " + std::to_string(opt.budget)).c_str());
-  std::printf("%5s %5s %7s %5s %6s %8s %8s %6s %6s %5s %6s %6s %6s %5s %7s %8s %8s %8s %8s\n", "frame", "phase",
-              "tris", "ROIs", "peeled", "uploaded", "indexed", "shapes", "passes", "reads", "nCTP", "found", "miss%",
+  std::printf("%5s %5s %7s %5s %5s %6s %8s %8s %6s %6s %5s %6s %6s %6s %5s %7s %8s %8s %8s %8s\n", "frame", "phase",
+              "tris", "ROIs", "exact", "peeled", "uploaded", "indexed", "shapes", "passes", "reads", "nCTP", "found", "miss%",
               "false", "aabb", "gpu", "readback", "cpu", "total");
   struct PhaseSum {
     std::size_t frames = 0;
@@ -470,13 +474,13 @@ int run_simulate(const SimArgs& a) {
     for (const Object& o : objects) tris += o.mesh.triangles.size();
     const Timings& t = r.timings;
     const int ph = seq->phase(f);
-    std::printf("%5zu %5c %7zu %5zu %6zu %8zu %8zu %6zu %6zu %5zu %6zu %6zu %5.1f%% %5zu %7.3f %8.2f %8.3f %8.2f %8.2f\n",
-                f, char('a' + ph), tris, r.pairs.size(), r.rois_peeled, r.triangles_uploaded, r.triangles_indexed,
+    std::printf("%5zu %5c %7zu %5zu %5zu %6zu %8zu %8zu %6zu %6zu %5zu %6zu %6zu %5.1f%% %5zu %7.3f %8.2f %8.3f %8.2f %8.2f\n",
+                f, char('a' + ph), tris, r.pairs.size(), r.rois_exact, r.rois_peeled, r.triangles_uploaded, r.triangles_indexed,
                 r.shape_uploads, r.gl_passes, r.pcs_readbacks, sc.exact, sc.found, 100.0 * sc.miss_ratio(), sc.false_contacts, t.aabb,
                 t.upload + t.gpu, t.readback, t.cpu, t.total);
     char line[512];
-    std::snprintf(line, sizeof line, "%zu,%c,%zu,%zu,%zu,%zu,%zu,%zu,%zu,%zu,%zu,%zu,%zu,%.4f,%.4f,%.4f,%.4f,%.4f,%.4f\n", f,
-                  char('a' + ph), tris, r.pairs.size(), r.rois_peeled, r.triangles_uploaded, r.triangles_indexed,
+    std::snprintf(line, sizeof line, "%zu,%c,%zu,%zu,%zu,%zu,%zu,%zu,%zu,%zu,%zu,%zu,%zu,%zu,%.4f,%.4f,%.4f,%.4f,%.4f,%.4f\n", f,
+                  char('a' + ph), tris, r.pairs.size(), r.rois_exact, r.rois_peeled, r.triangles_uploaded, r.triangles_indexed,
                   r.shape_uploads, r.gl_passes,
                   r.pcs_readbacks, sc.exact, sc.found, sc.false_contacts, t.aabb, t.upload, t.gpu, t.readback, t.cpu,
                   t.total);
@@ -491,16 +495,23 @@ int run_simulate(const SimArgs& a) {
     p.cpu += t.cpu;
     p.total += t.total;
   }
-  std::printf("\nsummary (means per phase; the paper's table beside, GeForce 7900GTX; ms)\n");
-  std::printf("%5s | %6s %6s %6s %7s %8s %7s %8s | %6s %6s %6s %8s %6s %6s\n", "", "nCTP", "found", "AABB", "GPU",
-              "readback", "CPU", "total", "nCTP", "AABB", "GPU", "readback", "CPU", "total");
-  const auto& paper = paper_table(seq->name());
+  const bool paper_scene = seq->name() == "test1" || seq->name() == "test2";
+  std::printf(paper_scene ? "\nsummary (means per phase; the paper's table beside, GeForce 7900GTX; ms)\n"
+                          : "\nsummary (means; ms)\n");
+  std::printf("%5s | %6s %6s %6s %7s %8s %7s %8s", "", "nCTP", "found", "AABB", "GPU", "readback", "CPU", "total");
+  if (paper_scene) std::printf(" | %6s %6s %6s %8s %6s %6s", "nCTP", "AABB", "GPU", "readback", "CPU", "total");
+  std::printf("\n");
   for (std::size_t i = 0; i < phases.size(); ++i) {
     const PhaseSum& p = phases[i];
     const double n = std::max<double>(1, double(p.frames));
-    std::printf("(%c)   | %6.0f %6.0f %6.3f %7.2f %8.3f %7.2f %8.2f | %6.0f %6.2f %6.2f %8.2f %6.2f %6.2f\n",
-                char('a' + i), p.nctp / n, p.found / n, p.aabb / n, p.gpu / n, p.readback / n, p.cpu / n,
-                p.total / n, paper[i][0], paper[i][1], paper[i][2], paper[i][3], paper[i][4], paper[i][5]);
+    std::printf("(%c)   | %6.0f %6.0f %6.3f %7.2f %8.3f %7.2f %8.2f", char('a' + i), p.nctp / n, p.found / n, p.aabb / n,
+                p.gpu / n, p.readback / n, p.cpu / n, p.total / n);
+    if (paper_scene) {
+      const auto& paper = paper_table(seq->name());
+      std::printf(" | %6.0f %6.2f %6.2f %8.2f %6.2f %6.2f", paper[i][0], paper[i][1], paper[i][2], paper[i][3], paper[i][4],
+                  paper[i][5]);
+    }
+    std::printf("\n");
   }
   std::printf("false contacts over all frames: %zu\n", false_total);
   if (!a.csv.empty()) write_output(a.csv, csv);
@@ -508,22 +519,59 @@ int run_simulate(const SimArgs& a) {
 }
 
 struct BenchArgs {
-  std::string scene = "test1";  // test1, test2 or a scene file
+  std::string scene = "test1";  // test1, test2, crowd or a scene file
   std::size_t frames = 12;
-  int res = -1;  // -1: 256 for a scene file; the shared 512^2 budget for test1/test2
+  std::size_t objects = 200;  // crowd
+  int res = -1;  // -1: 256 for a scene file; the shared 512^2 budget for the sequences
   std::string backend = "osmesa";
+  unsigned threads = 0;  // 0: the machine's (at most 8)
   std::string csv;
 };
+
+// Found, missed and false contacts of a peer against the exact pairs, object pair by object pair
+// (the peers' broad phases may list pairs in another order, or more of them).
+Score score_peer(const bench::PeerFrame& exact, const bench::PeerFrame& peer) {
+  Score total;
+  for (std::size_t i = 0; i < exact.objects.size(); ++i) {
+    const auto it = std::lower_bound(peer.objects.begin(), peer.objects.end(), exact.objects[i]);
+    static const std::vector<std::uint64_t> none;
+    const std::vector<std::uint64_t>& got =
+        it != peer.objects.end() && *it == exact.objects[i] ? peer.per_pair[std::size_t(it - peer.objects.begin())] : none;
+    std::vector<std::uint64_t> common;
+    std::set_intersection(exact.per_pair[i].begin(), exact.per_pair[i].end(), got.begin(), got.end(),
+                          std::back_inserter(common));
+    total.exact += exact.per_pair[i].size();
+    total.found += common.size();
+    total.missed += exact.per_pair[i].size() - common.size();
+    total.false_contacts += got.size() - common.size();
+  }
+  // Pairs the peer reported that the exact broad phase does not list: all false.
+  for (std::size_t j = 0; j < peer.objects.size(); ++j)
+    if (!std::binary_search(exact.objects.begin(), exact.objects.end(), peer.objects[j]))
+      total.false_contacts += peer.per_pair[j].size();
+  return total;
+}
 
 int run_bench(const BenchArgs& a) {
   std::unique_ptr<Sequence> seq;
   std::vector<Object> fixed;
   if (a.scene == "test1" || a.scene == "test2") {
     seq = make_sequence(a.scene, a.frames);
+  } else if (a.scene == "crowd") {
+    seq = make_crowd(a.objects, a.frames);
   } else {
+    // A scene file's objects do not move: passed as rigid at the identity pose, so that every
+    // method may keep what it builds from them (FCL its trees, the GL stage the shapes).
     fixed = load_objects(load_scene(a.scene));
+    for (Object& o : fixed) o.rigid = RigidMotion{std::make_shared<const Mesh>(o.mesh), Eigen::Affine3d::Identity()};
   }
-  Runner runner = make_runner(a.backend);
+  const unsigned hw = std::max(1u, std::min(8u, std::thread::hardware_concurrency()));
+  const unsigned threads = a.threads ? a.threads : hw;
+  // llvmpipe reads its thread count when the context is made: the same count as the peers.
+  if (a.threads) setenv("LP_NUM_THREADS", std::to_string(a.threads).c_str(), 1);
+  gl::GlOptions gl_base;
+  gl_base.workers = threads;
+  Runner runner = make_runner(a.backend, gl_base);
   if (!runner.gl) throw InputError("peelcd bench: --backend cpu: the benchmark times GL stages (use osmesa or egl)");
   if (a.res > 0 && a.res > runner.stage->max_resolution())
     throw InputError("peelcd bench: --res " + std::to_string(a.res) + " is above GL_MAX_TEXTURE_SIZE");
@@ -535,128 +583,119 @@ int run_bench(const BenchArgs& a) {
     gl::GlOptions gl;
   };
   std::vector<Config> configs;
-  DetectOptions base;
+  DetectOptions base;  // the default of detect: the router
   base.resolution = a.res >= 0 ? a.res : (seq ? 0 : 256);
-  configs.push_back({"peelcd default (conservative, 1 view)", "default", base});
-  DetectOptions box = base;
-  box.cull = Cull::box;
-  configs.push_back({"peelcd default, box culling", "box cull", box});
-  gl::GlOptions gpu_resolve;
+  gl::GlOptions gpu_resolve = gl_base;
   gpu_resolve.resolve = Resolve::gpu;
-  configs.push_back({"peelcd default, GPU resolve", "gpu rslv", base, gpu_resolve});
-  DetectOptions half = base;  // half the tile side: the texels culling saves
+  gl::GlOptions multi = gl_base;
+  multi.peeler = Peeler::multipass;
+  configs.push_back({"peelcd default (stage auto)", "default", base, gl_base});
+  DetectOptions exact = base;
+  exact.stage = Stage::exact;
+  configs.push_back({"peelcd exact CPU path (no image)", "exact", exact, gl_base});
+  DetectOptions image = base;
+  image.stage = Stage::image;
+  configs.push_back({"peelcd image stage (conservative)", "image", image, gl_base});
+  DetectOptions box = image;
+  box.cull = Cull::box;
+  configs.push_back({"peelcd image stage, box culling", "box cull", box, gl_base});
+  configs.push_back({"peelcd image stage, GPU resolve", "gpu rslv", image, gpu_resolve});
+  DetectOptions half = image;  // half the tile side: the texels culling saves
   if (half.resolution > 0)
     half.resolution = std::max(16, half.resolution / 2);
   else
     half.budget = std::max(16, half.budget / 2);
-  configs.push_back({"peelcd default, half the resolution", "half res", half});
-  if (base.resolution > 0) {  // a scene file at a forced tile: also what detect does by default
-    DetectOptions shared = base;
+  configs.push_back({"peelcd image stage, half resolution", "half res", half, gl_base});
+  if (image.resolution > 0) {  // a scene file at a forced tile: also the budget's tiles by need
+    DetectOptions shared = image;
     shared.resolution = 0;
-    configs.push_back({"peelcd default, budget, tile by edge", "edge tile", shared});
+    configs.push_back({"peelcd image stage, tiles by need", "need tile", shared, gl_base});
   }
   // Point sampling (the paper's image stage, with this project's culling, views and slope
-  // epsilon): the default of 0.2.0, three views along the world axes.
-  DetectOptions point = base;
+  // epsilon): the default of 0.2.0, three views along the world axes. Lossy: see the miss column.
+  DetectOptions point = image;
   point.conservative = false;
   point.ids = IdMode::ring;
   point.theta = point.phi = point.roll = 0.0;
   point.views = 3;
-  configs.push_back({"peelcd point sampling, 3 views", "point 3v", point});
-  gl::GlOptions multi;
-  multi.peeler = Peeler::multipass;
+  configs.push_back({"peelcd point sampling, 3 views", "point 3v", point, gl_base});
   configs.push_back({"peelcd point sampling, multi-pass", "multipass", point, multi});
-  DetectOptions three_alt = point;
-  three_alt.peel = PeelMode::alternate;
-  configs.push_back({"peelcd 3 views, alternate peeling", "3v alt", three_alt});
-  DetectOptions two = point;
-  two.views = 2;
-  configs.push_back({"peelcd 2 views, full peeling", "2v full", two});
   DetectOptions one = point;
   one.views = 1;
-  configs.push_back({"peelcd 1 view, full peeling", "1v full", one});
-  DetectOptions one_alt = one;
-  one_alt.peel = PeelMode::alternate;
-  configs.push_back({"peelcd 1 view, alternate peeling", "1v alt", one_alt});
-  DetectOptions paper = one_alt;  // the paper's pipeline: the whole overlap box, one view
+  configs.push_back({"peelcd point, 1 view, full peeling", "1v full", one, gl_base});
+  DetectOptions paper = one;  // the paper's pipeline: the whole overlap box, one view
+  paper.peel = PeelMode::alternate;
   paper.ids = IdMode::paper;
   paper.slope = 0.0;
   paper.cull = Cull::box;
-  configs.push_back({"peelcd paper config", "paper", paper});
+  configs.push_back({"peelcd paper config", "paper", paper, gl_base});
   configs.push_back({"peelcd paper config, multi-pass", "paper mp", paper, multi});
 
-  // The floors: one bare draw per view of every triangle touching the overlap box (the paper's
-  // ROI), and of the triangles contact culling keeps (what the default configurations draw);
-  // drawn along the three views, the floor of k views is the time of the first k.
-  DetectOptions floor3 = point, cfloor3 = point;
-  floor3.cull = Cull::box;
-  cfloor3.cull = Cull::contact;
-  const std::size_t methods = configs.size() + 8;  // + CGAL, FCL, six floors
+  // The floors: one bare draw of every triangle touching the overlap box (the paper's ROI), and
+  // of the triangles contact culling keeps (what the image-stage configurations draw).
+  DetectOptions floor1 = point, cfloor1 = point;
+  floor1.views = cfloor1.views = 1;
+  floor1.cull = Cull::box;
+  cfloor1.cull = Cull::contact;
+  const std::size_t cg = configs.size(), fr = cg + 1, fb = cg + 2, fl = cg + 3, cfl = cg + 4;
+  const std::size_t methods = cg + 5;
   std::vector<std::string> names;
   for (const Config& c : configs) names.push_back(c.name);
-  names.insert(names.end(), {"CGAL box_intersection_d + exact", "FCL 0.7 AABB tree built per frame",
-                             "floor: 1 bare draw x 3 views", "floor: 1 bare draw x 2 views",
-                             "floor: 1 bare draw x 1 view", "floor: culled, 1 draw x 3 views",
-                             "floor: culled, 1 draw x 2 views", "floor: culled, 1 draw x 1 view"});
+  names.insert(names.end(), {"CGAL, cropped to the overlap box", "FCL 0.7, deforming refit",
+                             "FCL 0.7, deforming rebuilt cropped", "floor: 1 bare draw, overlap box",
+                             "floor: 1 bare draw, culled"});
+  bench::FclPeer fcl_refit(bench::FclPeer::Deforming::refit, threads);
+  bench::FclPeer fcl_rebuild(bench::FclPeer::Deforming::rebuild, threads);
   std::vector<FrameResult> results(configs.size());
   std::vector<std::vector<double>> ms(methods);
   std::vector<Score> scores(methods);
   std::vector<std::vector<std::vector<double>>> phase_ms;  // [phase][method] -> frame times
   if (seq) phase_ms.assign(seq->phases(), std::vector<std::vector<double>>(methods));
-  std::string csv = "frame,method,ms,nctp,found,false_contacts\n";
+  std::string csv = "peelcd_version,frame,method,ms,nctp,found,false_contacts\n";
   std::vector<Object> objects;
   const std::size_t frames = seq ? seq->frames() : a.frames;
-  // One untimed pass over the frames first: shader compilation, rigid shapes' uploads and the
-  // growth of every buffer (k-buffer slots, PCS list) happen once, and would otherwise land on
-  // whichever configuration meets them first. The timed pass is the steady state.
+  // One untimed pass over the frames first: shader compilation, rigid shapes' uploads, FCL's
+  // trees of rigid shapes and the growth of every buffer happen once, and would otherwise land
+  // on whichever method meets them first. The timed pass is the steady state.
   for (std::size_t f = 0; f < (seq ? frames : std::min<std::size_t>(frames, 1)); ++f) {
     if (seq) seq->frame(f, objects);
+    const std::vector<Object>& obj = seq ? objects : fixed;
     for (std::size_t c = 0; c < configs.size(); ++c) {
       runner.use(configs[c].gl);
-      runner.detector->detect(seq ? objects : fixed, configs[c].opt, results[c]);
+      runner.detector->detect(obj, configs[c].opt, results[c]);
     }
+    fcl_refit.frame(obj);
+    fcl_rebuild.frame(obj);
   }
+  std::size_t rois = 0, rois_routed_exact = 0;
   Progress progress;
   for (std::size_t f = 0; f < frames; ++f) {
     if (seq) seq->frame(f, objects);
     const std::vector<Object>& obj = seq ? objects : fixed;
     // Side by side on the same frame: the exact reference first (it is the CGAL peer).
-    const bench::PeerFrame exact = bench::cgal_frame(obj);
+    const bench::PeerFrame ref = bench::cgal_frame(obj, threads);
     std::vector<double> t(methods);
     std::vector<Score> s(methods);
     for (std::size_t c = 0; c < configs.size(); ++c) {
       runner.use(configs[c].gl);
       runner.detector->detect(obj, configs[c].opt, results[c]);
       t[c] = results[c].timings.total;
-      s[c] = score_frame(results[c], exact);
+      s[c] = score_frame(results[c], ref);
     }
-    t[configs.size()] = exact.ms;
-    s[configs.size()] = Score{exact.pairs, exact.pairs, 0, 0};
-    const bench::PeerFrame fcl = bench::fcl_frame(obj);
-    t[configs.size() + 1] = fcl.ms;
-    Score fs;
-    for (std::size_t i = 0; i < exact.per_pair.size(); ++i) {
-      std::vector<std::uint64_t> common;
-      std::set_intersection(exact.per_pair[i].begin(), exact.per_pair[i].end(), fcl.per_pair[i].begin(),
-                            fcl.per_pair[i].end(), std::back_inserter(common));
-      fs.exact += exact.per_pair[i].size();
-      fs.found += common.size();
-      fs.missed += exact.per_pair[i].size() - common.size();
-      fs.false_contacts += fcl.per_pair[i].size() - common.size();
-    }
-    s[configs.size() + 1] = fs;
-    const DetectOptions* floors[2] = {&floor3, &cfloor3};
-    for (std::size_t i = 0; i < 2; ++i) {
-      std::vector<double> per_view;
-      runner.use(gl::GlOptions{});
-      bench::floor_ms(*runner.detector, *runner.gl, obj, *floors[i], &per_view);
-      for (std::size_t k = 0; k < 3; ++k) {  // 3, 2, 1 views
-        double sum = 0.0;
-        for (std::size_t v = 0; v < 3 - k; ++v) sum += per_view[v];
-        t[configs.size() + 2 + 3 * i + k] = sum;
-        s[configs.size() + 2 + 3 * i + k] = Score{exact.pairs, 0, exact.pairs, 0};
-      }
-    }
+    rois += results[0].pairs.size();
+    rois_routed_exact += results[0].rois_exact;
+    t[cg] = ref.ms;
+    s[cg] = Score{ref.pairs, ref.pairs, 0, 0};
+    const bench::PeerFrame refit = fcl_refit.frame(obj);
+    t[fr] = refit.ms;
+    s[fr] = score_peer(ref, refit);
+    const bench::PeerFrame rebuilt = fcl_rebuild.frame(obj);
+    t[fb] = rebuilt.ms;
+    s[fb] = score_peer(ref, rebuilt);
+    runner.use(gl_base);
+    t[fl] = bench::floor_ms(*runner.detector, *runner.gl, obj, floor1);
+    t[cfl] = bench::floor_ms(*runner.detector, *runner.gl, obj, cfloor1);
+    s[fl] = s[cfl] = Score{ref.pairs, 0, ref.pairs, 0};
     for (std::size_t m = 0; m < methods; ++m) {
       ms[m].push_back(t[m]);
       scores[m].exact += s[m].exact;
@@ -665,49 +704,52 @@ int run_bench(const BenchArgs& a) {
       scores[m].false_contacts += s[m].false_contacts;
       if (seq) phase_ms[seq->phase(f)][m].push_back(t[m]);
       char line[256];
-      std::snprintf(line, sizeof line, "%zu,\"%s\",%.4f,%zu,%zu,%zu\n", f, names[m].c_str(), t[m], s[m].exact,
-                    s[m].found, s[m].false_contacts);
+      std::snprintf(line, sizeof line, "%s,%zu,\"%s\",%.4f,%zu,%zu,%zu\n", PEELCD_VERSION_STRING, f, names[m].c_str(), t[m],
+                    s[m].exact, s[m].found, s[m].false_contacts);
       csv += line;
     }
     progress(f + 1, frames);
   }
-  const std::size_t cg = configs.size(), fc = cg + 1, fl = cg + 2, cfl = cg + 5;
-  // The floor of the paper's ROI with the same number of views as the configuration (the
-  // issue's floor), and the floor of the triangles the configuration draws.
-  const auto floor_of = [&](std::size_t m) { return fl + std::size_t(3 - configs[m].opt.views); };
-  const auto own_floor_of = [&](std::size_t m) {
-    if (configs[m].opt.cull == Cull::box) return floor_of(m);
-    return cfl + std::size_t(3 - configs[m].opt.views);
-  };
   std::vector<double> med(methods);
   for (std::size_t m = 0; m < methods; ++m) med[m] = median(ms[m]);
-  std::printf("peelcd bench: %s, %zu frames, %s, %s (%s), medians per frame after an untimed pass\n", a.scene.c_str(), frames,
+  // The FCL ratio is against the faster of its two ways with deforming objects.
+  const std::size_t fc = med[fr] <= med[fb] ? fr : fb;
+  std::size_t tris = 0;
+  for (const Object& o : (seq ? objects : fixed)) tris += o.mesh.triangles.size();
+  std::printf("peelcd bench: %s, %zu frames, %zu objects, %zu triangles, %s, %s (%s), medians per frame after an untimed pass\n",
+              a.scene.c_str(), frames, (seq ? objects : fixed).size(), tris,
               base.resolution ? (std::to_string(base.resolution) + "^2 per ROI").c_str()
                               : ("a " + std::to_string(base.budget) + "^2 budget shared by the ROIs").c_str(),
               runner.backend().c_str(), runner.renderer().c_str());
-  std::printf("%-36s %10s %8s %7s %8s %8s %8s %8s\n", "method", "median ms", "miss", "false", "x CGAL", "x FCL", "x floor",
-              "x own fl");
+  const char* lp = std::getenv("LP_NUM_THREADS");
+  std::printf("threads: CGAL and FCL %u (object pairs spread over them); peelcd host resolve %u lanes, llvmpipe %s, "
+              "broad phase, culling, exact path and narrow phase 1\n",
+              threads, threads, lp ? (std::string("LP_NUM_THREADS=") + lp).c_str() : "its default (one per core)");
+  std::printf("router (default row): %zu of %zu ROIs to the exact CPU path over the timed frames\n", rois_routed_exact, rois);
+  std::printf("%-36s %10s %8s %7s %8s %8s %8s\n", "method", "median ms", "miss", "false", "x CGAL", "x FCL", "x floor");
   for (std::size_t m = 0; m < methods; ++m) {
-    const bool peel = m < cg;
     const bool is_floor = m >= fl;
     std::printf("%-36s %10.2f", names[m].c_str(), med[m]);
     if (is_floor) std::printf(" %8s %7s", "-", "-");
     else std::printf(" %7.2f%% %7zu", 100.0 * scores[m].miss_ratio(), scores[m].false_contacts);
-    if (peel)
-      std::printf(" %8.2f %8.2f %8.2f %8.2f\n", med[m] / med[cg], med[m] / med[fc],
-                  med[floor_of(m)] > 0 ? med[m] / med[floor_of(m)] : 0.0,
-                  med[own_floor_of(m)] > 0 ? med[m] / med[own_floor_of(m)] : 0.0);
-    else std::printf("\n");
+    if (m < cg) {
+      const std::size_t floor = configs[m].opt.cull == Cull::box ? fl : cfl;
+      std::printf(" %8.2f %8.2f %8.2f\n", med[m] / med[cg], med[m] / med[fc], med[floor] > 0 ? med[m] / med[floor] : 0.0);
+    } else {
+      std::printf("\n");
+    }
   }
-  std::printf("(miss / false: over all frames against the exact pairs; FCL's triangle test is not exact; the floor finds nothing;\n"
-              " x floor: against the bare draw of the overlap box's triangles; x own fl: of the triangles the configuration draws)\n");
-  if (seq) {
-    std::printf("\nper phase, median ms (default = %s; paper mp = paper config, multi-pass):\n%-7s",
-                names[0].c_str(), "phase");
+  std::printf("(miss / false: over all frames against the exact pairs; FCL's triangle test is not exact; the floor finds nothing.\n"
+              " x CGAL: against the cropped CGAL peer; x FCL: against the faster FCL row (%s); x floor: against one bare\n"
+              " draw of the triangles the configuration would draw, one view. FCL trees kept: %zu (refit row), %zu (rebuilt\n"
+              " row); refits %zu; cropped per-pair trees %zu and %zu, all frames.)\n",
+              fc == fr ? "refit" : "rebuilt", fcl_refit.builds(), fcl_rebuild.builds(), fcl_refit.refits(),
+              fcl_refit.pair_builds(), fcl_rebuild.pair_builds());
+  if (seq && phase_ms.size() > 1) {
+    std::printf("\nper phase, median ms:\n%-7s", "phase");
     for (const Config& c : configs) std::printf(" %9s", c.column.c_str());
-    for (const char* peer : {"CGAL", "FCL", "floor x3", "floor x2", "floor x1", "cfloor x3", "cfloor x2", "cfloor x1"})
-      std::printf(" %9s", peer);
-    std::printf(" %9s %9s %9s\n", "dflt/CGAL", "dflt/FCL", "dflt/floor");
+    for (const char* peer : {"CGAL", "FCL refit", "FCL build", "floor", "cfloor"}) std::printf(" %9s", peer);
+    std::printf(" %9s %9s\n", "dflt/CGAL", "dflt/FCL");
     for (std::size_t p = 0; p < phase_ms.size(); ++p) {
       std::printf("(%c)    ", char('a' + p));
       if (phase_ms[p][0].empty()) {  // fewer frames than phases
@@ -716,7 +758,7 @@ int run_bench(const BenchArgs& a) {
       }
       std::vector<double> pm(methods);
       for (std::size_t m = 0; m < methods; ++m) std::printf(" %9.2f", pm[m] = median(phase_ms[p][m]));
-      std::printf(" %9.2f %9.2f %9.2f\n", pm[0] / pm[cg], pm[0] / pm[fc], pm[fl] > 0 ? pm[0] / pm[fl] : 0.0);
+      std::printf(" %9.2f %9.2f\n", pm[0] / pm[cg], pm[0] / std::min(pm[fr], pm[fb]));
     }
   }
   if (!a.csv.empty()) write_output(a.csv, csv);
@@ -1006,7 +1048,10 @@ int main(int argc, char** argv) {
       "simulate", "Run the paper's dynamic scenes (test1: a walking raptor among 40 billiard balls; test2: a "
                   "tearing cloth with 40 falling objects) and print per-frame nCTP, counters and stage times, "
                   "and a summary per phase beside the paper's Tables 1 and 2");
-  simulate->add_option("test", si.test, "test1 or test2")->required()->check(CLI::IsMember({"test1", "test2"}));
+  simulate->add_option("test", si.test, "test1, test2 or crowd (a pile of --objects balls in light contact)")
+      ->required()->check(CLI::IsMember({"test1", "test2", "crowd"}));
+  simulate->add_option("--objects", si.objects, "Balls of the crowd scene")->check(CLI::Range(2, 5000))
+      ->capture_default_str();
   simulate->add_option("--frames", si.frames, "Frames")->check(kPositive)->capture_default_str();
   add_frame_options(simulate, si.detect);
   simulate->add_flag("--no-rigid", si.no_rigid, "Pass the rigid objects as plain triangles (no shape caching)");
@@ -1014,9 +1059,15 @@ int main(int argc, char** argv) {
 
   BenchArgs be;
   CLI::App* benchmark = app.add_subcommand(
-      "bench", "Time peelcd's configurations, CGAL (exact, no preprocessing), FCL (BVH built per frame) and "
-               "the bare-draw floor side by side on the same frames; print medians, miss ratios and ratios");
-  benchmark->add_option("scene", be.scene, "test1, test2 or a scene file")->capture_default_str();
+      "bench", "Time peelcd's configurations, CGAL (cropped to the overlap box), FCL 0.7 (rigid trees kept, "
+               "deforming ones refitted or rebuilt, its own broad phase) and the bare-draw floor side by side on "
+               "the same frames; print medians, miss ratios and ratios");
+  benchmark->add_option("scene", be.scene, "test1, test2, crowd or a scene file")->capture_default_str();
+  benchmark->add_option("--objects", be.objects, "Balls of the crowd scene")->check(CLI::Range(2, 5000))
+      ->capture_default_str();
+  benchmark->add_option("--threads", be.threads, "Threads of the peers, of peelcd's host resolve and of llvmpipe "
+                                                 "(LP_NUM_THREADS); 0 = one per core, at most 8")
+      ->check(CLI::Range(0, 64))->capture_default_str();
   benchmark->add_option("--frames", be.frames, "Frames (of the test scene; repeats of a scene file)")
       ->check(kPositive)->capture_default_str();
   benchmark->add_option("--res", be.res, "Texture size per ROI for peelcd; 0 = share the 512^2 budget "

@@ -62,7 +62,7 @@ void box_overlap_pairs(const Mesh& a, const std::vector<std::uint32_t>& ta, cons
   bb.reserve(tb.size());
   for (const std::uint32_t t : ta) ba.push_back(triangle_box(a, t));
   for (const std::uint32_t t : tb) bb.push_back(triangle_box(b, t));
-  // Closed boxes: touching boxes are reported (CGAL's default is half-open).
+  // Closed boxes: touching boxes are reported (CGAL's default, named).
   CGAL::box_intersection_d(ba.begin(), ba.end(), bb.begin(), bb.end(),
                            [&](const Box& x, const Box& y) { out.push_back(pack_pair(x.info(), y.info())); },
                            std::ptrdiff_t(10), CGAL::Box_intersection_d::CLOSED);

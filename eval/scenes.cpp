@@ -201,6 +201,56 @@ Mesh torn_cloth(int n, double t, double y) {
   return packed;
 }
 
+class Crowd final : public Sequence {
+ public:
+  Crowd(std::size_t count, std::size_t frames, bool rigid) : Sequence(frames), rigid_(rigid) {
+    ball_ = std::make_shared<const Mesh>(make_uv_sphere(Vec3::Zero(), kRadius, 12, 24));
+    // Lower layer: side x side grid; upper layer: (side - 1)^2 in its hollows; filled lower first.
+    std::size_t side = 1;
+    while (side * side + (side - 1) * (side - 1) < count) ++side;
+    const double d = 2.0 * kRadius * 0.99;
+    for (std::size_t k = 0; k < side * side && centres_.size() < count; ++k)
+      centres_.emplace_back(d * double(k % side), d * double(k / side), 0.0);
+    // A ball in the hollow of four touching a distance 2r - 0.01 from each: height h with
+    // (d/sqrt2)^2 + h^2 = (2r - 0.01)^2.
+    const double reach = 2.0 * kRadius - 0.01;
+    const double h = std::sqrt(reach * reach - d * d / 2.0);
+    for (std::size_t k = 0; k < (side - 1) * (side - 1) && centres_.size() < count; ++k)
+      centres_.emplace_back(d * (double(k % (side - 1)) + 0.5), d * (double(k / (side - 1)) + 0.5), h);
+  }
+  std::string name() const override { return "crowd"; }
+  int phases() const override { return 1; }
+
+  void frame(std::size_t f, std::vector<Object>& objects) const override {
+    objects.resize(centres_.size());
+    for (std::size_t k = 0; k < centres_.size(); ++k) {
+      Object& o = objects[k];
+      o.name = "ball" + std::to_string(k);
+      const double t = 0.7 * double(f) + 1.3 * double(k);
+      const Vec3 at = centres_[k] + 0.004 * Vec3(std::sin(t), std::cos(1.1 * t), 0.5 * std::sin(0.9 * t));
+      const Eigen::Affine3d pose =
+          Eigen::Translation3d(at) * Eigen::AngleAxisd(0.05 * double(f) + double(k), Vec3(0.3, 0.5, 0.8).normalized());
+      const bool breathing = k % 5 == 4;
+      const double scale = breathing ? 1.0 + 0.002 * std::sin(t) : 1.0;
+      o.mesh.triangles = ball_->triangles;
+      o.mesh.vertices.resize(ball_->vertices.size());
+      for (std::size_t i = 0; i < ball_->vertices.size(); ++i) o.mesh.vertices[i] = pose * (scale * ball_->vertices[i]);
+      if (rigid_ && !breathing) o.rigid = RigidMotion{ball_, pose};
+      else o.rigid.reset();
+    }
+  }
+
+ private:
+  static constexpr double kRadius = 0.5;
+  bool rigid_;
+  std::shared_ptr<const Mesh> ball_;
+  std::vector<Vec3> centres_;
+};
+
+std::unique_ptr<Sequence> make_crowd(std::size_t objects, std::size_t frames, bool rigid) {
+  return std::make_unique<Crowd>(objects, frames, rigid);
+}
+
 std::unique_ptr<Sequence> make_test1(const std::string& dir, std::size_t frames, bool rigid) {
   return std::make_unique<Test1>(dir, frames, rigid);
 }

@@ -1,15 +1,24 @@
 #pragma once
-// What a user would pick instead of peelcd, run on the same frames (peelcd bench):
-//   cgal: per object pair with overlapping boxes, CGAL box_intersection_d over the triangles'
-//         boxes plus the exact triangle test (core/reference.h): the fastest exact method that
-//         needs no preprocessing, and the reference nCTP.
-//   fcl:  FCL 0.7, a BVH (AABB tree) built for every object in an overlapping pair, every frame
-//         (what a deforming or fracturing mesh costs there), then collided with all contacts
-//         (collide()'s traversal, without its model copies: see peers.cpp).
-// Both use the same object-level broad phase as peelcd (core/broad_phase.h).
+// What a user would pick instead of peelcd, run on the same frames (peelcd bench), each given
+// the same input and the optimisations a user of that library would apply:
+//   cgal: per object pair whose boxes overlap, only the triangles whose boxes touch the overlap
+//         box (the crop peelcd's ROI makes too), CGAL box_intersection_d over their boxes, then
+//         the exact triangle test (core/narrow_phase.h). No preprocessing; also the reference.
+//   fcl:  FCL 0.7 (FclPeer), object pairs from FCL's own broad phase
+//         (DynamicAABBTreeCollisionManager), then every colliding triangle pair:
+//         - two rigid objects: OBBRSS trees built once from their shapes and moved by their poses
+//           (FCL's oriented traversal: no refit, no copy);
+//         - a static object (rigid at the identity pose): its AABB tree built once, kept;
+//         - two deforming objects, Deforming::refit: AABB trees of the world meshes, refitted
+//           through FCL's update API every frame (rebuilt when the topology changes);
+//         - otherwise (Deforming::rebuild, or a moving rigid object against another kind): AABB
+//           trees of only the triangles touching the pair's overlap box, built for the pair.
+//         The benchmark runs both modes and compares with the faster.
+// Both spread the object pairs' narrow phases over `threads` threads (1 = the calling thread).
 #include "peelcd/core/mesh.h"
 
 #include <cstdint>
+#include <memory>
 #include <vector>
 
 namespace peelcd::bench {
@@ -17,13 +26,35 @@ namespace peelcd::bench {
 struct PeerFrame {
   double ms = 0;
   std::size_t pairs = 0;  // colliding triangle pairs reported (all object pairs summed)
-  std::vector<std::pair<std::size_t, std::size_t>> objects;  // the overlapping object pairs
-  // Per overlapping object pair (a, b) in broad-phase order: the reported triangle pairs,
-  // packed as core/id_map.h pair keys (tri_a << 32 | tri_b), sorted.
+  std::vector<std::pair<std::size_t, std::size_t>> objects;  // the object pairs tested (a < b)
+  // Per entry of `objects`: the reported triangle pairs, packed as core/id_map.h pair keys
+  // (tri_a << 32 | tri_b), sorted, distinct.
   std::vector<std::vector<std::uint64_t>> per_pair;
 };
 
-PeerFrame cgal_frame(const std::vector<Object>& objects);
-PeerFrame fcl_frame(const std::vector<Object>& objects);
+PeerFrame cgal_frame(const std::vector<Object>& objects, unsigned threads = 1);
+
+class FclPeer {
+ public:
+  enum class Deforming { refit, rebuild };
+  FclPeer(Deforming deforming, unsigned threads = 1);
+  ~FclPeer();
+  FclPeer(const FclPeer&) = delete;
+  FclPeer& operator=(const FclPeer&) = delete;
+
+  // One frame. State kept from frame to frame: the trees (rigid shapes' once, deforming
+  // objects' refitted when their topology is unchanged) and the broad-phase manager.
+  PeerFrame frame(const std::vector<Object>& objects);
+
+  // Trees built and kept (one per rigid shape, per static or refitted object), refits, and
+  // cropped trees built for one pair and frame, so far.
+  std::size_t builds() const;
+  std::size_t refits() const;
+  std::size_t pair_builds() const;
+
+ private:
+  struct Impl;
+  std::unique_ptr<Impl> impl_;
+};
 
 }  // namespace peelcd::bench

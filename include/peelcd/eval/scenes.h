@@ -42,6 +42,14 @@ class Sequence {
 std::unique_ptr<Sequence> make_test1(const std::string& meshes_dir, std::size_t frames, bool rigid = true);
 std::unique_ptr<Sequence> make_test2(const std::string& meshes_dir, std::size_t frames, bool rigid = true);
 
+// A crowd: `objects` balls (UV spheres of 24 x 12 quads, 528 triangles, radius 0.5) in a pile
+// of two layers, the lower on a square grid 0.99 of a diameter apart, the upper resting in the
+// lower's hollows 0.01 deep: every ball in light contact with its neighbours (about 2 contacts
+// per ball below, 4 above). Each frame every ball turns a little and jiggles by up to 0.004
+// (rigid motion), and every fifth ball breathes (its radius varies by 0.4%: a deforming mesh,
+// new vertices every frame). One phase.
+std::unique_ptr<Sequence> make_crowd(std::size_t objects, std::size_t frames, bool rigid = true);
+
 // The torn cloth of test2 at tear fraction t in [0, 1]: an n x n grid over [-3, 3]^2 at height
 // `y`, torn along x = 0.05 from z = -3 to z = -3 + 6t. Exposed for tests.
 Mesh torn_cloth(int n, double t, double y);
