@@ -19,6 +19,7 @@ endfunction()
 
 set(scene ${FIXTURES}/scenes/bunny_dragon.json)
 expect("help" 0 "detect" --help)
+expect("version" 0 "peelcd [0-9]" --version)
 expect("detect help" 0 "--ids" detect --help)
 expect("sweep help" 0 "--theta-step" sweep --help)
 expect("no subcommand" 2 "subcommand" )
@@ -136,7 +137,9 @@ expect("golden: unknown case" 2 "unknown case \"nonesuch\"" golden compare nones
 expect("golden: bad tier" 2 "unknown tier" golden compare boxes_crossing --tier fuzzy)
 
 # Dynamic scenes: a few frames of each; the exit status is non-zero on any false contact.
-expect("simulate help" 0 "test1 or test2" simulate --help)
+expect("simulate help" 0 "test1, test2 or crowd" simulate --help)
+expect("simulate crowd" 0 "crowd: 2 frames.*false contacts over all frames: 0" simulate crowd --objects 12 --frames 2)
+expect("simulate crowd, bad count" 2 "objects" simulate crowd --objects 1)
 expect("simulate test1" 0 "summary \\(means per phase.*\\(d\\).*false contacts over all frames: 0"
        simulate test1 --frames 8 --res 64 --csv ${WORK}/sim1.csv)
 file(STRINGS ${WORK}/sim1.csv lines)
@@ -147,5 +150,7 @@ endif()
 expect("simulate test2" 0 "\\(h\\).*false contacts over all frames: 0" simulate test2 --frames 8 --res 64)
 expect("simulate: unknown scene" 2 "test3" simulate test3)
 # The benchmark runs every method on the same frames and prints the ratios.
-expect("bench" 0 "CGAL box_intersection_d.*FCL 0.7.*floor" bench ${scene} --frames 1 --res 64)
+expect("bench" 0 "threads: CGAL and FCL 1.*exact CPU path.*CGAL, cropped.*FCL 0.7, deforming refit.*FCL 0.7, deforming rebuilt.*floor" bench ${scene} --frames 1 --res 64 --threads 1)
+expect("bench crowd" 0 "crowd, 1 frames, 8 objects.*CGAL, cropped" bench crowd --objects 8 --frames 1)
+expect("calibrate help" 0 "cost models" calibrate --help)
 expect("bench: bad peeler" 2 "unknown peeler" detect ${scene} --peeler magic)
