@@ -1,6 +1,7 @@
 #include "peelcd/bench/peers.h"
 
 #include "peelcd/core/broad_phase.h"
+#include "peelcd/core/detector.h"
 #include "peelcd/core/id_map.h"
 #include "peelcd/core/reference.h"
 #include "peelcd/core/worker_pool.h"
@@ -38,19 +39,6 @@ void parallel_for(WorkerPool* pool, std::size_t n, Body body) {
   pool->run(lane);
 }
 
-void touching(const Mesh& mesh, const Aabb& box, std::vector<std::uint32_t>& out) {
-  out.clear();
-  for (std::uint32_t t = 0; t < mesh.triangles.size(); ++t) {
-    const Tri& f = mesh.triangles[t];
-    const Vec3& a = mesh.vertices[f[0]];
-    const Vec3& b = mesh.vertices[f[1]];
-    const Vec3& c = mesh.vertices[f[2]];
-    const Vec3 lo = a.cwiseMin(b).cwiseMin(c), hi = a.cwiseMax(b).cwiseMax(c);
-    if ((hi.array() < box.lo.array()).any() || (lo.array() > box.hi.array()).any()) continue;
-    out.push_back(t);
-  }
-}
-
 }  // namespace
 
 PeerFrame cgal_frame(const std::vector<Object>& objects, unsigned threads) {
@@ -69,8 +57,8 @@ PeerFrame cgal_frame(const std::vector<Object>& objects, unsigned threads) {
     const Mesh& mb = objects[b].mesh;
     const Aabb roi = intersection(boxes[a], boxes[b]);
     std::vector<std::uint32_t> ta, tb;  // the crop: triangles touching the overlap box
-    touching(ma, roi, ta);
-    touching(mb, roi, tb);
+    triangles_touching(ma, roi, ta);
+    triangles_touching(mb, roi, tb);
     std::vector<std::uint64_t> candidates, hits;
     box_overlap_pairs(ma, ta, mb, tb, candidates);
     for (const std::uint64_t k : candidates)
@@ -246,8 +234,8 @@ struct FclPeer::Impl {
       const bool crop = !(ma && mb);
       if (crop) {
         const Aabb roi = intersection(bounds(objects[a].mesh), bounds(objects[b].mesh));
-        touching(objects[a].mesh, roi, ta);
-        touching(objects[b].mesh, roi, tb);
+        triangles_touching(objects[a].mesh, roi, ta);
+        triangles_touching(objects[b].mesh, roi, tb);
         if (ta.empty() || tb.empty()) return {};
         ma = build<Aligned>(objects[a].mesh, &ta);
         mb = build<Aligned>(objects[b].mesh, &tb);

@@ -123,8 +123,6 @@ StageCost exact_path_cost() {
   return StageCost{kExactViewMs, kExactTriangleUs, 0.0};
 }
 
-namespace {
-// The triangles of `mesh` whose boxes touch `box` (closed), ascending.
 void triangles_touching(const Mesh& mesh, const Aabb& box, std::vector<std::uint32_t>& out) {
   out.clear();
   for (std::uint32_t t = 0; t < mesh.triangles.size(); ++t) {
@@ -137,7 +135,6 @@ void triangles_touching(const Mesh& mesh, const Aabb& box, std::vector<std::uint
     out.push_back(t);
   }
 }
-}  // namespace
 
 // The frame's objects through pointers (no copy of any mesh).
 struct ObjectRefs {

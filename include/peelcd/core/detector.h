@@ -51,6 +51,10 @@ double triangles_in_view(const Mesh& mesh, const RoiView& view, const std::vecto
 // triangle), fitted by `peelcd calibrate` on the machine docs/performance.md names.
 StageCost exact_path_cost();
 
+// The triangles of `mesh` whose boxes touch `box` (closed), ascending, into `out`: the crop to
+// an overlap box (the router's triangles with Cull::box; the benchmark's CGAL peer).
+void triangles_touching(const Mesh& mesh, const Aabb& box, std::vector<std::uint32_t>& out);
+
 class Detector {
  public:
   // The detector shares ownership of its stage (a GL stage owns its context in turn).

@@ -84,7 +84,9 @@ class ImageStage {
   virtual const std::string& renderer() const = 0;  // GL_RENDERER, or a description of the CPU model
   virtual const std::string& version() const = 0;   // GL_VERSION, or the CPU model's version
   virtual int max_resolution() const = 0;    // the largest N of an N x N view
-  virtual StageCost cost() const = 0;        // the router's model of this stage
+  // The router's model of this stage. The default (all zero) predicts it free: a stage that
+  // does not model its cost always peels (as before the router existed).
+  virtual StageCost cost() const { return StageCost{}; }
   // Bracket the jobs of one frame (a GL stage makes its context current in begin_frame() and
   // gives the caller's current context back in end_frame()).
   virtual void begin_frame() {}
