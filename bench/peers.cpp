@@ -89,6 +89,7 @@ struct FclPeer::Impl {
   unsigned threads;
   std::unique_ptr<WorkerPool> pool;
   std::vector<Entry> entries;
+  std::vector<Aabb> boxes;  // this frame's object boxes
   std::unique_ptr<fcl::DynamicAABBTreeCollisionManagerd> manager;
   std::atomic<std::size_t> builds{0}, refits{0}, pair_builds{0};
   // One oriented tree per rigid shape, shared by every object that moves it (FCL geometries
@@ -192,7 +193,7 @@ struct FclPeer::Impl {
       e.oriented.reset();
       e.shape.reset();
       e.aligned.reset();
-      const Aabb b = bounds(o.mesh);
+      const Aabb& b = boxes[i];
       const Vec3 side = (b.hi - b.lo).cwiseMax(Vec3::Constant(1e-12));
       if (!e.box) e.box = std::make_shared<fcl::Boxd>(side);
       e.box->side = side;
@@ -233,7 +234,7 @@ struct FclPeer::Impl {
       std::shared_ptr<Aligned> ma = ea.aligned, mb = eb.aligned;
       const bool crop = !(ma && mb);
       if (crop) {
-        const Aabb roi = intersection(bounds(objects[a].mesh), bounds(objects[b].mesh));
+        const Aabb roi = intersection(boxes[a], boxes[b]);
         triangles_touching(objects[a].mesh, roi, ta);
         triangles_touching(objects[b].mesh, roi, tb);
         if (ta.empty() || tb.empty()) return {};
@@ -281,6 +282,8 @@ PeerFrame FclPeer::frame(const std::vector<Object>& objects) {
   const auto t0 = Clock::now();
   bool reregister = s.entries.size() != objects.size() || !s.manager;
   if (s.entries.size() != objects.size()) s.entries.resize(objects.size());
+  s.boxes.clear();
+  for (const Object& o : objects) s.boxes.push_back(bounds(o.mesh));
   for (std::size_t i = 0; i < objects.size(); ++i) reregister |= s.update(i, objects[i]);
   if (reregister) {
     s.manager = std::make_unique<fcl::DynamicAABBTreeCollisionManagerd>();

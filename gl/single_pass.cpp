@@ -100,12 +100,19 @@ bool GlImageStage::Impl::peel_single_pass(const PeelJob& job, PeelResult& out, T
   gl.Uniform1ui(u_rs_slots, view_slots);
   gl.Uniform1i(u_rs_full, job.peel == PeelMode::full);
   gl.Uniform1ui(u_rs_first, GLuint(job.first));
-  gl.Uniform1i(u_rs_append, 1);
-  gl.Uniform1i(u_rs_emit, -1);
+  return dispatch_resolve(job, fitting, view_slots, t_gpu, u_rs_append, u_rs_emit, "the k-buffer resolve", out, t);
+}
+
+bool GlImageStage::Impl::dispatch_resolve(const PeelJob& job, std::size_t fitting, std::uint32_t view_slots,
+                                          Clock::time_point t_gpu, GLint u_append, GLint u_emit, const char* what,
+                                          PeelResult& out, Timings& t) {
+  const int n = job.view.resolution;
+  gl.Uniform1i(u_append, 1);
+  gl.Uniform1i(u_emit, -1);
   gl.DispatchCompute(GLuint((n + 7) / 8), GLuint((n + 7) / 8), 1);
   gl.MemoryBarrier(GL_BUFFER_UPDATE_BARRIER_BIT | GL_SHADER_STORAGE_BARRIER_BIT);
   ++out.gl_passes;
-  check("the k-buffer resolve");
+  check(what);
   PcsHeader got{};
   gl.GetNamedBufferSubData(pcs_buffer, 0, sizeof got, &got);
   if (got.max_fragments > view_slots) {
@@ -115,7 +122,7 @@ bool GlImageStage::Impl::peel_single_pass(const PeelJob& job, PeelResult& out, T
   out.layers = int(got.max_layers);
   out.peel_passes = 1;
   out.captured.clear();
-  if (job.capture) capture_resolved(n, out.layers, u_rs_append, u_rs_emit, out);
+  if (job.capture) capture_resolved(n, out.layers, u_append, u_emit, out);
   t.gpu += ms_since(t_gpu);
   return read_pcs(out, t, &got);
 }
@@ -245,24 +252,7 @@ bool GlImageStage::Impl::peel_conservative(const PeelJob& job, PeelResult& out, 
   bind_resolve_inputs();
   gl.Uniform1i(u_cr_res, n);
   gl.Uniform1ui(u_cr_slots, view_slots);
-  gl.Uniform1i(u_cr_append, 1);
-  gl.Uniform1i(u_cr_emit, -1);
-  gl.DispatchCompute(GLuint((n + 7) / 8), GLuint((n + 7) / 8), 1);
-  gl.MemoryBarrier(GL_BUFFER_UPDATE_BARRIER_BIT | GL_SHADER_STORAGE_BARRIER_BIT);
-  ++out.gl_passes;
-  check("the conservative resolve");
-  PcsHeader got{};
-  gl.GetNamedBufferSubData(pcs_buffer, 0, sizeof got, &got);
-  if (got.max_fragments > view_slots) {
-    t.gpu += ms_since(t_gpu);
-    return regrow(got.max_fragments, fitting, job, out, t);
-  }
-  out.layers = int(got.max_layers);
-  out.peel_passes = 1;
-  out.captured.clear();
-  if (job.capture) capture_resolved(n, out.layers, u_cr_append, u_cr_emit, out);
-  t.gpu += ms_since(t_gpu);
-  return read_pcs(out, t, &got);
+  return dispatch_resolve(job, fitting, view_slots, t_gpu, u_cr_append, u_cr_emit, "the conservative resolve", out, t);
 }
 
 }  // namespace peelcd::gl

@@ -164,6 +164,10 @@ struct GlImageStage::Impl {
   void bind_resolve_inputs();
   void capture_resolved(int n, int layers, GLint u_append, GLint u_emit, PeelResult& out);
   bool regrow(std::uint32_t max_fragments, std::size_t fitting, const PeelJob& job, PeelResult& out, Timings& t);
+  // With the resolve program in use and its uniforms set: dispatches it over the n x n view,
+  // then regrows (false) or captures and reads the PCS back (both single-pass peelers).
+  bool dispatch_resolve(const PeelJob& job, std::size_t fitting, std::uint32_t view_slots, Clock::time_point t_gpu,
+                        GLint u_append, GLint u_emit, const char* what, PeelResult& out, Timings& t);
   // Conservative mode (shaders/conservative.*): false as peel_single_pass(); a view deeper than
   // any k-buffer that fits is marked PeelResult::exhaustive.
   bool peel_conservative(const PeelJob& job, PeelResult& out, Timings& t);
