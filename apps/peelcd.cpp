@@ -5,6 +5,8 @@
 // detector in core/, the floor in bench/); splitting the commands into one file each, with the
 // golden case handling moved into oracle/, is the open remainder of the library issue.
 #include "peelcd/core/reference.h"
+#include "peelcd/core/aabb.h"
+#include "peelcd/core/broad_phase.h"
 #include "peelcd/bench/peers.h"
 #include "peelcd/eval/calibrate.h"
 #include "peelcd/eval/classes.h"
@@ -284,19 +286,70 @@ oracle::Dump capture_frame(const std::vector<Object>& objects, const DetectOptio
                            runner.backend());
 }
 
-int run_dump(const DetectArgs& a, const std::string& out) {
+// The broad phase's overlapping object pairs: the ROIs of a frame (before culling).
+std::size_t count_overlapping_pairs(const std::vector<Object>& objects) {
+  std::vector<Aabb> boxes;
+  for (const Object& o : objects) boxes.push_back(bounds(o.mesh));
+  return overlapping_pairs(boxes).size();
+}
+
+struct DumpArgs {
+  std::string out;
+  std::string pair;        // "A,B": only that pair's ROI
+  std::size_t max_rois = 64;  // refuse larger dumps unless raised
+};
+
+int run_dump(const DetectArgs& a, const DumpArgs& d) {
   const Scene scene = load_scene(a.scene);
   const DetectOptions opt = merged_options(scene, a);
-  const std::vector<Object> objects = load_objects(scene);
+  std::vector<Object> objects = load_objects(scene);
+  // Refused before any work: an output that exists and is not an empty folder.
+  if (std::filesystem::exists(d.out) &&
+      !(std::filesystem::is_directory(d.out) && std::filesystem::is_empty(d.out)))
+    throw InputError("peelcd dump: --out '" + d.out + "' exists and is not an empty folder");
+  std::vector<std::size_t> original;  // object indices in the scene, for --pair
+  if (!d.pair.empty()) {
+    const std::size_t comma = d.pair.find(',');
+    if (comma == std::string::npos || comma == 0 || comma + 1 == d.pair.size())
+      throw InputError("peelcd dump: --pair \"" + d.pair + "\": expected two object names, A,B");
+    const std::string names[2] = {d.pair.substr(0, comma), d.pair.substr(comma + 1)};
+    std::vector<Object> two;
+    for (const std::string& name : names) {
+      std::size_t found = objects.size();
+      for (std::size_t i = 0; i < objects.size(); ++i)
+        if (objects[i].name == name) found = i;
+      if (found == objects.size())
+        throw InputError("peelcd dump: --pair: no object named \"" + name + "\" in " + a.scene);
+      original.push_back(found);
+    }
+    if (original[0] == original[1]) throw InputError("peelcd dump: --pair names one object twice");
+    if (original[0] > original[1]) std::swap(original[0], original[1]);  // scene order, as detect pairs them
+    two.push_back(objects[original[0]]);
+    two.push_back(objects[original[1]]);
+    objects = std::move(two);
+  }
   Runner runner = make_runner(a.backend, merged_gl_options(scene, a.peeler, a.resolve));
-  const oracle::Dump dump = capture_frame(objects, opt, runner);
-  oracle::write_dump(dump, out, true);
+  // The cap is checked on the broad phase's ROIs before any layer is captured.
+  {
+    const std::size_t rois = count_overlapping_pairs(objects);
+    if (rois > d.max_rois)
+      throw InputError("peelcd dump: " + a.scene + " has " + std::to_string(rois) +
+                       " overlapping pairs (ROIs), above --max-rois " + std::to_string(d.max_rois) +
+                       ": dump one with --pair A,B, or raise --max-rois");
+  }
+  oracle::Dump dump = capture_frame(objects, opt, runner);
+  if (!original.empty())
+    for (auto& p : dump.pairs) p.object_a = original[p.object_a], p.object_b = original[p.object_b];
+  if (!d.pair.empty() && dump.pairs.empty() && !a.quiet)
+    std::fprintf(stderr, "peelcd dump: %s and %s do not overlap: the dump has no ROI\n", objects[0].name.c_str(),
+                 objects[1].name.c_str());
+  oracle::write_dump(dump, d.out, true);
   std::size_t layers = 0, views = 0;
   for (const auto& p : dump.pairs)
     for (const auto& v : p.views) layers += v.layers.size(), ++views;
   if (!a.quiet)
     std::printf("peelcd dump: %s -> %s: %zu ROIs, %zu views, %zu layers (%s); open %s/index.html\n",
-                a.scene.c_str(), out.c_str(), dump.pairs.size(), views, layers, dump.renderer.c_str(), out.c_str());
+                a.scene.c_str(), d.out.c_str(), dump.pairs.size(), views, layers, dump.renderer.c_str(), d.out.c_str());
   return 0;
 }
 
@@ -308,8 +361,12 @@ struct GoldenArgs {
   std::string report = "golden-report";
   std::string peeler;  // empty: the case's (the default)
   std::string resolve;  // empty: the default (auto)
+  std::string require_renderer;  // skip (exit 77) unless GL_RENDERER contains this
   int repeat = 1;
 };
+
+// ctest's SKIP_RETURN_CODE for a run that cannot take place here (the reason on stderr).
+constexpr int kExitSkipped = 77;
 
 std::vector<std::string> golden_cases(const GoldenArgs& a) {
   if (!a.cases.empty()) return a.cases;
@@ -353,6 +410,11 @@ int run_golden_record(const GoldenArgs& a) {
 int run_golden_compare(const GoldenArgs& a) {
   Runner runner = make_runner(a.backend);
   const std::string renderer = runner.renderer();
+  if (!a.require_renderer.empty() && renderer.find(a.require_renderer) == std::string::npos) {
+    std::fprintf(stderr, "peelcd golden compare: skipped: the renderer is \"%s\", not %s (--require-renderer)\n",
+                 renderer.c_str(), a.require_renderer.c_str());
+    return kExitSkipped;
+  }
   oracle::Tier tier = renderer.find("llvmpipe") != std::string::npos ? oracle::Tier::exact : oracle::Tier::hardware;
   if (a.tier == "exact") tier = oracle::Tier::exact;
   else if (a.tier == "hardware") tier = oracle::Tier::hardware;
@@ -380,6 +442,28 @@ int run_golden_compare(const GoldenArgs& a) {
   }
   std::printf("golden compare: %d case(s) differ\n", failed);
   return failed ? 1 : 0;
+}
+
+// Two dumps from any producers (docs/dump-format.md), compared under a tier.
+struct CompareDumpsArgs {
+  std::string expected, actual, tier = "exact", report = "golden-report";
+};
+
+int run_compare_dumps(const CompareDumpsArgs& a) {
+  oracle::Tier tier = oracle::Tier::exact;
+  if (a.tier == "hardware") tier = oracle::Tier::hardware;
+  else if (a.tier != "exact")
+    throw InputError("peelcd golden compare-dumps: --tier: unknown tier \"" + a.tier + "\" (expected exact or hardware)");
+  const oracle::Dump expected = oracle::read_dump(a.expected);
+  const oracle::Dump actual = oracle::read_dump(a.actual);
+  const oracle::Comparison c = oracle::compare_dumps(expected, actual, tier);
+  const std::string label = a.expected + " vs " + a.actual;
+  if (c.ok()) {
+    std::printf("%s", oracle::report_text(c, label, tier).c_str());
+    return 0;
+  }
+  std::printf("%s", oracle::write_report(expected, actual, c, label, a.report).c_str());
+  return 1;
 }
 
 // A terminal-aware progress bar on stderr: redrawn in place on a terminal, silent otherwise.
@@ -1012,12 +1096,16 @@ int main(int argc, char** argv) {
   detect->add_flag("--quiet", d.quiet, "No human summary");
 
   DetectArgs du;
-  std::string dump_out;
   CLI::App* dump = app.add_subcommand(
       "dump", "Run one frame and write every peel layer of every ROI view (EXR, lossless; PNG previews), "
               "the PCS, the colliding pairs, meta.json and a self-contained index.html viewer to a folder");
   dump->add_option("scene", du.scene, "Scene JSON file")->required();
-  dump->add_option("--out", dump_out, "Output folder (must not exist, or be empty)")->required();
+  DumpArgs dump_args;
+  dump->add_option("--out", dump_args.out, "Output folder (must not exist, or be empty)")->required();
+  dump->add_option("--pair", dump_args.pair, "Only the ROI of objects A and B (names from the scene), e.g. --pair ball3,ball7");
+  dump->add_option("--max-rois", dump_args.max_rois, "Refuse a frame with more ROIs than this (a dump writes a folder "
+                                                     "per ROI and view); name one with --pair")
+      ->check(kPositive)->capture_default_str();
   add_frame_options(dump, du);
   dump->add_flag("--quiet", du.quiet, "No summary line");
 
@@ -1043,6 +1131,18 @@ int main(int argc, char** argv) {
   compare->add_option("--resolve", gc.resolve, "auto, gpu or host: where the k-buffer is resolved (default: auto)");
   compare->add_option("--repeat", gc.repeat, "Run and compare each case N times in one process (determinism)")
       ->check(kPositive)->capture_default_str();
+  compare->add_option("--require-renderer", gc.require_renderer,
+                      "Skip (exit 77, for ctest) unless GL_RENDERER contains TEXT, e.g. zink");
+  CompareDumpsArgs cd;
+  CLI::App* compare_dumps = golden->add_subcommand(
+      "compare-dumps", "Compare two dump folders from any producers (docs/dump-format.md) under a tier: exit 0 when "
+                       "they agree, 1 when they differ (first differing texels printed; report with expected / "
+                       "actual / error-mask PNGs), 2 when a dump is malformed");
+  compare_dumps->add_option("expected", cd.expected, "The reference dump folder (e.g. a golden's expected/)")->required();
+  compare_dumps->add_option("actual", cd.actual, "The dump folder to check")->required();
+  compare_dumps->add_option("--tier", cd.tier, "exact (every word) or hardware (another rasterizer's tolerances)")
+      ->capture_default_str();
+  compare_dumps->add_option("--report", cd.report, "Folder for the report when they differ")->capture_default_str();
   SimArgs si;
   CLI::App* simulate = app.add_subcommand(
       "simulate", "Run the paper's dynamic scenes (test1: a walking raptor among 40 billiard balls; test2: a "
@@ -1139,11 +1239,12 @@ int main(int argc, char** argv) {
   }
   try {
     if (*detect) return run_detect(d);
-    if (*dump) return run_dump(du, dump_out);
+    if (*dump) return run_dump(du, dump_args);
     if (*simulate) return run_simulate(si);
     if (*benchmark) return run_bench(be);
     if (*record) return run_golden_record(gr);
     if (*compare) return run_golden_compare(gc);
+    if (*compare_dumps) return run_compare_dumps(cd);
     if (*sweep) return run_sweep_command(sw);
     if (*classes) return run_classes(ca);
     if (*calibrate_cmd) return run_calibrate(cal);

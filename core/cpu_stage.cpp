@@ -197,8 +197,10 @@ void CpuImageStage::peel(const PeelJob& job, PeelResult& out, Timings& timings) 
   kb.resolution = n;
   kb.slots = slots;
   KResolveParams p;
-  out.epsilon_window = float(view.world_to_window_depth(job.epsilon));
-  out.slope = float(job.slope);
+  // The conservative test is interval overlap: no epsilon, no slope (recorded as 0, as the GL
+  // stage records them).
+  out.epsilon_window = job.conservative ? 0.0f : float(view.world_to_window_depth(job.epsilon));
+  out.slope = job.conservative ? 0.0f : float(job.slope);
   p.epsilon_window = out.epsilon_window;
   p.slope = out.slope;
   p.full_peel = job.peel == PeelMode::full;

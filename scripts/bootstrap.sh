@@ -8,12 +8,15 @@ packages=(
   build-essential cmake pkg-config python3-glad   # toolchain, glad 2 (GL loader generator)
   libosmesa6-dev                                  # OSMesa: the software GL reference backend
   libegl-dev libegl-mesa0 libgl1-mesa-dri         # EGL without a window (Mesa llvmpipe, or a GPU)
+  mesa-vulkan-drivers                              # the third GL stack in the tests: zink over lavapipe
   libeigen3-dev libcgal-dev libgmp-dev libmpfr-dev libboost-dev   # geometry, exact predicates
   libassimp-dev nlohmann-json3-dev libcli11-dev    # mesh files, scene JSON, command line
   libopenexr-dev libpng-dev                        # layer dumps and goldens (EXR), previews (PNG)
   chromium                                         # the viewer test (headless)
   libfcl-dev                                       # benchmark peer: FCL 0.7
   catch2                                           # tests (Catch2 v2)
+  python3 python3-jsonschema                       # tests: dump meta.json against its JSON Schema
+  python3-matplotlib                               # sweep --plot, scripts/plot_*.py
 )
 missing=()
 for p in "${packages[@]}"; do

@@ -7,11 +7,14 @@
 //   DIR/index.html                         the viewer (dumps only; self-contained)
 //   DIR/<pair>/pcs.txt                     the pair's PCS over all views: "idA idB", sorted
 //   DIR/<pair>/colliding.txt               "triA triB kind", sorted
+//   DIR/<pair>/reference.txt               "triA triB": the exact reference of the two meshes, sorted
 //   DIR/<pair>/view<v>/pcs.txt             that view's PCS
 //   DIR/<pair>/view<v>/layer<kk>.exr       layer kk: Z (FLOAT, window depth), id (UINT, ID + 1,
 //                                          0 = empty), object (UINT, 0 = A, 1 = B), dzdx, dzdy (FLOAT)
 //   DIR/<pair>/view<v>/layer<kk>.png       preview (dumps only): depth | IDs, PCS texels marked
 // EXR rows run top to bottom (row 0 = the top of the image, as image viewers show it).
+// The format is specified for other writers in docs/dump-format.md (meta.json: the JSON Schema
+// docs/schema/dump-meta.schema.json); kDumpFormat names its version.
 #include "peelcd/core/frame.h"
 #include "peelcd/core/detector.h"
 #include "peelcd/gl/gl_stage.h"
@@ -24,6 +27,9 @@
 #include <vector>
 
 namespace peelcd::oracle {
+
+// meta.json's "format": the version of the dump format this code writes and reads.
+inline constexpr const char* kDumpFormat = "peelcd.dump/1";
 
 struct DumpView {
   std::string dir;  // relative to the dump root, e.g. "pair0_bunny_dragon/view0"
@@ -44,16 +50,22 @@ struct DumpPair {
   std::vector<IdPair> pcs;
   std::vector<std::array<std::uint32_t, 2>> colliding;
   std::vector<std::string> kinds;  // ContactKind of each colliding pair
+  // The exact reference of the two meshes (every intersecting triangle pair, sorted): what a
+  // lossy configuration's misses are counted against. Absent (false) in a dump without it.
+  bool has_reference = false;
+  std::vector<std::array<std::uint32_t, 2>> reference;
   std::vector<DumpView> views;
 };
 
 struct Dump {
+  std::string format = kDumpFormat;
   std::string renderer, gl_version, backend, shader_hash;
   nlohmann::json options;  // the DetectOptions of the frame
   std::vector<DumpPair> pairs;
 };
 
-// Builds a dump from a frame and the views captured while it ran (Detector::capture_layers).
+// Builds a dump from a frame and the views captured while it ran (Detector::capture_layers),
+// with each pair's exact reference (exact_colliding_pairs of the two meshes).
 Dump make_dump(const FrameResult& frame, const std::vector<CapturedView>& captured,
                const std::vector<Object>& objects, const DetectOptions& options, const std::string& renderer,
                const std::string& gl_version, const std::string& backend);
@@ -63,7 +75,9 @@ Dump make_dump(const FrameResult& frame, const std::vector<CapturedView>& captur
 // renamed at the end, so a failure leaves nothing behind. Throws InputError.
 void write_dump(const Dump& dump, const std::string& dir, bool previews);
 
-// Reads a dump written by write_dump (previews are ignored). Throws InputError.
+// Reads a dump written by write_dump or by any writer that follows docs/dump-format.md
+// (previews are ignored). Throws InputError naming the file and the problem: a missing or
+// malformed meta.json, a missing layer, a truncated or foreign EXR, a layer of the wrong size.
 Dump read_dump(const std::string& dir);
 
 // The texels of layer `k` of `view` where it and layer k-1 are of different objects and close
@@ -99,9 +113,42 @@ Rgb layer_preview(const std::vector<std::uint32_t>& layer, int n, const std::vec
 // How a backend is compared with the OSMesa goldens (docs/design.md section 5).
 //   exact:    llvmpipe in any context (OSMesa, EGL surfaceless): every layer word equal, the same
 //             layer counts, the same PCS and colliding pairs.
-//   hardware: another rasterizer: see kIdSilhouetteTexels and kDepthUlps in dump.cpp; every
-//             golden colliding pair must be found; PCS and layer counts may differ (listed).
+//   hardware: another rasterizer. Texels: IDs may differ within kIdSilhouetteTexels of an edge of
+//             the golden layer, depths by max(kDepthTolerance, kDepthFractionOfEpsilon x epsilon) on the same surface, slopes are free; a
+//             layer only one side has may hold only edge texels (a sliver). Pairs: in the
+//             conservative mode the colliding set must be equal; in a lossy configuration the
+//             misses against the exact reference may exceed the golden's by at most
+//             hardware_miss_slack(reference size). PCS and layer counts may differ (listed).
 enum class Tier { exact, hardware };
+
+// Hardware tier tolerances, each with its reason (docs/golden-images.md).
+// IDs may differ within this many texels of a silhouette or triangle edge of the golden layer:
+// rasterizers snap vertices to different sub-texel grids and break ties on edges through texel
+// centres differently, so a texel next to an edge can go to either side.
+inline constexpr int kIdSilhouetteTexels = 1;
+// Depths may differ where the same triangle covers the texel (the depth plane is interpolated in
+// another order and precision) by kDepthFractionOfEpsilon of the view's PCS threshold
+// (epsilon_window), and at least kDepthTolerance (window depth, [0, 1] over the ROI's depth
+// range; the conservative mode has no threshold). A depth error of 1% of epsilon moves a PCS
+// decision only for a pair within 1% of the threshold; 2^-16 = 1.5e-5 is 256 float ULPs at depth
+// 1 and 128 times below one texel's depth at 512^2.
+inline constexpr double kDepthFractionOfEpsilon = 0.01;
+inline constexpr double kDepthTolerance = 1.0 / 65536.0;
+// On steep triangles, also the texel's depth slope (|dzdx| + |dzdy|) times 1/256 texel: GPUs and
+// llvmpipe snap vertices to 8 sub-texel bits, each to its own grid, which moves the depth plane
+// by up to that much. With ring or paper IDs (one ID for several triangles) a depth within the
+// golden depths of the same ID in the 3 x 3 texels around is also accepted: the edge between two
+// triangles of one ID moved by a texel, which near_edge cannot see.
+inline constexpr double kSnapTexels = 1.0 / 256.0;
+// The PCS threshold and slope factor of a view are host arithmetic; another implementation may
+// round them differently in float: relative difference allowed.
+inline constexpr double kThresholdRelative = 1e-5;
+// A lossy configuration (point sampling) misses pairs whose contact covers few texel centres;
+// a one-texel edge shift changes which of them are sampled. The golden's misses plus this slack
+// (2 pairs, plus 5% of the reference) bound a hardware backend's misses.
+inline constexpr std::size_t kMissSlackPairs = 2;
+inline constexpr double kMissSlackFraction = 0.05;
+std::size_t hardware_miss_slack(std::size_t reference_pairs);
 const char* to_string(Tier tier);
 
 struct TexelDifference {
