@@ -22,6 +22,7 @@
 #include "peelcd/gl_osmesa/osmesa_context.h"
 #endif
 #include "peelcd/io/error.h"
+#include "peelcd/io/output.h"
 #include "peelcd/io/result_json.h"
 #include "peelcd/io/scene.h"
 #include "peelcd/oracle/dump.h"
@@ -84,6 +85,7 @@ Runner make_runner(const std::string& backend, const gl::GlOptions& options = {}
 
 struct DetectArgs {
   std::string scene;
+  std::vector<std::string> inputs;  // detect: one scene file, or mesh files
   int res = 0;  // 0 = not given
   std::string ids, peel, peeler, cull, resolve, stage;
   double slope = NAN;
@@ -155,31 +157,30 @@ DetectOptions merged_options(const Scene& scene, const DetectArgs& a) {
 
 // Writes `text` to `path` through a temporary file and a rename, so a failure never leaves a
 // half-written file behind. "-" is stdout.
-void write_output(const std::string& path, const std::string& text) {
-  if (path == "-") {
-    std::cout << text << "\n";
-    return;
-  }
-  const std::string tmp = path + ".tmp";
-  {
-    std::ofstream out(tmp);
-    if (!out) throw InputError("peelcd: cannot write '" + path + "'");
-    out << text << "\n";
-    if (!out.flush()) {
-      std::remove(tmp.c_str());
-      throw InputError("peelcd: cannot write '" + path + "'");
-    }
-  }
-  std::filesystem::rename(tmp, path);
-}
+// --json / --csv outputs: atomic, never destroying (include/peelcd/io/output.h).
+void write_output(const std::string& path, const std::string& text) { write_output_file(path, text + "\n", "peelcd: output"); }
 
 double median(std::vector<double> v) {
   std::sort(v.begin(), v.end());
   return v.empty() ? 0.0 : (v.size() % 2 ? v[v.size() / 2] : 0.5 * (v[v.size() / 2 - 1] + v[v.size() / 2]));
 }
 
+// detect's input: one scene file, or two or more mesh files (identity transforms, default options).
+Scene detect_input(const std::vector<std::string>& inputs) {
+  const auto is_scene = [](const std::string& p) { return std::filesystem::path(p).extension() == ".json"; };
+  if (inputs.size() == 1) {
+    if (!is_scene(inputs[0]))
+      throw InputError("peelcd detect: '" + inputs[0] + "' is one mesh: give a scene file (.json) or two or more meshes");
+    return load_scene(inputs[0]);
+  }
+  for (const std::string& p : inputs)
+    if (is_scene(p)) throw InputError("peelcd detect: '" + p + "': a scene file (.json) goes alone, not among meshes");
+  return scene_from_meshes(inputs);
+}
+
 int run_detect(const DetectArgs& a) {
-  const Scene scene = load_scene(a.scene);
+  if (!a.json_out.empty()) check_output_path(a.json_out, "peelcd detect: --json");
+  const Scene scene = detect_input(a.inputs);
   const DetectOptions opt = merged_options(scene, a);
   const std::vector<Object> objects = load_objects(scene);
 
@@ -200,34 +201,40 @@ int run_detect(const DetectArgs& a) {
                       med(&Timings::readback), med(&Timings::cpu), med(&Timings::total)};
   }
 
+  // --check: every pair against the exact reference (in the JSON too).
   Score total;
-  if (a.quiet && a.check)  // the figures are still needed for --max-miss
+  std::vector<Score> scores;
+  if (a.check)
     for (const PairResult& p : result.pairs) {
-      const Score sc = score_contacts(exact_colliding_pairs(objects[p.object_a].mesh, objects[p.object_b].mesh),
-                                      p.colliding);
-      total.exact += sc.exact;
-      total.missed += sc.missed;
+      scores.push_back(score_contacts(exact_colliding_pairs(objects[p.object_a].mesh, objects[p.object_b].mesh),
+                                      p.colliding));
+      total.exact += scores.back().exact;
+      total.found += scores.back().found;
+      total.missed += scores.back().missed;
+      total.false_contacts += scores.back().false_contacts;
     }
+  // The human summary: on stdout, or on stderr when the JSON goes to stdout.
+  FILE* const human = a.json_out == "-" ? stderr : stdout;
   if (!a.quiet) {
-    std::printf("peelcd detect: %s  (%zu objects, %s, %s)\n", a.scene.c_str(), objects.size(),
+    std::fprintf(human, "peelcd detect: %s  (%zu objects, %s, %s)\n", scene.path.c_str(), objects.size(),
                 runner.backend().c_str(), result.renderer.c_str());
     if (opt.conservative)
-      std::printf("conservative  view theta=%g phi=%g roll=%g  views=%d  ids=%s  cull=%s\n", opt.theta, opt.phi, opt.roll,
+      std::fprintf(human, "conservative  view theta=%g phi=%g roll=%g  views=%d  ids=%s  cull=%s\n", opt.theta, opt.phi, opt.roll,
                   opt.views, to_string(opt.ids), to_string(opt.cull));
     else
-      std::printf("point sampling  view theta=%g phi=%g roll=%g  views=%d  ids=%s  peel=%s  slope=%g  cull=%s\n", opt.theta,
+      std::fprintf(human, "point sampling  view theta=%g phi=%g roll=%g  views=%d  ids=%s  peel=%s  slope=%g  cull=%s\n", opt.theta,
                   opt.phi, opt.roll, opt.views, to_string(opt.ids), to_string(opt.peel), opt.slope, to_string(opt.cull));
-    std::printf("stage %s: %zu of %zu ROIs by the exact CPU path, %zu peeled\n", to_string(opt.stage), result.rois_exact,
+    std::fprintf(human, "stage %s: %zu of %zu ROIs by the exact CPU path, %zu peeled\n", to_string(opt.stage), result.rois_exact,
                 result.pairs.size(), result.pairs.size() - result.rois_exact);
-    if (result.pairs.empty()) std::printf("no overlapping bounding boxes: no GL work\n");
+    if (result.pairs.empty()) std::fprintf(human, "no overlapping bounding boxes: no GL work\n");
     for (const PairResult& p : result.pairs) {
       if (p.exact_stage) {
-        std::printf("%s x %s: exact CPU path (predicted %.3f ms; image stage %.3f ms), %zu+%zu tris in the ROI, "
+        std::fprintf(human, "%s x %s: exact CPU path (predicted %.3f ms; image stage %.3f ms), %zu+%zu tris in the ROI, "
                     "%zu candidates, %zu colliding\n",
                     objects[p.object_a].name.c_str(), objects[p.object_b].name.c_str(), p.predicted_exact_ms,
                     p.predicted_image_ms, p.triangles_in_roi_a, p.triangles_in_roi_b, p.candidates, p.colliding.size());
       } else
-      std::printf("%s x %s: ROI %dx%d, eps %.3g, drawn %zu+%zu of %zu+%zu tris, %d layers, %zu PCS, %zu candidates, %zu colliding\n",
+      std::fprintf(human, "%s x %s: ROI %dx%d, eps %.3g, drawn %zu+%zu of %zu+%zu tris, %d layers, %zu PCS, %zu candidates, %zu colliding\n",
                   objects[p.object_a].name.c_str(), objects[p.object_b].name.c_str(), p.resolution,
                   p.resolution, p.epsilon, p.triangles_drawn_a, p.triangles_drawn_b, p.triangles_in_roi_a,
                   p.triangles_in_roi_b, p.layers,
@@ -236,28 +243,25 @@ int run_detect(const DetectArgs& a) {
       for (const Contact& c : p.colliding) {
         line += " (" + std::to_string(c.tri_a) + "," + std::to_string(c.tri_b) + ")";
         if (line.size() > 90) {
-          std::printf("%s\n", line.c_str());
+          std::fprintf(human, "%s\n", line.c_str());
           line = " ";
         }
       }
-      if (line.size() > 1) std::printf("%s\n", line.c_str());
+      if (line.size() > 1) std::fprintf(human, "%s\n", line.c_str());
       if (a.check) {
-        const Score sc = score_contacts(exact_colliding_pairs(objects[p.object_a].mesh, objects[p.object_b].mesh),
-                                        p.colliding);
-        total.exact += sc.exact;
-        total.missed += sc.missed;
-        std::printf("  exact reference: %zu pairs; found %zu, missed %zu (miss ratio %.2f%%), false contacts %zu\n",
+        const Score& sc = scores[std::size_t(&p - result.pairs.data())];
+        std::fprintf(human, "  exact reference: %zu pairs; found %zu, missed %zu (miss ratio %.2f%%), false contacts %zu\n",
                     sc.exact, sc.found, sc.missed, 100.0 * sc.miss_ratio(), sc.false_contacts);
       }
     }
     const Timings& t = result.timings;
-    std::printf("timings (ms%s): aabb %.3f  upload %.3f  gpu %.3f  readback %.3f  cpu %.3f  total %.3f\n",
+    std::fprintf(human, "timings (ms%s): aabb %.3f  upload %.3f  gpu %.3f  readback %.3f  cpu %.3f  total %.3f\n",
                 runs.size() > 1 ? (", median of " + std::to_string(runs.size())).c_str() : "",
                 t.aabb, t.upload, t.gpu, t.readback, t.cpu, t.total);
   }
-  if (!a.json_out.empty()) write_output(a.json_out, to_json(result, objects, opt).dump(2));
+  if (!a.json_out.empty()) write_output(a.json_out, to_json(result, objects, opt, a.check ? &scores : nullptr).dump(2));
   if (a.check && !a.quiet)
-    std::printf("check: %zu exact pairs, %zu missed (miss ratio %.4f%%)\n", total.exact, total.missed,
+    std::fprintf(human, "check: %zu exact pairs, %zu missed (miss ratio %.4f%%)\n", total.exact, total.missed,
                 100.0 * total.miss_ratio());
   if (a.check && !std::isnan(a.max_miss) && 100.0 * total.miss_ratio() > a.max_miss) {
     std::fprintf(stderr, "peelcd detect: miss ratio %.4f%% is above --max-miss %g%%\n", 100.0 * total.miss_ratio(),
@@ -528,6 +532,7 @@ struct SimArgs {
 };
 
 int run_simulate(const SimArgs& a) {
+  if (!a.csv.empty()) check_output_path(a.csv, "peelcd simulate: --csv");
   const auto seq = make_sequence(a.test, a.frames, !a.no_rigid, a.objects);
   Scene defaults;
   const DetectOptions opt = merged_options(defaults, a.detect);
@@ -637,6 +642,7 @@ Score score_peer(const bench::PeerFrame& exact, const bench::PeerFrame& peer) {
 }
 
 int run_bench(const BenchArgs& a) {
+  if (!a.csv.empty()) check_output_path(a.csv, "peelcd bench: --csv");
   std::unique_ptr<Sequence> seq;
   std::vector<Object> fixed;
   if (a.scene == "test1" || a.scene == "test2") {
@@ -864,6 +870,7 @@ struct SweepArgs {
 
 
 int run_sweep_command(const SweepArgs& a) {
+  if (!a.csv.empty()) check_output_path(a.csv, "peelcd sweep: --csv");
   const Scene scene = load_scene(a.scene);
   const std::vector<Object> objects = load_objects(scene);
   std::vector<SweepConfig> configs;
@@ -1079,9 +1086,11 @@ int main(int argc, char** argv) {
   app.require_subcommand(1);
   DetectArgs d;
   CLI::App* detect = app.add_subcommand(
-      "detect", "Run one frame of collision detection on a scene file and report the colliding "
+      "detect", "Run one frame of collision detection on a scene file or on mesh files and report the colliding "
                 "triangle pairs (indices in each mesh file's triangle order)");
-  detect->add_option("scene", d.scene, "Scene JSON file")->required();
+  detect->add_option("input", d.inputs, "A scene JSON file, or two or more mesh files (OBJ, PLY, STL, glTF, ...: "
+                                        "identity transforms, named by their file names, default options)")
+      ->required();
   add_frame_options(detect, d);
   detect->add_option("--json", d.json_out, "Write the JSON report to FILE, or - for stdout");
   detect->add_option("--repeat", d.repeat, "Run the frame N times and report median timings")

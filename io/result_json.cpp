@@ -7,21 +7,29 @@ namespace peelcd {
 
 namespace {
 nlohmann::json vec(const Vec3& v) { return {v.x(), v.y(), v.z()}; }
+
+nlohmann::json score_json(const Score& s) {
+  return {{"exact", s.exact}, {"found", s.found}, {"missed", s.missed}, {"miss_ratio", s.miss_ratio()},
+          {"false_contacts", s.false_contacts}};
+}
 }  // namespace
 
-nlohmann::json to_json(const FrameResult& r, const std::vector<Object>& objects, const DetectOptions& o) {
+nlohmann::json to_json(const FrameResult& r, const std::vector<Object>& objects, const DetectOptions& o,
+                       const std::vector<Score>* check) {
   using nlohmann::json;
   json pairs = json::array();
   std::size_t total = 0;
-  for (const PairResult& p : r.pairs) {
-    json colliding = json::array(), segments = json::array(), kinds = json::array();
-    for (const Contact& c : p.colliding) {
-      colliding.push_back({c.tri_a, c.tri_b});
-      segments.push_back({vec(c.p), vec(c.q)});
-      kinds.push_back(to_string(c.kind));
-    }
+  Score sum;
+  for (std::size_t i = 0; i < r.pairs.size(); ++i) {
+    const PairResult& p = r.pairs[i];
+    json colliding = json::array();
+    for (const Contact& c : p.colliding)
+      colliding.push_back({{"tri_a", c.tri_a}, {"tri_b", c.tri_b}, {"kind", to_string(c.kind)},
+                           {"segment", {vec(c.p), vec(c.q)}}});
     total += p.colliding.size();
     pairs.push_back({{"a", objects[p.object_a].name},
+                     {"object_a", p.object_a},
+                     {"object_b", p.object_b},
                      {"b", objects[p.object_b].name},
                      {"roi", {{"min", vec(p.roi.lo)}, {"max", vec(p.roi.hi)}}},
                      {"region", p.region.empty() ? nlohmann::json(nullptr)
@@ -35,13 +43,17 @@ nlohmann::json to_json(const FrameResult& r, const std::vector<Object>& objects,
                      {"triangles_drawn", {p.triangles_drawn_a, p.triangles_drawn_b}},
                      {"layers", p.layers},
                      {"passes", p.passes},
-                     {"pcs", p.pcs_count},
+                     {"pcs_count", p.pcs_count},
                      {"candidates", p.candidates},
-                     {"colliding", colliding},
-                     {"segments", segments},
-                     {"kinds", kinds}});
+                     {"colliding", colliding}});
+    if (check) {
+      const Score& s = check->at(i);
+      pairs.back()["check"] = score_json(s);
+      sum.exact += s.exact, sum.found += s.found, sum.missed += s.missed, sum.false_contacts += s.false_contacts;
+    }
   }
-  return {{"peelcd_version", PEELCD_VERSION_STRING},
+  json out = {{"schema", kResultSchema},
+          {"peelcd_version", PEELCD_VERSION_STRING},
           {"renderer", r.renderer},
           {"options", options_to_json(o)},
           {"pairs", pairs},
@@ -55,6 +67,8 @@ nlohmann::json to_json(const FrameResult& r, const std::vector<Object>& objects,
             {"readback", r.timings.readback},
             {"cpu", r.timings.cpu},
             {"total", r.timings.total}}}};
+  if (check) out["check"] = score_json(sum);
+  return out;
 }
 
 }  // namespace peelcd

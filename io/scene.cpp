@@ -6,6 +6,7 @@
 #include <nlohmann/json.hpp>
 
 #include <cmath>
+#include <cstdio>
 #include <filesystem>
 #include <fstream>
 #include <set>
@@ -88,6 +89,12 @@ Scene parse_scene(const std::string& text, const std::string& path, const std::s
     scene.objects.push_back(std::move(so));
   }
   if (scene.objects.empty()) c.fail("objects", "must name at least one object");
+  // Names identify objects in results and dumps: each once.
+  for (std::size_t i = 0; i < scene.objects.size(); ++i)
+    for (std::size_t j = 0; j < i; ++j)
+      if (scene.objects[i].name == scene.objects[j].name)
+        c.fail("objects[" + std::to_string(i) + "].name",
+               "duplicate name \"" + scene.objects[i].name + "\" (also objects[" + std::to_string(j) + "])");
   DetectOptions& opt = scene.options;
   if (root.contains("view")) {
     const json& v = root["view"];
@@ -181,14 +188,54 @@ Scene load_scene(const std::string& path) {
   return parse_scene(ss.str(), path, fs::path(path).parent_path().string());
 }
 
+Scene scene_from_meshes(const std::vector<std::string>& paths) {
+  Scene scene;
+  scene.path = "(meshes on the command line)";
+  for (const std::string& path : paths) {
+    SceneObject so;
+    so.mesh_path = path;
+    so.name = std::filesystem::path(path).stem().string();
+    if (so.name.empty()) so.name = "object";
+    // Names from the file names, made distinct: bunny, bunny_2, ...
+    const std::string base = so.name;
+    for (int k = 2;; ++k) {
+      bool taken = false;
+      for (const SceneObject& other : scene.objects) taken = taken || other.name == so.name;
+      if (!taken) break;
+      so.name = base + "_" + std::to_string(k);
+    }
+    scene.objects.push_back(std::move(so));
+  }
+  if (scene.objects.empty()) throw InputError("peelcd: no meshes given");
+  return scene;
+}
+
 std::vector<Object> load_objects(const Scene& scene) {
   std::vector<Object> out;
-  for (const SceneObject& so : scene.objects) {
+  for (std::size_t i = 0; i < scene.objects.size(); ++i) {
+    const SceneObject& so = scene.objects[i];
+    const std::string where = "'" + scene.path + "': objects[" + std::to_string(i) + "] (\"" + so.name + "\")";
     Object o;
     o.name = so.name;
-    o.mesh = transformed(load_mesh(so.mesh_path), so.transform);
+    const Mesh raw = load_mesh(so.mesh_path);
+    o.mesh = transformed(raw, so.transform);
     try {
-      validate_mesh(o.mesh, "'" + so.mesh_path + "'");
+      validate_mesh(raw, "'" + so.mesh_path + "'");
+    } catch (const std::invalid_argument& e) {
+      throw InputError(std::string("peelcd::load_objects(): ") + e.what());
+    }
+    // The image stage uploads float coordinates: beyond float's range a vertex becomes infinite.
+    constexpr double kFloatMax = 3.4028234663852886e38;
+    for (const Vec3& v : o.mesh.vertices)
+      if (!v.allFinite() || v.cwiseAbs().maxCoeff() > kFloatMax) {
+        char buf[160];
+        std::snprintf(buf, sizeof buf, "(%g, %g, %g)", v.x(), v.y(), v.z());
+        throw InputError("peelcd::load_objects(): " + where + ": the transform gives the vertex " + buf +
+                         ", outside the float range (|x| <= 3.4e38) the image stage works in: scale or "
+                         "translation too large");
+      }
+    try {
+      validate_mesh(o.mesh, where);
     } catch (const std::invalid_argument& e) {
       throw InputError(std::string("peelcd::load_objects(): ") + e.what());
     }

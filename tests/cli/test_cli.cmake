@@ -89,10 +89,56 @@ expect("zero resolution" 2 "--res: Value 0 is not positive" detect ${scene} --re
 expect("resolution above the GL maximum" 2 "GL_MAX_TEXTURE_SIZE" detect ${scene} --res 1000000)
 expect("negative epsilon" 2 "--epsilon" detect ${scene} --epsilon -1)
 expect("latitude out of range" 2 "--phi" detect ${scene} --phi 120)
-expect("unwritable json" 2 "cannot write" detect ${scene} --res 64 --json ${WORK}/no/such/dir/out.json)
-if(EXISTS ${WORK}/no/such/dir/out.json OR EXISTS ${WORK}/no/such/dir/out.json.tmp)
-  message(SEND_ERROR "unwritable json: a partial file was left")
+expect("unwritable json" 2 "the folder '.*/no/such/dir' does not exist" detect ${scene} --res 64 --json ${WORK}/no/such/dir/out.json)
+if(EXISTS ${WORK}/no/such/dir)
+  message(SEND_ERROR "unwritable json: something was created")
 endif()
+# Outputs that never destroy: a directory refused; a symlink followed (the link stays);
+# no temporary file left behind.
+file(MAKE_DIRECTORY ${WORK}/outdir)
+expect("json into a directory" 2 "outdir': is a directory" detect ${scene} --json ${WORK}/outdir)
+file(WRITE ${WORK}/outdir/target.json "old")
+file(CREATE_LINK target.json ${WORK}/outdir/link.json SYMBOLIC)
+expect("json through a symlink" 0 "" detect ${scene} --json ${WORK}/outdir/link.json --quiet)
+file(READ ${WORK}/outdir/target.json via_link)
+if(NOT IS_SYMLINK ${WORK}/outdir/link.json OR NOT via_link MATCHES "peelcd.result/2")
+  message(SEND_ERROR "json through a symlink: the link was replaced or its target not written")
+endif()
+file(GLOB leftovers ${WORK}/outdir/.*)
+if(leftovers)
+  message(SEND_ERROR "json: temporary files left behind: ${leftovers}")
+endif()
+# JSON on stdout: the human summary goes to stderr, stdout is one JSON document.
+execute_process(COMMAND ${PEELCD} detect ${scene} --check --json - RESULT_VARIABLE rc OUTPUT_VARIABLE out ERROR_VARIABLE err)
+string(JSON schema ERROR_VARIABLE json_error GET "${out}" schema)
+string(JSON exact ERROR_VARIABLE json_error2 GET "${out}" check exact)
+string(JSON tri_a ERROR_VARIABLE json_error3 GET "${out}" pairs 0 colliding 0 tri_a)
+if(NOT rc EQUAL 0 OR json_error OR NOT schema STREQUAL "peelcd.result/2" OR NOT exact EQUAL 228 OR json_error3
+   OR NOT err MATCHES "check: 228 exact pairs")
+  message(SEND_ERROR "json on stdout: rc ${rc}, schema '${schema}', check.exact '${exact}' ${json_error} ${json_error3}\n${err}")
+else()
+  message(STATUS "ok: json on stdout, human text on stderr, --check in the JSON")
+endif()
+file(WRITE ${WORK}/stdout.json "${out}")
+# Every JSON output validates against docs/schema/result.schema.json.
+expect("json: two meshes" 0 "" detect ${FIXTURES}/meshes/bunny_3k.obj ${FIXTURES}/meshes/kitten_1k5.obj --json ${WORK}/meshes.json --quiet)
+expect("json: many ROIs" 0 "" detect ${FIXTURES}/golden/crowded_conservative_16/case.json --check --stage image --json ${WORK}/crowd.json --quiet)
+execute_process(COMMAND ${PYTHON} ${SOURCE}/tests/oracle/validate_json.py ${SOURCE}/docs/schema/result.schema.json
+                        ${WORK}/stdout.json ${WORK}/meshes.json ${WORK}/crowd.json ${WORK}/out.json ${WORK}/outdir/target.json
+                RESULT_VARIABLE rc OUTPUT_VARIABLE out ERROR_VARIABLE err)
+if(NOT rc EQUAL 0)
+  message(SEND_ERROR "json: not valid against the schema\n${out}${err}")
+else()
+  message(STATUS "ok: ${out}")
+endif()
+# Inputs: mesh files without a scene; scene validation.
+expect("detect A.obj B.obj" 0 "bunny_3k x dragon_3k" detect ${FIXTURES}/meshes/bunny_3k.obj ${FIXTURES}/meshes/dragon_3k.obj)
+expect("detect one mesh" 2 "is one mesh: give a scene file" detect ${FIXTURES}/meshes/bunny_3k.obj)
+expect("detect the same mesh twice" 0 "bunny_3k x bunny_3k_2" detect ${FIXTURES}/meshes/bunny_3k.obj ${FIXTURES}/meshes/bunny_3k.obj)
+file(WRITE ${WORK}/dupnames.json "{\"objects\":[{\"name\":\"a\",\"mesh\":\"${FIXTURES}/meshes/bunny_3k.obj\"},{\"name\":\"a\",\"mesh\":\"${FIXTURES}/meshes/bunny_3k.obj\"}]}")
+expect("duplicate names" 2 "objects\\[1\\].name: duplicate name \"a\" \\(also objects\\[0\\]\\)" detect ${WORK}/dupnames.json)
+file(WRITE ${WORK}/huge.json "{\"objects\":[{\"name\":\"a\",\"mesh\":\"${FIXTURES}/meshes/bunny_3k.obj\",\"transform\":{\"scale\":1e39}},{\"name\":\"b\",\"mesh\":\"${FIXTURES}/meshes/dragon_3k.obj\"}]}")
+expect("scale beyond float" 2 "objects\\[0\\] \\(\"a\"\\): the transform gives the vertex .*outside the float range" detect ${WORK}/huge.json)
 
 # No overlapping boxes: no GL work.
 file(WRITE ${WORK}/apart.json "{\"objects\":[{\"mesh\":\"${FIXTURES}/meshes/bunny_3k.obj\"},

@@ -2,12 +2,18 @@
 // The JSON report of `peelcd detect --json`.
 #include "peelcd/core/frame.h"
 #include "peelcd/core/mesh.h"
+#include "peelcd/core/reference.h"
 
 #include <nlohmann/json.hpp>
 
 namespace peelcd {
 
+// The result's JSON schema name (docs/json.md, docs/schema/result.schema.json).
+inline constexpr const char* kResultSchema = "peelcd.result/2";
+
+// The report of one frame. With `check` (one Score per pair, `detect --check`), each pair and
+// the frame also carry the comparison with the exact reference.
 nlohmann::json to_json(const FrameResult& result, const std::vector<Object>& objects,
-                       const DetectOptions& options);
+                       const DetectOptions& options, const std::vector<Score>* check = nullptr);
 
 }  // namespace peelcd

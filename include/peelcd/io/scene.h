@@ -33,6 +33,10 @@ Scene parse_scene(const std::string& json_text, const std::string& path_for_mess
                   const std::string& base_dir);
 Scene load_scene(const std::string& path);  // throws InputError
 
+// A scene of mesh files at identity transforms, named by their file names (made distinct:
+// "bunny", "bunny_2"), with the default options: `peelcd detect A.obj B.obj`. Throws InputError.
+Scene scene_from_meshes(const std::vector<std::string>& paths);
+
 // Loads, validates and transforms every object's mesh into world space. Throws InputError.
 std::vector<Object> load_objects(const Scene& scene);
 
