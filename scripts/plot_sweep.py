@@ -11,6 +11,7 @@ import sys
 from collections import defaultdict
 
 import matplotlib
+import matplotlib.ticker
 
 matplotlib.use("Agg")
 import matplotlib.pyplot as plt  # noqa: E402
@@ -36,7 +37,9 @@ def main(path, out_dir):
                 grid[i][thetas.index(float(r["theta"]))] = miss
         avg = sum(100 * float(r["miss_ratio"]) for r in rs) / len(rs)
         fig, ax = plt.subplots(figsize=(7, 4.2))
-        im = ax.imshow(grid, origin="lower", aspect="auto", cmap="viridis", vmin=0,
+        worst = max((v for row in grid for v in row if v == v), default=0.0)
+        # A miss ratio cannot be negative: the scale starts at 0 (and spans 1% when all are 0).
+        im = ax.imshow(grid, origin="lower", aspect="auto", cmap="viridis", vmin=0, vmax=worst if worst > 0 else 1.0,
                        extent=[thetas[0], thetas[-1] + (thetas[1] - thetas[0] if len(thetas) > 1 else 30),
                                phis[0] - 5, phis[-1] + 5])
         fig.colorbar(im, ax=ax, label="miss ratio (%)")
@@ -48,20 +51,34 @@ def main(path, out_dir):
         fig.savefig(os.path.join(out_dir, f"heatmap_{name}.png"), dpi=110)
         plt.close(fig)
 
-    fig, ax = plt.subplots(figsize=(7, 4.5))
+    # Run time against miss ratio: one numbered point per configuration, the key beside the plot
+    # (labels on the points overlap when configurations cluster).
+    points = []
     for config, rs in by_config.items():
         avg = sum(100 * float(r["miss_ratio"]) for r in rs) / len(rs)
         times = sorted(float(r["total_ms"]) for r in rs)
-        median = times[len(times) // 2]
-        ax.scatter([median], [avg], s=40)
-        ax.annotate(config, (median, avg), fontsize=7, xytext=(4, 3), textcoords="offset points")
+        points.append((times[len(times) // 2], avg, config))
+    points.sort(key=lambda p: (p[1], p[0]))
+    fig = plt.figure(figsize=(13, max(5.5, 0.19 * len(points) + 1.5)))
+    ax = fig.add_axes([0.07, 0.1, 0.47, 0.8])
+    cmap = plt.get_cmap("tab20")
+    markers = "osD^vP*X"
+    for k, (t, m, config) in enumerate(points, 1):
+        ax.scatter([t], [m], s=36, color=cmap((k - 1) % 20), marker=markers[(k - 1) // 20 % len(markers)],
+                   label=f"{k}: {config}  ({t:.2f} ms, {m:.2f}%)")
+        ax.annotate(str(k), (t, m), fontsize=6, xytext=(3, 2), textcoords="offset points")
     ax.set_xlabel("median run time per frame (ms)")
     ax.set_ylabel("average miss ratio (%)")
     ax.set_xscale("log")
     ax.set_yscale("symlog", linthresh=0.1)  # the interesting configurations are below 1%
-    ax.set_title("run time against miss ratio")
-    ax.grid(True, alpha=0.3)
-    fig.tight_layout()
+    ax.set_ylim(bottom=0, top=max(1.0, max(m for _, m, _ in points) * 1.5))
+    ax.xaxis.set_major_locator(matplotlib.ticker.LogLocator(subs=(1.0, 2.0, 3.0, 5.0)))
+    ax.xaxis.set_major_formatter(matplotlib.ticker.FuncFormatter(lambda v, _: f"{v:g}"))
+    ax.xaxis.set_minor_formatter(matplotlib.ticker.NullFormatter())
+    ax.set_title(f"run time against miss ratio ({len(points)} configurations; lower left is better)")
+    ax.grid(True, which="both", alpha=0.3)
+    ax.legend(loc="upper left", bbox_to_anchor=(1.02, 1.0), fontsize=6.5, frameon=False,
+              title="configuration (median time, average miss)", title_fontsize=7)
     fig.savefig(os.path.join(out_dir, "time_vs_miss.png"), dpi=110)
     plt.close(fig)
 
