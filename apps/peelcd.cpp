@@ -22,6 +22,7 @@
 #include "peelcd/gl_osmesa/osmesa_context.h"
 #endif
 #include "peelcd/io/error.h"
+#include "peelcd/io/mesh_io.h"
 #include "peelcd/io/output.h"
 #include "peelcd/io/result_json.h"
 #include "peelcd/io/scene.h"
@@ -169,8 +170,9 @@ double median(std::vector<double> v) {
 Scene detect_input(const std::vector<std::string>& inputs) {
   const auto is_scene = [](const std::string& p) { return std::filesystem::path(p).extension() == ".json"; };
   if (inputs.size() == 1) {
+    if (is_node_scene(inputs[0])) return scene_from_meshes(inputs);  // a glTF scene: one object per node
     if (!is_scene(inputs[0]))
-      throw InputError("peelcd detect: '" + inputs[0] + "' is one mesh: give a scene file (.json) or two or more meshes");
+      throw InputError("peelcd detect: '" + inputs[0] + "' is one mesh: give a scene file (.json), a glTF scene (.gltf, .glb) or two or more meshes");
     return load_scene(inputs[0]);
   }
   for (const std::string& p : inputs)

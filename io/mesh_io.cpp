@@ -28,7 +28,8 @@ struct PositionHash {
 };
 
 void append_node(const aiScene* scene, const aiNode* node, const aiMatrix4x4& parent, Mesh& out,
-                 std::unordered_map<Vec3, std::uint32_t, PositionHash>& weld, const std::string& path) {
+                 std::unordered_map<Vec3, std::uint32_t, PositionHash>& weld, const std::string& path,
+                 bool recurse = true) {
   const aiMatrix4x4 xf = parent * node->mTransformation;
   for (unsigned i = 0; i < node->mNumMeshes; ++i) {
     const aiMesh* m = scene->mMeshes[node->mMeshes[i]];
@@ -55,7 +56,16 @@ void append_node(const aiScene* scene, const aiNode* node, const aiMatrix4x4& pa
         out.triangles.push_back({remap[face.mIndices[0]], remap[face.mIndices[k]], remap[face.mIndices[k + 1]]});
     }
   }
-  for (unsigned c = 0; c < node->mNumChildren; ++c) append_node(scene, node->mChildren[c], xf, out, weld, path);
+  if (recurse)
+    for (unsigned c = 0; c < node->mNumChildren; ++c) append_node(scene, node->mChildren[c], xf, out, weld, path);
+}
+
+// Every node that holds meshes, with its world transform, in depth-first order.
+void mesh_nodes(const aiNode* node, const aiMatrix4x4& parent,
+                std::vector<std::pair<const aiNode*, aiMatrix4x4>>& out) {
+  const aiMatrix4x4 xf = parent * node->mTransformation;
+  if (node->mNumMeshes > 0) out.push_back({node, parent});
+  for (unsigned c = 0; c < node->mNumChildren; ++c) mesh_nodes(node->mChildren[c], xf, out);
 }
 
 // Checks the header of an ASCII or binary PLY file line by line before assimp sees it: assimp
@@ -207,6 +217,41 @@ Mesh load_mesh(const std::string& path) {
   append_node(scene, scene->mRootNode, aiMatrix4x4(), mesh, weld, path);
   if (mesh.triangles.empty()) throw InputError("peelcd::load_mesh(): '" + path + "': the file has no triangles");
   return mesh;
+}
+
+bool is_node_scene(const std::string& path) {
+  std::string ext = std::filesystem::path(path).extension().string();
+  for (char& c : ext) c = char(std::tolower(static_cast<unsigned char>(c)));
+  return ext == ".gltf" || ext == ".glb";
+}
+
+std::vector<NamedMesh> load_mesh_nodes(const std::string& path) {
+  if (!is_node_scene(path)) return {{std::filesystem::path(path).stem().string(), load_mesh(path)}};
+  load_mesh(path);  // the same checks and messages as a single mesh (missing, empty, unreadable)
+  Assimp::Importer importer;
+  const aiScene* scene = importer.ReadFile(path, 0);
+  if (!scene || !scene->mRootNode) throw InputError("peelcd::load_mesh(): '" + path + "': cannot read it");
+  std::vector<std::pair<const aiNode*, aiMatrix4x4>> nodes;
+  mesh_nodes(scene->mRootNode, aiMatrix4x4(), nodes);
+  std::vector<NamedMesh> out;
+  for (std::size_t k = 0; k < nodes.size(); ++k) {
+    NamedMesh n;
+    n.name = nodes[k].first->mName.length ? nodes[k].first->mName.C_Str() : "node" + std::to_string(k);
+    std::unordered_map<Vec3, std::uint32_t, PositionHash> weld;
+    append_node(scene, nodes[k].first, nodes[k].second, n.mesh, weld, path, false);
+    if (n.mesh.triangles.empty()) continue;  // a node of points or lines only
+    // Node names need not be unique in glTF: made distinct (name, name_2, ...).
+    const std::string base = n.name;
+    for (int i = 2;; ++i) {
+      bool taken = false;
+      for (const NamedMesh& o : out) taken = taken || o.name == n.name;
+      if (!taken) break;
+      n.name = base + "_" + std::to_string(i);
+    }
+    out.push_back(std::move(n));
+  }
+  if (out.empty()) throw InputError("peelcd::load_mesh(): '" + path + "': the file has no triangles");
+  return out;
 }
 
 }  // namespace peelcd

@@ -215,31 +215,38 @@ std::vector<Object> load_objects(const Scene& scene) {
   for (std::size_t i = 0; i < scene.objects.size(); ++i) {
     const SceneObject& so = scene.objects[i];
     const std::string where = "'" + scene.path + "': objects[" + std::to_string(i) + "] (\"" + so.name + "\")";
-    Object o;
-    o.name = so.name;
-    const Mesh raw = load_mesh(so.mesh_path);
-    o.mesh = transformed(raw, so.transform);
-    try {
-      validate_mesh(raw, "'" + so.mesh_path + "'");
-    } catch (const std::invalid_argument& e) {
-      throw InputError(std::string("peelcd::load_objects(): ") + e.what());
-    }
-    // The image stage uploads float coordinates: beyond float's range a vertex becomes infinite.
-    constexpr double kFloatMax = 3.4028234663852886e38;
-    for (const Vec3& v : o.mesh.vertices)
-      if (!v.allFinite() || v.cwiseAbs().maxCoeff() > kFloatMax) {
-        char buf[160];
-        std::snprintf(buf, sizeof buf, "(%g, %g, %g)", v.x(), v.y(), v.z());
-        throw InputError("peelcd::load_objects(): " + where + ": the transform gives the vertex " + buf +
-                         ", outside the float range (|x| <= 3.4e38) the image stage works in: scale or "
-                         "translation too large");
+    // A glTF / GLB file with several mesh nodes becomes one object per node: named by the node
+    // ("object/node" when the scene has other objects too).
+    std::vector<NamedMesh> parts;
+    if (is_node_scene(so.mesh_path)) parts = load_mesh_nodes(so.mesh_path);
+    else parts.push_back({so.name, load_mesh(so.mesh_path)});
+    for (NamedMesh& part : parts) {
+      Object o;
+      o.name = parts.size() == 1 ? so.name : scene.objects.size() == 1 ? part.name : so.name + "/" + part.name;
+      const Mesh raw = std::move(part.mesh);
+      o.mesh = transformed(raw, so.transform);
+      try {
+        validate_mesh(raw, "'" + so.mesh_path + "'");
+      } catch (const std::invalid_argument& e) {
+        throw InputError(std::string("peelcd::load_objects(): ") + e.what());
       }
-    try {
-      validate_mesh(o.mesh, where);
-    } catch (const std::invalid_argument& e) {
-      throw InputError(std::string("peelcd::load_objects(): ") + e.what());
+      // The image stage uploads float coordinates: beyond float's range a vertex becomes infinite.
+      constexpr double kFloatMax = 3.4028234663852886e38;
+      for (const Vec3& v : o.mesh.vertices)
+        if (!v.allFinite() || v.cwiseAbs().maxCoeff() > kFloatMax) {
+          char buf[160];
+          std::snprintf(buf, sizeof buf, "(%g, %g, %g)", v.x(), v.y(), v.z());
+          throw InputError("peelcd::load_objects(): " + where + ": the transform gives the vertex " + buf +
+                           ", outside the float range (|x| <= 3.4e38) the image stage works in: scale or "
+                           "translation too large");
+        }
+      try {
+        validate_mesh(o.mesh, where);
+      } catch (const std::invalid_argument& e) {
+        throw InputError(std::string("peelcd::load_objects(): ") + e.what());
+      }
+      out.push_back(std::move(o));
     }
-    out.push_back(std::move(o));
   }
   return out;
 }

@@ -15,4 +15,14 @@ namespace peelcd {
 // triangles, or non-finite coordinates.
 Mesh load_mesh(const std::string& path);
 
+// A glTF / GLB file (.gltf, .glb) is a scene of nodes: one mesh per node that holds meshes, in
+// the node's world transform (the node's and its parents'), named by the node (made distinct).
+// Any other file gives one mesh named by the file's stem. Throws InputError.
+struct NamedMesh {
+  std::string name;
+  Mesh mesh;
+};
+bool is_node_scene(const std::string& path);
+std::vector<NamedMesh> load_mesh_nodes(const std::string& path);
+
 }  // namespace peelcd
