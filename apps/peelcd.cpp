@@ -40,7 +40,9 @@
 #include <fstream>
 #include <iostream>
 #include <memory>
+#include <sstream>
 #include <thread>
+#include <tuple>
 #include <unistd.h>
 
 namespace {
@@ -368,6 +370,7 @@ struct GoldenArgs {
   std::string peeler;  // empty: the case's (the default)
   std::string resolve;  // empty: the default (auto)
   std::string require_renderer;  // skip (exit 77) unless GL_RENDERER contains this
+  std::string shard;             // "K/N": every N-th case from the K-th
   int repeat = 1;
 };
 
@@ -413,6 +416,8 @@ int run_golden_record(const GoldenArgs& a) {
   return 0;
 }
 
+std::pair<std::size_t, std::size_t> parse_shard(const std::string& text, const std::string& what);
+
 int run_golden_compare(const GoldenArgs& a) {
   Runner runner = make_runner(a.backend);
   const std::string renderer = runner.renderer();
@@ -428,7 +433,13 @@ int run_golden_compare(const GoldenArgs& a) {
   std::printf("golden compare: backend %s, %s, %s tier\n", runner.backend().c_str(), renderer.c_str(),
               oracle::to_string(tier));
   int failed = 0;
-  for (const std::string& name : golden_cases(a)) {
+  const auto [shard, shards] = parse_shard(a.shard, "peelcd golden compare:");
+  const std::vector<std::string> all_cases = golden_cases(a);
+  std::vector<std::string> cases;
+  for (std::size_t i = 0; i < all_cases.size(); ++i)
+    if (i % shards == shard) cases.push_back(all_cases[i]);
+  if (shards > 1) std::printf("golden compare: shard %zu/%zu: %zu of %zu cases\n", shard + 1, shards, cases.size(), all_cases.size());
+  for (const std::string& name : cases) {
     Scene scene = load_scene(case_scene(a, name));
     runner.use(merged_gl_options(scene, a.peeler, a.resolve));
     const std::vector<Object> objects = load_objects(scene);
@@ -868,8 +879,105 @@ struct SweepArgs {
   double theta_step = 30, phi_step = 10;
   std::string csv, plot;
   std::string backend = "osmesa";
+  std::string shard;  // "K/N": the K-th of N deterministic slices of the view directions
 };
 
+// "K/N" (1 <= K <= N): which slice of a sharded run this is, as {K - 1, N}; {0, 1} when empty.
+std::pair<std::size_t, std::size_t> parse_shard(const std::string& text, const std::string& what) {
+  if (text.empty()) return {0, 1};
+  std::size_t k = 0, n = 0;
+  char slash = 0, rest = 0;
+  if (std::sscanf(text.c_str(), "%zu%c%zu%c", &k, &slash, &n, &rest) != 3 || slash != '/' || k < 1 || n < 1 || k > n)
+    throw InputError(what + " --shard \"" + text + "\": expected K/N with 1 <= K <= N, e.g. 2/8");
+  return {k - 1, n};
+}
+
+// Runs the plot script on a sweep CSV (Debian's interpreter, where python3-matplotlib lives,
+// unless PYTHON names another).
+void plot_sweep(const std::string& csv_path, const std::string& dir) {
+  std::filesystem::create_directories(dir);
+  const char* python = std::getenv("PYTHON");
+  const std::string py = python ? python : (std::filesystem::exists("/usr/bin/python3") ? "/usr/bin/python3" : "python3");
+  const std::string cmd = "'" + py + "' '" + std::string(PEELCD_SCRIPTS_DIR) + "/plot_sweep.py' '" + csv_path + "' '" + dir + "'";
+  if (std::system(cmd.c_str()) != 0)
+    throw InputError("peelcd sweep: plotting failed (needs python3-matplotlib): " + cmd);
+}
+
+// peelcd sweep merge: the CSVs of sharded sweeps joined into one, rows in (configuration, theta,
+// phi) order, each (configuration, direction) once.
+struct SweepMergeArgs {
+  std::vector<std::string> inputs;
+  std::string csv, plot;
+};
+
+int run_sweep_merge(const SweepMergeArgs& a) {
+  if (!a.csv.empty()) check_output_path(a.csv, "peelcd sweep merge: --csv");
+  struct Row {
+    std::size_t config;
+    double theta, phi;
+    std::string line, file;
+  };
+  std::string header;
+  std::vector<std::string> labels;
+  std::vector<Row> rows;
+  for (const std::string& path : a.inputs) {
+    std::ifstream in(path);
+    if (!in) throw InputError("peelcd sweep merge: '" + path + "': cannot read it");
+    std::string first, line;
+    if (!std::getline(in, first) || first.rfind("config,", 0) != 0)
+      throw InputError("peelcd sweep merge: '" + path + "': not a sweep CSV (no \"config,...\" header)");
+    if (header.empty()) header = first;
+    else if (first != header)
+      throw InputError("peelcd sweep merge: '" + path + "': its columns differ from '" + a.inputs[0] + "'");
+    std::size_t number = 1;
+    while (std::getline(in, line)) {
+      ++number;
+      if (line.empty()) continue;
+      // "label",resolution,ids,mode,slope,views,theta,phi,...
+      const std::size_t close = line.find("\",", 1);
+      std::vector<std::string> cols;
+      if (close != std::string::npos) {
+        std::istringstream fields(line.substr(close + 2));
+        std::string f;
+        while (std::getline(fields, f, ',')) cols.push_back(f);
+      }
+      const std::string where = "peelcd sweep merge: '" + path + "' line " + std::to_string(number);
+      if (line.front() != '"' || cols.size() < 7) throw InputError(where + ": malformed row");
+      double theta = 0, phi = 0;
+      try {
+        theta = std::stod(cols[5]);
+        phi = std::stod(cols[6]);
+      } catch (const std::exception&) {
+        throw InputError(where + ": malformed theta or phi");
+      }
+      const std::string label = line.substr(1, close - 1);
+      const auto it = std::find(labels.begin(), labels.end(), label);
+      const std::size_t config = std::size_t(it - labels.begin());
+      if (it == labels.end()) labels.push_back(label);
+      rows.push_back({config, theta, phi, line, path});
+    }
+  }
+  std::stable_sort(rows.begin(), rows.end(), [](const Row& x, const Row& y) {
+    return std::tie(x.config, x.theta, x.phi) < std::tie(y.config, y.theta, y.phi);
+  });
+  for (std::size_t i = 1; i < rows.size(); ++i)
+    if (rows[i].config == rows[i - 1].config && rows[i].theta == rows[i - 1].theta && rows[i].phi == rows[i - 1].phi)
+      throw InputError("peelcd sweep merge: \"" + labels[rows[i].config] + "\" at theta " + std::to_string(rows[i].theta) +
+                       ", phi " + std::to_string(rows[i].phi) + " is in both '" + rows[i - 1].file + "' and '" +
+                       rows[i].file + "' (the shards overlap)");
+  std::string out = header;
+  for (const Row& r : rows) out += "\n" + r.line;
+  std::fprintf(a.csv == "-" ? stderr : stdout, "sweep merge: %zu rows from %zu files, %zu configurations\n",
+               rows.size(), a.inputs.size(), labels.size());
+  std::string csv_path = a.csv;
+  if (csv_path.empty() && !a.plot.empty()) {
+    std::filesystem::create_directories(a.plot);
+    csv_path = a.plot + "/sweep.csv";
+  }
+  if (!csv_path.empty()) write_output(csv_path, out);
+  if (!a.plot.empty()) plot_sweep(csv_path, a.plot);
+  return 0;
+}
 
 int run_sweep_command(const SweepArgs& a) {
   if (!a.csv.empty()) check_output_path(a.csv, "peelcd sweep: --csv");
@@ -899,7 +1007,14 @@ int run_sweep_command(const SweepArgs& a) {
             }
       }
     }
-  const auto directions = sweep_directions(a.theta_step, a.phi_step);
+  const auto [shard, shards] = parse_shard(a.shard, "peelcd sweep:");
+  const auto all_directions = sweep_directions(a.theta_step, a.phi_step);
+  std::vector<std::pair<double, double>> directions;
+  for (std::size_t i = 0; i < all_directions.size(); ++i)
+    if (i % shards == shard) directions.push_back(all_directions[i]);
+  if (shards > 1)
+    std::fprintf(stderr, "sweep: shard %zu/%zu: %zu of %zu view directions\n", shard + 1, shards, directions.size(),
+                 all_directions.size());
   Runner runner = make_runner(a.backend);
   for (int res : a.res)
     if (res > runner.stage->max_resolution())
@@ -923,15 +1038,7 @@ int run_sweep_command(const SweepArgs& a) {
     csv_path = a.plot + "/sweep.csv";
   }
   if (!csv_path.empty()) write_output(csv_path, sweep_csv(rows, configs));
-  if (!a.plot.empty()) {
-    std::filesystem::create_directories(a.plot);
-    // Debian's interpreter, where python3-matplotlib lives, unless PYTHON names another.
-    const char* python = std::getenv("PYTHON");
-    const std::string py = python ? python : (std::filesystem::exists("/usr/bin/python3") ? "/usr/bin/python3" : "python3");
-    const std::string cmd = "'" + py + "' '" + std::string(PEELCD_SCRIPTS_DIR) + "/plot_sweep.py' '" + csv_path + "' '" + a.plot + "'";
-    if (std::system(cmd.c_str()) != 0)
-      throw InputError("peelcd sweep: plotting failed (needs python3-matplotlib): " + cmd);
-  }
+  if (!a.plot.empty()) plot_sweep(csv_path, a.plot);
   return 0;
 }
 
@@ -1142,6 +1249,7 @@ int main(int argc, char** argv) {
   compare->add_option("--resolve", gc.resolve, "auto, gpu or host: where the k-buffer is resolved (default: auto)");
   compare->add_option("--repeat", gc.repeat, "Run and compare each case N times in one process (determinism)")
       ->check(kPositive)->capture_default_str();
+  compare->add_option("--shard", gc.shard, "Compare the K-th of N deterministic slices of the cases (K/N)");
   compare->add_option("--require-renderer", gc.require_renderer,
                       "Skip (exit 77, for ctest) unless GL_RENDERER contains TEXT, e.g. zink");
   CompareDumpsArgs cd;
@@ -1191,7 +1299,16 @@ int main(int argc, char** argv) {
   CLI::App* sweep = app.add_subcommand(
       "sweep", "Measure accuracy and run time over view directions and configurations against the "
                "exact reference; prints a summary per configuration (average/max/min miss ratio)");
-  sweep->add_option("scene", sw.scene, "Scene JSON file")->required();
+  sweep->add_option("scene", sw.scene, "Scene JSON file");
+  sweep->add_option("--shard", sw.shard, "Run the K-th of N deterministic slices of the view directions (K/N, "
+                                         "e.g. 3/8); join the shards' CSVs with: peelcd sweep merge");
+  SweepMergeArgs sm;
+  CLI::App* sweep_merge = sweep->add_subcommand(
+      "merge", "Join the CSVs of sharded sweeps (sweep --shard K/N --csv ...) into one, in (configuration, view) "
+               "order, each row once");
+  sweep_merge->add_option("csv_files", sm.inputs, "The shards' CSV files")->required();
+  sweep_merge->add_option("--csv", sm.csv, "Write the joined CSV to FILE, or - for stdout");
+  sweep_merge->add_option("--plot", sm.plot, "Write heat maps and the run-time-against-miss-ratio plot to DIR (matplotlib)");
   sweep->add_option("--res", sw.res, "Resolutions (comma-separated)")->delimiter(',')->check(kPositive)
       ->capture_default_str();
   sweep->add_option("--ids", sw.ids, "ID modes: unique, paper, ring (comma-separated)")->delimiter(',')
@@ -1256,7 +1373,11 @@ int main(int argc, char** argv) {
     if (*record) return run_golden_record(gr);
     if (*compare) return run_golden_compare(gc);
     if (*compare_dumps) return run_compare_dumps(cd);
-    if (*sweep) return run_sweep_command(sw);
+    if (*sweep_merge) return run_sweep_merge(sm);
+    if (*sweep) {
+      if (sw.scene.empty()) throw InputError("peelcd sweep: a scene file is required (or: peelcd sweep merge CSV...)");
+      return run_sweep_command(sw);
+    }
     if (*classes) return run_classes(ca);
     if (*calibrate_cmd) return run_calibrate(cal);
   } catch (const InputError& e) {

@@ -187,6 +187,27 @@ expect("dump: bad resolution" 2 "resolution 100000 is outside" dump ${scene} --r
 if(EXISTS ${WORK}/dump_bad OR EXISTS ${WORK}/dump_bad.partial)
   message(SEND_ERROR "dump: a failed dump left ${WORK}/dump_bad behind")
 endif()
+# Sharded sweeps: three shards merged give the full sweep's rows (accuracy columns; times differ).
+set(sweep_args ${FIXTURES}/golden/boxes_crossing/case.json --res 32 --ids unique --mode full,paper --theta-step 90 --phi-step 45)
+expect("sweep: full" 0 "" sweep ${sweep_args} --csv ${WORK}/sweep_full.csv)
+foreach(k 1 2 3)
+  expect("sweep: shard ${k}/3" 0 "" sweep ${sweep_args} --shard ${k}/3 --csv ${WORK}/sweep_s${k}.csv)
+endforeach()
+expect("sweep merge" 0 "28 rows from 3 files, 2 configurations" sweep merge ${WORK}/sweep_s1.csv ${WORK}/sweep_s2.csv
+       ${WORK}/sweep_s3.csv --csv ${WORK}/sweep_merged.csv)
+execute_process(COMMAND ${PYTHON} -c "
+import csv, sys
+keep = ['config', 'theta', 'phi', 'exact', 'found', 'missed', 'false_contacts', 'pcs', 'candidates', 'layers']
+rows = lambda p: sorted(tuple(r[k] for k in keep) for r in csv.DictReader(open(p)))
+sys.exit(0 if rows(sys.argv[1]) == rows(sys.argv[2]) and len(rows(sys.argv[1])) == 28 else 1)"
+  ${WORK}/sweep_full.csv ${WORK}/sweep_merged.csv RESULT_VARIABLE rc)
+if(NOT rc EQUAL 0)
+  message(SEND_ERROR "sweep merge: the merged shards differ from the full sweep")
+endif()
+expect("sweep merge: overlapping shards" 2 "is in both" sweep merge ${WORK}/sweep_s1.csv ${WORK}/sweep_s1.csv --csv ${WORK}/sweep_bad.csv)
+expect("sweep: bad shard" 2 "expected K/N with 1 <= K <= N" sweep ${sweep_args} --shard 4/3)
+expect("golden compare: a shard" 0 "shard 2/5: 4 of 18 cases" golden compare --shard 2/5)
+
 # Crowded scenes: a cap on the ROIs a dump writes, and one pair by name.
 set(crowd ${FIXTURES}/golden/crowded_conservative_16/case.json)
 expect("dump: above --max-rois" 2 "20 overlapping pairs \\(ROIs\\), above --max-rois 5" dump ${crowd} --max-rois 5 --out ${WORK}/dump_crowd)
