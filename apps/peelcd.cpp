@@ -168,6 +168,33 @@ double median(std::vector<double> v) {
   return v.empty() ? 0.0 : (v.size() % 2 ? v[v.size() / 2] : 0.5 * (v[v.size() / 2 - 1] + v[v.size() / 2]));
 }
 
+// Progress on long work, in one place: a bar redrawn in place on stderr, and one-line phases
+// ("loading meshes", "running the frame") cleared when done, only when stderr is a terminal, so
+// logs and pipes stay clean. A command that prints a line per step on a terminal stdout (simulate,
+// golden compare) asks for the bar only when stdout is redirected (`unless_stdout_tty`).
+struct Progress {
+  std::string unit = "frames";
+  bool unless_stdout_tty = false;
+  bool tty = isatty(STDERR_FILENO) && !(unless_stdout_tty && isatty(STDOUT_FILENO));
+  Progress() = default;
+  Progress(std::string u, bool unless_stdout = false)
+      : unit(std::move(u)), unless_stdout_tty(unless_stdout),
+        tty(isatty(STDERR_FILENO) && !(unless_stdout && isatty(STDOUT_FILENO))) {}
+  void operator()(std::size_t done, std::size_t total) const {
+    if (!tty) return;
+    const int width = 40, filled = int(width * done / std::max<std::size_t>(total, 1));
+    std::fprintf(stderr, "\r[%s%s] %zu/%zu %s", std::string(filled, '#').c_str(),
+                 std::string(width - filled, ' ').c_str(), done, total, unit.c_str());
+    if (done == total) std::fprintf(stderr, "\n");
+  }
+  void phase(const std::string& what) const {
+    if (tty) std::fprintf(stderr, "\r\033[K%s", what.c_str());
+  }
+  void clear() const {
+    if (tty) std::fprintf(stderr, "\r\033[K");
+  }
+};
+
 // detect's input: one scene file, or two or more mesh files (identity transforms, default options).
 Scene detect_input(const std::vector<std::string>& inputs) {
   const auto is_scene = [](const std::string& p) { return std::filesystem::path(p).extension() == ".json"; };
@@ -184,9 +211,12 @@ Scene detect_input(const std::vector<std::string>& inputs) {
 
 int run_detect(const DetectArgs& a) {
   if (!a.json_out.empty()) check_output_path(a.json_out, "peelcd detect: --json");
+  const Progress progress;
+  progress.phase("peelcd detect: loading the meshes...");
   const Scene scene = detect_input(a.inputs);
   const DetectOptions opt = merged_options(scene, a);
   const std::vector<Object> objects = load_objects(scene);
+  progress.phase("peelcd detect: running the frame...");
 
   Runner runner = make_runner(a.backend, merged_gl_options(scene, a.peeler, a.resolve));
   FrameResult result;
@@ -195,6 +225,7 @@ int run_detect(const DetectArgs& a) {
     result = runner.detector->detect(objects, opt);
     runs.push_back(result.timings);
   }
+  progress.clear();
   if (runs.size() > 1) {  // report per-stage medians over the repeated frames
     const auto med = [&](double Timings::*f) {
       std::vector<double> v;
@@ -308,6 +339,8 @@ struct DumpArgs {
 };
 
 int run_dump(const DetectArgs& a, const DumpArgs& d) {
+  const Progress progress;
+  progress.phase("peelcd dump: loading the meshes...");
   const Scene scene = load_scene(a.scene);
   const DetectOptions opt = merged_options(scene, a);
   std::vector<Object> objects = load_objects(scene);
@@ -345,13 +378,16 @@ int run_dump(const DetectArgs& a, const DumpArgs& d) {
                        " overlapping pairs (ROIs), above --max-rois " + std::to_string(d.max_rois) +
                        ": dump one with --pair A,B, or raise --max-rois");
   }
+  progress.phase("peelcd dump: peeling and reading every layer back...");
   oracle::Dump dump = capture_frame(objects, opt, runner);
+  progress.phase("peelcd dump: writing the layers...");
   if (!original.empty())
     for (auto& p : dump.pairs) p.object_a = original[p.object_a], p.object_b = original[p.object_b];
   if (!d.pair.empty() && dump.pairs.empty() && !a.quiet)
     std::fprintf(stderr, "peelcd dump: %s and %s do not overlap: the dump has no ROI\n", objects[0].name.c_str(),
                  objects[1].name.c_str());
   oracle::write_dump(dump, d.out, true);
+  progress.clear();
   std::size_t layers = 0, views = 0;
   for (const auto& p : dump.pairs)
     for (const auto& v : p.views) layers += v.layers.size(), ++views;
@@ -439,7 +475,10 @@ int run_golden_compare(const GoldenArgs& a) {
   for (std::size_t i = 0; i < all_cases.size(); ++i)
     if (i % shards == shard) cases.push_back(all_cases[i]);
   if (shards > 1) std::printf("golden compare: shard %zu/%zu: %zu of %zu cases\n", shard + 1, shards, cases.size(), all_cases.size());
+  const Progress progress("cases", true);
+  std::size_t done = 0;
   for (const std::string& name : cases) {
+    progress(done++, cases.size());
     Scene scene = load_scene(case_scene(a, name));
     runner.use(merged_gl_options(scene, a.peeler, a.resolve));
     const std::vector<Object> objects = load_objects(scene);
@@ -457,6 +496,7 @@ int run_golden_compare(const GoldenArgs& a) {
       break;
     }
   }
+  progress(cases.size(), cases.size());
   std::printf("golden compare: %d case(s) differ\n", failed);
   return failed ? 1 : 0;
 }
@@ -482,18 +522,6 @@ int run_compare_dumps(const CompareDumpsArgs& a) {
   std::printf("%s", oracle::write_report(expected, actual, c, label, a.report).c_str());
   return 1;
 }
-
-// A terminal-aware progress bar on stderr: redrawn in place on a terminal, silent otherwise.
-struct Progress {
-  bool tty = isatty(STDERR_FILENO);
-  void operator()(std::size_t done, std::size_t total) const {
-    if (!tty) return;
-    const int width = 40, filled = int(width * done / std::max<std::size_t>(total, 1));
-    std::fprintf(stderr, "\r[%s%s] %zu/%zu frames", std::string(filled, '#').c_str(),
-                 std::string(width - filled, ' ').c_str(), done, total);
-    if (done == total) std::fprintf(stderr, "\n");
-  }
-};
 
 // ---- dynamic scenes and benchmarks ----
 
@@ -566,7 +594,9 @@ int run_simulate(const SimArgs& a) {
   std::vector<PhaseSum> phases(seq->phases());
   std::size_t false_total = 0;
   FrameResult r;  // reused frame after frame, as an application would
+  const Progress progress("frames", true);
   for (std::size_t f = 0; f < seq->frames(); ++f) {
+    progress(f, seq->frames());
     seq->frame(f, objects);
     runner.detector->detect(objects, opt, r);
     const bench::PeerFrame exact = bench::cgal_frame(objects);
@@ -597,6 +627,7 @@ int run_simulate(const SimArgs& a) {
     p.cpu += t.cpu;
     p.total += t.total;
   }
+  progress(seq->frames(), seq->frames());
   const bool paper_scene = seq->name() == "test1" || seq->name() == "test2";
   std::printf(paper_scene ? "\nsummary (means per phase; the paper's table beside, GeForce 7900GTX; ms)\n"
                           : "\nsummary (means; ms)\n");
@@ -1020,7 +1051,7 @@ int run_sweep_command(const SweepArgs& a) {
     if (res > runner.stage->max_resolution())
       throw InputError("peelcd sweep: --res " + std::to_string(res) + " is above GL_MAX_TEXTURE_SIZE " +
                        std::to_string(runner.stage->max_resolution()));
-  const auto rows = run_sweep(*runner.detector, objects, configs, directions, Progress{});
+  const auto rows = run_sweep(*runner.detector, objects, configs, directions, Progress("views"));
 
   std::printf("sweep: %s, %zu views per configuration (theta step %g, phi step %g), %s\n", a.scene.c_str(),
               directions.size(), a.theta_step, a.phi_step, runner.renderer().c_str());

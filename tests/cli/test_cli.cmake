@@ -207,6 +207,14 @@ endif()
 expect("sweep merge: overlapping shards" 2 "is in both" sweep merge ${WORK}/sweep_s1.csv ${WORK}/sweep_s1.csv --csv ${WORK}/sweep_bad.csv)
 expect("sweep: bad shard" 2 "expected K/N with 1 <= K <= N" sweep ${sweep_args} --shard 4/3)
 expect("golden compare: a shard" 0 "shard 2/5: 4 of 18 cases" golden compare --shard 2/5)
+# Progress is for terminals only: with stderr a pipe (as here), nothing but messages.
+execute_process(COMMAND ${PEELCD} golden compare --shard 1/6 OUTPUT_VARIABLE out ERROR_VARIABLE err)
+execute_process(COMMAND ${PEELCD} detect ${scene} --quiet OUTPUT_VARIABLE out2 ERROR_VARIABLE err2)
+if(NOT err STREQUAL "" OR NOT err2 STREQUAL "")
+  message(SEND_ERROR "progress: printed to a stderr that is not a terminal:\n${err}${err2}")
+else()
+  message(STATUS "ok: no progress output when stderr is not a terminal")
+endif()
 
 # Crowded scenes: a cap on the ROIs a dump writes, and one pair by name.
 set(crowd ${FIXTURES}/golden/crowded_conservative_16/case.json)
