@@ -348,6 +348,14 @@ int run_dump(const DetectArgs& a, const DumpArgs& d) {
   if (std::filesystem::exists(d.out) &&
       !(std::filesystem::is_directory(d.out) && std::filesystem::is_empty(d.out)))
     throw InputError("peelcd dump: --out '" + d.out + "' exists and is not an empty folder");
+  {
+    const std::filesystem::path parent = std::filesystem::path(d.out).parent_path();
+    if (!parent.empty() && !std::filesystem::is_directory(parent))
+      throw InputError("peelcd dump: --out '" + d.out + "': the folder '" + parent.string() + "' does not exist");
+    if (access(parent.empty() ? "." : parent.c_str(), W_OK | X_OK) != 0)
+      throw InputError("peelcd dump: --out '" + d.out + "': cannot write into the folder '" +
+                       (parent.empty() ? std::string(".") : parent.string()) + "'");
+  }
   std::vector<std::size_t> original;  // object indices in the scene, for --pair
   if (!d.pair.empty()) {
     const std::size_t comma = d.pair.find(',');

@@ -183,6 +183,7 @@ foreach(f meta.json index.html pair0_bunny_dragon/pcs.txt pair0_bunny_dragon/col
   endif()
 endforeach()
 expect("dump: output exists" 2 "exists and is not an empty folder" dump ${scene} --res 64 --out ${WORK}/dump)
+expect("dump: missing parent folder" 2 "the folder '.*/no/such' does not exist" dump ${scene} --out ${WORK}/no/such/dump)
 expect("dump: bad resolution" 2 "resolution 100000 is outside" dump ${scene} --res 100000 --out ${WORK}/dump_bad)
 if(EXISTS ${WORK}/dump_bad OR EXISTS ${WORK}/dump_bad.partial)
   message(SEND_ERROR "dump: a failed dump left ${WORK}/dump_bad behind")
