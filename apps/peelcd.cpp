@@ -394,7 +394,10 @@ int run_dump(const DetectArgs& a, const DumpArgs& d) {
   if (!d.pair.empty() && dump.pairs.empty() && !a.quiet)
     std::fprintf(stderr, "peelcd dump: %s and %s do not overlap: the dump has no ROI\n", objects[0].name.c_str(),
                  objects[1].name.c_str());
-  oracle::write_dump(dump, d.out, true);
+  {
+    const DeferSignals hold;  // Ctrl-C while writing: the dump completes (or is removed), then exit
+    oracle::write_dump(dump, d.out, true);
+  }
   progress.clear();
   std::size_t layers = 0, views = 0;
   for (const auto& p : dump.pairs)
@@ -448,6 +451,7 @@ int run_golden_record(const GoldenArgs& a) {
     const oracle::Dump dump = capture_frame(objects, scene.options, runner);
     const std::string dir = a.dir + "/" + name + "/expected", fresh = dir + ".new";
     std::error_code ec;
+    const DeferSignals hold;  // Ctrl-C: this case's goldens are replaced whole, or not at all
     std::filesystem::remove_all(fresh, ec);
     oracle::write_dump(dump, fresh, false);
     std::filesystem::remove_all(dir);

@@ -7,9 +7,32 @@
 //   - a directory, a missing parent folder or a folder that cannot be written is refused with
 //     an InputError naming the path; check_output_path() says so before any work is done;
 //   - no temporary file is left behind, also on errors and on SIGINT / SIGTERM.
+#include <signal.h>
+
 #include <string>
 
 namespace peelcd {
+
+// Holds SIGINT, SIGTERM and SIGHUP back while it lives (a folder of files being written and
+// renamed into place, as `peelcd dump` does): a Ctrl-C then takes effect when the folder is
+// complete or cleaned up, never between. The held signal is delivered when this ends.
+class DeferSignals {
+ public:
+  DeferSignals() {
+    sigset_t set;
+    sigemptyset(&set);
+    sigaddset(&set, SIGINT);
+    sigaddset(&set, SIGTERM);
+    sigaddset(&set, SIGHUP);
+    sigprocmask(SIG_BLOCK, &set, &old_);
+  }
+  ~DeferSignals() { sigprocmask(SIG_SETMASK, &old_, nullptr); }
+  DeferSignals(const DeferSignals&) = delete;
+  DeferSignals& operator=(const DeferSignals&) = delete;
+
+ private:
+  sigset_t old_;
+};
 
 // Throws InputError ("<what> 'path': ...") when `path` cannot be written as described above.
 void check_output_path(const std::string& path, const std::string& what);
