@@ -104,6 +104,32 @@ file(READ ${WORK}/outdir/target.json via_link)
 if(NOT IS_SYMLINK ${WORK}/outdir/link.json OR NOT via_link MATCHES "peelcd.result/2")
   message(SEND_ERROR "json through a symlink: the link was replaced or its target not written")
 endif()
+# A FIFO is written in place as a stream (a reader gets the JSON); a character device too, and it
+# stays a device (as root, a rename would replace /dev/null-like nodes with a file).
+execute_process(COMMAND sh -c "rm -f '${WORK}/outdir/fifo' && mkfifo '${WORK}/outdir/fifo' && (cat '${WORK}/outdir/fifo' > '${WORK}/fifo_read.json' &) && '${PEELCD}' detect '${scene}' --json '${WORK}/outdir/fifo' --quiet; rc=$?; sleep 0.3; rm -f '${WORK}/outdir/fifo'; exit $rc"
+                RESULT_VARIABLE rc)
+file(READ ${WORK}/fifo_read.json fifo_json)
+if(NOT rc EQUAL 0 OR NOT fifo_json MATCHES "peelcd.result/2")
+  message(SEND_ERROR "json into a FIFO: exit ${rc}, the reader got:\n${fifo_json}")
+else()
+  message(STATUS "ok: json into a FIFO")
+endif()
+expect("json into a character device" 0 "" detect ${scene} --json /dev/null --quiet)
+execute_process(COMMAND test -c /dev/null RESULT_VARIABLE rc)
+if(NOT rc EQUAL 0)
+  message(FATAL_ERROR "json into a character device: /dev/null is no longer a character device")
+endif()
+expect("json into /dev/full" 2 "/dev/full': cannot write it" detect ${scene} --json /dev/full --quiet)
+# An unwritable file: refused before any work (not testable as root, who may write anything).
+execute_process(COMMAND id -u OUTPUT_VARIABLE uid OUTPUT_STRIP_TRAILING_WHITESPACE)
+if(NOT uid STREQUAL "0")
+  file(WRITE ${WORK}/outdir/readonly.json "keep")
+  file(CHMOD ${WORK}/outdir/readonly.json PERMISSIONS OWNER_READ)
+  expect("json onto an unwritable file" 2 "the file is not writable" detect ${scene} --json ${WORK}/outdir/readonly.json)
+  file(REMOVE ${WORK}/outdir/readonly.json)
+else()
+  message(STATUS "skipped: json onto an unwritable file (running as root)")
+endif()
 file(GLOB leftovers ${WORK}/outdir/.*)
 if(leftovers)
   message(SEND_ERROR "json: temporary files left behind: ${leftovers}")
@@ -194,6 +220,15 @@ expect("sweep: full" 0 "" sweep ${sweep_args} --csv ${WORK}/sweep_full.csv)
 foreach(k 1 2 3)
   expect("sweep: shard ${k}/3" 0 "" sweep ${sweep_args} --shard ${k}/3 --csv ${WORK}/sweep_s${k}.csv)
 endforeach()
+foreach(k 1 2)
+  expect("sweep: shard ${k}/2" 0 "" sweep ${sweep_args} --shard ${k}/2 --csv ${WORK}/sweep_h${k}.csv)
+endforeach()
+# Two halves merged, with the plots (python3-matplotlib, installed by the bootstrap).
+expect("sweep merge: halves, plotted" 0 "28 rows from 2 files" sweep merge ${WORK}/sweep_h1.csv ${WORK}/sweep_h2.csv
+       --csv ${WORK}/sweep_halves.csv --plot ${WORK}/sweep_plots)
+if(NOT EXISTS ${WORK}/sweep_plots/time_vs_miss.png)
+  message(SEND_ERROR "sweep merge --plot: no time_vs_miss.png")
+endif()
 expect("sweep merge" 0 "28 rows from 3 files, 2 configurations" sweep merge ${WORK}/sweep_s1.csv ${WORK}/sweep_s2.csv
        ${WORK}/sweep_s3.csv --csv ${WORK}/sweep_merged.csv)
 execute_process(COMMAND ${PYTHON} -c "
@@ -202,8 +237,14 @@ keep = ['config', 'theta', 'phi', 'exact', 'found', 'missed', 'false_contacts', 
 rows = lambda p: sorted(tuple(r[k] for k in keep) for r in csv.DictReader(open(p)))
 sys.exit(0 if rows(sys.argv[1]) == rows(sys.argv[2]) and len(rows(sys.argv[1])) == 28 else 1)"
   ${WORK}/sweep_full.csv ${WORK}/sweep_merged.csv RESULT_VARIABLE rc)
-if(NOT rc EQUAL 0)
-  message(SEND_ERROR "sweep merge: the merged shards differ from the full sweep")
+execute_process(COMMAND ${PYTHON} -c "
+import csv, sys
+keep = ['config', 'theta', 'phi', 'exact', 'found', 'missed', 'false_contacts', 'pcs', 'candidates', 'layers']
+rows = lambda p: sorted(tuple(r[k] for k in keep) for r in csv.DictReader(open(p)))
+sys.exit(0 if rows(sys.argv[1]) == rows(sys.argv[2]) else 1)"
+  ${WORK}/sweep_full.csv ${WORK}/sweep_halves.csv RESULT_VARIABLE rc2)
+if(NOT rc EQUAL 0 OR NOT rc2 EQUAL 0)
+  message(SEND_ERROR "sweep merge: the merged shards differ from the full sweep (3 shards: ${rc}, 2 shards: ${rc2})")
 endif()
 expect("sweep merge: overlapping shards" 2 "is in both" sweep merge ${WORK}/sweep_s1.csv ${WORK}/sweep_s1.csv --csv ${WORK}/sweep_bad.csv)
 expect("sweep: bad shard" 2 "expected K/N with 1 <= K <= N" sweep ${sweep_args} --shard 4/3)
