@@ -192,26 +192,35 @@ Mesh read_off(const std::string& path) {
 
 }  // namespace
 
-Mesh load_mesh(const std::string& path) {
+namespace {
+
+// The checks every mesh file gets, then assimp's import (no post-processing: its triangulation
+// asserts (aborts) on some malformed files, which fuzzing found (docs/robustness.md); polygons
+// are split in append_node instead). Null for OFF files, which peelcd reads itself.
+const aiScene* import_checked(const std::string& path, Assimp::Importer& importer) {
   namespace fs = std::filesystem;
   std::error_code ec;
   if (!fs::exists(path, ec)) throw InputError("peelcd::load_mesh(): '" + path + "': no such file");
   if (fs::is_directory(path, ec)) throw InputError("peelcd::load_mesh(): '" + path + "': is a directory, not a mesh file");
   if (fs::file_size(path, ec) == 0) throw InputError("peelcd::load_mesh(): '" + path + "': the file is empty");
-
   std::string ext = std::filesystem::path(path).extension().string();
   for (char& c : ext) c = char(std::tolower(static_cast<unsigned char>(c)));
-  if (ext == ".off") return read_off(path);
+  if (ext == ".off") return nullptr;
   if (const std::string problem = ply_header_problem(path); !problem.empty())
     throw InputError("peelcd::load_mesh(): '" + path + "': " + problem);
-
-  Assimp::Importer importer;
-  // No post-processing: assimp's triangulation asserts (aborts) on some malformed files, which
-  // fuzzing found (docs/robustness.md); polygons are split below instead.
   const aiScene* scene = importer.ReadFile(path, 0);
   if (!scene || !scene->mRootNode || (scene->mFlags & AI_SCENE_FLAGS_INCOMPLETE))
     throw InputError("peelcd::load_mesh(): '" + path + "': cannot read it as a mesh: " +
                      importer.GetErrorString());
+  return scene;
+}
+
+}  // namespace
+
+Mesh load_mesh(const std::string& path) {
+  Assimp::Importer importer;
+  const aiScene* scene = import_checked(path, importer);
+  if (!scene) return read_off(path);
   Mesh mesh;
   std::unordered_map<Vec3, std::uint32_t, PositionHash> weld;
   append_node(scene, scene->mRootNode, aiMatrix4x4(), mesh, weld, path);
@@ -227,10 +236,8 @@ bool is_node_scene(const std::string& path) {
 
 std::vector<NamedMesh> load_mesh_nodes(const std::string& path) {
   if (!is_node_scene(path)) return {{std::filesystem::path(path).stem().string(), load_mesh(path)}};
-  load_mesh(path);  // the same checks and messages as a single mesh (missing, empty, unreadable)
   Assimp::Importer importer;
-  const aiScene* scene = importer.ReadFile(path, 0);
-  if (!scene || !scene->mRootNode) throw InputError("peelcd::load_mesh(): '" + path + "': cannot read it");
+  const aiScene* scene = import_checked(path, importer);  // never null: not an OFF file
   std::vector<std::pair<const aiNode*, aiMatrix4x4>> nodes;
   mesh_nodes(scene->mRootNode, aiMatrix4x4(), nodes);
   std::vector<NamedMesh> out;
