@@ -173,13 +173,10 @@ double median(std::vector<double> v) {
 // logs and pipes stay clean. A command that prints a line per step on a terminal stdout (simulate,
 // golden compare) asks for the bar only when stdout is redirected (`unless_stdout_tty`).
 struct Progress {
-  std::string unit = "frames";
-  bool unless_stdout_tty = false;
-  bool tty = isatty(STDERR_FILENO) && !(unless_stdout_tty && isatty(STDOUT_FILENO));
-  Progress() = default;
-  Progress(std::string u, bool unless_stdout = false)
-      : unit(std::move(u)), unless_stdout_tty(unless_stdout),
-        tty(isatty(STDERR_FILENO) && !(unless_stdout && isatty(STDOUT_FILENO))) {}
+  std::string unit;
+  bool tty;  // draw at all
+  explicit Progress(std::string u = "frames", bool unless_stdout_tty = false)
+      : unit(std::move(u)), tty(isatty(STDERR_FILENO) && !(unless_stdout_tty && isatty(STDOUT_FILENO))) {}
   void operator()(std::size_t done, std::size_t total) const {
     if (!tty) return;
     const int width = 40, filled = int(width * done / std::max<std::size_t>(total, 1));
