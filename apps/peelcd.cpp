@@ -27,6 +27,7 @@
 #include "peelcd/io/result_json.h"
 #include "peelcd/io/scene.h"
 #include "peelcd/oracle/dump.h"
+#include "peelcd/oracle/explain.h"
 
 #include <CLI/CLI.hpp>
 
@@ -100,6 +101,7 @@ struct DetectArgs {
   int views = 0;  // 0 = not given
   bool check = false;
   bool quiet = false;
+  int explain_misses = 0;  // detect --check: explain the first N missed pairs
   std::string backend = "osmesa";
 };
 
@@ -236,10 +238,19 @@ int run_detect(const DetectArgs& a) {
   // --check: every pair against the exact reference (in the JSON too).
   Score total;
   std::vector<Score> scores;
+  std::vector<oracle::PairQuery> misses;  // in frame order, for --explain-misses
   if (a.check)
     for (const PairResult& p : result.pairs) {
-      scores.push_back(score_contacts(exact_colliding_pairs(objects[p.object_a].mesh, objects[p.object_b].mesh),
-                                      p.colliding));
+      const std::vector<std::uint64_t> exact = exact_colliding_pairs(objects[p.object_a].mesh, objects[p.object_b].mesh);
+      scores.push_back(score_contacts(exact, p.colliding));
+      if (misses.size() < std::size_t(a.explain_misses))
+        for (const std::uint64_t k : exact) {
+          const bool reported = std::any_of(p.colliding.begin(), p.colliding.end(), [&](const Contact& c) {
+            return c.tri_a == pair_a(k) && c.tri_b == pair_b(k);
+          });
+          if (!reported && misses.size() < std::size_t(a.explain_misses))
+            misses.push_back({p.object_a, p.object_b, pair_a(k), pair_b(k)});
+        }
       total.exact += scores.back().exact;
       total.found += scores.back().found;
       total.missed += scores.back().missed;
@@ -295,10 +306,54 @@ int run_detect(const DetectArgs& a) {
   if (a.check && !a.quiet)
     std::fprintf(human, "check: %zu exact pairs, %zu missed (miss ratio %.4f%%)\n", total.exact, total.missed,
                 100.0 * total.miss_ratio());
+  if (!misses.empty()) {  // --explain-misses: the same frame again, every layer captured
+    const oracle::FrameTrace trace(*runner.detector, objects, opt);
+    std::fprintf(human, "explain: the first %zu missed pair(s) (peelcd explain ... --pair A:TRI,B:TRI for the whole walk)\n",
+                 misses.size());
+    for (const oracle::PairQuery& m : misses)
+      std::fprintf(human, "  %s:%u,%s:%u: %s\n", objects[m.object_a].name.c_str(), m.tri_a,
+                   objects[m.object_b].name.c_str(), m.tri_b, trace.explain(m).verdict_line.c_str());
+  }
   if (a.check && !std::isnan(a.max_miss) && 100.0 * total.miss_ratio() > a.max_miss) {
     std::fprintf(stderr, "peelcd detect: miss ratio %.4f%% is above --max-miss %g%%\n", 100.0 * total.miss_ratio(),
                  a.max_miss);
     return 3;
+  }
+  return 0;
+}
+
+struct ExplainArgs {
+  std::string pair;  // OBJ_A:TRI_A,OBJ_B:TRI_B
+  std::string out;   // the page's folder
+};
+
+// peelcd explain: why one triangle pair was found or missed (peelcd/oracle/explain.h).
+int run_explain(const DetectArgs& a, const ExplainArgs& x) {
+  if (!a.json_out.empty()) check_output_path(a.json_out, "peelcd explain: --json");
+  if (!x.out.empty()) {
+    const std::filesystem::path out(x.out);
+    if (std::filesystem::exists(out) && !(std::filesystem::is_directory(out) && std::filesystem::is_empty(out)))
+      throw InputError("peelcd explain: --out '" + x.out + "' exists and is not an empty folder");
+    if (!out.parent_path().empty() && !std::filesystem::is_directory(out.parent_path()))
+      throw InputError("peelcd explain: --out '" + x.out + "': the parent folder does not exist");
+  }
+  const Progress progress;
+  progress.phase("peelcd explain: loading the meshes...");
+  const Scene scene = detect_input(a.inputs);
+  const DetectOptions opt = merged_options(scene, a);
+  const std::vector<Object> objects = load_objects(scene);
+  const oracle::PairQuery query = oracle::parse_pair_query(x.pair, objects);
+  progress.phase("peelcd explain: running the frame...");
+  Runner runner = make_runner(a.backend, merged_gl_options(scene, a.peeler, a.resolve));
+  const oracle::FrameTrace trace(*runner.detector, objects, opt);
+  const oracle::Explanation e = trace.explain(query);
+  progress.clear();
+  FILE* const human = a.json_out == "-" ? stderr : stdout;
+  if (!a.quiet) std::fputs(oracle::explain_text(e).c_str(), human);
+  if (!a.json_out.empty()) write_output(a.json_out, oracle::to_json(e).dump(2));
+  if (!x.out.empty()) {
+    oracle::write_explain_page(e, x.out);
+    if (!a.quiet) std::fprintf(human, "page: %s/index.html\n", x.out.c_str());
   }
   return 0;
 }
@@ -1252,6 +1307,25 @@ int main(int argc, char** argv) {
       ->check(CLI::Range(0.0, 100.0))
       ->needs(check_flag);
   detect->add_flag("--quiet", d.quiet, "No human summary");
+  detect->add_option("--explain-misses", d.explain_misses,
+                     "With --check: run `peelcd explain` on the first N missed pairs and print their verdicts")
+      ->check(kPositive)
+      ->needs(check_flag);
+
+  DetectArgs ex;
+  ExplainArgs explain_args;
+  CLI::App* explain = app.add_subcommand(
+      "explain", "Say why one triangle pair was found or missed: the exact answer, the ROI, culling, and per view "
+                 "the fragments, the layers and the PCS tests at the segment's texels, then a one-line verdict "
+                 "(docs/debugging.md)");
+  explain->add_option("input", ex.inputs, "A scene JSON file, or two or more mesh files (as detect)")->required();
+  explain->add_option("--pair", explain_args.pair, "The pair: OBJ_A:TRI_A,OBJ_B:TRI_B (object name or index, triangle index)")
+      ->required();
+  add_frame_options(explain, ex);
+  explain->add_option("--out", explain_args.out, "Write a page (index.html, one zoomed picture per view, "
+                                                 "explain.json) to this folder (must not exist, or be empty)");
+  explain->add_option("--json", ex.json_out, "Write the explanation as JSON to FILE, or - for stdout");
+  explain->add_flag("--quiet", ex.quiet, "No text report");
 
   DetectArgs du;
   CLI::App* dump = app.add_subcommand(
@@ -1407,6 +1481,7 @@ int main(int argc, char** argv) {
   }
   try {
     if (*detect) return run_detect(d);
+    if (*explain) return run_explain(ex, explain_args);
     if (*dump) return run_dump(du, dump_args);
     if (*simulate) return run_simulate(si);
     if (*benchmark) return run_bench(be);

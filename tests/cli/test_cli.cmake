@@ -295,3 +295,34 @@ expect("bench" 0 "threads: CGAL and FCL 1.*exact CPU path.*CGAL, cropped.*FCL 0.
 expect("bench crowd" 0 "crowd, 1 frames, 8 objects.*CGAL, cropped" bench crowd --objects 8 --frames 1)
 expect("calibrate help" 0 "cost models" calibrate --help)
 expect("bench: bad peeler" 2 "unknown peeler" detect ${scene} --peeler magic)
+
+# peelcd explain (docs/debugging.md): one pair's walk and verdict; detect --explain-misses.
+expect("explain: separated under the paper's configuration" 0
+       "exact: the triangles intersect.*view 0: .*texel .*verdict: missed: separated by a layer of the same object"
+       explain ${scene} --paper --pair bunny:351,dragon:1283 --out ${WORK}/explain_page --json ${WORK}/explain.json)
+foreach(f index.html view0.png explain.json)
+  if(NOT EXISTS ${WORK}/explain_page/${f})
+    message(SEND_ERROR "explain --out: ${f} missing")
+  endif()
+endforeach()
+file(READ ${WORK}/explain.json explained)
+string(JSON verdict GET "${explained}" verdict)
+string(JSON intersect GET "${explained}" exact intersect)
+string(JSON nviews LENGTH "${explained}" views)
+if(NOT verdict STREQUAL "separated" OR NOT intersect OR NOT nviews EQUAL 1)
+  message(SEND_ERROR "explain --json: verdict ${verdict}, intersect ${intersect}, views ${nviews}")
+endif()
+expect("explain: the default finds it (exact CPU path on llvmpipe)" 0 "verdict: found by the exact CPU path"
+       explain ${scene} --pair bunny:351,dragon:1283)
+expect("explain: the image stage forced finds it" 0 "verdict: found in view 0 at texel"
+       explain ${scene} --stage image --pair dragon:1283,bunny:351)
+expect("explain: JSON on stdout" 0 "\"schema\": \"peelcd.explain/1\"" explain ${scene} --pair 0:351,1:1283 --json - --quiet)
+expect("explain: unknown object" 2 "--pair 'cat:1,dragon:2': no object named 'cat'" explain ${scene} --pair cat:1,dragon:2)
+expect("explain: triangle out of range" 2 "triangle 99999 is out of range" explain ${scene} --pair bunny:99999,dragon:2)
+expect("explain: same object" 2 "same object" explain ${scene} --pair bunny:1,bunny:2)
+expect("explain: --pair required" 2 "--pair is required" explain ${scene})
+expect("explain: page folder not empty" 2 "not an empty folder"
+       explain ${scene} --paper --pair bunny:351,dragon:1283 --out ${WORK}/explain_page)
+expect("detect --explain-misses" 3 "explain: the first 3 missed pair.*bunny:[0-9]+,dragon:[0-9]+: missed: "
+       detect ${scene} --paper --check --max-miss 1 --explain-misses 3)
+expect("explain-misses needs check" 2 "requires --check" detect ${scene} --explain-misses 3)

@@ -1,0 +1,849 @@
+#include "peelcd/oracle/explain.h"
+
+#include "peelcd/core/cpu_stage.h"
+#include "peelcd/core/cull.h"
+#include "peelcd/core/id_map.h"
+#include "peelcd/core/narrow_phase.h"
+#include "peelcd/io/error.h"
+#include "peelcd/io/options_json.h"
+#include "peelcd/io/output.h"
+#include "peelcd/oracle/dump.h"
+
+#include <algorithm>
+#include <cmath>
+#include <cstdio>
+#include <cstring>
+#include <filesystem>
+#include <fstream>
+#include <limits>
+#include <set>
+#include <sstream>
+
+namespace peelcd::oracle {
+namespace {
+
+namespace fs = std::filesystem;
+
+float as_float(std::uint32_t bits) {
+  float f;
+  std::memcpy(&f, &bits, sizeof f);
+  return f;
+}
+
+std::string fmt(const char* format, double v) {
+  char buf[64];
+  std::snprintf(buf, sizeof buf, format, v);
+  return buf;
+}
+std::string g(double v) { return fmt("%.6g", v); }
+
+// Triangle t's box touches `box` (closed), as the detector decides it.
+bool touches(const Mesh& mesh, std::uint32_t t, const Aabb& box) {
+  const Tri& f = mesh.triangles[t];
+  const Vec3& a = mesh.vertices[f[0]];
+  const Vec3& b = mesh.vertices[f[1]];
+  const Vec3& c = mesh.vertices[f[2]];
+  const Vec3 lo = a.cwiseMin(b).cwiseMin(c), hi = a.cwiseMax(b).cwiseMax(c);
+  return !((hi.array() < box.lo.array()).any() || (lo.array() > box.hi.array()).any());
+}
+
+// Window position (texels; texel i spans [i, i + 1)) of world point p in `view`.
+std::array<double, 2> window_of(const RoiView& view, const Vec3& p) {
+  const Vec3 local = p - view.center;
+  const double n = view.resolution;
+  return {(local.dot(view.frame.u) / view.half_uv + 1.0) * 0.5 * n, (local.dot(view.frame.v) / view.half_uv + 1.0) * 0.5 * n};
+}
+
+// The IDs of `mesh` whose triangle set (IdMap) holds triangle t.
+std::set<std::uint32_t> ids_standing_for(const Mesh& mesh, const IdMap& map, std::uint32_t t) {
+  std::set<std::uint32_t> out;
+  std::vector<std::uint32_t> ids = {t};
+  for (int k = 0; k < 3; ++k) ids.push_back(mesh.triangles[t][k]);
+  for (const std::uint32_t id : ids)
+    if (id < map.id_count() && std::find(map.begin(id), map.end(id), t) != map.end(id)) out.insert(id);
+  return out;
+}
+
+const char* verdict_text(Verdict v) {
+  switch (v) {
+    case Verdict::found: return "found";
+    case Verdict::found_exact: return "found by the exact CPU path";
+    case Verdict::no_roi: return "the objects' boxes do not overlap";
+    case Verdict::culled: return "culled";
+    case Verdict::edge_on: return "edge-on, no fragment";
+    case Verdict::sub_texel: return "between texel centres";
+    case Verdict::separated: return "separated by a layer of the same object";
+    case Verdict::above_epsilon: return "depth difference above the threshold";
+    case Verdict::not_located: return "no texel explains it";
+    case Verdict::no_contact: return "no contact";
+  }
+  return "?";
+}
+
+std::string object_word(std::uint32_t object) { return object == 0 ? "A" : "B"; }
+
+}  // namespace
+
+const char* to_string(Verdict v) {
+  switch (v) {
+    case Verdict::found: return "found";
+    case Verdict::found_exact: return "found_exact";
+    case Verdict::no_roi: return "no_roi";
+    case Verdict::culled: return "culled";
+    case Verdict::edge_on: return "edge_on";
+    case Verdict::sub_texel: return "sub_texel";
+    case Verdict::separated: return "separated";
+    case Verdict::above_epsilon: return "above_epsilon";
+    case Verdict::not_located: return "not_located";
+    case Verdict::no_contact: return "no_contact";
+  }
+  return "?";
+}
+
+PairQuery parse_pair_query(const std::string& text, const std::vector<Object>& objects) {
+  const auto fail = [&](const std::string& problem) {
+    throw InputError("peelcd: --pair '" + text + "': " + problem +
+                     " (expected OBJ_A:TRI_A,OBJ_B:TRI_B, OBJ a name or an index)");
+  };
+  const std::size_t comma = text.find(',');
+  if (comma == std::string::npos || text.find(',', comma + 1) != std::string::npos) fail("not two items");
+  const auto side = [&](const std::string& item, std::size_t& object, std::uint32_t& tri) {
+    const std::size_t colon = item.rfind(':');
+    if (colon == std::string::npos || colon == 0 || colon + 1 == item.size()) fail("'" + item + "' is not OBJ:TRI");
+    const std::string name = item.substr(0, colon), number = item.substr(colon + 1);
+    bool found = false;
+    for (std::size_t i = 0; i < objects.size() && !found; ++i)
+      if (objects[i].name == name) object = i, found = true;
+    if (!found) {
+      if (name.find_first_not_of("0123456789") != std::string::npos || name.size() > 9)
+        fail("no object named '" + name + "'");
+      object = std::stoul(name);
+      if (object >= objects.size())
+        fail("object index " + name + " is out of range (" + std::to_string(objects.size()) + " objects)");
+    }
+    if (number.find_first_not_of("0123456789") != std::string::npos || number.size() > 10)
+      fail("'" + number + "' is not a triangle index");
+    const unsigned long long t = std::stoull(number);
+    const std::size_t count = objects[object].mesh.triangles.size();
+    if (t >= count)
+      fail("triangle " + number + " is out of range: '" + objects[object].name + "' has " + std::to_string(count) +
+           " triangles");
+    tri = std::uint32_t(t);
+  };
+  PairQuery q;
+  side(text.substr(0, comma), q.object_a, q.tri_a);
+  side(text.substr(comma + 1), q.object_b, q.tri_b);
+  if (q.object_a == q.object_b) fail("both triangles are of the same object");
+  return q;
+}
+
+FrameTrace::FrameTrace(Detector& detector, const std::vector<Object>& objects, const DetectOptions& options)
+    : objects_(objects), options_(options) {
+  detector.capture_layers(&captured_);
+  try {
+    detector.detect(objects, options, result_);
+  } catch (...) {
+    detector.capture_layers(nullptr);
+    throw;
+  }
+  detector.capture_layers(nullptr);
+  backend_ = detector.stage().backend();
+  renderer_ = result_.renderer;
+}
+
+Explanation FrameTrace::explain(const PairQuery& query) const {
+  Explanation e;
+  PairQuery q = query;
+  if (q.object_a >= objects_.size() || q.object_b >= objects_.size() || q.object_a == q.object_b)
+    throw std::invalid_argument("peelcd::oracle::FrameTrace::explain(): bad object indices");
+  if (q.object_a > q.object_b) {
+    std::swap(q.object_a, q.object_b);
+    std::swap(q.tri_a, q.tri_b);
+  }
+  const Object& oa = objects_[q.object_a];
+  const Object& ob = objects_[q.object_b];
+  const Mesh& ma = oa.mesh;
+  const Mesh& mb = ob.mesh;
+  if (q.tri_a >= ma.triangles.size() || q.tri_b >= mb.triangles.size())
+    throw std::invalid_argument("peelcd::oracle::FrameTrace::explain(): triangle index out of range");
+  const DetectOptions& opt = options_;
+  e.query = q;
+  e.name_a = oa.name;
+  e.name_b = ob.name;
+  e.options = options_to_json(opt);
+  e.backend = backend_;
+  e.renderer = renderer_;
+
+  // 1. The exact answer.
+  const TriangleCorners ca = corners(ma, q.tri_a), cb = corners(mb, q.tri_b);
+  e.intersect = triangles_intersect(ca, cb);
+  if (e.intersect) {
+    e.kind = to_string(classify_contact(ca, cb));
+    std::tie(e.p, e.q) = intersection_segment(ca, cb);
+  }
+
+  // 2. The ROI, the router and culling.
+  const PairResult* pr = nullptr;
+  std::size_t pair_index = 0;
+  for (std::size_t i = 0; i < result_.pairs.size(); ++i)
+    if (result_.pairs[i].object_a == q.object_a && result_.pairs[i].object_b == q.object_b) pr = &result_.pairs[i], pair_index = i;
+  IdMap map_a(ma, opt.ids), map_b(mb, opt.ids);
+  e.id_a = corner_id(ma, q.tri_a, 2, opt.ids);
+  e.id_b = corner_id(mb, q.tri_b, 2, opt.ids);
+  const std::set<std::uint32_t> stand_a = ids_standing_for(ma, map_a, q.tri_a);
+  const std::set<std::uint32_t> stand_b = ids_standing_for(mb, map_b, q.tri_b);
+  std::vector<std::uint32_t> kept_a, kept_b;
+  if (pr) {
+    e.roi = true;
+    e.exact_path = pr->exact_stage;
+    e.predicted_exact_ms = pr->predicted_exact_ms;
+    e.predicted_image_ms = pr->predicted_image_ms;
+    for (const Contact& c : pr->colliding)
+      if (c.tri_a == q.tri_a && c.tri_b == q.tri_b) e.reported = true;
+    const auto why = [&](const Mesh& m, std::uint32_t t, const std::string& other) -> std::string {
+      if (!touches(m, t, pr->roi)) return "its box does not touch the ROI (the overlap of the two objects' boxes)";
+      return "contact culling: its box touches no grid cell that a triangle of '" + other +
+             "' touches (peelcd/core/cull.h)";
+    };
+    if (opt.cull == Cull::contact) {
+      ContactCull cull;
+      cull_to_contact_region(ma, mb, pr->roi, cull);
+      kept_a = cull.kept_a;
+      kept_b = cull.kept_b;
+      e.kept_a = std::binary_search(kept_a.begin(), kept_a.end(), q.tri_a);
+      e.kept_b = std::binary_search(kept_b.begin(), kept_b.end(), q.tri_b);
+    } else {  // Cull::box: what touches the ROI (the views pad it further)
+      e.kept_a = touches(ma, q.tri_a, pr->roi);
+      e.kept_b = touches(mb, q.tri_b, pr->roi);
+    }
+    if (!e.kept_a) e.cull_a = why(ma, q.tri_a, ob.name);
+    if (!e.kept_b) e.cull_b = why(mb, q.tri_b, oa.name);
+    if (e.exact_path) {
+      e.candidate = e.kept_a && e.kept_b && triangle_bounds(ma, q.tri_a).overlaps(triangle_bounds(mb, q.tri_b));
+    } else {
+      std::vector<std::uint64_t> candidates;
+      expand_pcs(pr->pcs, map_a, map_b, candidates);
+      e.candidate = std::binary_search(candidates.begin(), candidates.end(), pack_pair(q.tri_a, q.tri_b));
+    }
+  }
+
+  // 3. The views.
+  if (pr && !e.exact_path) {
+    CpuImageStage model;
+    for (const CapturedView& cv : captured_) {
+      if (cv.pair != pair_index) continue;
+      ViewReport v;
+      const RoiView& view = cv.roi;
+      const int n = view.resolution;
+      v.view = cv.view;
+      v.resolution = n;
+      v.texel = view.texel();
+      v.epsilon_window = cv.epsilon_window;
+      v.slope = cv.slope;
+      v.conservative = opt.conservative;
+      std::vector<std::uint32_t> in_view;
+      triangles_in_view(ma, view, opt.cull == Cull::contact ? &kept_a : nullptr, in_view);
+      v.drawn_a = std::binary_search(in_view.begin(), in_view.end(), q.tri_a);
+      triangles_in_view(mb, view, opt.cull == Cull::contact ? &kept_b : nullptr, in_view);
+      v.drawn_b = std::binary_search(in_view.begin(), in_view.end(), q.tri_b);
+      v.exhaustive = cv.layers.empty();
+      for (int k = 0; k < 3; ++k) {
+        v.window_a[k] = window_of(view, ca[k]);
+        v.window_b[k] = window_of(view, cb[k]);
+      }
+      if (e.intersect) {
+        v.segment[0] = window_of(view, e.p);
+        v.segment[1] = window_of(view, e.q);
+        v.segment_texels = std::hypot(v.segment[1][0] - v.segment[0][0], v.segment[1][1] - v.segment[0][1]);
+      }
+      for (const IdPair& p : cv.pcs)
+        if (stand_a.count(p.a) && stand_b.count(p.b)) v.pcs_found = true;
+
+      // Where each triangle alone lands: the CPU stage's model with just the two triangles.
+      const std::vector<std::uint32_t> only_a = {q.tri_a}, only_b = {q.tri_b};
+      PeelJob job;
+      job.objects[0] = &oa;
+      job.objects[1] = &ob;
+      job.triangles[0] = &only_a;
+      job.triangles[1] = &only_b;
+      job.view = view;
+      job.ids = IdMode::unique;
+      job.peel = PeelMode::full;
+      job.epsilon = 0.0;
+      job.capture = true;
+      job.conservative = opt.conservative;
+      PeelResult alone;
+      Timings ignored;
+      model.peel(job, alone, ignored);
+      const std::size_t texels = std::size_t(n) * std::size_t(n);
+      std::vector<float> za(texels, NAN), zb(texels, NAN);
+      for (const auto& layer : alone.captured)
+        for (std::size_t t = 0; t < texels; ++t) {
+          if (texel_empty(layer, t)) continue;
+          (texel_object(layer, t) == 0 ? za : zb)[t] = as_float(layer[4 * t]);
+        }
+      std::vector<std::size_t> common;
+      for (std::size_t t = 0; t < texels; ++t) {
+        v.fragments_a += !std::isnan(za[t]);
+        v.fragments_b += !std::isnan(zb[t]);
+        if (!std::isnan(za[t]) && !std::isnan(zb[t])) common.push_back(t);
+      }
+      v.common_texels = common.size();
+
+      // The stage's layers at texel t, with the tests between layers standing for the two.
+      const auto analyse = [&](std::size_t t) {
+        TexelReport r;
+        r.x = int(t % std::size_t(n));
+        r.y = int(t / std::size_t(n));
+        r.model_a = !std::isnan(za[t]);
+        r.model_b = !std::isnan(zb[t]);
+        r.model_depth_a = za[t];
+        r.model_depth_b = zb[t];
+        for (std::size_t k = 0; k < cv.layers.size(); ++k) {
+          const auto& layer = cv.layers[k];
+          if (texel_empty(layer, t)) continue;
+          TexelLayer l;
+          l.layer = int(k);
+          l.object = texel_object(layer, t);
+          l.id = texel_id1(layer, t) - 1u;
+          l.depth = as_float(layer[4 * t]);
+          l.depth_hi = v.conservative ? as_float(layer[4 * t + 2]) : l.depth;
+          l.stands_a = l.object == 0 && stand_a.count(l.id);
+          l.stands_b = l.object == 1 && stand_b.count(l.id);
+          r.layers.push_back(l);
+        }
+        for (std::size_t i = 0; i < r.layers.size(); ++i)
+          for (std::size_t j = i + 1; j < r.layers.size(); ++j) {
+            const TexelLayer& x = r.layers[i];
+            const TexelLayer& y = r.layers[j];
+            if (!((x.stands_a && y.stands_b) || (x.stands_b && y.stands_a))) continue;
+            TexelTest test;
+            test.layer_a = x.stands_a ? x.layer : y.layer;
+            test.layer_b = x.stands_a ? y.layer : x.layer;
+            if (v.conservative) {  // resolve_intervals: j sorts after i; overlap unless lo_j > hi_i
+              test.value = y.depth - x.depth_hi;
+              test.bound = 0.0f;
+              test.pass = !(y.depth > x.depth_hi);
+            } else {  // kbuffer.cpp's test_pair on adjacent layers, in the same float operations
+              const auto& lx = cv.layers[std::size_t(x.layer)];
+              const auto& ly = cv.layers[std::size_t(y.layer)];
+              test.adjacent = y.layer == x.layer + 1;
+              test.value = std::fabs(as_float(ly[4 * t]) - as_float(lx[4 * t]));
+              const float spread = std::fabs(as_float(ly[4 * t + 2]) - as_float(lx[4 * t + 2])) +
+                                   std::fabs(as_float(ly[4 * t + 3]) - as_float(lx[4 * t + 3]));
+              test.bound = v.epsilon_window + v.slope * spread;
+              test.pass = test.adjacent && test.value < test.bound;
+            }
+            r.tests.push_back(test);
+          }
+        const bool has_a = std::any_of(r.layers.begin(), r.layers.end(), [](const TexelLayer& l) { return l.stands_a; });
+        const bool has_b = std::any_of(r.layers.begin(), r.layers.end(), [](const TexelLayer& l) { return l.stands_b; });
+        const TexelTest* best = nullptr;  // the passing test, or the adjacent one closest to passing
+        for (const TexelTest& test : r.tests)
+          if (test.pass) best = &test;
+        if (!best)
+          for (const TexelTest& test : r.tests)
+            if (test.adjacent && (!best || test.value - test.bound < best->value - best->bound)) best = &test;
+        const double to_world = 2.0 * view.half_depth;
+        if (best && best->pass) {
+          r.status = Verdict::found;
+          r.note = "PCS: layers " + std::to_string(best->layer_a) + " (A) and " + std::to_string(best->layer_b) + " (B), " +
+                   (v.conservative ? "intervals overlap" : "|dz| " + g(best->value) + " < " + g(best->bound));
+        } else if (!(r.model_a && r.model_b)) {
+          r.status = Verdict::sub_texel;
+          r.note = std::string("not covered by both triangles (model: ") + (r.model_a ? "A" : "") + (r.model_b ? "B" : "") +
+                   (r.model_a || r.model_b ? " only)" : "neither)");
+        } else if (best) {
+          r.status = Verdict::above_epsilon;
+          r.note = v.conservative ? "intervals apart by " + g(best->value) + " (window depth)"
+                                  : "|dz| " + g(best->value) + " >= threshold " + g(best->bound) + ": above by " +
+                                        g(best->value - best->bound) + " window = " +
+                                        g((best->value - best->bound) * to_world) + " world";
+        } else if (has_a && has_b) {
+          r.status = Verdict::separated;
+          const TexelTest& t0 = r.tests.front();
+          r.note = "layers " + std::to_string(t0.layer_a) + " (A) and " + std::to_string(t0.layer_b) +
+                   " (B) are not adjacent: a layer between them is tested instead";
+        } else {
+          const bool miss_a = !has_a;
+          const float want = miss_a ? r.model_depth_a : r.model_depth_b;
+          const std::uint32_t object = miss_a ? 0u : 1u;
+          const TexelLayer* hider = nullptr;
+          for (const TexelLayer& l : r.layers)
+            if (l.object == object && !(l.depth > want)) hider = &l;
+          if (opt.peel == PeelMode::alternate && hider) {
+            r.status = Verdict::separated;
+            r.note = std::string(miss_a ? "A" : "B") + "'s triangle (depth " + g(want) + ") was not peeled here: layer " +
+                     std::to_string(hider->layer) + " holds " + object_word(object) + " ID " + std::to_string(hider->id) +
+                     " at depth " + g(hider->depth) + ", and alternate peeling takes the next layer from the other object";
+          } else if (opt.peel == PeelMode::alternate && !r.layers.empty() && r.layers.front().object != object &&
+                     want < r.layers.front().depth) {
+            r.status = Verdict::separated;
+            r.note = std::string(miss_a ? "A" : "B") + "'s triangle (depth " + g(want) +
+                     ") lies in front of layer 0 (" + object_word(r.layers.front().object) + " at depth " +
+                     g(r.layers.front().depth) + "): alternate peeling began with the other object and never comes back to it";
+          } else {
+            r.status = Verdict::not_located;
+            r.note = std::string(miss_a ? "A" : "B") +
+                     "'s triangle covers the texel in the model but is in no layer of the stage here";
+          }
+        }
+        return r;
+      };
+
+      // The segment's texels first (sampled every 1/16 texel), then other common texels.
+      std::vector<std::size_t> chosen;
+      std::set<std::size_t> seen;
+      if (e.intersect) {
+        const int steps = int(std::min(65536.0, std::ceil(v.segment_texels * 16.0))) + 1;
+        for (int s = 0; s <= steps; ++s) {
+          const double f = steps ? double(s) / steps : 0.0;
+          const double x = v.segment[0][0] + f * (v.segment[1][0] - v.segment[0][0]);
+          const double y = v.segment[0][1] + f * (v.segment[1][1] - v.segment[0][1]);
+          const int ix = int(std::floor(x)), iy = int(std::floor(y));
+          if (ix < 0 || iy < 0 || ix >= n || iy >= n) continue;
+          const std::size_t t = std::size_t(iy) * std::size_t(n) + std::size_t(ix);
+          if (seen.insert(t).second) chosen.push_back(t);
+        }
+      }
+      v.segment_texel_count = chosen.size();
+      constexpr std::size_t kDetailed = 48;
+      for (const std::size_t t : common)
+        if (chosen.size() < kDetailed && seen.insert(t).second) chosen.push_back(t);
+
+      // Every texel for the found count; the chosen ones in detail.
+      Verdict best = Verdict::no_contact;
+      double best_excess = std::numeric_limits<double>::infinity();
+      const auto consider = [&](const TexelReport& r) {
+        if (r.status == Verdict::found) {
+          if (v.found_texels++ == 0) v.found_x = r.x, v.found_y = r.y;
+        }
+      };
+      for (std::size_t t = 0; t < texels && !cv.layers.empty(); ++t) {
+        if (std::isnan(za[t]) && std::isnan(zb[t])) {
+          // Neither triangle covers it in the model; a neighbour with a shared ID still may.
+          if (opt.ids == IdMode::unique) continue;
+        }
+        consider(analyse(t));
+      }
+      // The reason among the common texels (the detailed ones): the one closest to being found,
+      // the segment's texels before the others, then above epsilon before separated before
+      // unexplained, then the smallest excess.
+      bool best_on_segment = false;
+      const auto rank = [](Verdict x) { return x == Verdict::above_epsilon ? 0 : x == Verdict::separated ? 1 : 2; };
+      std::size_t counts[3] = {0, 0, 0};
+      for (std::size_t i = 0; i < chosen.size(); ++i) {
+        const std::size_t t = chosen[i];
+        if (std::isnan(za[t]) || std::isnan(zb[t]) || cv.layers.empty()) continue;
+        const TexelReport r = analyse(t);
+        if (r.status == Verdict::found) continue;
+        ++counts[rank(r.status)];
+        double excess = std::numeric_limits<double>::infinity();
+        for (const TexelTest& test : r.tests)
+          if (test.adjacent) excess = std::min(excess, double(test.value - test.bound));
+        const bool on_segment = i < v.segment_texel_count;
+        if (best == Verdict::no_contact || (on_segment && !best_on_segment) ||
+            (on_segment == best_on_segment &&
+             (rank(r.status) < rank(best) ||
+              (r.status == Verdict::above_epsilon && best == Verdict::above_epsilon && excess < best_excess)))) {
+          best = r.status;
+          best_excess = excess;
+          best_on_segment = on_segment;
+        }
+      }
+      const std::string tally = " (common texels examined: " + std::to_string(counts[0]) + " above the threshold, " +
+                                std::to_string(counts[1]) + " separated, " + std::to_string(counts[2]) + " unexplained)";
+      if (!cv.layers.empty())
+        for (const std::size_t t : chosen) v.texels.push_back(analyse(t));
+
+      // The view's reason.
+      const auto extent = [](const std::array<std::array<double, 2>, 3>& w) {
+        double x0 = w[0][0], x1 = x0, y0 = w[0][1], y1 = y0;
+        for (const auto& c : w) x0 = std::min(x0, c[0]), x1 = std::max(x1, c[0]), y0 = std::min(y0, c[1]), y1 = std::max(y1, c[1]);
+        return std::max(x1 - x0, y1 - y0);
+      };
+      const auto no_fragment = [&](const char* who, const std::array<std::array<double, 2>, 3>& w) {
+        const double ext = extent(w);
+        if (ext < 1.0) {
+          v.reason = Verdict::sub_texel;
+          v.summary = std::string(who) + "'s triangle projects to " + g(ext) + " texels: it covers no texel centre";
+        } else {
+          v.reason = Verdict::edge_on;
+          const double area = std::fabs((w[1][0] - w[0][0]) * (w[2][1] - w[0][1]) - (w[2][0] - w[0][0]) * (w[1][1] - w[0][1])) * 0.5;
+          v.summary = std::string(who) + "'s triangle is drawn but has no fragment: seen edge-on (" + g(ext) +
+                      " texels long, " + g(area) + " texels^2 of area)";
+        }
+      };
+      if (v.pcs_found) {
+        v.reason = Verdict::found;
+        v.summary = v.found_texels ? "found at texel (" + std::to_string(v.found_x) + ", " + std::to_string(v.found_y) + "), " +
+                                         std::to_string(v.found_texels) + " texel(s) report it"
+                                   : "found in the view's PCS (texel not located: a shared-ID neighbour)";
+      } else if (!v.drawn_a || !v.drawn_b) {
+        v.reason = Verdict::culled;
+        v.summary = std::string(!v.drawn_a ? "A" : "B") + "'s triangle is not drawn: its box misses the view's padded ROI" +
+                    (opt.cull == Cull::contact ? " or culling dropped it" : "");
+      } else if (v.exhaustive) {
+        v.reason = Verdict::not_located;
+        v.summary = "no layers: the view was resolved by box tests (k-buffer too deep)";
+      } else if (v.fragments_a == 0) {
+        no_fragment("A", v.window_a);
+      } else if (v.fragments_b == 0) {
+        no_fragment("B", v.window_b);
+      } else if (v.common_texels == 0) {
+        v.reason = Verdict::sub_texel;
+        v.summary = "no texel centre is covered by both triangles (the segment projects to " + g(v.segment_texels) +
+                    " texels)";
+      } else {
+        v.reason = best == Verdict::no_contact ? Verdict::not_located : best;
+        if (v.reason == Verdict::above_epsilon)
+          v.summary = v.conservative ? "intervals apart at every common texel"
+                                     : std::string(best_on_segment ? "where the segment crosses" : "at a common texel") +
+                                           ", adjacent layers, depth difference above the threshold by " +
+                                           g(best_excess) + " window depth = " + g(best_excess * 2.0 * view.half_depth) +
+                                           " world (epsilon " + g(view.window_to_world_depth(v.epsilon_window)) + ")";
+        else if (v.reason == Verdict::separated)
+          v.summary = opt.peel == PeelMode::alternate
+                          ? std::string(best_on_segment ? "where the segment crosses" : "at the common texels") +
+                                ", alternate peeling skipped one of the two: a layer of the same object was taken "
+                                "instead, or the surface lay in front of the other object's first layer"
+                          : std::string(best_on_segment ? "where the segment crosses" : "at the common texels") +
+                                ", another layer lies between the two (only adjacent layers are tested)";
+        else
+          v.summary = "both cover " + std::to_string(v.common_texels) + " texel(s) but no test involving them was found";
+        v.summary += tally;
+      }
+
+      // The crop for the page: the segment's texels (or the triangles' common ones) and a margin.
+      int x0 = n, y0 = n, x1 = -1, y1 = -1;
+      const auto grow = [&](int x, int y) { x0 = std::min(x0, x), y0 = std::min(y0, y), x1 = std::max(x1, x), y1 = std::max(y1, y); };
+      for (std::size_t i = 0; i < chosen.size(); ++i) grow(int(chosen[i] % std::size_t(n)), int(chosen[i] / std::size_t(n)));
+      if (x1 < 0) grow(std::clamp(int(v.window_a[0][0]), 0, n - 1), std::clamp(int(v.window_a[0][1]), 0, n - 1));
+      const int margin = 6, side = std::max({16, x1 - x0 + 1 + 2 * margin, y1 - y0 + 1 + 2 * margin});
+      const int w = std::min(n, std::min(side, 96));
+      v.crop_w = v.crop_h = w;
+      v.crop_x = std::clamp((x0 + x1) / 2 - w / 2, 0, n - w);
+      v.crop_y = std::clamp((y0 + y1) / 2 - w / 2, 0, n - w);
+      v.crop_flags.assign(std::size_t(w) * w, 0);
+      v.crop_depth.assign(std::size_t(w) * w, NAN);
+      for (int y = 0; y < w; ++y)
+        for (int x = 0; x < w; ++x) {
+          const std::size_t t = std::size_t(v.crop_y + y) * std::size_t(n) + std::size_t(v.crop_x + x);
+          std::uint8_t f = 0;
+          if (!std::isnan(za[t])) f |= 1;
+          if (!std::isnan(zb[t])) f |= 2;
+          if (!cv.layers.empty()) {
+            if (!texel_empty(cv.layers[0], t)) v.crop_depth[std::size_t(y) * w + x] = as_float(cv.layers[0][4 * t]);
+            if ((f || opt.ids != IdMode::unique) && analyse(t).status == Verdict::found) f |= 4;
+          }
+          v.crop_flags[std::size_t(y) * w + x] = f;
+        }
+      e.views.push_back(std::move(v));
+    }
+  }
+
+  // 4. The verdict.
+  const std::string pair_name = "'" + oa.name + "':" + std::to_string(q.tri_a) + " x '" + ob.name + "':" + std::to_string(q.tri_b);
+  const ViewReport* found_in = nullptr;
+  for (const ViewReport& v : e.views)
+    if (!found_in && v.reason == Verdict::found) found_in = &v;
+  if (!e.intersect) {
+    if (pr && (!e.kept_a || !e.kept_b)) {
+      e.verdict = Verdict::culled;
+      e.verdict_line = "no contact: the triangles do not intersect; culled before drawing (" +
+                       std::string(!e.kept_a ? "A: " + e.cull_a : "B: " + e.cull_b) + ")";
+    } else {
+      e.verdict = Verdict::no_contact;
+      e.verdict_line = std::string("no contact: the triangles do not intersect") +
+                       (!pr ? " (the objects' boxes do not overlap)"
+                            : e.candidate ? " (a candidate; the exact test rejected it)" : " (not a candidate)");
+    }
+  } else if (!pr) {
+    e.verdict = Verdict::no_roi;
+    e.verdict_line = "missed: the objects' boxes do not overlap (impossible for an intersecting pair: a bug)";
+  } else if (e.reported && e.exact_path) {
+    e.verdict = Verdict::found_exact;
+    e.verdict_line = "found by the exact CPU path (the router predicted " + g(e.predicted_exact_ms) + " ms against " +
+                     g(e.predicted_image_ms) + " ms for the image stage)";
+  } else if (e.reported) {
+    e.verdict = Verdict::found;
+    e.verdict_line = found_in ? "found in view " + std::to_string(found_in->view) +
+                                    (found_in->found_texels ? " at texel (" + std::to_string(found_in->found_x) + ", " +
+                                                                  std::to_string(found_in->found_y) + ")"
+                                                            : std::string())
+                              : "found (through a view resolved by box tests)";
+  } else if (!e.kept_a || !e.kept_b) {
+    e.verdict = Verdict::culled;
+    e.verdict_line = "missed: culled (" + std::string(!e.kept_a ? "A: " + e.cull_a : "B: " + e.cull_b) +
+                     "); culling is meant to keep every colliding pair: a bug";
+  } else if (e.candidate) {
+    e.verdict = Verdict::not_located;
+    e.verdict_line = "missed: a candidate that the narrow phase rejected (a bug)";
+  } else if (e.views.empty()) {
+    e.verdict = Verdict::not_located;
+    e.verdict_line = "missed: no view was peeled for this ROI";
+  } else {
+    const ViewReport& first = e.views.front();
+    bool all_short = true;
+    double longest = 0.0;
+    for (const ViewReport& v : e.views) {
+      all_short = all_short && v.segment_texels < 1.0;
+      longest = std::max(longest, v.segment_texels);
+    }
+    e.verdict = first.reason;
+    if (all_short && (first.reason == Verdict::sub_texel || first.reason == Verdict::not_located)) {
+      e.verdict = Verdict::sub_texel;
+      e.verdict_line = "missed: tile too coarse: the segment projects to under one texel in every view (at most " +
+                       g(longest) + " texels); view " + std::to_string(first.view) + ": " + first.summary;
+    } else {
+      e.verdict_line = std::string("missed: ") + verdict_text(first.reason) + ": view " + std::to_string(first.view) + ": " +
+                       first.summary;
+    }
+  }
+  (void)pair_name;
+  return e;
+}
+
+nlohmann::json to_json(const Explanation& e) {
+  using nlohmann::json;
+  const auto vec = [](const Vec3& v) { return json::array({v.x(), v.y(), v.z()}); };
+  const auto pt = [](const std::array<double, 2>& p) { return json::array({p[0], p[1]}); };
+  json j;
+  j["schema"] = "peelcd.explain/1";
+  j["pair"] = {{"object_a", e.query.object_a}, {"name_a", e.name_a}, {"tri_a", e.query.tri_a},
+               {"object_b", e.query.object_b}, {"name_b", e.name_b}, {"tri_b", e.query.tri_b}};
+  j["backend"] = e.backend;
+  j["renderer"] = e.renderer;
+  j["options"] = e.options;
+  j["exact"] = {{"intersect", e.intersect}, {"kind", e.kind}};
+  if (e.intersect) {
+    j["exact"]["segment"] = json::array({vec(e.p), vec(e.q)});
+    j["exact"]["length"] = (e.q - e.p).norm();
+  }
+  j["roi"] = e.roi;
+  j["stage"] = e.exact_path ? "exact" : "image";
+  j["predicted_ms"] = {{"exact", e.predicted_exact_ms}, {"image", e.predicted_image_ms}};
+  j["culling"] = {{"kept_a", e.kept_a}, {"kept_b", e.kept_b}, {"why_a", e.cull_a}, {"why_b", e.cull_b}};
+  j["ids"] = {{"a", e.id_a}, {"b", e.id_b}};
+  j["candidate"] = e.candidate;
+  j["reported"] = e.reported;
+  json views = json::array();
+  for (const ViewReport& v : e.views) {
+    json jv = {{"view", v.view},
+               {"resolution", v.resolution},
+               {"texel", v.texel},
+               {"epsilon_window", v.epsilon_window},
+               {"slope", v.slope},
+               {"conservative", v.conservative},
+               {"drawn_a", v.drawn_a},
+               {"drawn_b", v.drawn_b},
+               {"fragments_a", v.fragments_a},
+               {"fragments_b", v.fragments_b},
+               {"common_texels", v.common_texels},
+               {"triangle_a", json::array({pt(v.window_a[0]), pt(v.window_a[1]), pt(v.window_a[2])})},
+               {"triangle_b", json::array({pt(v.window_b[0]), pt(v.window_b[1]), pt(v.window_b[2])})},
+               {"segment", json::array({pt(v.segment[0]), pt(v.segment[1])})},
+               {"segment_texels", v.segment_texels},
+               {"pcs_found", v.pcs_found},
+               {"found_texels", v.found_texels},
+               {"reason", to_string(v.reason)},
+               {"summary", v.summary}};
+    if (v.found_texels) jv["found_texel"] = json::array({v.found_x, v.found_y});
+    json texels = json::array();
+    for (std::size_t i = 0; i < v.texels.size(); ++i) {
+      const TexelReport& r = v.texels[i];
+      json layers = json::array();
+      for (const TexelLayer& l : r.layers) {
+        json jl = {{"layer", l.layer}, {"object", object_word(l.object)}, {"id", l.id}, {"depth", l.depth}};
+        if (v.conservative) jl["depth_hi"] = l.depth_hi;
+        if (l.stands_a || l.stands_b) jl["stands_for_queried"] = true;
+        layers.push_back(jl);
+      }
+      json tests = json::array();
+      for (const TexelTest& t : r.tests)
+        tests.push_back({{"layer_a", t.layer_a}, {"layer_b", t.layer_b}, {"value", t.value}, {"bound", t.bound},
+                         {"adjacent", t.adjacent}, {"pass", t.pass}});
+      json jt = {{"texel", json::array({r.x, r.y})}, {"on_segment", i < v.segment_texel_count},
+                 {"model_a", r.model_a}, {"model_b", r.model_b}, {"layers", layers}, {"tests", tests},
+                 {"status", to_string(r.status)}, {"note", r.note}};
+      if (r.model_a) jt["model_depth_a"] = r.model_depth_a;
+      if (r.model_b) jt["model_depth_b"] = r.model_depth_b;
+      texels.push_back(jt);
+    }
+    jv["texels"] = texels;
+    views.push_back(jv);
+  }
+  j["views"] = views;
+  j["verdict"] = to_string(e.verdict);
+  j["verdict_line"] = e.verdict_line;
+  return j;
+}
+
+std::string explain_text(const Explanation& e) {
+  std::ostringstream s;
+  const auto v3 = [](const Vec3& v) { return "(" + g(v.x()) + ", " + g(v.y()) + ", " + g(v.z()) + ")"; };
+  s << "pair: A = '" << e.name_a << "' (object " << e.query.object_a << ") triangle " << e.query.tri_a << ", B = '"
+    << e.name_b << "' (object " << e.query.object_b << ") triangle " << e.query.tri_b << "\n";
+  s << "backend: " << e.backend << " (" << e.renderer << ")\n";
+  if (e.intersect)
+    s << "exact: the triangles intersect (" << e.kind << "), segment " << v3(e.p) << " - " << v3(e.q) << ", length "
+      << g((e.q - e.p).norm()) << "\n";
+  else
+    s << "exact: the triangles do not intersect\n";
+  if (!e.roi) {
+    s << "ROI: the objects' boxes do not overlap\n";
+  } else {
+    s << "ROI: stage " << (e.exact_path ? "exact CPU path" : "image") << " (router: exact " << g(e.predicted_exact_ms)
+      << " ms, image " << g(e.predicted_image_ms) << " ms predicted)\n";
+    s << "culling: A's triangle " << (e.kept_a ? "kept" : "dropped: " + e.cull_a) << "; B's triangle "
+      << (e.kept_b ? "kept" : "dropped: " + e.cull_b) << "\n";
+    s << "IDs written: A " << e.id_a << ", B " << e.id_b << "; candidate: " << (e.candidate ? "yes" : "no")
+      << "; reported: " << (e.reported ? "yes" : "no") << "\n";
+  }
+  for (const ViewReport& v : e.views) {
+    s << "view " << v.view << ": " << v.resolution << "x" << v.resolution << " texels of " << g(v.texel) << " world";
+    if (!v.conservative)
+      s << ", epsilon " << g(v.epsilon_window) << " window depth, slope " << g(v.slope);
+    else
+      s << ", conservative";
+    s << "\n  drawn: A " << (v.drawn_a ? "yes" : "no") << ", B " << (v.drawn_b ? "yes" : "no") << "; fragments (model): A "
+      << v.fragments_a << ", B " << v.fragments_b << "; texels both cover: " << v.common_texels << "\n";
+    if (e.intersect)
+      s << "  segment: (" << g(v.segment[0][0]) << ", " << g(v.segment[0][1]) << ") - (" << g(v.segment[1][0]) << ", "
+        << g(v.segment[1][1]) << "), " << g(v.segment_texels) << " texels long, crosses " << v.segment_texel_count
+        << " texel(s)\n";
+    for (std::size_t i = 0; i < v.texels.size(); ++i) {
+      const TexelReport& r = v.texels[i];
+      s << "  texel (" << r.x << ", " << r.y << ")" << (i < v.segment_texel_count ? " [segment]" : "") << ": model "
+        << (r.model_a ? "A z=" + g(r.model_depth_a) : std::string("A -")) << ", "
+        << (r.model_b ? "B z=" + g(r.model_depth_b) : std::string("B -")) << "\n    layers:";
+      if (r.layers.empty()) s << " none";
+      for (const TexelLayer& l : r.layers) {
+        s << " " << l.layer << ":" << object_word(l.object) << "#" << l.id << "@" << g(l.depth);
+        if (v.conservative) s << ".." << g(l.depth_hi);
+        if (l.stands_a || l.stands_b) s << "*";
+      }
+      s << "\n    -> " << to_string(r.status) << ": " << r.note << "\n";
+    }
+    s << "  view " << v.view << ": " << to_string(v.reason) << ": " << v.summary << "\n";
+  }
+  if (!e.views.empty()) s << "(* = the layer's ID stands for the queried triangle)\n";
+  s << "verdict: " << e.verdict_line << "\n";
+  return s.str();
+}
+
+namespace {
+
+std::string escape(const std::string& in) {
+  std::string out;
+  for (const char c : in) {
+    if (c == '<') out += "&lt;";
+    else if (c == '>') out += "&gt;";
+    else if (c == '&') out += "&amp;";
+    else if (c == '"') out += "&quot;";
+    else out += c;
+  }
+  return out;
+}
+
+// The zoomed crop of one view: layer-0 depth in grey, A's triangle's texels red, B's blue, both
+// magenta, texels whose test reported the pair green; the triangles outlined, the segment yellow.
+Rgb view_picture(const ViewReport& v) {
+  const int w = v.crop_w, h = v.crop_h;
+  const int zoom = std::clamp(480 / std::max(1, std::max(w, h)), 4, 32);
+  Rgb img(w * zoom, h * zoom);
+  float lo = std::numeric_limits<float>::max(), hi = -lo;
+  for (const float d : v.crop_depth)
+    if (!std::isnan(d)) lo = std::min(lo, d), hi = std::max(hi, d);
+  const float range = hi > lo ? hi - lo : 1.0f;
+  for (int y = 0; y < h; ++y)
+    for (int x = 0; x < w; ++x) {
+      const std::size_t i = std::size_t(y) * w + x;
+      const float d = v.crop_depth[i];
+      const int grey = std::isnan(d) ? 24 : int(200 - 150 * (d - lo) / range);
+      int r = grey, gch = grey, b = grey;
+      const std::uint8_t f = v.crop_flags[i];
+      if (f & 1) r = std::min(255, r / 2 + 128);
+      if (f & 2) b = std::min(255, b / 2 + 128);
+      if ((f & 3) == 3) gch = gch / 3;
+      if (f & 4) r = 40, gch = 220, b = 60;
+      for (int py = 0; py < zoom; ++py)
+        for (int px = 0; px < zoom; ++px) {
+          const bool grid = zoom >= 8 && (px == 0 || py == 0);
+          const int yy = (h - 1 - y) * zoom + py;  // rows bottom to top
+          img.set(x * zoom + px, yy,
+                  {std::uint8_t(grid ? r * 3 / 4 : r), std::uint8_t(grid ? gch * 3 / 4 : gch), std::uint8_t(grid ? b * 3 / 4 : b)});
+        }
+      // The texel centre as a dot.
+      if (zoom >= 8) img.set(x * zoom + zoom / 2, (h - 1 - y) * zoom + zoom / 2, {0, 0, 0});
+    }
+  const auto line = [&](std::array<double, 2> p, std::array<double, 2> q, std::array<std::uint8_t, 3> c, int thick) {
+    const auto px = [&](const std::array<double, 2>& a) {
+      return std::array<double, 2>{(a[0] - v.crop_x) * zoom, (v.crop_y + h - a[1]) * zoom};
+    };
+    const auto a = px(p), b = px(q);
+    const double len = std::hypot(b[0] - a[0], b[1] - a[1]);
+    const int steps = int(std::min(1e5, std::ceil(len * 2.0))) + 1;
+    for (int s = 0; s <= steps; ++s) {
+      const double f = double(s) / steps;
+      const int x = int(std::floor(a[0] + f * (b[0] - a[0]))), y = int(std::floor(a[1] + f * (b[1] - a[1])));
+      for (int dy = 0; dy < thick; ++dy)
+        for (int dx = 0; dx < thick; ++dx)
+          if (x + dx >= 0 && y + dy >= 0 && x + dx < img.width && y + dy < img.height) img.set(x + dx, y + dy, c);
+    }
+  };
+  for (int k = 0; k < 3; ++k) {
+    line(v.window_a[k], v.window_a[(k + 1) % 3], {255, 60, 60}, 2);
+    line(v.window_b[k], v.window_b[(k + 1) % 3], {70, 150, 255}, 2);
+  }
+  line(v.segment[0], v.segment[1], {255, 230, 0}, 3);
+  return img;
+}
+
+}  // namespace
+
+void write_explain_page(const Explanation& e, const std::string& dir) {
+  const fs::path root(dir);
+  if (fs::exists(root) && !(fs::is_directory(root) && fs::is_empty(root)))
+    throw InputError("peelcd explain: --out '" + dir + "' exists and is not an empty folder");
+  if (!root.parent_path().empty() && !fs::is_directory(root.parent_path()))
+    throw InputError("peelcd explain: --out '" + dir + "': the parent folder does not exist");
+  const fs::path tmp = root.string() + ".partial";
+  DeferSignals hold;
+  std::error_code ec;
+  fs::remove_all(tmp, ec);
+  try {
+    fs::create_directories(tmp);
+    std::ostringstream h;
+    h << "<!doctype html>\n<html><head><meta charset=\"utf-8\"><title>peelcd explain: " << escape(e.name_a) << ":"
+      << e.query.tri_a << " x " << escape(e.name_b) << ":" << e.query.tri_b << "</title>\n<style>body{font-family:sans-serif;"
+      << "margin:1.5em;background:#fafafa}pre{background:#fff;border:1px solid #ccc;padding:.8em;overflow-x:auto}"
+      << "figure{display:inline-block;margin:0 1.5em 1.5em 0;vertical-align:top}img{image-rendering:pixelated;"
+      << "border:1px solid #888}.verdict{font-size:1.2em;font-weight:bold}</style></head><body>\n";
+    h << "<h1>peelcd explain</h1>\n<p class=\"verdict\">" << escape(e.verdict_line) << "</p>\n";
+    h << "<p>Pictures: layer 0's depth in grey (near = light), the texels A's triangle covers alone (the rasterization "
+         "model) tinted red, B's blue, both magenta; texels where the pair's test passed green; A's triangle outlined "
+         "red, B's blue, the intersection segment yellow; black dots are texel centres.</p>\n";
+    for (const ViewReport& v : e.views) {
+      const std::string name = "view" + std::to_string(v.view) + ".png";
+      write_png((tmp / name).string(), view_picture(v));
+      h << "<figure><img src=\"" << name << "\" alt=\"view " << v.view << "\"><figcaption>view " << v.view << ": texels ("
+        << v.crop_x << ".." << v.crop_x + v.crop_w - 1 << ", " << v.crop_y << ".." << v.crop_y + v.crop_h - 1 << ") of "
+        << v.resolution << "&sup2;<br>" << escape(to_string(v.reason)) << ": " << escape(v.summary)
+        << "</figcaption></figure>\n";
+    }
+    h << "<h2>Report</h2>\n<pre>" << escape(explain_text(e)) << "</pre>\n</body></html>\n";
+    std::ofstream(tmp / "index.html") << h.str();
+    std::ofstream(tmp / "explain.json") << to_json(e).dump(2) << "\n";
+    if (fs::exists(root)) fs::remove(root);
+    fs::rename(tmp, root);
+  } catch (const fs::filesystem_error& err) {
+    fs::remove_all(tmp, ec);
+    throw InputError("peelcd explain: --out '" + dir + "': " + err.what());
+  } catch (...) {
+    fs::remove_all(tmp, ec);
+    throw;
+  }
+}
+
+}  // namespace peelcd::oracle
