@@ -376,6 +376,13 @@ Explanation FrameTrace::explain(const PairQuery& query) const {
             r.note = std::string(miss_a ? "A" : "B") + "'s triangle (depth " + g(want) + ") was not peeled here: layer " +
                      std::to_string(hider->layer) + " holds " + object_word(object) + " ID " + std::to_string(hider->id) +
                      " at depth " + g(hider->depth) + ", and alternate peeling takes the next layer from the other object";
+            for (const TexelLayer& l : r.layers)
+              if (l.layer > hider->layer && l.object != object) {
+                if (want < l.depth)
+                  r.note += "; " + object_word(object) + "'s next turn looks only behind layer " + std::to_string(l.layer) +
+                            " (" + object_word(l.object) + " at depth " + g(l.depth) + "), and this fragment lies in front of it";
+                break;
+              }
           } else if (opt.peel == PeelMode::alternate && !r.layers.empty() && r.layers.front().object != object &&
                      want < r.layers.front().depth) {
             r.status = Verdict::separated;
@@ -455,6 +462,11 @@ Explanation FrameTrace::explain(const PairQuery& query) const {
                                 std::to_string(counts[1]) + " separated, " + std::to_string(counts[2]) + " unexplained)";
       if (!cv.layers.empty())
         for (const std::size_t t : chosen) v.texels.push_back(analyse(t));
+      for (std::size_t i = 0; i < v.segment_texel_count && i < v.texels.size(); ++i)
+        if (v.texels[i].status == Verdict::found) {  // name a texel on the segment when one reports it
+          v.found_x = v.texels[i].x, v.found_y = v.texels[i].y;
+          break;
+        }
 
       // The view's reason.
       const auto extent = [](const std::array<std::array<double, 2>, 3>& w) {
@@ -693,8 +705,11 @@ std::string explain_text(const Explanation& e) {
   if (!e.roi) {
     s << "ROI: the objects' boxes do not overlap\n";
   } else {
-    s << "ROI: stage " << (e.exact_path ? "exact CPU path" : "image") << " (router: exact " << g(e.predicted_exact_ms)
-      << " ms, image " << g(e.predicted_image_ms) << " ms predicted)\n";
+    s << "ROI: stage " << (e.exact_path ? "exact CPU path" : "image");
+    if (e.options.value("stage", std::string()) == "auto")
+      s << " (router: exact " << g(e.predicted_exact_ms) << " ms, image " << g(e.predicted_image_ms) << " ms predicted)\n";
+    else
+      s << " (not routed: --stage " << e.options.value("stage", std::string()) << ")\n";
     s << "culling: A's triangle " << (e.kept_a ? "kept" : "dropped: " + e.cull_a) << "; B's triangle "
       << (e.kept_b ? "kept" : "dropped: " + e.cull_b) << "\n";
     s << "IDs written: A " << e.id_a << ", B " << e.id_b << "; candidate: " << (e.candidate ? "yes" : "no")
