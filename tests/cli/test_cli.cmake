@@ -313,9 +313,20 @@ if(NOT verdict STREQUAL "separated" OR NOT intersect OR NOT nviews EQUAL 1)
   message(SEND_ERROR "explain --json: verdict ${verdict}, intersect ${intersect}, views ${nviews}")
 endif()
 expect("explain: the default finds it (exact CPU path on llvmpipe)" 0 "verdict: found by the exact CPU path"
-       explain ${scene} --pair bunny:351,dragon:1283)
+       explain ${scene} --pair bunny:351,dragon:1283 --json ${WORK}/explain_exact.json)
 expect("explain: the image stage forced finds it" 0 "verdict: found in view 0 at texel"
-       explain ${scene} --stage image --pair dragon:1283,bunny:351)
+       explain ${scene} --stage image --pair dragon:1283,bunny:351 --json ${WORK}/explain_found.json)
+expect("explain: a pair that does not intersect" 0 "verdict: no contact"
+       explain ${scene} --paper --views 3 --pair bunny:1,dragon:2 --json ${WORK}/explain_none.json)
+execute_process(COMMAND ${PYTHON} ${SOURCE}/tests/oracle/validate_json.py ${SOURCE}/docs/schema/explain.schema.json
+                        ${WORK}/explain.json ${WORK}/explain_page/explain.json ${WORK}/explain_exact.json
+                        ${WORK}/explain_found.json ${WORK}/explain_none.json
+                RESULT_VARIABLE rc OUTPUT_VARIABLE out ERROR_VARIABLE err)
+if(NOT rc EQUAL 0)
+  message(SEND_ERROR "explain --json: not valid against docs/schema/explain.schema.json\n${out}${err}")
+else()
+  message(STATUS "ok: ${out}")
+endif()
 expect("explain: JSON on stdout" 0 "\"schema\": \"peelcd.explain/1\"" explain ${scene} --pair 0:351,1:1283 --json - --quiet)
 expect("explain: unknown object" 2 "--pair 'cat:1,dragon:2': no object named 'cat'" explain ${scene} --pair cat:1,dragon:2)
 expect("explain: triangle out of range" 2 "triangle 99999 is out of range" explain ${scene} --pair bunny:99999,dragon:2)
