@@ -166,7 +166,10 @@ struct Detector::Impl {
   std::vector<std::size_t> order;
   ContactCull cull;
   std::vector<std::uint32_t> tris[2];
-  PeelResult peeled;
+  std::vector<std::vector<std::uint32_t>> job_tris;  // per job of the frame: A's, B's triangles
+  std::vector<PeelJob> jobs;                         // the frame's ROI views, grouped by pair
+  std::vector<std::size_t> job_first;                // pair i's jobs: [job_first[i], job_first[i + 1])
+  std::vector<PeelResult> peeled;                    // per job (never shrinks: storage reused)
   std::vector<IdPair> pcs_all;
   std::vector<std::uint64_t> candidates, candidate_scratch, pcs_keys;
   IdMap map_a, map_b;
@@ -300,8 +303,14 @@ void Detector::detect(const std::vector<const Object*>& object_ptrs, const Detec
   ViewFrame frames[3];
   const std::size_t frame_count = fused_view_frames(opt, frames);
 
+  // Pass 1: per pair, the exact path now, or the pair's ROI views as jobs (their triangles kept
+  // in s.job_tris); pass 2: every job of the frame peeled in one call (a stage may draw them
+  // together); pass 3: per pair, the views' PCS united, expanded and tested exactly.
   std::size_t used = 0;
+  s.jobs.clear();
+  s.job_first.assign(pairs.size() + 1, 0);
   for (std::size_t pi = 0; pi < pairs.size(); ++pi) {
+    s.job_first[pi] = s.jobs.size();
     const PairPlan& plan = s.plans[pi];
     const std::size_t ia = plan.a, ib = plan.b;
     if (used == out.pairs.size()) out.pairs.emplace_back();
@@ -338,41 +347,36 @@ void Detector::detect(const std::vector<const Object*>& object_ptrs, const Detec
       out.timings.cpu += ms_since(t0);
       continue;
     }
-    if (!scope.stage) {
-      stage.begin_frame();
-      scope.stage = &stage;
-    }
     const std::vector<std::uint32_t>* only_a = opt.cull == Cull::contact ? &plan.kept_a : nullptr;
     const std::vector<std::uint32_t>* only_b = opt.cull == Cull::contact ? &plan.kept_b : nullptr;
-    std::vector<IdPair>& all_pcs = s.pcs_all;
-    all_pcs.clear();
-    s.direct.clear();
     for (std::size_t v = 0; v < frame_count; ++v) {
       const RoiView view = make_padded_roi_view(r.region, s.boxes[ia], s.boxes[ib], frames[v], r.resolution);
       if (v == 0) r.epsilon = opt.epsilon > 0.0 ? opt.epsilon : view.texel();
 
       t0 = Clock::now();
       // Each view gathers its own triangles: the pad follows that view's texel size.
-      const double min_a = triangles_in_view(ma, view, only_a, s.tris[0]);
-      const double min_b = triangles_in_view(mb, view, only_b, s.tris[1]);
+      const std::size_t j = s.jobs.size();
+      if (s.job_tris.size() < 2 * (j + 1)) s.job_tris.resize(2 * (j + 1));
+      std::vector<std::uint32_t>& tris_a = s.job_tris[2 * j];
+      std::vector<std::uint32_t>& tris_b = s.job_tris[2 * j + 1];
+      const double min_a = triangles_in_view(ma, view, only_a, tris_a);
+      const double min_b = triangles_in_view(mb, view, only_b, tris_b);
       out.timings.upload += ms_since(t0);
       if (v == 0) {
-        r.triangles_drawn_a = s.tris[0].size();
-        r.triangles_drawn_b = s.tris[1].size();
+        r.triangles_drawn_a = tris_a.size();
+        r.triangles_drawn_b = tris_b.size();
         if (opt.cull == Cull::box) {  // nothing culled: what touches the (padded) ROI
           r.triangles_in_roi_a = r.triangles_drawn_a;
           r.triangles_in_roi_b = r.triangles_drawn_b;
         }
         r.a_first = min_a > min_b;  // the farther object first; ties: B first
       }
-      if (s.tris[0].empty() || s.tris[1].empty()) continue;  // no contact possible, no image work
+      if (tris_a.empty() || tris_b.empty()) continue;  // no contact possible, no image work
 
-      PeelJob job;
+      PeelJob& job = s.jobs.emplace_back();
       job.objects[0] = &objects[ia];
       job.objects[1] = &objects[ib];
-      job.triangles[0] = &s.tris[0];
-      job.triangles[1] = &s.tris[1];
-      job.view = view;
+      job.view = view;  // job.triangles are set below: s.job_tris may still move
       job.pair_index = used - 1;
       job.view_index = int(v);
       job.ids = opt.ids;
@@ -382,8 +386,33 @@ void Detector::detect(const std::vector<const Object*>& object_ptrs, const Detec
       job.first = min_a > min_b ? 0 : 1;
       job.capture = s.capture != nullptr;
       job.conservative = opt.conservative;
-      PeelResult& one = s.peeled;
-      stage.peel(job, one, out.timings);
+    }
+  }
+  s.job_first[pairs.size()] = s.jobs.size();
+  for (std::size_t j = 0; j < s.jobs.size(); ++j) {
+    s.jobs[j].triangles[0] = &s.job_tris[2 * j];
+    s.jobs[j].triangles[1] = &s.job_tris[2 * j + 1];
+  }
+
+  if (!s.jobs.empty()) {
+    stage.begin_frame();
+    scope.stage = &stage;
+    if (s.peeled.size() < s.jobs.size()) s.peeled.resize(s.jobs.size());
+    stage.peel_batch(s.jobs.data(), s.jobs.size(), s.peeled.data(), out.timings);
+  }
+
+  for (std::size_t pi = 0; pi < pairs.size(); ++pi) {
+    const PairPlan& plan = s.plans[pi];
+    if (plan.culled_out || plan.exact) continue;
+    PairResult& r = out.pairs[pi];
+    const Mesh& ma = objects[plan.a].mesh;
+    const Mesh& mb = objects[plan.b].mesh;
+    std::vector<IdPair>& all_pcs = s.pcs_all;
+    all_pcs.clear();
+    s.direct.clear();
+    for (std::size_t j = s.job_first[pi]; j < s.job_first[pi + 1]; ++j) {
+      const PeelJob& job = s.jobs[j];
+      PeelResult& one = s.peeled[j];
       ++out.rois_peeled;
       out.gl_passes += one.gl_passes;
       out.pcs_readbacks += one.pcs_readbacks;
@@ -393,15 +422,15 @@ void Detector::detect(const std::vector<const Object*>& object_ptrs, const Detec
       if (one.exhaustive) {  // the stage could not resolve the view: every couple of boxes
         ++out.views_exhaustive;
         t0 = Clock::now();
-        box_overlap_pairs(ma, s.tris[0], mb, s.tris[1], s.direct, &s.box_scratch);
+        box_overlap_pairs(ma, *job.triangles[0], mb, *job.triangles[1], s.direct, &s.box_scratch);
         out.timings.cpu += ms_since(t0);
       }
       if (s.capture) {
         CapturedView& c = s.capture->emplace_back();
-        c.pair = used - 1;
-        c.view = int(v);
-        c.roi = view;
-        c.a_first = min_a > min_b;
+        c.pair = pi;
+        c.view = job.view_index;
+        c.roi = job.view;
+        c.a_first = job.first == 0;
         c.epsilon_window = one.epsilon_window;
         c.slope = one.slope;
         c.layers = std::move(one.captured);

@@ -93,6 +93,13 @@ class ImageStage {
   virtual void end_frame() noexcept {}
   // Peels `job` into `out` (cleared first). Adds its time to `timings` (upload, gpu, readback).
   virtual void peel(const PeelJob& job, PeelResult& out, Timings& timings) = 0;
+  // Peels `count` jobs (every ROI view of a frame) into outs[0..count): the same results as
+  // peel() on each, in any order of work. A stage may draw them together (the GL stage packs
+  // conservative views into one k-buffer: one draw for all of them); the counters of the shared
+  // work (gl_passes) are then reported on the first job of the batch. The default peels each.
+  virtual void peel_batch(const PeelJob* jobs, std::size_t count, PeelResult* outs, Timings& timings) {
+    for (std::size_t i = 0; i < count; ++i) peel(jobs[i], outs[i], timings);
+  }
 };
 
 }  // namespace peelcd
