@@ -94,7 +94,7 @@ struct DetectArgs {
   std::string ids, peel, peeler, cull, resolve, stage;
   double slope = NAN;
   double theta = NAN, phi = NAN, roll = NAN, epsilon = NAN, edge_texels = NAN;
-  bool conservative = false, no_conservative = false, paper = false;
+  bool conservative = false, no_conservative = false, paper = false, no_batch = false;
   double max_miss = NAN;  // percent; NaN = report only
   std::string json_out;
   int repeat = 1;
@@ -120,8 +120,10 @@ Peeler peeler_option(const std::string& text) {
 }
 
 // GL stage options: the scene file's, overridden by the command line's.
-gl::GlOptions merged_gl_options(const Scene& scene, const std::string& peeler, const std::string& resolve) {
+gl::GlOptions merged_gl_options(const Scene& scene, const std::string& peeler, const std::string& resolve,
+                               bool no_batch = false) {
   gl::GlOptions o = scene.gl;
+  if (no_batch) o.batch = false;
   if (!peeler.empty()) o.peeler = peeler_option(peeler);
   if (!resolve.empty())
     o.resolve = parsed(resolve, parse_resolve, "peelcd: --resolve: unknown resolve", "auto, gpu or host");
@@ -217,7 +219,7 @@ int run_detect(const DetectArgs& a) {
   const std::vector<Object> objects = load_objects(scene);
   progress.phase("peelcd detect: running the frame...");
 
-  Runner runner = make_runner(a.backend, merged_gl_options(scene, a.peeler, a.resolve));
+  Runner runner = make_runner(a.backend, merged_gl_options(scene, a.peeler, a.resolve, a.no_batch));
   FrameResult result;
   std::vector<Timings> runs;
   for (int i = 0; i < std::max(1, a.repeat); ++i) {
@@ -344,7 +346,7 @@ int run_explain(const DetectArgs& a, const ExplainArgs& x) {
   const std::vector<Object> objects = load_objects(scene);
   const oracle::PairQuery query = oracle::parse_pair_query(x.pair, objects);
   progress.phase("peelcd explain: running the frame...");
-  Runner runner = make_runner(a.backend, merged_gl_options(scene, a.peeler, a.resolve));
+  Runner runner = make_runner(a.backend, merged_gl_options(scene, a.peeler, a.resolve, a.no_batch));
   const oracle::FrameTrace trace(*runner.detector, objects, opt);
   const oracle::Explanation e = trace.explain(query);
   progress.clear();
@@ -429,7 +431,7 @@ int run_dump(const DetectArgs& a, const DumpArgs& d) {
     two.push_back(objects[original[1]]);
     objects = std::move(two);
   }
-  Runner runner = make_runner(a.backend, merged_gl_options(scene, a.peeler, a.resolve));
+  Runner runner = make_runner(a.backend, merged_gl_options(scene, a.peeler, a.resolve, a.no_batch));
   // The cap is checked on the broad phase's ROIs before any layer is captured.
   {
     const std::size_t rois = count_overlapping_pairs(objects);
@@ -641,7 +643,7 @@ int run_simulate(const SimArgs& a) {
   const auto seq = make_sequence(a.test, a.frames, !a.no_rigid, a.objects);
   Scene defaults;
   const DetectOptions opt = merged_options(defaults, a.detect);
-  Runner runner = make_runner(a.detect.backend, merged_gl_options(Scene{}, a.detect.peeler, a.detect.resolve));
+  Runner runner = make_runner(a.detect.backend, merged_gl_options(Scene{}, a.detect.peeler, a.detect.resolve, a.detect.no_batch));
   std::vector<Object> objects;
   std::string csv = "frame,phase,triangles,rois,rois_exact,rois_peeled,triangles_uploaded,triangles_indexed,shape_uploads,gl_passes,pcs_readbacks,nctp,found,"
                     "false_contacts,aabb_ms,upload_ms,gpu_ms,readback_ms,cpu_ms,total_ms\n";
@@ -1177,6 +1179,8 @@ void add_frame_options(CLI::App* c, DetectArgs& d) {
                                     "stage: culling, box overlaps, exact test). dump always peels");
   c->add_option("--resolve", d.resolve, "Where the k-buffer becomes layers and PCS: auto (host on a software renderer such as "
                                         "llvmpipe, else gpu; default), gpu (a compute pass) or host (mapped, resolved on the CPU)");
+  c->add_flag("--no-batch", d.no_batch, "GL stage: draw each conservative ROI view on its own instead of packing the "
+                                        "frame's views into one k-buffer and one draw (the same results; for comparison)");
   c->add_option("--slope", d.slope, "Slope-following epsilon, in texels (default 1; 0 = the paper's constant epsilon)")
       ->check(kNonNegative);
   c->add_flag("--conservative", d.conservative,

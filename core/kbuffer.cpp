@@ -74,6 +74,7 @@ KResolveResult resolve_range(const KBuffer& kb, const KResolveParams& p, std::si
                              std::vector<std::vector<std::uint32_t>>* layers) {
   KResolveResult result;
   const std::size_t texels = std::size_t(kb.resolution) * std::size_t(kb.resolution);
+  const std::size_t stride = kb.stride ? kb.stride : texels;
   if (sorted.size() < kb.slots) sorted.resize(kb.slots);
   for (std::size_t t = first; t < last; ++t) {
     const std::uint32_t n = kb.counts[t];
@@ -90,7 +91,7 @@ KResolveResult resolve_range(const KBuffer& kb, const KResolveParams& p, std::si
     const std::uint32_t flip = p.full_peel || p.conservative ? 0u : p.first_object << 31;
     // Insertion sort: a texel holds a handful of fragments.
     for (std::uint32_t i = 0; i < n; ++i) {
-      const KFragment f = kb.fragments[std::size_t(i) * texels + t];
+      const KFragment f = kb.fragments[std::size_t(i) * stride + t];
       std::uint32_t j = i;
       for (; j > 0 && before(f, sorted[j - 1], flip); --j) sorted[j] = sorted[j - 1];
       sorted[j] = f;

@@ -48,30 +48,6 @@ void GlImageStage::begin_frame() {
 
 void GlImageStage::end_frame() noexcept { impl_->context->restore_previous(); }
 
-void GlImageStage::peel(const PeelJob& job, PeelResult& out, Timings& timings) {
-  Impl& s = *impl_;
-  out.clear();
-  const auto t0 = Clock::now();
-  s.shape_uploads = 0;
-  for (int slot = 0; slot < 2; ++slot) s.prepare(*job.objects[slot], job.view, *job.triangles[slot], job.ids, slot);
-  s.upload(0);
-  s.upload(1);
-  timings.upload += ms_since(t0);
-  for (int slot = 0; slot < 2; ++slot)
-    (s.slot_shape[slot] ? out.triangles_indexed : out.triangles_uploaded) += s.corners(slot) / 3;
-  out.shape_uploads = s.shape_uploads;
-  if (job.conservative) {  // intervals need every fragment at once: the k-buffer
-    while (!s.peel_conservative(job, out, timings)) {
-    }
-  } else if (s.options.peeler == Peeler::abuffer) {
-    while (!s.peel_single_pass(job, out, timings)) {
-    }
-  } else {
-    while (!s.peel_multipass(job, out, timings)) {
-    }
-  }
-}
-
 double GlImageStage::floor_draw_ms(const PeelJob& job) {
   Impl& s = *impl_;
   for (int slot = 0; slot < 2; ++slot) s.prepare(*job.objects[slot], job.view, *job.triangles[slot], job.ids, slot);

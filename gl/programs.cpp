@@ -48,6 +48,13 @@ GlImageStage::Impl::Impl(std::shared_ptr<Context> ctx, const GlOptions& opt)
   cons_resolve_program =
       link({compile(GL_COMPUTE_SHADER, shaders::conservative_resolve_comp, "conservative_resolve.comp")},
            "conservative resolve");
+  cons_batch_program = link({compile(GL_VERTEX_SHADER, shaders::conservative_batch_vert, "conservative_batch.vert"),
+                             compile(GL_GEOMETRY_SHADER, shaders::conservative_batch_geom, "conservative_batch.geom"),
+                             compile(GL_FRAGMENT_SHADER, shaders::conservative_batch_frag, "conservative_batch.frag")},
+                            "conservative batch");
+  u_cb_viewport = gl.GetUniformLocation(cons_batch_program, "viewport");
+  u_cb_slots = gl.GetUniformLocation(cons_batch_program, "slots");
+  u_cb_texels = gl.GetUniformLocation(cons_batch_program, "texels");
   u_cs_clip = gl.GetUniformLocation(cons_program, "clip_from_local");
   u_cs_model = gl.GetUniformLocation(cons_program, "roi_from_object");
   u_cs_res = gl.GetUniformLocation(cons_program, "resolution");
@@ -102,6 +109,9 @@ GlImageStage::Impl::Impl(std::shared_ptr<Context> ctx, const GlOptions& opt)
   gl.VertexArrayAttribBinding(vao, 1, 0);
   gl.CreateBuffers(2, vbo);
   gl.CreateBuffers(2, ibo);
+  gl.CreateBuffers(1, &batch_vbo);
+  gl.CreateBuffers(1, &batch_views);
+  gl.CreateBuffers(1, &batch_triangles);
   u_model_peel = gl.GetUniformLocation(peel_program, "roi_from_object");
   gl.CreateQueries(GL_ANY_SAMPLES_PASSED, 1, &query);
   gl.CreateBuffers(1, &pcs_buffer);
@@ -123,6 +133,10 @@ GlImageStage::Impl::~Impl() {
   gl.DeleteProgram(resolve_program);
   gl.DeleteProgram(cons_program);
   gl.DeleteProgram(cons_resolve_program);
+  gl.DeleteProgram(cons_batch_program);
+  gl.DeleteBuffers(1, &batch_vbo);
+  gl.DeleteBuffers(1, &batch_views);
+  gl.DeleteBuffers(1, &batch_triangles);
   gl.DeleteBuffers(1, &count_buffer);
   gl.DeleteBuffers(1, &fragment_buffer);
   gl.DeleteTextures(1, &count_tex);

@@ -31,6 +31,9 @@ extern const char* const conservative_vert;
 extern const char* const conservative_geom;
 extern const char* const conservative_frag;
 extern const char* const conservative_resolve_comp;
+extern const char* const conservative_batch_vert;
+extern const char* const conservative_batch_geom;
+extern const char* const conservative_batch_frag;
 extern const char* const shader_sources_hash;
 }  // namespace peelcd::shaders
 
@@ -77,6 +80,14 @@ struct GlImageStage::Impl {
   GLuint cons_program = 0, cons_resolve_program = 0;  // conservative mode
   GLint u_cs_clip = -1, u_cs_model = -1, u_cs_res = -1, u_cs_slots = -1, u_cs_object = -1;
   GLint u_cr_res = -1, u_cr_slots = -1, u_cr_append = -1, u_cr_emit = -1;
+  // Batched conservative views (batch.cpp, shaders/conservative_batch.*).
+  GLuint cons_batch_program = 0;
+  GLint u_cb_viewport = -1, u_cb_slots = -1, u_cb_texels = -1;
+  GLuint batch_vbo = 0, batch_views = 0, batch_triangles = 0;
+  std::size_t batch_vbo_capacity = 0, batch_views_capacity = 0, batch_triangles_capacity = 0;  // bytes
+  std::vector<GpuVertex> batch_corners;
+  std::vector<std::uint32_t> batch_triangle_view, batch_ids;
+  std::vector<float> batch_view_data;
   GLint u_rank_flip = -1;
   GLint u_floor_clip = -1, u_floor_lo = -1, u_floor_hi = -1;
   GLint u_model_peel = -1, u_model_ab = -1, u_model_floor = -1;
@@ -173,6 +184,16 @@ struct GlImageStage::Impl {
   bool peel_conservative(const PeelJob& job, PeelResult& out, Timings& t);
   bool resolve_on_host(const PeelJob& job, std::size_t fitting, std::uint32_t view_slots, Clock::time_point t_gpu,
                        PeelResult& out, Timings& t);
+
+  // batch.cpp: conservative views jobs[0..count) packed into one k-buffer and drawn at once,
+  // resolved on the host. Returns how many of the jobs it peeled (at least one: a first job
+  // that does not fit a packed k-buffer alone is peeled by peel_conservative()).
+  // One view: its geometry uploaded, then peeled by the configured peeler (GlImageStage::peel).
+  void peel_one(const PeelJob& job, PeelResult& out, Timings& timings);
+  std::size_t peel_conservative_batch(const PeelJob* jobs, std::size_t count, PeelResult* outs, Timings& t);
+  bool host_resolve() const {
+    return options.resolve == Resolve::host || (options.resolve == Resolve::automatic && software_renderer);
+  }
 };
 
 }  // namespace peelcd::gl

@@ -5,6 +5,7 @@
 #include "gl_fixture.h"
 #include "peelcd/core/primitives.h"
 #include "peelcd/eval/classes.h"
+#include "peelcd/eval/scenes.h"
 
 #include <catch2/catch.hpp>
 
@@ -112,4 +113,48 @@ TEST_CASE("point sampling keeps ties in both peelers: touching and coincident su
       INFO(name << " (" << to_string(peeler) << "): " << r.found << " of " << r.exact);
       CHECK(r.found > 0);
     }
+}
+
+TEST_CASE("conservative views packed into one k-buffer and one draw give each view's layers and PCS",
+          "[conservative][batch]") {
+  // A crowd frame: rigid balls (poses in the views buffer) in light contact, many ROIs.
+  std::vector<Object> objects;
+  make_crowd(60, 2)->frame(1, objects);
+  DetectOptions opt;  // the default configuration, the image stage forced
+  opt.stage = Stage::image;
+  std::vector<CapturedView> batched, single;
+  gl::GlOptions one_by_one;
+  one_by_one.batch = false;
+  gl::GlOptions host;
+  host.resolve = Resolve::host;  // the batch is the host resolve's (the default on llvmpipe)
+  test_pipeline().set_gl_options(host);
+  test_pipeline().capture_layers(&batched);
+  const FrameResult b = test_pipeline().detect(objects, opt);
+  test_pipeline().capture_layers(nullptr);
+  const FrameResult b_fast = test_pipeline().detect(objects, opt);  // no capture
+  one_by_one.resolve = Resolve::host;
+  test_pipeline().set_gl_options(one_by_one);
+  test_pipeline().capture_layers(&single);
+  const FrameResult s = test_pipeline().detect(objects, opt);
+  test_pipeline().capture_layers(nullptr);
+  test_pipeline().set_gl_options(gl::GlOptions{});
+  REQUIRE(b.rois_peeled > 8);
+  CHECK(s.gl_passes == s.rois_peeled);  // one draw per view
+  CHECK(b.gl_passes < 4);               // one draw per packed k-buffer
+  CHECK(b_fast.gl_passes == b.gl_passes);
+  REQUIRE(batched.size() == single.size());
+  for (std::size_t v = 0; v < single.size(); ++v) {
+    INFO("view " << v << " of pair " << single[v].pair);
+    CHECK(batched[v].pair == single[v].pair);
+    CHECK(batched[v].pcs == single[v].pcs);
+    CHECK(batched[v].layers == single[v].layers);
+  }
+  REQUIRE(b.pairs.size() == s.pairs.size());
+  std::size_t contacts = 0;
+  for (std::size_t i = 0; i < s.pairs.size(); ++i) {
+    CHECK(b.pairs[i].colliding.size() == s.pairs[i].colliding.size());
+    CHECK(b_fast.pairs[i].pcs == s.pairs[i].pcs);
+    contacts += s.pairs[i].colliding.size();
+  }
+  CHECK(contacts > 0);
 }

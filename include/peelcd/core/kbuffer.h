@@ -26,6 +26,10 @@ struct KBuffer {
   const KFragment* fragments = nullptr;   // slot s of texel t at s * texels + t
   int resolution = 0;                     // texels = resolution^2
   std::uint32_t slots = 0;                // fragments a texel can hold
+  // Texels between a texel's consecutive slots: 0 = resolution^2 (one view's k-buffer); a view
+  // packed with others (GlImageStage::peel_batch) passes the packed k-buffer's texel count, with
+  // `counts` and `fragments` pointing at the view's first texel.
+  std::size_t stride = 0;
 };
 
 struct KResolveParams {

@@ -45,6 +45,11 @@ class GlImageStage final : public ImageStage {
   void begin_frame() override;
   void end_frame() noexcept override;
   void peel(const PeelJob& job, PeelResult& out, Timings& timings) override;
+  // Conservative views resolved on the host (a software renderer, or Resolve::host) are packed
+  // into one k-buffer and drawn together: one draw for every view of the frame (more only when
+  // their texels times the slots exceed the largest storage block), the same layers and PCS as
+  // peel() on each. Other views, and views whose texels overflow the slots, are peeled one by one.
+  void peel_batch(const PeelJob* jobs, std::size_t count, PeelResult* outs, Timings& timings) override;
 
   // Benchmarks: the floor under any image-space method on this context. The job's triangles
   // uploaded (not timed), then drawn once with depth testing and a fragment shader that does

@@ -44,6 +44,10 @@ struct GlOptions {
   Resolve resolve = Resolve::automatic;   // single-pass peeler only
   // Threads of the host resolve (Resolve::host): 0 = the hardware's threads, at most 8.
   unsigned workers = 0;
+  // Conservative views resolved on the host are packed into one k-buffer and drawn together (one
+  // draw per frame: GlImageStage::peel_batch); false draws each view on its own (the same layers
+  // and PCS; for comparison: peelcd detect/simulate --no-batch).
+  bool batch = true;
 };
 
 }  // namespace gl

@@ -1,0 +1,77 @@
+#version 450 core
+// Conservative mode, batched, step 2 (a copy of shaders/conservative.frag but for where the view
+// and its texels are): keeps the texels the triangle (grown by its margin) really touches,
+// by separating axes, and stores the depth interval it spans over the texel in the k-buffer of
+// shaders/abuffer.frag: lower depth bits, object << 31 | draw order, upper depth bits, 0.
+// The arithmetic and the constants are peelcd/core/conservative.h's (texel_interval).
+flat in vec3 g_x;
+flat in vec3 g_y;
+flat in vec3 g_z;
+flat in vec2 g_margin;
+flat in uint g_order;
+flat in uint g_view;  // view << 1 | object
+
+struct BatchView {
+  mat4 clip_from_local;
+  mat4 roi_from_object[2];
+  ivec4 info;  // resolution, first texel in the packed k-buffer
+};
+layout(std430, binding = 3) readonly buffer Views { BatchView views[]; };
+uniform uint slots;
+uniform uint texels;  // of the packed k-buffer: every view's texels, one after the other
+
+layout(std430, binding = 2) buffer Counts { uint counts[]; };
+layout(std430, binding = 1) writeonly buffer Fragments { uvec4 fragments[]; };
+
+const float kWindowRel = 1.0 / 1048576.0;
+const float kDepthAbs = 1.0 / 4194304.0;
+const float kSliver = 1.0 / 256.0;
+const float kPlaneRel = 1.0 / 1024.0;
+
+float min3(vec3 v) { return min(min(v.x, v.y), v.z); }
+float max3(vec3 v) { return max(max(v.x, v.y), v.z); }
+
+void main() {
+  int resolution = views[g_view >> 1].info.x;
+  uint object_bit = g_view & 1u;
+  ivec2 ij = ivec2(gl_FragCoord.xy);
+  if (ij.x < 0 || ij.y < 0 || ij.x >= resolution || ij.y >= resolution) return;
+  float h = 0.5 + g_margin.x;
+  float cx = float(ij.x) + 0.5, cy = float(ij.y) + 0.5;
+  float xmin = min3(g_x), xmax = max3(g_x), ymin = min3(g_y), ymax = max3(g_y);
+  if (xmax < cx - h || xmin > cx + h || ymax < cy - h || ymin > cy + h) return;
+  float big = max(max(max(abs(xmin), abs(xmax)), max(abs(ymin), abs(ymax))), max(cx, cy));
+  for (int k = 0; k < 3; ++k) {
+    int k1 = k == 2 ? 0 : k + 1;
+    float nx = g_y[k] - g_y[k1], ny = g_x[k1] - g_x[k];
+    vec3 p = nx * g_x + ny * g_y;
+    float an = abs(nx) + abs(ny);
+    float sc = nx * cx + ny * cy, sr = h * an;
+    float tol = 4.0 * kWindowRel * an * big;
+    if (max3(p) < sc - sr - tol || min3(p) > sc + sr + tol) return;
+  }
+  float mz = g_margin.y;
+  float lo = min3(g_z) - mz, hi = max3(g_z) + mz;
+  float e1x = g_x.y - g_x.x, e1y = g_y.y - g_y.x, e1z = g_z.y - g_z.x;
+  float e2x = g_x.z - g_x.x, e2y = g_y.z - g_y.x, e2z = g_z.z - g_z.x;
+  float det = e1x * e2y - e1y * e2x;
+  if (abs(det) > kSliver * (abs(e1x) + abs(e1y)) * (abs(e2x) + abs(e2y))) {
+    float a = (e1z * e2y - e2z * e1y) / det, b = (e1x * e2z - e2x * e1z) / det;
+    float dx = cx - g_x.x, dy = cy - g_y.x;
+    float zc = g_z.x + a * dx + b * dy;
+    float r = (abs(a) + abs(b)) * h;
+    float w = kPlaneRel * (abs(a) * abs(dx) + abs(b) * abs(dy) + r) + mz + kDepthAbs;
+    float plo = zc - r - w, phi = zc + r + w;
+    if (!isinf(plo) && !isnan(plo) && !isinf(phi) && !isnan(phi)) {
+      lo = max(lo, plo);
+      hi = min(hi, phi);
+    }
+  }
+  lo = max(lo, 0.0);
+  hi = min(hi, 1.0);
+  if (!(lo <= hi)) return;
+  uint texel = uint(views[g_view >> 1].info.y) + uint(ij.y) * uint(resolution) + uint(ij.x);
+  uint s = atomicAdd(counts[texel], 1u);
+  if (s >= slots) return;  // the resolve sees the count and asks the host for more slots
+  fragments[s * texels + texel] = uvec4(floatBitsToUint(lo), (object_bit << 31) | g_order, floatBitsToUint(hi), 0u);
+}
