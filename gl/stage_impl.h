@@ -5,6 +5,7 @@
 //   geometry.cpp     a view's triangles into buffers: ROI-local corners, or a rigid shape's indices
 //   multipass.cpp    the multi-pass peeler (one draw per layer) and the PCS readback
 //   single_pass.cpp  the single-pass peeler (k-buffer), its GPU and host resolves
+//   batch.cpp        one view (peel_one), or conservative views packed into one k-buffer and one draw
 //   gl_stage.cpp     the public class, the floor draw
 #include "peelcd/core/image_stage.h"
 #include "peelcd/core/kbuffer.h"
