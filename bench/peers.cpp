@@ -60,7 +60,7 @@ PeerFrame cgal_frame(const std::vector<Object>& objects, unsigned threads) {
     triangles_touching(ma, roi, ta);
     triangles_touching(mb, roi, tb);
     std::vector<std::uint64_t> candidates, hits;
-    box_overlap_pairs(ma, ta, mb, tb, candidates);
+    cgal_box_overlap_pairs(ma, ta, mb, tb, candidates);
     for (const std::uint64_t k : candidates)
       if (triangles_intersect(corners(ma, pair_a(k)), corners(mb, pair_b(k)))) hits.push_back(k);
     std::sort(hits.begin(), hits.end());

@@ -227,6 +227,41 @@ std::pair<Vec3, Vec3> intersection_segment(const TriangleCorners& a, const Trian
   return seg;
 }
 
+namespace {
+// Shewchuk's orient3d error bound (Adaptive Precision Floating-Point Arithmetic and Fast Robust
+// Geometric Predicates, 1997): with eps = 2^-53, |det - exact| <= (7 + 56 eps) eps * permanent
+// when nothing overflows or underflows. The absolute term covers underflow; an overflow gives
+// inf or NaN, which no comparison below accepts.
+constexpr double kOrient3dBound = (7.0 + 56.0 * 1.1102230246251565e-16) * 1.1102230246251565e-16;
+constexpr double kUnderflowSlack = 1e-290;
+
+// The sign of orient3d(p, q, r, d) when the double evaluation certifies it: +1, -1, or 0 when it
+// cannot (then the exact predicates decide).
+int certain_orientation(const Vec3& p, const Vec3& q, const Vec3& r, const Vec3& d) {
+  const double adx = p.x() - d.x(), bdx = q.x() - d.x(), cdx = r.x() - d.x();
+  const double ady = p.y() - d.y(), bdy = q.y() - d.y(), cdy = r.y() - d.y();
+  const double adz = p.z() - d.z(), bdz = q.z() - d.z(), cdz = r.z() - d.z();
+  const double bc = bdy * cdz - bdz * cdy, ca = cdy * adz - cdz * ady, ab = ady * bdz - adz * bdy;
+  const double det = adx * bc + bdx * ca + cdx * ab;
+  const double permanent = (std::fabs(bdy * cdz) + std::fabs(bdz * cdy)) * std::fabs(adx) +
+                           (std::fabs(cdy * adz) + std::fabs(cdz * ady)) * std::fabs(bdx) +
+                           (std::fabs(ady * bdz) + std::fabs(adz * bdy)) * std::fabs(cdx);
+  const double bound = kOrient3dBound * permanent + kUnderflowSlack;
+  if (det > bound) return 1;
+  if (det < -bound) return -1;
+  return 0;
+}
+
+// Every corner of `t` strictly on one side of the plane through `plane`, certified in double:
+// the triangles cannot meet. (A degenerate `plane` gives no certain sign.)
+bool certainly_separated(const TriangleCorners& plane, const TriangleCorners& t) {
+  const int s0 = certain_orientation(plane[0], plane[1], plane[2], t[0]);
+  if (s0 == 0) return false;
+  return certain_orientation(plane[0], plane[1], plane[2], t[1]) == s0 &&
+         certain_orientation(plane[0], plane[1], plane[2], t[2]) == s0;
+}
+}  // namespace
+
 void narrow_phase(const Mesh& a, const Mesh& b, const std::vector<std::uint64_t>& candidates,
                   std::vector<Contact>& out) {
   for (std::uint64_t c : candidates) {
@@ -234,7 +269,10 @@ void narrow_phase(const Mesh& a, const Mesh& b, const std::vector<std::uint64_t>
     const TriangleCorners ca = corners(a, ta), cb = corners(b, tb);
     // A triangle lies in the box of its corners: disjoint boxes, no contact (exact: comparisons
     // of doubles; boxes that only touch overlap).
-    if (!triangle_bounds(a, ta).overlaps(triangle_bounds(b, tb)) || !triangles_intersect(ca, cb)) continue;
+    if (!triangle_bounds(a, ta).overlaps(triangle_bounds(b, tb))) continue;
+    // Most candidates lie wholly on one side of the other's plane: certified in double, they
+    // skip the exact predicates (which decide everything else).
+    if (certainly_separated(ca, cb) || certainly_separated(cb, ca) || !triangles_intersect(ca, cb)) continue;
     Contact contact;
     contact.tri_a = ta;
     contact.tri_b = tb;

@@ -7,6 +7,7 @@
 #include <CGAL/box_intersection_d.h>
 
 #include <algorithm>
+#include <limits>
 
 namespace peelcd {
 namespace {
@@ -45,19 +46,36 @@ std::vector<std::uint64_t> exact_colliding_pairs(const Mesh& a, const Mesh& b) {
   return out;
 }
 
-struct BoxScratch::Impl {
-  std::vector<Box> a, b;
+namespace {
+// A triangle's closed box for the sweep below.
+struct SweepBox {
+  double lo[3], hi[3];
+  std::uint32_t tri;
 };
-BoxScratch::BoxScratch() : impl(std::make_unique<Impl>()) {}
-BoxScratch::~BoxScratch() = default;
 
-void box_overlap_pairs(const Mesh& a, const std::vector<std::uint32_t>& ta, const Mesh& b,
-                       const std::vector<std::uint32_t>& tb, std::vector<std::uint64_t>& out, BoxScratch* scratch) {
-  std::vector<Box> own_a, own_b;
-  std::vector<Box>& ba = scratch ? scratch->impl->a : own_a;
-  std::vector<Box>& bb = scratch ? scratch->impl->b : own_b;
-  ba.clear();
-  bb.clear();
+SweepBox sweep_box(const Mesh& m, std::uint32_t t) {
+  SweepBox b;
+  const Tri& f = m.triangles[t];
+  for (int k = 0; k < 3; ++k) {
+    const double x = m.vertices[f[0]][k], y = m.vertices[f[1]][k], z = m.vertices[f[2]][k];
+    b.lo[k] = std::min({x, y, z});
+    b.hi[k] = std::max({x, y, z});
+  }
+  b.tri = t;
+  return b;
+}
+
+// The boxes overlap (closed) on the two axes other than `axis`.
+bool overlap_other(const SweepBox& x, const SweepBox& y, int axis) {
+  for (int k = 0; k < 3; ++k)
+    if (k != axis && (x.hi[k] < y.lo[k] || y.hi[k] < x.lo[k])) return false;
+  return true;
+}
+}  // namespace
+
+void cgal_box_overlap_pairs(const Mesh& a, const std::vector<std::uint32_t>& ta, const Mesh& b,
+                            const std::vector<std::uint32_t>& tb, std::vector<std::uint64_t>& out) {
+  std::vector<Box> ba, bb;
   ba.reserve(ta.size());
   bb.reserve(tb.size());
   for (const std::uint32_t t : ta) ba.push_back(triangle_box(a, t));
@@ -66,6 +84,45 @@ void box_overlap_pairs(const Mesh& a, const std::vector<std::uint32_t>& ta, cons
   CGAL::box_intersection_d(ba.begin(), ba.end(), bb.begin(), bb.end(),
                            [&](const Box& x, const Box& y) { out.push_back(pack_pair(x.info(), y.info())); },
                            std::ptrdiff_t(10), CGAL::Box_intersection_d::CLOSED);
+}
+
+struct BoxScratch::Impl {
+  std::vector<SweepBox> a, b;
+};
+BoxScratch::BoxScratch() : impl(std::make_unique<Impl>()) {}
+BoxScratch::~BoxScratch() = default;
+
+// Sweep and prune over the two lists sorted by their boxes' lower x: each box
+// meets the boxes of the other list that start at or after it and before its end; a pair is found
+// from the box that starts first (ties: from A's side), so once. Closed boxes: touching boxes are
+// reported. (The exact reference above keeps CGAL's
+// box_intersection_d: the two are checked against each other by every --check.)
+void box_overlap_pairs(const Mesh& a, const std::vector<std::uint32_t>& ta, const Mesh& b,
+                       const std::vector<std::uint32_t>& tb, std::vector<std::uint64_t>& out, BoxScratch* scratch) {
+  std::vector<SweepBox> own_a, own_b;
+  std::vector<SweepBox>& ba = scratch ? scratch->impl->a : own_a;
+  std::vector<SweepBox>& bb = scratch ? scratch->impl->b : own_b;
+  ba.clear();
+  bb.clear();
+  for (const std::uint32_t t : ta) ba.push_back(sweep_box(a, t));
+  for (const std::uint32_t t : tb) bb.push_back(sweep_box(b, t));
+  if (ba.empty() || bb.empty()) return;
+  const int ax = 0;  // along x (choosing the axis by the boxes' spread cost more than it saved here)
+  const auto by_lo = [](const SweepBox& x, const SweepBox& y) { return x.lo[ax] < y.lo[ax]; };
+  std::sort(ba.begin(), ba.end(), by_lo);
+  std::sort(bb.begin(), bb.end(), by_lo);
+  std::size_t i = 0, j = 0;
+  while (i < ba.size() && j < bb.size()) {
+    if (ba[i].lo[ax] <= bb[j].lo[ax]) {
+      const SweepBox& x = ba[i++];
+      for (std::size_t k = j; k < bb.size() && !(bb[k].lo[ax] > x.hi[ax]); ++k)
+        if (overlap_other(x, bb[k], ax)) out.push_back(pack_pair(x.tri, bb[k].tri));
+    } else {
+      const SweepBox& y = bb[j++];
+      for (std::size_t k = i; k < ba.size() && !(ba[k].lo[ax] > y.hi[ax]); ++k)
+        if (overlap_other(ba[k], y, ax)) out.push_back(pack_pair(ba[k].tri, y.tri));
+    }
+  }
 }
 
 Score score_contacts(const std::vector<std::uint64_t>& exact, const std::vector<Contact>& reported) {

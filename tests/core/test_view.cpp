@@ -28,12 +28,12 @@ TEST_CASE("view frames are right-handed and orthonormal for every direction, pol
     }
 }
 
-TEST_CASE("fused views look along d, then u, then v; two views are the first two of three", "[view]") {
+TEST_CASE("fused views look along d, then u, then v, and two views are the first two of three", "[view]") {
   for (const auto& [theta, phi] : std::vector<std::pair<double, double>>{{0, 0}, {45, 30}, {200, -90}}) {
     DetectOptions o;
     o.theta = theta;
     o.phi = phi;
-    const ViewFrame f = view_frame(theta, phi);
+    const ViewFrame f = view_frame(theta, phi, o.roll);  // the default roll turns u and v about d
     std::vector<std::vector<ViewFrame>> by_count;
     for (int views = 1; views <= 3; ++views) {
       o.views = views;

@@ -91,7 +91,7 @@ TEST_CASE("EXR layers round-trip bit for bit, IDs above 2^24 included", "[oracle
   fs::remove_all(dir);
 }
 
-TEST_CASE("a dump written and read back compares equal; a non-empty target is refused", "[oracle]") {
+TEST_CASE("a dump written and read back compares equal and a non-empty target is refused", "[oracle]") {
   const Dump d = synthetic();
   const fs::path dir = fresh_dir("dump");
   write_dump(d, dir.string(), true);

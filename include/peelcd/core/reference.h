@@ -26,6 +26,12 @@ void box_overlap_pairs(const Mesh& a, const std::vector<std::uint32_t>& ta, cons
                        const std::vector<std::uint32_t>& tb, std::vector<std::uint64_t>& out,
                        BoxScratch* scratch = nullptr);
 
+// The same pairs through CGAL's box_intersection_d (the benchmark's CGAL peer; the exact
+// reference uses it too). box_overlap_pairs() sweeps along x instead: faster on the few thousand
+// boxes of a ROI (docs/performance.md).
+void cgal_box_overlap_pairs(const Mesh& a, const std::vector<std::uint32_t>& ta, const Mesh& b,
+                            const std::vector<std::uint32_t>& tb, std::vector<std::uint64_t>& out);
+
 // Reported contacts against the exact set: every miss and every false contact counts.
 struct Score {
   std::size_t exact = 0, found = 0, missed = 0, false_contacts = 0;
