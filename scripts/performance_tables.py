@@ -37,7 +37,7 @@ def bench_methods(path):
     """{method: [median, miss, false, xCGAL, xFCL, xfloor]} from a `peelcd bench` table."""
     out = {}
     for line in open(path):
-        m = re.match(r"^(peelcd .*?|CGAL .*?|FCL .*?|floor: .*?)\s{2,}(\S.*)$", line.rstrip())
+        m = re.match(r"^(peelcd .*?|CGAL.*?|FCL .*?|floor: .*?)\s{2,}(\S.*)$", line.rstrip())
         if m:
             out[m.group(1)] = m.group(2).split()
     return out
