@@ -88,9 +88,7 @@ void validate_options(const DetectOptions& opt, int max_resolution) {
     throw std::invalid_argument(std::string(where) + "edge_texels must be finite and >= 0 (0 = the budget's share)");
 }
 
-namespace {
-// Triangle t's box touches `box` (closed).
-bool touches(const Mesh& mesh, std::uint32_t t, const Aabb& box) {
+bool triangle_touches(const Mesh& mesh, std::uint32_t t, const Aabb& box) {
   const Tri& f = mesh.triangles[t];
   const Vec3& a = mesh.vertices[f[0]];
   const Vec3& b = mesh.vertices[f[1]];
@@ -98,7 +96,6 @@ bool touches(const Mesh& mesh, std::uint32_t t, const Aabb& box) {
   const Vec3 lo = a.cwiseMin(b).cwiseMin(c), hi = a.cwiseMax(b).cwiseMax(c);
   return !((hi.array() < box.lo.array()).any() || (lo.array() > box.hi.array()).any());
 }
-}  // namespace
 
 double triangles_in_view(const Mesh& mesh, const RoiView& view, const std::vector<std::uint32_t>* only,
                          std::vector<std::uint32_t>& out) {
@@ -108,7 +105,7 @@ double triangles_in_view(const Mesh& mesh, const RoiView& view, const std::vecto
   const std::size_t count = only ? only->size() : mesh.triangles.size();
   for (std::size_t i = 0; i < count; ++i) {
     const auto t = only ? (*only)[i] : std::uint32_t(i);
-    if (!touches(mesh, t, box)) continue;
+    if (!triangle_touches(mesh, t, box)) continue;
     out.push_back(t);
     const Tri& f = mesh.triangles[t];
     for (int k = 0; k < 3; ++k) {
@@ -134,7 +131,7 @@ StageCost exact_path_cost() {
 void triangles_touching(const Mesh& mesh, const Aabb& box, std::vector<std::uint32_t>& out) {
   out.clear();
   for (std::uint32_t t = 0; t < mesh.triangles.size(); ++t)
-    if (touches(mesh, t, box)) out.push_back(t);
+    if (triangle_touches(mesh, t, box)) out.push_back(t);
 }
 
 // The frame's objects through pointers (no copy of any mesh).

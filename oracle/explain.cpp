@@ -37,16 +37,6 @@ std::string fmt(const char* format, double v) {
 }
 std::string g(double v) { return fmt("%.6g", v); }
 
-// Triangle t's box touches `box` (closed), as the detector decides it.
-bool touches(const Mesh& mesh, std::uint32_t t, const Aabb& box) {
-  const Tri& f = mesh.triangles[t];
-  const Vec3& a = mesh.vertices[f[0]];
-  const Vec3& b = mesh.vertices[f[1]];
-  const Vec3& c = mesh.vertices[f[2]];
-  const Vec3 lo = a.cwiseMin(b).cwiseMin(c), hi = a.cwiseMax(b).cwiseMax(c);
-  return !((hi.array() < box.lo.array()).any() || (lo.array() > box.hi.array()).any());
-}
-
 // Window position (texels; texel i spans [i, i + 1)) of world point p in `view`.
 std::array<double, 2> window_of(const RoiView& view, const Vec3& p) {
   const Vec3 local = p - view.center;
@@ -201,7 +191,7 @@ Explanation FrameTrace::explain(const PairQuery& query) const {
     for (const Contact& c : pr->colliding)
       if (c.tri_a == q.tri_a && c.tri_b == q.tri_b) e.reported = true;
     const auto why = [&](const Mesh& m, std::uint32_t t, const std::string& other) -> std::string {
-      if (!touches(m, t, pr->roi)) return "its box does not touch the ROI (the overlap of the two objects' boxes)";
+      if (!triangle_touches(m, t, pr->roi)) return "its box does not touch the ROI (the overlap of the two objects' boxes)";
       return "contact culling: its box touches no grid cell that a triangle of '" + other +
              "' touches (peelcd/core/cull.h)";
     };
@@ -213,8 +203,8 @@ Explanation FrameTrace::explain(const PairQuery& query) const {
       e.kept_a = std::binary_search(kept_a.begin(), kept_a.end(), q.tri_a);
       e.kept_b = std::binary_search(kept_b.begin(), kept_b.end(), q.tri_b);
     } else {  // Cull::box: what touches the ROI (the views pad it further)
-      e.kept_a = touches(ma, q.tri_a, pr->roi);
-      e.kept_b = touches(mb, q.tri_b, pr->roi);
+      e.kept_a = triangle_touches(ma, q.tri_a, pr->roi);
+      e.kept_b = triangle_touches(mb, q.tri_b, pr->roi);
     }
     if (!e.kept_a) e.cull_a = why(ma, q.tri_a, ob.name);
     if (!e.kept_b) e.cull_b = why(mb, q.tri_b, oa.name);

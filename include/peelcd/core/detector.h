@@ -51,6 +51,9 @@ double triangles_in_view(const Mesh& mesh, const RoiView& view, const std::vecto
 // triangle), fitted by `peelcd calibrate` on the machine docs/performance.md names.
 StageCost exact_path_cost();
 
+// Triangle t's box touches `box` (closed): the test of triangles_touching() and culling's ROI.
+bool triangle_touches(const Mesh& mesh, std::uint32_t t, const Aabb& box);
+
 // The triangles of `mesh` whose boxes touch `box` (closed), ascending, into `out`: the crop to
 // an overlap box (the router's triangles with Cull::box; the benchmark's CGAL peer).
 void triangles_touching(const Mesh& mesh, const Aabb& box, std::vector<std::uint32_t>& out);
