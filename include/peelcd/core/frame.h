@@ -27,7 +27,7 @@ std::optional<Cull> parse_cull(const std::string& text);
 
 // Which stage tests a ROI (pair of objects whose boxes overlap). image: the image stage (peeled
 // layers -> PCS -> exact test of their candidates). exact: the exact CPU path (the same culling,
-// then every couple of kept triangles whose boxes overlap, CGAL box_intersection_d, then the
+// then every couple of kept triangles whose boxes overlap, found by a sweep along x, then the
 // exact test): no GL work. automatic: per ROI, whichever a cost model calibrated for the image
 // stage's backend (ImageStage::cost()) predicts cheaper (docs/performance.md, "The stage
 // router"). The exact path is exact: routing to it never loses a contact.

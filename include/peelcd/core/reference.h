@@ -12,7 +12,7 @@ namespace peelcd {
 std::vector<std::uint64_t> exact_colliding_pairs(const Mesh& a, const Mesh& b);
 
 // Appends pack_pair(triA, triB) for every triangle of `ta` (of A) and of `tb` (of B) whose
-// closed boxes overlap: the candidates of the exact CPU path (no image stage).
+// closed boxes overlap, by a sweep along x: the candidates of the exact CPU path (no image stage).
 // With `scratch`, the boxes' storage is kept there from call to call (a frame loop allocates
 // nothing once it has grown).
 class BoxScratch {
