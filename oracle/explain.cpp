@@ -545,7 +545,6 @@ Explanation FrameTrace::explain(const PairQuery& query) const {
   }
 
   // 4. The verdict.
-  const std::string pair_name = "'" + oa.name + "':" + std::to_string(q.tri_a) + " x '" + ob.name + "':" + std::to_string(q.tri_b);
   const ViewReport* found_in = nullptr;
   for (const ViewReport& v : e.views)
     if (!found_in && v.reason == Verdict::found) found_in = &v;
@@ -602,7 +601,6 @@ Explanation FrameTrace::explain(const PairQuery& query) const {
                        first.summary;
     }
   }
-  (void)pair_name;
   return e;
 }
 
