@@ -408,32 +408,29 @@ Explanation FrameTrace::explain(const PairQuery& query) const {
       for (const std::size_t t : common)
         if (chosen.size() < kDetailed && seen.insert(t).second) chosen.push_back(t);
 
-      // Every texel for the found count; the chosen ones in detail.
+      // Every texel once: where the pair's test passed (the count, the page's marks); with unique
+      // IDs only texels either triangle covers can hold its ID, with shared IDs any texel may.
       Verdict best = Verdict::no_contact;
       double best_excess = std::numeric_limits<double>::infinity();
-      const auto consider = [&](const TexelReport& r) {
-        if (r.status == Verdict::found) {
-          if (v.found_texels++ == 0) v.found_x = r.x, v.found_y = r.y;
-        }
-      };
+      std::vector<bool> found_at(texels, false);
       for (std::size_t t = 0; t < texels && !cv.layers.empty(); ++t) {
-        if (std::isnan(za[t]) && std::isnan(zb[t])) {
-          // Neither triangle covers it in the model; a neighbour with a shared ID still may.
-          if (opt.ids == IdMode::unique) continue;
-        }
-        consider(analyse(t));
+        if (opt.ids == IdMode::unique && std::isnan(za[t]) && std::isnan(zb[t])) continue;
+        if (analyse(t).status != Verdict::found) continue;
+        found_at[t] = true;
+        if (v.found_texels++ == 0) v.found_x = int(t % std::size_t(n)), v.found_y = int(t / std::size_t(n));
       }
+      // The chosen texels in detail, analysed once.
+      if (!cv.layers.empty())
+        for (const std::size_t t : chosen) v.texels.push_back(analyse(t));
       // The reason among the common texels (the detailed ones): the one closest to being found,
       // the segment's texels before the others, then above epsilon before separated before
       // unexplained, then the smallest excess.
       bool best_on_segment = false;
       const auto rank = [](Verdict x) { return x == Verdict::above_epsilon ? 0 : x == Verdict::separated ? 1 : 2; };
       std::size_t counts[3] = {0, 0, 0};
-      for (std::size_t i = 0; i < chosen.size(); ++i) {
-        const std::size_t t = chosen[i];
-        if (std::isnan(za[t]) || std::isnan(zb[t]) || cv.layers.empty()) continue;
-        const TexelReport r = analyse(t);
-        if (r.status == Verdict::found) continue;
+      for (std::size_t i = 0; i < v.texels.size(); ++i) {
+        const TexelReport& r = v.texels[i];
+        if (!r.model_a || !r.model_b || r.status == Verdict::found) continue;
         ++counts[rank(r.status)];
         double excess = std::numeric_limits<double>::infinity();
         for (const TexelTest& test : r.tests)
@@ -450,8 +447,6 @@ Explanation FrameTrace::explain(const PairQuery& query) const {
       }
       const std::string tally = " (common texels examined: " + std::to_string(counts[0]) + " above the threshold, " +
                                 std::to_string(counts[1]) + " separated, " + std::to_string(counts[2]) + " unexplained)";
-      if (!cv.layers.empty())
-        for (const std::size_t t : chosen) v.texels.push_back(analyse(t));
       for (std::size_t i = 0; i < v.segment_texel_count && i < v.texels.size(); ++i)
         if (v.texels[i].status == Verdict::found) {  // name a texel on the segment when one reports it
           v.found_x = v.texels[i].x, v.found_y = v.texels[i].y;
@@ -536,7 +531,7 @@ Explanation FrameTrace::explain(const PairQuery& query) const {
           if (!std::isnan(zb[t])) f |= 2;
           if (!cv.layers.empty()) {
             if (!texel_empty(cv.layers[0], t)) v.crop_depth[std::size_t(y) * w + x] = as_float(cv.layers[0][4 * t]);
-            if ((f || opt.ids != IdMode::unique) && analyse(t).status == Verdict::found) f |= 4;
+            if (found_at[t]) f |= 4;
           }
           v.crop_flags[std::size_t(y) * w + x] = f;
         }

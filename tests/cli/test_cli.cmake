@@ -4,6 +4,17 @@ file(REMOVE_RECURSE ${WORK})
 file(MAKE_DIRECTORY ${WORK})
 set(failures 0)
 
+# validate(<what> <schema file under docs/schema> <json files...>): every file valid against it.
+function(validate what schema)
+  execute_process(COMMAND ${PYTHON} ${SOURCE}/tests/oracle/validate_json.py ${SOURCE}/docs/schema/${schema} ${ARGN}
+                  RESULT_VARIABLE rc OUTPUT_VARIABLE out ERROR_VARIABLE err)
+  if(NOT rc EQUAL 0)
+    message(SEND_ERROR "${what}: not valid against docs/schema/${schema}\n${out}${err}")
+  else()
+    message(STATUS "ok: ${out}")
+  endif()
+endfunction()
+
 # expect(<name> <exit code> <regex that stdout+stderr must match> <args...>)
 function(expect name code regex)
   execute_process(COMMAND ${PEELCD} ${ARGN} RESULT_VARIABLE rc OUTPUT_VARIABLE out ERROR_VARIABLE err)
@@ -149,14 +160,8 @@ file(WRITE ${WORK}/stdout.json "${out}")
 # Every JSON output validates against docs/schema/result.schema.json.
 expect("json: two meshes" 0 "" detect ${FIXTURES}/meshes/bunny_3k.obj ${FIXTURES}/meshes/kitten_1k5.obj --json ${WORK}/meshes.json --quiet)
 expect("json: many ROIs" 0 "" detect ${FIXTURES}/golden/crowded_conservative_16/case.json --check --stage image --json ${WORK}/crowd.json --quiet)
-execute_process(COMMAND ${PYTHON} ${SOURCE}/tests/oracle/validate_json.py ${SOURCE}/docs/schema/result.schema.json
-                        ${WORK}/stdout.json ${WORK}/meshes.json ${WORK}/crowd.json ${WORK}/out.json ${WORK}/outdir/target.json
-                RESULT_VARIABLE rc OUTPUT_VARIABLE out ERROR_VARIABLE err)
-if(NOT rc EQUAL 0)
-  message(SEND_ERROR "json: not valid against the schema\n${out}${err}")
-else()
-  message(STATUS "ok: ${out}")
-endif()
+validate("json" result.schema.json ${WORK}/stdout.json ${WORK}/meshes.json ${WORK}/crowd.json ${WORK}/out.json
+         ${WORK}/outdir/target.json)
 # Inputs: mesh files without a scene; scene validation.
 expect("detect A.obj B.obj" 0 "bunny_3k x dragon_3k" detect ${FIXTURES}/meshes/bunny_3k.obj ${FIXTURES}/meshes/dragon_3k.obj)
 # A glTF scene: one object per node, the node transforms applied ("far" is moved 10 away: no pair).
@@ -318,15 +323,8 @@ expect("explain: the image stage forced finds it" 0 "verdict: found in view 0 at
        explain ${scene} --stage image --pair dragon:1283,bunny:351 --json ${WORK}/explain_found.json)
 expect("explain: a pair that does not intersect" 0 "verdict: no contact"
        explain ${scene} --paper --views 3 --pair bunny:1,dragon:2 --json ${WORK}/explain_none.json)
-execute_process(COMMAND ${PYTHON} ${SOURCE}/tests/oracle/validate_json.py ${SOURCE}/docs/schema/explain.schema.json
-                        ${WORK}/explain.json ${WORK}/explain_page/explain.json ${WORK}/explain_exact.json
-                        ${WORK}/explain_found.json ${WORK}/explain_none.json
-                RESULT_VARIABLE rc OUTPUT_VARIABLE out ERROR_VARIABLE err)
-if(NOT rc EQUAL 0)
-  message(SEND_ERROR "explain --json: not valid against docs/schema/explain.schema.json\n${out}${err}")
-else()
-  message(STATUS "ok: ${out}")
-endif()
+validate("explain --json" explain.schema.json ${WORK}/explain.json ${WORK}/explain_page/explain.json
+         ${WORK}/explain_exact.json ${WORK}/explain_found.json ${WORK}/explain_none.json)
 expect("explain: JSON on stdout" 0 "\"schema\": \"peelcd.explain/1\"" explain ${scene} --pair 0:351,1:1283 --json - --quiet)
 expect("explain: unknown object" 2 "--pair 'cat:1,dragon:2': no object named 'cat'" explain ${scene} --pair cat:1,dragon:2)
 expect("explain: triangle out of range" 2 "triangle 99999 is out of range" explain ${scene} --pair bunny:99999,dragon:2)
