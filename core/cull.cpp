@@ -143,7 +143,8 @@ void gather(const Mesh& m, const Aabb& roi, std::vector<std::uint8_t>& outcodes,
 
 }  // namespace
 
-void cull_to_contact_region(const Mesh& a, const Mesh& b, const Aabb& roi, ContactCull& out) {
+void cull_to_contact_region(const Mesh& a, const Mesh& b, const Aabb& roi, ContactCull& out, int max_rounds) {
+  max_rounds = std::clamp(max_rounds, 1, kMaxCullRounds);
   out.stats = CullStats{};
   out.kept_a.clear();
   out.kept_b.clear();
@@ -155,7 +156,7 @@ void cull_to_contact_region(const Mesh& a, const Mesh& b, const Aabb& roi, Conta
   out.stats.in_roi_a = out.entries_a.size();
   out.stats.in_roi_b = out.entries_b.size();
   Aabb box = roi;
-  while (!out.entries_a.empty() && !out.entries_b.empty() && out.stats.rounds < kMaxCullRounds) {
+  while (!out.entries_a.empty() && !out.entries_b.empty() && out.stats.rounds < max_rounds) {
     const std::size_t before = out.entries_a.size() + out.entries_b.size();
     const Grid g = make_grid(box, before);
     for (std::size_t i = 0; i < out.entries_a.size(); ++i)

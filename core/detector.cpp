@@ -150,6 +150,7 @@ struct PairPlan {
   int tile = 0;
   bool exact = false;  // routed to the exact CPU path
   double predicted_image = 0.0, predicted_exact = 0.0;
+  double median_edge = 0.0;  // of the kept triangles (edge_tile_resolution())
   std::vector<std::uint32_t> kept_a, kept_b;
 };
 
@@ -177,12 +178,16 @@ struct Detector::Impl {
   // The plans of the frame's overlapping pairs (s.object_pairs): culling, then the tiles. With
   // Cull::contact and a shared budget, each ROI asks for the side that gives its kept triangles'
   // median edge `edge_texels` texels, and the budget is shared by need (allocate_tiles()).
+  // Routing (Stage::automatic, Stage::exact) happens after one culling round: the exact CPU path
+  // goes on from there (further rounds cost it more than they save), and only the ROIs routed to
+  // the image stage are culled again with every round (the tiles shared again with their needs).
+  // Stage::image culls every ROI with every round first (dumps and goldens depend on it).
   template <class Objects>
   void plan(const Objects& objects, const DetectOptions& opt) {
     const auto& pairs = object_pairs;
     if (plans.size() < pairs.size()) plans.resize(pairs.size());
-    needs.clear();
     const int equal = opt.resolution > 0 ? opt.resolution : tile_resolution(opt.budget, pairs.size());
+    const int first_rounds = opt.stage == Stage::image ? kMaxCullRounds : 1;
     for (std::size_t i = 0; i < pairs.size(); ++i) {
       PairPlan& p = plans[i];
       p.a = pairs[i].first;
@@ -206,23 +211,50 @@ struct Detector::Impl {
         p.culled_out = p.kept_a.empty() || p.kept_b.empty();
         continue;
       }
-      cull_to_contact_region(objects[p.a].mesh, objects[p.b].mesh, p.roi, cull);
-      p.region = cull.box;
-      p.in_roi_a = cull.stats.in_roi_a;
-      p.in_roi_b = cull.stats.in_roi_b;
-      p.culled_out = cull.box.empty();
-      p.kept_a.assign(cull.kept_a.begin(), cull.kept_a.end());
-      p.kept_b.assign(cull.kept_b.begin(), cull.kept_b.end());
-      if (opt.resolution == 0 && !p.culled_out)
-        needs.push_back(edge_tile_resolution(opt.budget, cull.box, cull.median_edge, opt.edge_texels));
+      cull_pair(objects, p, first_rounds);
     }
-    if (opt.cull == Cull::contact && opt.resolution == 0) {
-      allocate_tiles(opt.budget, needs, tiles);
-      std::size_t next = 0;
-      for (std::size_t i = 0; i < pairs.size(); ++i)
-        if (!plans[i].culled_out) plans[i].tile = tiles[next++];
-    }
+    share_budget(opt);
     route(opt);
+    if (opt.stage != Stage::automatic || opt.cull != Cull::contact) return;
+    bool any_image = false;
+    for (std::size_t i = 0; i < pairs.size(); ++i) {
+      PairPlan& p = plans[i];
+      if (p.culled_out || p.exact) continue;
+      cull_pair(objects, p, kMaxCullRounds);
+      any_image = true;
+    }
+    if (any_image) share_budget(opt);  // the same ROIs share it: the image ROIs' needs now final
+  }
+
+  template <class Objects>
+  void cull_pair(const Objects& objects, PairPlan& p, int rounds) {
+    cull_to_contact_region(objects[p.a].mesh, objects[p.b].mesh, p.roi, cull, rounds);
+    p.region = cull.box;
+    p.in_roi_a = cull.stats.in_roi_a;
+    p.in_roi_b = cull.stats.in_roi_b;
+    p.culled_out = cull.box.empty();
+    p.kept_a.assign(cull.kept_a.begin(), cull.kept_a.end());
+    p.kept_b.assign(cull.kept_b.begin(), cull.kept_b.end());
+    p.median_edge = cull.median_edge;
+  }
+
+  // With Cull::contact and a shared budget: each ROI's tile by need (allocate_tiles()), among the
+  // ROIs not culled out.
+  void share_budget(const DetectOptions& opt) {
+    if (opt.cull != Cull::contact || opt.resolution != 0) return;
+    needs.clear();
+    for (std::size_t i = 0; i < object_pairs.size(); ++i) {
+      const PairPlan& p = plans[i];
+      if (p.culled_out) continue;
+      needs.push_back(edge_tile_resolution(opt.budget, p.region, p.median_edge, opt.edge_texels));
+    }
+    allocate_tiles(opt.budget, needs, tiles);
+    std::size_t next = 0;
+    for (std::size_t i = 0; i < object_pairs.size(); ++i) {
+      PairPlan& p = plans[i];
+      if (p.culled_out) continue;
+      p.tile = tiles[next++];
+    }
   }
 
   // The stage router: each ROI to the exact CPU path or the image stage, by the stage's cost
@@ -339,7 +371,7 @@ void Detector::detect(const std::vector<const Object*>& object_ptrs, const Detec
       box_overlap_pairs(ma, plan.kept_a, mb, plan.kept_b, s.candidates, &s.box_scratch);
       sort_unique_pairs(s.candidates, s.candidate_scratch);
       r.candidates = s.candidates.size();
-      narrow_phase(ma, mb, s.candidates, r.colliding);
+      narrow_phase(ma, mb, s.candidates, r.colliding, /*boxes_overlap=*/true);
       ++out.rois_exact;
       out.timings.cpu += ms_since(t0);
       continue;

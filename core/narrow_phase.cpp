@@ -97,26 +97,62 @@ void collect_exact(const EK::Segment_3&, const EK::Point_3& b, std::vector<Vec3>
 void collect_exact(const EK::Point_3& a, const EK::Triangle_3&, std::vector<Vec3>& pts) { Collect{pts}(a); }
 void collect_exact(const EK::Triangle_3&, const EK::Point_3& b, std::vector<Vec3>& pts) { Collect{pts}(b); }
 
-// The part of triangle `t` on the plane of triangle `plane`, as the two extreme points along
-// `dir`. Which corners lie on, above or below the plane is decided with exact orientation
-// predicates; only the crossing points of straddling edges are interpolated in double (with the
+// Shewchuk's orient3d error bound (Adaptive Precision Floating-Point Arithmetic and Fast Robust
+// Geometric Predicates, 1997): with eps = 2^-53, |det - exact| <= (7 + 56 eps) eps * permanent
+// when nothing overflows or underflows. The absolute term covers underflow; an overflow gives
+// inf or NaN, which no comparison below accepts.
+constexpr double kOrient3dBound = (7.0 + 56.0 * 1.1102230246251565e-16) * 1.1102230246251565e-16;
+constexpr double kUnderflowSlack = 1e-290;
+
+// The sign of orient3d(p, q, r, d) when the double evaluation certifies it: +1, -1, or 0 when it
+// cannot (then the exact predicates decide).
+int certain_orientation(const Vec3& p, const Vec3& q, const Vec3& r, const Vec3& d) {
+  const double adx = p.x() - d.x(), bdx = q.x() - d.x(), cdx = r.x() - d.x();
+  const double ady = p.y() - d.y(), bdy = q.y() - d.y(), cdy = r.y() - d.y();
+  const double adz = p.z() - d.z(), bdz = q.z() - d.z(), cdz = r.z() - d.z();
+  const double bc = bdy * cdz - bdz * cdy, ca = cdy * adz - cdz * ady, ab = ady * bdz - adz * bdy;
+  const double det = adx * bc + bdx * ca + cdx * ab;
+  const double permanent = (std::fabs(bdy * cdz) + std::fabs(bdz * cdy)) * std::fabs(adx) +
+                           (std::fabs(cdy * adz) + std::fabs(cdz * ady)) * std::fabs(bdx) +
+                           (std::fabs(ady * bdz) + std::fabs(adz * bdy)) * std::fabs(cdx);
+  const double bound = kOrient3dBound * permanent + kUnderflowSlack;
+  if (det > bound) return 1;
+  if (det < -bound) return -1;
+  return 0;
+}
+
+// CGAL's orientation(p, q, r, s) as -1, 0, +1 (positive: s on the positive side of the oriented
+// plane pqr): certified in double where the bound allows (Shewchuk's det has the opposite sign),
+// CGAL's exact predicate otherwise.
+int orientation_sign(const Vec3& p, const Vec3& q, const Vec3& r, const Vec3& s) {
+  const int certain = certain_orientation(p, q, r, s);
+  if (certain != 0) return -certain;
+  return int(CGAL::orientation(to_cgal(p), to_cgal(q), to_cgal(r), to_cgal(s)));
+}
+
+// The signs of the corners of `t` against the plane of `plane` (orientation_sign()).
+void plane_sides(const TriangleCorners& plane, const TriangleCorners& t, int side[3]) {
+  for (int i = 0; i < 3; ++i) side[i] = orientation_sign(plane[0], plane[1], plane[2], t[i]);
+}
+
+bool all_zero(const int s[3]) { return s[0] == 0 && s[1] == 0 && s[2] == 0; }
+bool one_open_side(const int s[3]) { return s[0] != 0 && s[0] == s[1] && s[1] == s[2]; }
+
+// The part of triangle `t` on the plane n.x = c of the other triangle, as the two extreme points
+// along `dir`. Which corners lie on, above or below the plane is `side` (exact orientation
+// predicates, plane_sides()); only the crossing points of straddling edges are interpolated in double (with the
 // plane n.x = c), clamped to their edge. Returns false if the triangle does not reach the plane,
 // or if a straddling edge is too close to parallel to it for double to place the crossing.
-bool cut_by_plane(const TriangleCorners& t, const TriangleCorners& plane, const Vec3& n, double c, const Vec3& dir,
-                  Vec3& lo, Vec3& hi) {
-  const P3 q0 = to_cgal(plane[0]), q1 = to_cgal(plane[1]), q2 = to_cgal(plane[2]);
-  CGAL::Orientation side[3];
+bool cut_by_plane(const TriangleCorners& t, const int side[3], const Vec3& n, double c, const Vec3& dir, Vec3& lo,
+                  Vec3& hi) {
   double d[3];
-  for (int i = 0; i < 3; ++i) {
-    side[i] = CGAL::orientation(q0, q1, q2, to_cgal(t[i]));
-    d[i] = n.dot(t[i]) - c;
-  }
+  for (int i = 0; i < 3; ++i) d[i] = n.dot(t[i]) - c;
   Vec3 pts[6];
   int count = 0;
   for (int i = 0; i < 3; ++i) {
     const int j = (i + 1) % 3;
-    if (side[i] == CGAL::ZERO) pts[count++] = t[i];
-    if (side[i] != CGAL::ZERO && side[j] != CGAL::ZERO && side[i] != side[j]) {
+    if (side[i] == 0) pts[count++] = t[i];
+    if (side[i] != 0 && side[j] != 0 && side[i] != side[j]) {
       // An edge nearly parallel to the plane (both ends within rounding of it) has no
       // well-defined crossing point in double: leave it to the exact construction.
       const double denom = d[i] - d[j];
@@ -134,18 +170,87 @@ bool cut_by_plane(const TriangleCorners& t, const TriangleCorners& plane, const 
 }
 
 // Segment of two crossing, non-coplanar triangles in double: each triangle cut by the other's
-// plane gives a segment on the common line; the intersection is their overlap.
-bool crossing_segment(const TriangleCorners& a, const TriangleCorners& b, Vec3& p, Vec3& q) {
-  const Vec3 na = (a[1] - a[0]).cross(a[2] - a[0]), nb = (b[1] - b[0]).cross(b[2] - b[0]);
+// plane gives a segment on the common line; the intersection is their overlap. sa: A's corners
+// against B's plane, sb: B's against A's.
+bool crossing_segment(const TriangleCorners& a, const TriangleCorners& b, const int sa[3], const int sb[3], Vec3& p,
+                      Vec3& q) {
+  const Vec3 a1 = a[1] - a[0], a2 = a[2] - a[0], b1 = b[1] - b[0], b2 = b[2] - b[0];
+  const Vec3 na = a1.cross(a2), nb = b1.cross(b2);
+  // The double construction is ill-conditioned for planes within 1e-6 rad of parallel, and
+  // for needles (an angle under 1e-6 rad), whose normals rounding can turn anywhere.
+  const bool steep_enough = na.norm() > 1e-6 * a1.norm() * a2.norm() && nb.norm() > 1e-6 * b1.norm() * b2.norm() &&
+                            na.cross(nb).norm() > 1e-6 * na.norm() * nb.norm();
+  if (!steep_enough) return false;
   const Vec3 dir = na.cross(nb);
   if (!(dir.squaredNorm() > 0.0)) return false;
   Vec3 alo, ahi, blo, bhi;
-  if (!cut_by_plane(a, b, nb, nb.dot(b[0]), dir, alo, ahi) || !cut_by_plane(b, a, na, na.dot(a[0]), dir, blo, bhi))
+  if (!cut_by_plane(a, sa, nb, nb.dot(b[0]), dir, alo, ahi) || !cut_by_plane(b, sb, na, na.dot(a[0]), dir, blo, bhi))
     return false;
   p = alo.dot(dir) > blo.dot(dir) ? alo : blo;  // the later start
   q = ahi.dot(dir) < bhi.dot(dir) ? ahi : bhi;  // the earlier end
   if (p.dot(dir) > q.dot(dir)) p = q = 0.5 * (p + q);  // a touch, split by rounding
   return true;
+}
+
+// Guigue and Devillers' test (Fast and Robust Triangle-Triangle Overlap Test Using Orientation
+// Predicates, 2003), as CGAL's do_intersect(Triangle_3, Triangle_3) runs it, on the signs already
+// known: two proper triangles, not coplanar (neither sign triple all zero), neither strictly on one
+// side of the other's plane. Both triangles are turned so that their lone corner (the one on its
+// own side of the other's plane) comes first; they meet iff the two intervals they cut on the
+// common line overlap, two more orientation predicates.
+struct Cut {
+  int s_min, t_min, s_max, t_max;
+};
+Cut lone_corner(const int d[3]) {
+  const int p = d[0], q = d[1], r = d[2];
+  // The corner alone on the positive (closed negative) side gives (i, j, k, i) ((k, i, i, j)).
+  const auto pos = [](int i) { return Cut{i, (i + 1) % 3, (i + 2) % 3, i}; };
+  const auto neg = [](int i) { return Cut{(i + 2) % 3, i, i, (i + 1) % 3}; };
+  if (p > 0) {
+    if (q > 0) return neg(2);
+    return r > 0 ? neg(1) : pos(0);
+  }
+  if (p < 0) {
+    if (q < 0) return pos(2);
+    return r < 0 ? pos(1) : neg(0);
+  }
+  if (q > 0) return r > 0 ? neg(0) : pos(1);
+  if (q < 0) return r < 0 ? pos(0) : neg(1);
+  return r > 0 ? pos(2) : neg(2);
+}
+
+bool crossing_intersect(const TriangleCorners& a, const TriangleCorners& b, const int sa[3], const int sb[3]) {
+  const Cut c1 = lone_corner(sa), c2 = lone_corner(sb);
+  return orientation_sign(a[c1.s_min], a[c1.t_min], b[c2.s_min], b[c2.t_min]) <= 0 &&
+         orientation_sign(a[c1.s_max], a[c1.t_max], b[c2.t_max], b[c2.s_max]) <= 0;
+}
+
+// The exact construction of the intersection of two simplices: its extreme points.
+std::pair<Vec3, Vec3> exact_segment(const TriangleCorners& a, const TriangleCorners& b, const Simplex& sa,
+                                    const Simplex& sb) {
+  const CGAL::Cartesian_converter<K, EK> to_exact;
+  std::vector<Vec3> pts;
+  std::visit([&](const auto& x, const auto& y) { collect_exact(to_exact(x), to_exact(y), pts); }, sa, sb);
+  if (pts.empty()) {
+    // Inexact constructions can fail on a pair the exact predicate calls intersecting (a
+    // graze at rounding level); report the nearest corner of A to B's centroid as the point.
+    const Vec3 cb = (b[0] + b[1] + b[2]) / 3.0;
+    Vec3 best = a[0];
+    for (const Vec3& p : a)
+      if ((p - cb).squaredNorm() < (best - cb).squaredNorm()) best = p;
+    return {best, best};
+  }
+  std::pair<Vec3, Vec3> seg{pts[0], pts[0]};
+  double best = -1.0;
+  for (std::size_t i = 0; i < pts.size(); ++i)
+    for (std::size_t j = i; j < pts.size(); ++j) {
+      const double d = (pts[i] - pts[j]).squaredNorm();
+      if (d > best) {
+        best = d;
+        seg = {pts[i], pts[j]};
+      }
+    }
+  return seg;
 }
 
 }  // namespace
@@ -188,96 +293,52 @@ std::pair<Vec3, Vec3> intersection_segment(const TriangleCorners& a, const Trian
   const Simplex sa = simplex(a), sb = simplex(b);
   // Common case: two proper triangles crossing, not coplanar: constructed in double.
   if (std::holds_alternative<T3>(sa) && std::holds_alternative<T3>(sb)) {
-    const T3& ta = std::get<T3>(sa);
-    const bool coplanar = CGAL::coplanar(ta[0], ta[1], ta[2], to_cgal(b[0])) &&
-                          CGAL::coplanar(ta[0], ta[1], ta[2], to_cgal(b[1])) &&
-                          CGAL::coplanar(ta[0], ta[1], ta[2], to_cgal(b[2]));
-    // The double construction is ill-conditioned for planes within 1e-6 rad of parallel, and
-    // for needles (an angle under 1e-6 rad), whose normals rounding can turn anywhere.
-    const Vec3 a1 = a[1] - a[0], a2 = a[2] - a[0], b1 = b[1] - b[0], b2 = b[2] - b[0];
-    const Vec3 na = a1.cross(a2), nb = b1.cross(b2);
-    const bool steep_enough = na.norm() > 1e-6 * a1.norm() * a2.norm() && nb.norm() > 1e-6 * b1.norm() * b2.norm() &&
-                              na.cross(nb).norm() > 1e-6 * na.norm() * nb.norm();
+    int side_a[3], side_b[3];
+    plane_sides(b, a, side_a);
+    plane_sides(a, b, side_b);
     Vec3 p, q;
-    if (!coplanar && steep_enough && crossing_segment(a, b, p, q)) return {p, q};
+    if (!all_zero(side_b) && crossing_segment(a, b, side_a, side_b, p, q)) return {p, q};
   }
   // Coplanar overlaps, degenerate triangles, and grazes that rounding lost: exact constructions.
-  const CGAL::Cartesian_converter<K, EK> to_exact;
-  std::vector<Vec3> pts;
-  std::visit([&](const auto& x, const auto& y) { collect_exact(to_exact(x), to_exact(y), pts); }, sa, sb);
-  if (pts.empty()) {
-    // Inexact constructions can fail on a pair the exact predicate calls intersecting (a
-    // graze at rounding level); report the nearest corner of A to B's centroid as the point.
-    const Vec3 cb = (b[0] + b[1] + b[2]) / 3.0;
-    Vec3 best = a[0];
-    for (const Vec3& p : a)
-      if ((p - cb).squaredNorm() < (best - cb).squaredNorm()) best = p;
-    return {best, best};
-  }
-  std::pair<Vec3, Vec3> seg{pts[0], pts[0]};
-  double best = -1.0;
-  for (std::size_t i = 0; i < pts.size(); ++i)
-    for (std::size_t j = i; j < pts.size(); ++j) {
-      const double d = (pts[i] - pts[j]).squaredNorm();
-      if (d > best) {
-        best = d;
-        seg = {pts[i], pts[j]};
-      }
-    }
-  return seg;
+  return exact_segment(a, b, sa, sb);
 }
-
-namespace {
-// Shewchuk's orient3d error bound (Adaptive Precision Floating-Point Arithmetic and Fast Robust
-// Geometric Predicates, 1997): with eps = 2^-53, |det - exact| <= (7 + 56 eps) eps * permanent
-// when nothing overflows or underflows. The absolute term covers underflow; an overflow gives
-// inf or NaN, which no comparison below accepts.
-constexpr double kOrient3dBound = (7.0 + 56.0 * 1.1102230246251565e-16) * 1.1102230246251565e-16;
-constexpr double kUnderflowSlack = 1e-290;
-
-// The sign of orient3d(p, q, r, d) when the double evaluation certifies it: +1, -1, or 0 when it
-// cannot (then the exact predicates decide).
-int certain_orientation(const Vec3& p, const Vec3& q, const Vec3& r, const Vec3& d) {
-  const double adx = p.x() - d.x(), bdx = q.x() - d.x(), cdx = r.x() - d.x();
-  const double ady = p.y() - d.y(), bdy = q.y() - d.y(), cdy = r.y() - d.y();
-  const double adz = p.z() - d.z(), bdz = q.z() - d.z(), cdz = r.z() - d.z();
-  const double bc = bdy * cdz - bdz * cdy, ca = cdy * adz - cdz * ady, ab = ady * bdz - adz * bdy;
-  const double det = adx * bc + bdx * ca + cdx * ab;
-  const double permanent = (std::fabs(bdy * cdz) + std::fabs(bdz * cdy)) * std::fabs(adx) +
-                           (std::fabs(cdy * adz) + std::fabs(cdz * ady)) * std::fabs(bdx) +
-                           (std::fabs(ady * bdz) + std::fabs(adz * bdy)) * std::fabs(cdx);
-  const double bound = kOrient3dBound * permanent + kUnderflowSlack;
-  if (det > bound) return 1;
-  if (det < -bound) return -1;
-  return 0;
-}
-
-// Every corner of `t` strictly on one side of the plane through `plane`, certified in double:
-// the triangles cannot meet. (A degenerate `plane` gives no certain sign.)
-bool certainly_separated(const TriangleCorners& plane, const TriangleCorners& t) {
-  const int s0 = certain_orientation(plane[0], plane[1], plane[2], t[0]);
-  if (s0 == 0) return false;
-  return certain_orientation(plane[0], plane[1], plane[2], t[1]) == s0 &&
-         certain_orientation(plane[0], plane[1], plane[2], t[2]) == s0;
-}
-}  // namespace
 
 void narrow_phase(const Mesh& a, const Mesh& b, const std::vector<std::uint64_t>& candidates,
-                  std::vector<Contact>& out) {
+                  std::vector<Contact>& out, bool boxes_overlap) {
   for (std::uint64_t c : candidates) {
     const std::uint32_t ta = pair_a(c), tb = pair_b(c);
-    const TriangleCorners ca = corners(a, ta), cb = corners(b, tb);
     // A triangle lies in the box of its corners: disjoint boxes, no contact (exact: comparisons
-    // of doubles; boxes that only touch overlap).
-    if (!triangle_bounds(a, ta).overlaps(triangle_bounds(b, tb))) continue;
-    // Most candidates lie wholly on one side of the other's plane: certified in double, they
-    // skip the exact predicates (which decide everything else).
-    if (certainly_separated(ca, cb) || certainly_separated(cb, ca) || !triangles_intersect(ca, cb)) continue;
+    // of doubles; boxes that only touch overlap). Skipped when the caller's candidates are
+    // pairs of overlapping boxes already.
+    if (!boxes_overlap && !triangle_bounds(a, ta).overlaps(triangle_bounds(b, tb))) continue;
+    const TriangleCorners ca = corners(a, ta), cb = corners(b, tb);
+    // The six corner/plane signs, each once (certified in double, exact where double cannot
+    // tell); most candidates end here, one triangle strictly on one side of the other's plane.
+    int side_b[3], side_a[3];
+    plane_sides(ca, cb, side_b);
+    if (one_open_side(side_b)) continue;
+    plane_sides(cb, ca, side_a);
+    if (one_open_side(side_a)) continue;
     Contact contact;
     contact.tri_a = ta;
     contact.tri_b = tb;
-    std::tie(contact.p, contact.q) = intersection_segment(ca, cb);
-    contact.kind = classify_contact(ca, cb);
+    if (all_zero(side_a) || all_zero(side_b)) {
+      // Coplanar, or a triangle without area: the general exact test and constructions.
+      if (!triangles_intersect(ca, cb)) continue;
+      std::tie(contact.p, contact.q) = intersection_segment(ca, cb);
+      contact.kind = classify_contact(ca, cb);
+    } else {
+      // Two proper triangles in two planes (a zero-area triangle has every sign 0 against
+      // its own plane): Guigue-Devillers on the signs, the kind from them, the segment in
+      // double where it is well conditioned.
+      if (!crossing_intersect(ca, cb, side_a, side_b)) continue;
+      const auto both = [](const int s[3]) {
+        return (s[0] < 0 || s[1] < 0 || s[2] < 0) && (s[0] > 0 || s[1] > 0 || s[2] > 0);
+      };
+      contact.kind = both(side_a) && both(side_b) ? ContactKind::crossing : ContactKind::touching;
+      if (!crossing_segment(ca, cb, side_a, side_b, contact.p, contact.q))
+        std::tie(contact.p, contact.q) = exact_segment(ca, cb, simplex(ca), simplex(cb));
+    }
     out.push_back(contact);
   }
 }

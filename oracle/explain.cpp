@@ -196,8 +196,8 @@ Explanation FrameTrace::explain(const PairQuery& query) const {
              "' touches (peelcd/core/cull.h)";
     };
     if (opt.cull == Cull::contact) {
-      ContactCull cull;
-      cull_to_contact_region(ma, mb, pr->roi, cull);
+      ContactCull cull;  // as the detector culled it: one round for the exact CPU path, all for the image stage
+      cull_to_contact_region(ma, mb, pr->roi, cull, pr->exact_stage ? 1 : kMaxCullRounds);
       kept_a = cull.kept_a;
       kept_b = cull.kept_b;
       e.kept_a = std::binary_search(kept_a.begin(), kept_a.end(), q.tri_a);

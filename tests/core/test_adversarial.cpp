@@ -71,6 +71,7 @@ double segment_bound(const TriangleCorners& a, const TriangleCorners& b) {
 
 struct Tally {
   std::size_t cases = 0, disagreements = 0, order_dependent = 0, segment_off = 0;
+  std::size_t narrow_kind_differs = 0, narrow_order_dependent = 0;
   std::size_t per_family[int(Family::count)] = {};
   std::size_t hits[int(Family::count)] = {};
   std::size_t kinds[4] = {};
@@ -97,6 +98,34 @@ Tally run_cases(std::uint64_t seed, std::size_t n) {
       ++t.disagreements;
       continue;
     }
+    // narrow_phase() decides non-coplanar pairs on its own signs (Guigue-Devillers): its kind
+    // must be classify_contact()'s, and its answer the same in every corner order and both
+    // triangle orders (every 16th case that is not coplanar or degenerate: those take the general
+    // exact path, whose order-invariance is checked above, and whose exact constructions are slow).
+    const ContactKind kind = got ? classify_contact(c.a, c.b) : ContactKind::crossing;
+    if (got && contacts[0].kind != kind) ++t.narrow_kind_differs;
+    if (i % 16 == 0 && (kind == ContactKind::crossing || kind == ContactKind::touching)) {
+      std::array<int, 3> pa = {0, 1, 2};
+      bool same = true;
+      do {
+        std::array<int, 3> pb = {0, 1, 2};
+        do {
+          ma.vertices = {c.a[pa[0]], c.a[pa[1]], c.a[pa[2]]};
+          mb.vertices = {c.b[pb[0]], c.b[pb[1]], c.b[pb[2]]};
+          contacts.clear();
+          narrow_phase(ma, mb, {pack_pair(0, 0)}, contacts);
+          same = same && contacts.empty() != got;
+          contacts.clear();
+          narrow_phase(mb, ma, {pack_pair(0, 0)}, contacts);
+          same = same && contacts.empty() != got;
+        } while (std::next_permutation(pb.begin(), pb.end()));
+      } while (std::next_permutation(pa.begin(), pa.end()));
+      if (!same) ++t.narrow_order_dependent;
+      ma.vertices.assign(c.a.begin(), c.a.end());
+      mb.vertices.assign(c.b.begin(), c.b.end());
+      contacts.clear();
+      narrow_phase(ma, mb, {pack_pair(0, 0)}, contacts);
+    }
     // All 36 corner orderings, both triangle orders: 72 evaluations, one answer.
     std::array<int, 3> pa = {0, 1, 2};
     bool stable = true;
@@ -111,10 +140,14 @@ Tally run_cases(std::uint64_t seed, std::size_t n) {
     if (!stable) ++t.order_dependent;
     if (got) {
       ++t.hits[int(c.family)];
-      ++t.kinds[int(classify_contact(c.a, c.b))];
+      ++t.kinds[int(kind)];
       const auto [p, q] = intersection_segment(c.a, c.b);
       const double bound = segment_bound(c.a, c.b);
-      const double worst = std::max({distance(p, c.a), distance(q, c.a), distance(p, c.b), distance(q, c.b)});
+      double worst = std::max({distance(p, c.a), distance(q, c.a), distance(p, c.b), distance(q, c.b)});
+      // narrow_phase() builds its segment from its own signs: checked too where it differs.
+      const Vec3 &np = contacts[0].p, &nq = contacts[0].q;
+      if (np != p || nq != q)
+        worst = std::max({worst, distance(np, c.a), distance(nq, c.a), distance(np, c.b), distance(nq, c.b)});
       if (worst > bound) {
         if (t.segment_off < 5)
           std::printf("  segment off: %s, scale %g, offset %g, %s: distance %.3g > bound %.3g\n",
@@ -139,7 +172,8 @@ TEST_CASE("adversarial pairs: exact answers, order-invariant, segments on both t
   const std::size_t n = env ? std::strtoull(env, nullptr, 10) : 100000;
   const Tally t = run_cases(20261122, n);
   std::printf("adversarial narrow phase: %zu cases, %zu disagreements with the exact oracle, %zu order-dependent, "
-              "%zu segments off their triangles\n", t.cases, t.disagreements, t.order_dependent, t.segment_off);
+              "%zu segments off their triangles; narrow_phase(): %zu kinds differ, %zu order-dependent\n", t.cases,
+              t.disagreements, t.order_dependent, t.segment_off, t.narrow_kind_differs, t.narrow_order_dependent);
   for (int f = 0; f < int(Family::count); ++f)
     std::printf("  %-17s %8zu cases, %8zu intersecting\n", kFamilyNames[f], t.per_family[f], t.hits[f]);
   std::printf("  contact kinds: crossing %zu, touching %zu, coplanar %zu, degenerate %zu\n", t.kinds[0], t.kinds[1],
@@ -148,6 +182,8 @@ TEST_CASE("adversarial pairs: exact answers, order-invariant, segments on both t
   CHECK(t.disagreements == 0);
   CHECK(t.order_dependent == 0);
   CHECK(t.segment_off == 0);
+  CHECK(t.narrow_kind_differs == 0);
+  CHECK(t.narrow_order_dependent == 0);
   // The generator must really produce every kind of contact, or the test proves little.
   for (int k = 0; k < 4; ++k) CHECK(t.kinds[k] > 0);
   for (int f = 0; f < int(Family::count); ++f) CHECK(t.hits[f] > 0);

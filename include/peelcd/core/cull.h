@@ -54,7 +54,11 @@ constexpr std::size_t kMaxCullCells = std::size_t(1) << 18;
 constexpr int kMaxCullRounds = 3;
 
 // Fills `out` with the triangles of `a` and `b` (world space) that may touch the other object
-// inside `roi`, the shrunk ROI and the kept triangles' median edge length.
-void cull_to_contact_region(const Mesh& a, const Mesh& b, const Aabb& roi, ContactCull& out);
+// inside `roi`, the shrunk ROI and the kept triangles' median edge length, after at most
+// `max_rounds` rounds (1 to kMaxCullRounds). The detector's exact CPU path stops after one round
+// (later rounds cost more than the box overlaps they save there); the image stage takes all of
+// them (fewer triangles drawn, a smaller region, a finer tile).
+void cull_to_contact_region(const Mesh& a, const Mesh& b, const Aabb& roi, ContactCull& out,
+                            int max_rounds = kMaxCullRounds);
 
 }  // namespace peelcd

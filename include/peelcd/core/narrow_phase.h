@@ -42,8 +42,10 @@ ContactKind classify_contact(const TriangleCorners& a, const TriangleCorners& b)
 std::pair<Vec3, Vec3> intersection_segment(const TriangleCorners& a, const TriangleCorners& b);
 
 // Tests every candidate pair (packed with pack_pair(triA, triB), see id_map.h) and appends
-// the colliding ones to `out` in candidate order.
+// the colliding ones to `out` in candidate order. boxes_overlap: every candidate is known to be
+// a pair of overlapping triangle boxes (box_overlap_pairs()'s output), so that first test is
+// skipped; the answer is the same either way.
 void narrow_phase(const Mesh& a, const Mesh& b, const std::vector<std::uint64_t>& candidates,
-                  std::vector<Contact>& out);
+                  std::vector<Contact>& out, bool boxes_overlap = false);
 
 }  // namespace peelcd
