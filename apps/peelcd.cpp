@@ -721,7 +721,7 @@ struct BenchArgs {
   std::string scene = "test1";  // test1, test2, crowd or a scene file
   std::size_t frames = 12;
   std::size_t objects = 200;  // crowd
-  int res = -1;  // -1: 256 for a scene file; the shared 512^2 budget for the sequences
+  int res = 0;  // 0: the shared 512^2 budget, tiles by need (detect's default)
   std::string backend = "osmesa";
   unsigned threads = 0;  // 0: the machine's (at most 8)
   std::string csv;
@@ -767,8 +767,10 @@ int run_bench(const BenchArgs& a) {
   }
   const unsigned hw = std::max(1u, std::min(8u, std::thread::hardware_concurrency()));
   const unsigned threads = a.threads ? a.threads : hw;
-  // llvmpipe reads its thread count when the context is made: the same count as the peers.
-  if (a.threads) setenv("LP_NUM_THREADS", std::to_string(a.threads).c_str(), 1);
+  // llvmpipe reads its thread count when the context is made: the same count as the peers. One
+  // thread is LP_NUM_THREADS=0: llvmpipe rasterizes on the calling thread (with 1 it hands every
+  // draw to one worker thread and waits for it: still one thread working, plus the handoff).
+  if (a.threads) setenv("LP_NUM_THREADS", std::to_string(a.threads == 1 ? 0 : a.threads).c_str(), 1);
   gl::GlOptions gl_base;
   gl_base.workers = threads;
   Runner runner = make_runner(a.backend, gl_base);
@@ -784,7 +786,7 @@ int run_bench(const BenchArgs& a) {
   };
   std::vector<Config> configs;
   DetectOptions base;  // the default of detect: the router
-  base.resolution = a.res >= 0 ? a.res : (seq ? 0 : 256);
+  base.resolution = a.res;
   gl::GlOptions gpu_resolve = gl_base;
   gpu_resolve.resolve = Resolve::gpu;
   gl::GlOptions multi = gl_base;
@@ -806,10 +808,10 @@ int run_bench(const BenchArgs& a) {
   else
     half.budget = std::max(16, half.budget / 2);
   configs.push_back({"peelcd image stage, half resolution", "half res", half, gl_base});
-  if (image.resolution > 0) {  // a scene file at a forced tile: also the budget's tiles by need
-    DetectOptions shared = image;
-    shared.resolution = 0;
-    configs.push_back({"peelcd image stage, tiles by need", "need tile", shared, gl_base});
+  if (image.resolution == 0) {  // the conservative stage's earlier tiles: 12 texels per median edge
+    DetectOptions fine = image;
+    fine.edge_texels = kPointEdgeTexels;
+    configs.push_back({"peelcd image stage, 12 texels per edge", "12 tx/edge", fine, gl_base});
   }
   // Point sampling (the paper's image stage, with this project's culling, views and slope
   // epsilon): the default of 0.2.0, three views along the world axes. Lossy: see the miss column.
@@ -828,6 +830,7 @@ int run_bench(const BenchArgs& a) {
   paper.ids = IdMode::paper;
   paper.slope = 0.0;
   paper.cull = Cull::box;
+  if (a.res == 0 && !seq) paper.resolution = 256;  // the paper's 256^2 on one pair (its Fig. 8)
   configs.push_back({"peelcd paper config", "paper", paper, gl_base});
   configs.push_back({"peelcd paper config, multi-pass", "paper mp", paper, multi});
 
@@ -837,6 +840,7 @@ int run_bench(const BenchArgs& a) {
   floor1.views = cfloor1.views = 1;
   floor1.cull = Cull::box;
   cfloor1.cull = Cull::contact;
+  cfloor1.edge_texels = edge_texels_of(image);  // the conservative image stage's tiles
   const std::size_t cg = configs.size(), fr = cg + 1, fb = cg + 2, fl = cg + 3, cfl = cg + 4;
   const std::size_t methods = cg + 5;
   std::vector<std::string> names;
@@ -1202,7 +1206,8 @@ void add_frame_options(CLI::App* c, DetectArgs& d) {
       ->check(kPositive);
   c->add_option("--edge-texels", d.edge_texels,
                 "Sharing the budget with contact culling, a ROI's tile is at most K texels per median edge of its "
-                "triangles across the culled region (default 12; 0 = always the budget's share)")
+                "triangles across the culled region (default 2 with the conservative stage, 12 with point sampling; 0 = always "
+                "the budget's share)")
       ->check(kNonNegative);
   c->add_option("--backend", d.backend, "Image stage: osmesa (software GL, the reference), egl (GPU, or Mesa without one) or cpu (no GL)")
       ->capture_default_str();
@@ -1407,8 +1412,8 @@ int main(int argc, char** argv) {
       ->check(CLI::Range(0, 64))->capture_default_str();
   benchmark->add_option("--frames", be.frames, "Frames (of the test scene; repeats of a scene file)")
       ->check(kPositive)->capture_default_str();
-  benchmark->add_option("--res", be.res, "Texture size per ROI for peelcd; 0 = share the 512^2 budget "
-                                         "(default: 256 for a scene file, 0 for test1/test2)")
+  benchmark->add_option("--res", be.res, "Texture size per ROI for peelcd; 0 = share the 512^2 budget with "
+                                         "tiles by need, as detect does")->capture_default_str()
       ->check(kNonNegative);
   benchmark->add_option("--backend", be.backend, "GL backend: osmesa or egl")->capture_default_str();
   benchmark->add_option("--csv", be.csv, "Write one row per (frame, method) to FILE, or - for stdout");

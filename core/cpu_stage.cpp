@@ -36,7 +36,7 @@ struct Corner {
 
 StageCost CpuImageStage::cost() const {
   // Fitted by `peelcd calibrate --backend cpu` (2 cores, 2026-11-23): docs/performance.md.
-  return StageCost{0.0, 1.0, 19.2};
+  return StageCost{0.0, 0.85, 20.0};
 }
 
 void CpuImageStage::peel(const PeelJob& job, PeelResult& out, Timings& timings) {

@@ -84,7 +84,7 @@ void validate_options(const DetectOptions& opt, int max_resolution) {
     throw std::invalid_argument(std::string(where) + "slope must be finite and >= 0");
   if (!(opt.epsilon >= 0.0) || !std::isfinite(opt.epsilon))
     throw std::invalid_argument(std::string(where) + "epsilon must be finite and >= 0 (0 = one texel)");
-  if (!(opt.edge_texels >= 0.0) || !std::isfinite(opt.edge_texels))
+  if (opt.edge_texels && (!(*opt.edge_texels >= 0.0) || !std::isfinite(*opt.edge_texels)))
     throw std::invalid_argument(std::string(where) + "edge_texels must be finite and >= 0 (0 = the budget's share)");
 }
 
@@ -117,10 +117,11 @@ double triangles_in_view(const Mesh& mesh, const RoiView& view, const std::vecto
 }
 
 namespace {
-// Fitted by `peelcd calibrate` (2 cores, 2026-11-23; docs/performance.md): 0.34 us per kept
-// triangle, no fixed part measurable.
+// Fitted by `peelcd calibrate` (2 cores, 2026-11-23, after the sign-once narrow phase and the
+// one-round culling of the exact path; docs/performance.md): 0.16 us per triangle kept by the
+// first culling round (the router's count), no fixed part measurable.
 constexpr double kExactViewMs = 0.0;
-constexpr double kExactTriangleUs = 0.34;
+constexpr double kExactTriangleUs = 0.16;
 }  // namespace
 
 StageCost exact_path_cost() {
@@ -242,11 +243,12 @@ struct Detector::Impl {
   // ROIs not culled out.
   void share_budget(const DetectOptions& opt) {
     if (opt.cull != Cull::contact || opt.resolution != 0) return;
+    const double edge_texels = edge_texels_of(opt);
     needs.clear();
     for (std::size_t i = 0; i < object_pairs.size(); ++i) {
       const PairPlan& p = plans[i];
       if (p.culled_out) continue;
-      needs.push_back(edge_tile_resolution(opt.budget, p.region, p.median_edge, opt.edge_texels));
+      needs.push_back(edge_tile_resolution(opt.budget, p.region, p.median_edge, edge_texels));
     }
     allocate_tiles(opt.budget, needs, tiles);
     std::size_t next = 0;

@@ -66,6 +66,11 @@ int edge_tile_resolution(int share, const Aabb& region, double median_edge, doub
   return std::min(n, share);
 }
 
+double edge_texels_of(const DetectOptions& o) {
+  if (o.edge_texels) return *o.edge_texels;
+  return o.conservative ? kConservativeEdgeTexels : kPointEdgeTexels;
+}
+
 DetectOptions paper_options() {
   DetectOptions o;
   o.conservative = false;

@@ -1,5 +1,6 @@
 #include "peelcd/eval/calibrate.h"
 
+#include "peelcd/core/cull.h"
 #include "peelcd/eval/classes.h"
 #include "peelcd/io/mesh_io.h"
 
@@ -105,7 +106,10 @@ Calibration calibrate(Detector& detector, const std::string& meshes_dir, const s
           row.image_candidates = candidates;
           if (!r.pairs.empty()) {
             row.tile = r.pairs[0].resolution;
-            row.triangles = r.pairs[0].triangles_drawn_a + r.pairs[0].triangles_drawn_b;
+            // The router's count: the triangles one culling round keeps (it routes there).
+            ContactCull cull;
+            cull_to_contact_region(objects[0].mesh, objects[1].mesh, r.pairs[0].roi, cull, 1);
+            row.triangles = cull.kept_a.size() + cull.kept_b.size();
           }
         } else {
           row.exact_ms = median_of(ms);

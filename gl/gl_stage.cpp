@@ -32,11 +32,12 @@ const std::string& GlImageStage::version() const { return impl_->version; }
 int GlImageStage::max_resolution() const { return impl_->max_texture; }
 
 StageCost GlImageStage::cost() const {
-  // llvmpipe: fitted by `peelcd calibrate --backend osmesa` on 2 cores (2026-11-23). A GPU: not
+  // llvmpipe: fitted by `peelcd calibrate --backend osmesa` on 2 cores (2026-11-23; triangles
+  // counted after one culling round, as the router sees them). A GPU: not
   // calibrated yet (no GPU lent since the router exists); estimated from the H100 run of
   // docs/backends.md (0.58 ms of GPU for 3 views of the default scene, ~1,500 triangles at 256^2,
   // with upload and narrow phase of its PCS). See docs/performance.md, "The stage router".
-  if (impl_->software_renderer) return StageCost{0.09, 1.45, 14.4};
+  if (impl_->software_renderer) return StageCost{0.16, 1.48, 19.5};
   return StageCost{0.2, 0.05, 0.5};
 }
 Context& GlImageStage::context() { return *impl_->context; }

@@ -159,7 +159,7 @@ Scene parse_scene(const std::string& text, const std::string& path, const std::s
   }
   if (root.contains("edge_texels")) {
     opt.edge_texels = c.number(root["edge_texels"], "edge_texels");
-    if (opt.edge_texels < 0) c.fail("edge_texels", "must be >= 0 (0 = the budget's share)");
+    if (*opt.edge_texels < 0) c.fail("edge_texels", "must be >= 0 (0 = the budget's share)");
   }
   if (root.contains("peeler")) {
     const std::string peeler = c.string(root["peeler"], "peeler");

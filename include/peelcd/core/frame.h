@@ -76,12 +76,20 @@ struct DetectOptions {
   // Sharing the budget (resolution == 0) with Cull::contact, a ROI's tile is at most the side
   // that gives the median edge of its kept triangles `edge_texels` texels
   // (edge_tile_resolution()): a contact between large triangles needs fewer texels than its
-  // share of the budget. 0 = always the share. Chosen on docs/performance.md's measurements.
-  double edge_texels = 12.0;
+  // share of the budget. 0 = always the share. Unset: the mode's default (edge_texels_of()):
+  // kConservativeEdgeTexels for the conservative stage, which is exact at any tile (a coarser
+  // tile draws fewer fragments and tests more candidates), kPointEdgeTexels for point sampling,
+  // whose misses grow with the texel. Chosen on docs/performance.md's measurements.
+  std::optional<double> edge_texels;
   // Per ROI: image stage, exact CPU path, or the cheaper of the two by the cost model. Dumps,
   // goldens and sweeps set Stage::image (they check the image stage).
   Stage stage = Stage::automatic;
 };
+
+constexpr double kConservativeEdgeTexels = 2.0;
+constexpr double kPointEdgeTexels = 12.0;
+// The texels per median edge `options` asks for: its edge_texels, or the mode's default.
+double edge_texels_of(const DetectOptions& options);
 
 // The paper's configuration (ISVC 2007): alternate peeling of every triangle in the ROI box,
 // constant epsilon of one texel, the paper's IDs, one view along world x, point sampling.

@@ -11,7 +11,7 @@ namespace peelcd {
 
 struct CalibrationRow {
   std::string scene;
-  std::size_t triangles = 0;  // kept triangles of the ROI (both objects)
+  std::size_t triangles = 0;  // triangles of the ROI (both objects) one culling round keeps: the router's n
   int tile = 0;               // the image stage's tile side
   int views = 1;
   double image_ms = 0.0, exact_ms = 0.0;  // medians of the stage's part of the frame
