@@ -1,7 +1,7 @@
 #!/usr/bin/env bash
 # Regenerates docs/performance/ and the tables of docs/performance.md: the router's calibration
 # (peelcd calibrate), the two dynamic scenes (peelcd simulate), the benchmarks against CGAL, FCL
-# and the bare-draw floor (peelcd bench: the default scene, test1, test2 and a 200-ball crowd,
+# and the bare-draw floor (peelcd bench: the default scene, test1, test2 and a 400-ball pile,
 # all with one thread per method; the default scene and the crowd again with one per core), and
 # the plots. Needs a built ./build/peelcd and python3-matplotlib (Debian's /usr/bin/python3).
 # About ten minutes on 2 cores; run it on a quiet machine: every number is a median of frames
@@ -19,8 +19,8 @@ done
 scene=fixtures/scenes/bunny_dragon.json
 ./build/peelcd bench "$scene" --frames 30 --threads 1 --csv "$out/bench_default.csv" > "$out/bench_default.txt"
 ./build/peelcd bench "$scene" --frames 30 > "$out/bench_default_2threads.txt"
-./build/peelcd bench crowd --objects 200 --frames 6 --threads 1 --csv "$out/bench_crowd.csv" > "$out/bench_crowd.txt"
-./build/peelcd bench crowd --objects 200 --frames 6 > "$out/bench_crowd_2threads.txt"
+./build/peelcd bench crowd --objects 400 --frames 6 --threads 1 --csv "$out/bench_crowd.csv" > "$out/bench_crowd.txt"
+./build/peelcd bench crowd --objects 400 --frames 6 > "$out/bench_crowd_2threads.txt"
 PY=/usr/bin/python3; [ -x "$PY" ] || PY=python3
 "$PY" scripts/plot_performance.py "$out" "$out/bench_default.csv" "$out/bench_test1.csv" "$out/bench_test2.csv" \
   "$out/bench_crowd.csv" --simulate "$out/simulate_test1.csv" "$out/simulate_test2.csv"

@@ -50,7 +50,7 @@ def main():
     # One panel per scene; every method has one colour and marker in all panels, named once in a
     # shared legend (labels on the points overlap where methods cluster).
     titles = {"bench_default": "default scene (bunny / dragon)", "bench_test1": "test1 (raptor, 40 balls)",
-              "bench_test2": "test2 (cloth, 40 objects)", "bench_crowd": "crowd (200 balls)"}
+              "bench_test2": "test2 (cloth, 40 objects)", "bench_crowd": "crowd (400 balls)"}
     data_all = [(path, read_bench(path)) for path in benches]
     methods = []
     for _, data in data_all:
