@@ -95,6 +95,7 @@ struct DetectArgs {
   double slope = NAN;
   double theta = NAN, phi = NAN, roll = NAN, epsilon = NAN, edge_texels = NAN;
   bool conservative = false, no_conservative = false, paper = false, no_batch = false;
+  int threads = -1;  // -1 = not given
   double max_miss = NAN;  // percent; NaN = report only
   std::string json_out;
   int repeat = 1;
@@ -159,6 +160,7 @@ DetectOptions merged_options(const Scene& scene, const DetectArgs& a) {
   if (!std::isnan(a.phi)) o.phi = a.phi;
   if (!std::isnan(a.epsilon)) o.epsilon = a.epsilon;
   if (!std::isnan(a.edge_texels)) o.edge_texels = a.edge_texels;
+  if (a.threads >= 0) o.threads = unsigned(a.threads);
   return o;
 }
 
@@ -786,6 +788,7 @@ int run_bench(const BenchArgs& a) {
   };
   std::vector<Config> configs;
   DetectOptions base;  // the default of detect: the router
+  base.threads = threads;  // culling and the exact CPU path: the peers' thread count
   base.resolution = a.res;
   gl::GlOptions gpu_resolve = gl_base;
   gpu_resolve.resolve = Resolve::gpu;
@@ -927,8 +930,8 @@ int run_bench(const BenchArgs& a) {
               runner.backend().c_str(), runner.renderer().c_str());
   const char* lp = std::getenv("LP_NUM_THREADS");
   std::printf("threads: CGAL and FCL %u (object pairs spread over them); peelcd host resolve %u lanes, llvmpipe %s, "
-              "broad phase, culling, exact path and narrow phase 1\n",
-              threads, threads, lp ? (std::string("LP_NUM_THREADS=") + lp).c_str() : "its default (one per core)");
+              "culling and exact CPU path %u, broad phase and the image stage's narrow phase 1\n",
+              threads, threads, lp ? (std::string("LP_NUM_THREADS=") + lp).c_str() : "its default (one per core)", threads);
   std::printf("router (default row): %zu of %zu ROIs to the exact CPU path over the timed frames\n", rois_routed_exact, rois);
   std::printf("%-36s %10s %8s %7s %8s %8s %8s\n", "method", "median ms", "miss", "false", "x CGAL", "x FCL", "x floor");
   for (std::size_t m = 0; m < methods; ++m) {
@@ -1211,6 +1214,10 @@ void add_frame_options(CLI::App* c, DetectArgs& d) {
       ->check(kNonNegative);
   c->add_option("--backend", d.backend, "Image stage: osmesa (software GL, the reference), egl (GPU, or Mesa without one) or cpu (no GL)")
       ->capture_default_str();
+  c->add_option("--threads", d.threads,
+                "Threads for contact culling and the exact CPU path, object pairs spread over them (default 1; 0 = one "
+                "per core, at most 8); the results do not depend on it")
+      ->check(CLI::Range(0, 64));
 }
 
 struct ClassesArgs {

@@ -3,8 +3,10 @@
 #include "peelcd/core/broad_phase.h"
 #include "peelcd/core/cull.h"
 #include "peelcd/core/reference.h"
+#include "peelcd/core/worker_pool.h"
 
 #include <algorithm>
+#include <atomic>
 #include <chrono>
 #include <cmath>
 #include <stdexcept>
@@ -84,6 +86,7 @@ void validate_options(const DetectOptions& opt, int max_resolution) {
     throw std::invalid_argument(std::string(where) + "slope must be finite and >= 0");
   if (!(opt.epsilon >= 0.0) || !std::isfinite(opt.epsilon))
     throw std::invalid_argument(std::string(where) + "epsilon must be finite and >= 0 (0 = one texel)");
+  if (opt.threads > 64) throw std::invalid_argument(std::string(where) + "threads must be 0 to 64");
   if (opt.edge_texels && (!(*opt.edge_texels >= 0.0) || !std::isfinite(*opt.edge_texels)))
     throw std::invalid_argument(std::string(where) + "edge_texels must be finite and >= 0 (0 = the budget's share)");
 }
@@ -163,7 +166,15 @@ struct Detector::Impl {
   std::vector<Aabb> boxes;
   std::vector<std::pair<std::size_t, std::size_t>> object_pairs;
   std::vector<std::size_t> order;
-  ContactCull cull;
+  // Per lane of the object-pair loops (lane 0: the calling thread): culling and exact-path scratch.
+  struct Lane {
+    ContactCull cull;
+    std::vector<std::uint64_t> candidates, candidate_scratch;
+    BoxScratch boxes;
+  };
+  std::vector<std::unique_ptr<Lane>> lanes;
+  std::unique_ptr<WorkerPool> pool;  // DetectOptions::threads > 1 only
+  std::vector<std::size_t> exact_pairs;
   std::vector<std::uint32_t> tris[2];
   std::vector<std::vector<std::uint32_t>> job_tris;  // per job of the frame: A's, B's triangles
   std::vector<PeelJob> jobs;                         // the frame's ROI views, grouped by pair
@@ -175,6 +186,28 @@ struct Detector::Impl {
   std::vector<CapturedView>* capture = nullptr;
   StageCost image_cost;
   BoxScratch box_scratch;
+
+  // body(i, lane) for every i in [0, n): on the calling thread, or spread over the pool's lanes
+  // (pairs taken one at a time from a shared counter) when opt.threads asks for more than one.
+  // Each pair's work touches only its own plan or result and the lane's scratch.
+  template <class Body>
+  void for_pairs(std::size_t n, const DetectOptions& opt, Body&& body) {
+    unsigned threads = opt.threads;
+    if (threads != 1 && n > 1) {
+      if (!pool || (threads != 0 && pool->lanes() != threads)) pool = std::make_unique<WorkerPool>(threads);
+      threads = pool->lanes();
+    }
+    while (lanes.size() < std::max(1u, threads)) lanes.push_back(std::make_unique<Lane>());
+    if (threads <= 1 || n <= 1) {
+      for (std::size_t i = 0; i < n; ++i) body(i, *lanes[0]);
+      return;
+    }
+    std::atomic<std::size_t> next{0};
+    auto job = [&](unsigned lane) {
+      for (std::size_t i = next.fetch_add(1); i < n; i = next.fetch_add(1)) body(i, *lanes[lane]);
+    };
+    pool->run(job);
+  }
 
   // The plans of the frame's overlapping pairs (s.object_pairs): culling, then the tiles. With
   // Cull::contact and a shared budget, each ROI asks for the side that gives its kept triangles'
@@ -189,7 +222,7 @@ struct Detector::Impl {
     if (plans.size() < pairs.size()) plans.resize(pairs.size());
     const int equal = opt.resolution > 0 ? opt.resolution : tile_resolution(opt.budget, pairs.size());
     const int first_rounds = opt.stage == Stage::image ? kMaxCullRounds : 1;
-    for (std::size_t i = 0; i < pairs.size(); ++i) {
+    for_pairs(pairs.size(), opt, [&](std::size_t i, Lane& lane) {
       PairPlan& p = plans[i];
       p.a = pairs[i].first;
       p.b = pairs[i].second;
@@ -203,32 +236,32 @@ struct Detector::Impl {
       p.kept_a.clear();
       p.kept_b.clear();
       if (opt.cull != Cull::contact) {
-        if (opt.stage == Stage::image) continue;
+        if (opt.stage == Stage::image) return;
         // The router and the exact path need the triangles touching the ROI.
         triangles_touching(objects[p.a].mesh, p.roi, p.kept_a);
         triangles_touching(objects[p.b].mesh, p.roi, p.kept_b);
         p.in_roi_a = p.kept_a.size();
         p.in_roi_b = p.kept_b.size();
         p.culled_out = p.kept_a.empty() || p.kept_b.empty();
-        continue;
+        return;
       }
-      cull_pair(objects, p, first_rounds);
-    }
+      cull_pair(objects, p, first_rounds, lane.cull);
+    });
     share_budget(opt);
     route(opt);
     if (opt.stage != Stage::automatic || opt.cull != Cull::contact) return;
     bool any_image = false;
-    for (std::size_t i = 0; i < pairs.size(); ++i) {
+    for (std::size_t i = 0; i < pairs.size(); ++i) any_image = any_image || !(plans[i].culled_out || plans[i].exact);
+    if (!any_image) return;
+    for_pairs(pairs.size(), opt, [&](std::size_t i, Lane& lane) {
       PairPlan& p = plans[i];
-      if (p.culled_out || p.exact) continue;
-      cull_pair(objects, p, kMaxCullRounds);
-      any_image = true;
-    }
-    if (any_image) share_budget(opt);  // the same ROIs share it: the image ROIs' needs now final
+      if (!(p.culled_out || p.exact)) cull_pair(objects, p, kMaxCullRounds, lane.cull);
+    });
+    share_budget(opt);  // the same ROIs share it: the image ROIs' needs now final
   }
 
   template <class Objects>
-  void cull_pair(const Objects& objects, PairPlan& p, int rounds) {
+  void cull_pair(const Objects& objects, PairPlan& p, int rounds, ContactCull& cull) {
     cull_to_contact_region(objects[p.a].mesh, objects[p.b].mesh, p.roi, cull, rounds);
     p.region = cull.box;
     p.in_roi_a = cull.stats.in_roi_a;
@@ -338,6 +371,7 @@ void Detector::detect(const std::vector<const Object*>& object_ptrs, const Detec
   // in s.job_tris); pass 2: every job of the frame peeled in one call (a stage may draw them
   // together); pass 3: per pair, the views' PCS united, expanded and tested exactly.
   std::size_t used = 0;
+  s.exact_pairs.clear();
   s.jobs.clear();
   s.job_first.assign(pairs.size() + 1, 0);
   for (std::size_t pi = 0; pi < pairs.size(); ++pi) {
@@ -366,16 +400,9 @@ void Detector::detect(const std::vector<const Object*>& object_ptrs, const Detec
     if (plan.culled_out) continue;  // no triangle of one object near the other: no contact
     const Mesh& ma = objects[ia].mesh;
     const Mesh& mb = objects[ib].mesh;
-    if (plan.exact) {  // the exact CPU path: every couple of kept triangles whose boxes overlap
-      t0 = Clock::now();
+    if (plan.exact) {  // the exact CPU path, after this loop (object pairs over opt.threads)
       r.resolution = 0;
-      s.candidates.clear();
-      box_overlap_pairs(ma, plan.kept_a, mb, plan.kept_b, s.candidates, &s.box_scratch);
-      sort_unique_pairs(s.candidates, s.candidate_scratch);
-      r.candidates = s.candidates.size();
-      narrow_phase(ma, mb, s.candidates, r.colliding, /*boxes_overlap=*/true);
-      ++out.rois_exact;
-      out.timings.cpu += ms_since(t0);
+      s.exact_pairs.push_back(pi);
       continue;
     }
     const std::vector<std::uint32_t>* only_a = opt.cull == Cull::contact ? &plan.kept_a : nullptr;
@@ -420,6 +447,25 @@ void Detector::detect(const std::vector<const Object*>& object_ptrs, const Detec
     }
   }
   s.job_first[pairs.size()] = s.jobs.size();
+
+  // The exact CPU path: every couple of kept triangles whose boxes overlap, tested exactly.
+  if (!s.exact_pairs.empty()) {
+    t0 = Clock::now();
+    s.for_pairs(s.exact_pairs.size(), opt, [&](std::size_t k, Impl::Lane& lane) {
+      const std::size_t pi = s.exact_pairs[k];
+      const PairPlan& plan = s.plans[pi];
+      PairResult& r = out.pairs[pi];
+      const Mesh& ma = objects[plan.a].mesh;
+      const Mesh& mb = objects[plan.b].mesh;
+      lane.candidates.clear();
+      box_overlap_pairs(ma, plan.kept_a, mb, plan.kept_b, lane.candidates, &lane.boxes);
+      sort_unique_pairs(lane.candidates, lane.candidate_scratch);
+      r.candidates = lane.candidates.size();
+      narrow_phase(ma, mb, lane.candidates, r.colliding, /*boxes_overlap=*/true);
+    });
+    out.rois_exact = s.exact_pairs.size();
+    out.timings.cpu += ms_since(t0);
+  }
   for (std::size_t j = 0; j < s.jobs.size(); ++j) {
     s.jobs[j].triangles[0] = &s.job_tris[2 * j];
     s.jobs[j].triangles[1] = &s.job_tris[2 * j + 1];

@@ -5,8 +5,11 @@
 #include "peelcd/core/detector.h"
 #include "peelcd/core/reference.h"
 #include "peelcd/eval/classes.h"
+#include "peelcd/eval/scenes.h"
 
 #include <catch2/catch.hpp>
+
+#include <algorithm>
 
 using namespace peelcd;
 
@@ -105,4 +108,67 @@ TEST_CASE("the router's models are positive and its choice depends on them only"
   const FrameResult b = detector.detect(g.objects, DetectOptions{});
   REQUIRE(a.pairs.size() == b.pairs.size());
   for (std::size_t i = 0; i < a.pairs.size(); ++i) CHECK(a.pairs[i].exact_stage == b.pairs[i].exact_stage);
+}
+
+// An image stage whose fixed cost per view lies between the exact path's smallest and largest
+// predictions on `objects`: ROIs go to each stage.
+StageCost mixed_cost(const std::vector<Object>& objects) {
+  Detector probe(std::make_shared<CpuImageStage>());
+  std::vector<double> exact;
+  for (const PairResult& p : probe.detect(objects, DetectOptions{}).pairs)
+    if (p.predicted_exact_ms > 0.0) exact.push_back(p.predicted_exact_ms);
+  if (exact.empty()) return StageCost{0, 0, 0};
+  const auto [lo, hi] = std::minmax_element(exact.begin(), exact.end());
+  return StageCost{0.5 * (*lo + *hi), 0.0, 0.0};
+}
+
+// The classes of geometry and a frame of the 60-ball pile (overlaps of many sizes).
+std::vector<std::pair<std::string, std::vector<Object>>> thread_scenes() {
+  std::vector<std::pair<std::string, std::vector<Object>>> out;
+  for (GeometryClass& g : geometry_classes(8)) out.emplace_back(g.name, std::move(g.objects));
+  std::vector<Object> pile;
+  make_crowd(60, 3)->frame(2, pile);
+  out.emplace_back("60-ball pile", std::move(pile));
+  return out;
+}
+
+TEST_CASE("culling and the exact CPU path give the same frame on 1, 2 and 4 threads", "[router][threads]") {
+  // A mixed router: ROIs go to each stage, so every parallel loop runs (culling twice, the exact
+  // path), with the image stage's ROIs between them.
+  for (const auto& [name, objects] : thread_scenes()) {
+    auto stage = std::make_shared<CostedStage>(mixed_cost(objects));
+    Detector detector(stage);
+    DetectOptions opt;
+    opt.threads = 1;
+    const FrameResult one = detector.detect(objects, opt);
+    for (const unsigned threads : {2u, 4u, 0u}) {
+      opt.threads = threads;
+      for (int repeat = 0; repeat < 2; ++repeat) {  // a second frame reuses the pool and the lanes
+        const FrameResult many = detector.detect(objects, opt);
+        INFO(name << ", threads " << threads << ", frame " << repeat);
+        CHECK(many.rois_exact == one.rois_exact);
+        CHECK(many.rois_peeled == one.rois_peeled);
+        REQUIRE(many.pairs.size() == one.pairs.size());
+        for (std::size_t i = 0; i < one.pairs.size(); ++i) {
+          const PairResult &x = one.pairs[i], &y = many.pairs[i];
+          CHECK(y.object_a == x.object_a);
+          CHECK(y.object_b == x.object_b);
+          CHECK(y.exact_stage == x.exact_stage);
+          CHECK(y.resolution == x.resolution);
+          CHECK(y.candidates == x.candidates);
+          CHECK(y.triangles_in_roi_a == x.triangles_in_roi_a);
+          CHECK(keys(y.colliding) == keys(x.colliding));
+        }
+      }
+    }
+  }
+}
+
+TEST_CASE("a mixed frame of the ball pile routes some ROIs each way", "[router][threads]") {
+  // Guards the test above: with its model both stages get ROIs of the pile.
+  const std::vector<Object> pile = thread_scenes().back().second;
+  Detector detector(std::make_shared<CostedStage>(mixed_cost(pile)));
+  const FrameResult r = detector.detect(pile, DetectOptions{});
+  CHECK(r.rois_exact > 0);
+  CHECK(r.rois_peeled > 0);
 }

@@ -84,6 +84,11 @@ struct DetectOptions {
   // Per ROI: image stage, exact CPU path, or the cheaper of the two by the cost model. Dumps,
   // goldens and sweeps set Stage::image (they check the image stage).
   Stage stage = Stage::automatic;
+  // Threads for the per-object-pair CPU work: contact culling and the exact CPU path (pairs
+  // spread over them; each pair's result is the same on any count). 1 = the calling thread
+  // only; 0 = the hardware's threads, at most 8. The GL stage's host resolve has its own lanes
+  // (gl::GlOptions::workers).
+  unsigned threads = 1;
 };
 
 constexpr double kConservativeEdgeTexels = 2.0;
