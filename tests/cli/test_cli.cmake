@@ -86,6 +86,8 @@ expect("four fused views" 2 "--views" detect ${scene} --views 4)
 expect("tile by the median edge" 0 "ROI 32x32.*exact reference: 228 pairs; found 228" detect ${scene} --stage image --check)
 expect("tile by the median edge, 12 texels" 0 "ROI 160x160.*exact reference: 228 pairs; found 228" detect ${scene} --stage image --check --edge-texels 12)
 expect("point sampling: 12 texels per edge" 0 "ROI 160x160" detect ${scene} --stage image --no-conservative)
+expect("threads: the same pairs" 0 "exact reference: 228 pairs; found 228, missed 0" detect ${scene} --threads 2 --check)
+expect("threads: out of range" 2 "--threads: Value 99 not in range" detect ${scene} --threads 99)
 expect("tile from the budget" 0 "ROI 512x512" detect ${scene} --stage image --edge-texels 0)
 expect("negative edge texels" 2 "--edge-texels: Value -2 is negative" detect ${scene} --edge-texels -2)
 # A NaN or infinite option is refused, not read as "not given" (CLI11's own checks let NaN pass).
