@@ -19,10 +19,27 @@ endif()
 if(TARGET peelcd_gl_osmesa)
   string(APPEND _pc_requires " osmesa")
 endif()
+# The prefix is found from where the .pc file lies (pkg-config's ${pcfiledir}), so the file is
+# right wherever the build is installed (cmake --install build --prefix P), not only at
+# CMAKE_INSTALL_PREFIX. An absolute CMAKE_INSTALL_LIBDIR is kept as it is.
+if(IS_ABSOLUTE "${CMAKE_INSTALL_LIBDIR}")
+  set(_pc_prefix "${CMAKE_INSTALL_PREFIX}")
+  set(_pc_libdir "${CMAKE_INSTALL_LIBDIR}")
+else()
+  file(RELATIVE_PATH _pc_up "/x/${CMAKE_INSTALL_LIBDIR}/pkgconfig" "/x")
+  string(REGEX REPLACE "/$" "" _pc_up "${_pc_up}")
+  set(_pc_prefix "\${pcfiledir}/${_pc_up}")
+  set(_pc_libdir "\${prefix}/${CMAKE_INSTALL_LIBDIR}")
+endif()
+if(IS_ABSOLUTE "${CMAKE_INSTALL_INCLUDEDIR}")
+  set(_pc_includedir "${CMAKE_INSTALL_INCLUDEDIR}")
+else()
+  set(_pc_includedir "\${prefix}/${CMAKE_INSTALL_INCLUDEDIR}")
+endif()
 file(WRITE ${PROJECT_BINARY_DIR}/peelcd.pc.in
-"prefix=@CMAKE_INSTALL_PREFIX@
-libdir=\${prefix}/@CMAKE_INSTALL_LIBDIR@
-includedir=\${prefix}/@CMAKE_INSTALL_INCLUDEDIR@
+"prefix=${_pc_prefix}
+libdir=${_pc_libdir}
+includedir=${_pc_includedir}
 
 Name: peelcd
 Description: @PROJECT_DESCRIPTION@
