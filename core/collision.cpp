@@ -8,7 +8,7 @@ CollisionGeometry::CollisionGeometry(Mesh mesh, std::string name) : name_(std::m
   Object probe;
   probe.name = name_;
   probe.mesh = std::move(mesh);
-  validate_object(probe, 0);
+  validate_object(probe, name_.empty() ? std::string("a CollisionGeometry") : "object '" + name_ + "'", false);
   mesh_ = std::make_shared<const Mesh>(std::move(probe.mesh));
 }
 
@@ -32,9 +32,8 @@ CollisionObject CollisionObject::deforming(Mesh mesh, std::string name) {
 
 void CollisionObject::set_pose(const Eigen::Affine3d& pose) {
   if (!rigid()) throw std::logic_error("peelcd::CollisionObject::set_pose(): '" + object_.name + "' is deforming");
-  if (!pose.matrix().allFinite())
-    throw std::invalid_argument("peelcd::CollisionObject::set_pose(): '" + object_.name +
-                                "': the pose has a NaN or infinite entry");
+  if (const std::string problem = pose_problem(pose); !problem.empty())
+    throw std::invalid_argument("peelcd::CollisionObject::set_pose(): '" + object_.name + "': the pose " + problem);
   object_.rigid->pose = pose;
   stale_ = true;
 }
@@ -78,6 +77,10 @@ std::size_t collide(Detector& detector, const CollisionObject& a, const Collisio
 
 std::size_t collide(Detector& detector, const Mesh& a, const Eigen::Affine3d& pose_a, const Mesh& b,
                     const Eigen::Affine3d& pose_b, const CollisionRequest& request, CollisionResult& result) {
+  // Poses first, named as this call's arguments (not as CollisionObject::set_pose()).
+  for (const auto& [pose, name] : {std::pair<const Eigen::Affine3d*, const char*>{&pose_a, "pose_a"}, {&pose_b, "pose_b"}})
+    if (const std::string problem = pose_problem(*pose); !problem.empty())
+      throw std::invalid_argument(std::string("peelcd::collide(): ") + name + " " + problem);
   const auto ga = std::make_shared<const CollisionGeometry>(a, "a");
   const auto gb = std::make_shared<const CollisionGeometry>(b, "b");
   return collide(detector, CollisionObject(ga, pose_a), CollisionObject(gb, pose_b), request, result);

@@ -9,8 +9,10 @@
 #include <atomic>
 #include <chrono>
 #include <cmath>
+#include <cstdio>
 #include <stdexcept>
 #include <string>
+#include <thread>
 
 namespace peelcd {
 namespace {
@@ -24,6 +26,33 @@ std::string object_label(const Object& o, std::size_t i) {
   return "object " + std::to_string(i) + (o.name.empty() ? "" : " '" + o.name + "'");
 }
 
+// One thread at a time per detector: a second thread entering while a frame runs gets a clear
+// error instead of racing on the frame's scratch. Re-entry from the owning thread (the public
+// overloads call one another) passes.
+class ExclusiveUse {
+ public:
+  explicit ExclusiveUse(std::atomic<std::thread::id>& owner) : owner_(owner) {
+    const std::thread::id me = std::this_thread::get_id();
+    std::thread::id none{};
+    if (owner_.compare_exchange_strong(none, me)) {
+      held_ = true;
+    } else if (none != me) {
+      throw std::logic_error(
+          "peelcd::Detector: called from a second thread while a frame runs; a detector serves one thread at a time "
+          "(make one detector per thread)");
+    }
+  }
+  ~ExclusiveUse() {
+    if (held_) owner_.store(std::thread::id{});
+  }
+  ExclusiveUse(const ExclusiveUse&) = delete;
+  ExclusiveUse& operator=(const ExclusiveUse&) = delete;
+
+ private:
+  std::atomic<std::thread::id>& owner_;
+  bool held_ = false;
+};
+
 // Gives the caller's context back when the frame ends, also on an exception.
 struct FrameScope {
   ImageStage* stage = nullptr;
@@ -34,23 +63,46 @@ struct FrameScope {
 
 }  // namespace
 
-void validate_objects(const std::vector<Object>& objects) {
-  for (std::size_t i = 0; i < objects.size(); ++i) validate_object(objects[i], i);
+void validate_objects(const std::vector<Object>& objects, bool float_range) {
+  for (std::size_t i = 0; i < objects.size(); ++i) validate_object(objects[i], i, float_range);
 }
 
-void validate_objects(const std::vector<const Object*>& objects) {
-  for (std::size_t i = 0; i < objects.size(); ++i) validate_object(*objects[i], i);
+void validate_objects(const std::vector<const Object*>& objects, bool float_range) {
+  for (std::size_t i = 0; i < objects.size(); ++i) validate_object(*objects[i], i, float_range);
 }
 
-void validate_object(const Object& o, std::size_t i) {
+std::string pose_problem(const Eigen::Affine3d& pose) {
+  if (!pose.matrix().allFinite()) return "has a NaN or infinite entry";
+  const double det = pose.linear().determinant();
+  if (!(std::abs(det) > 0.0) || !std::isfinite(det))
+    return "is singular (its rotation/scale part has determinant " + std::to_string(det) +
+           ": a zero scale collapses the mesh)";
+  return {};
+}
+
+std::string coordinate_problem(const Vec3& p, bool float_range) {
+  if (!p.allFinite()) return "has a NaN or infinite coordinate";
+  if (float_range && p.cwiseAbs().maxCoeff() > kFloatMax) {
+    char buf[200];
+    std::snprintf(buf, sizeof buf, "(%g, %g, %g) is outside the float range (|x| <= 3.4e38) the image stage works in",
+                  p.x(), p.y(), p.z());
+    return buf;
+  }
+  return {};
+}
+
+void validate_object(const Object& o, std::size_t i, bool float_range) {
+  validate_object(o, object_label(o, i), float_range);
+}
+
+void validate_object(const Object& o, const std::string& label, bool float_range) {
   // Messages are built only on failure: a valid frame allocates nothing here.
   {
     const Mesh& m = o.mesh;
-    const auto fail = [&](const std::string& problem) {
-      throw std::invalid_argument("peelcd: " + object_label(o, i) + problem);
-    };
+    const auto fail = [&](const std::string& problem) { throw std::invalid_argument("peelcd: " + label + problem); };
     for (std::size_t v = 0; v < m.vertices.size(); ++v)
-      if (!m.vertices[v].allFinite()) fail(": vertex " + std::to_string(v) + " has a NaN or infinite coordinate");
+      if (!m.vertices[v].allFinite() || (float_range && m.vertices[v].cwiseAbs().maxCoeff() > kFloatMax))
+        fail(": vertex " + std::to_string(v) + " " + coordinate_problem(m.vertices[v], float_range));
     const std::size_t n = m.vertices.size();
     for (std::size_t f = 0; f < m.triangles.size(); ++f)
       for (std::uint32_t v : m.triangles[f])
@@ -65,7 +117,7 @@ void validate_object(const Object& o, std::size_t i) {
       if (o.rigid->shape->triangles.size() != m.triangles.size())
         fail(": its rigid shape has " + std::to_string(o.rigid->shape->triangles.size()) + " triangles, its world mesh " +
              std::to_string(m.triangles.size()));
-      if (!o.rigid->pose.matrix().allFinite()) fail(": its pose has a NaN or infinite entry");
+      if (const std::string problem = pose_problem(o.rigid->pose); !problem.empty()) fail(": its pose " + problem);
     }
   }
 }
@@ -159,6 +211,7 @@ struct PairPlan {
 };
 
 struct Detector::Impl {
+  std::atomic<std::thread::id> owner{};  // the thread running a frame (ExclusiveUse)
   std::vector<const Object*> pointers;
   std::vector<PairPlan> plans;
   std::vector<int> needs, tiles;
@@ -330,6 +383,7 @@ FrameResult Detector::detect(const std::vector<Object>& objects, const DetectOpt
 }
 
 void Detector::detect(const std::vector<Object>& objects, const DetectOptions& opt, FrameResult& out) {
+  const ExclusiveUse exclusive(impl_->owner);
   std::vector<const Object*>& ptrs = impl_->pointers;
   ptrs.clear();
   for (const Object& o : objects) ptrs.push_back(&o);
@@ -337,13 +391,16 @@ void Detector::detect(const std::vector<Object>& objects, const DetectOptions& o
 }
 
 void Detector::detect(const std::vector<const Object*>& object_ptrs, const DetectOptions& opt, FrameResult& out) {
+  const ExclusiveUse exclusive(impl_->owner);
   Impl& s = *impl_;
   const ObjectRefs objects{object_ptrs};
   ImageStage& stage = *stage_;
   validate_options(opt, stage.max_resolution());
   for (const Object* o : object_ptrs)
     if (!o) throw std::invalid_argument("peelcd::Detector::detect(): a null object");
-  validate_objects(object_ptrs);
+  // The image stage works in float: a coordinate beyond float's range is refused unless the
+  // frame runs on the exact CPU path alone (exact for every finite double).
+  validate_objects(object_ptrs, opt.stage != Stage::exact);
 
   // `out` is reused: its vectors keep their capacity (tests/alloc/test_alloc.cpp counts it).
   out.timings = Timings{};
@@ -548,9 +605,10 @@ void Detector::detect(const std::vector<const Object*>& object_ptrs, const Detec
 
 void Detector::for_each_view(const std::vector<Object>& objects_in, const DetectOptions& opt,
                              const std::function<void(const PeelJob&)>& fn) {
+  const ExclusiveUse exclusive(impl_->owner);
   Impl& s = *impl_;
   validate_options(opt, stage_->max_resolution());
-  validate_objects(objects_in);
+  validate_objects(objects_in, true);
   std::vector<const Object*> ptrs;
   for (const Object& o : objects_in) ptrs.push_back(&o);
   const ObjectRefs objects{ptrs};

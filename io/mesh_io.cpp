@@ -7,6 +7,7 @@
 #include <assimp/scene.h>
 
 #include <cctype>
+#include <cmath>
 #include <filesystem>
 #include <cstdlib>
 #include <fstream>
@@ -39,7 +40,8 @@ void append_node(const aiScene* scene, const aiNode* node, const aiMatrix4x4& pa
       const Vec3 q(p.x, p.y, p.z);
       if (!q.allFinite())
         throw InputError("peelcd::load_mesh(): '" + path + "': vertex " + std::to_string(v) +
-                         " has a NaN or infinite coordinate");
+                         " has a NaN or infinite coordinate (files other than OFF are read at float precision: "
+                         "a value beyond 3.4e38 in the file reads as infinite)");
       auto [it, inserted] = weld.emplace(q, std::uint32_t(out.vertices.size()));
       if (inserted) out.vertices.push_back(q);
       remap[v] = it->second;
@@ -127,6 +129,37 @@ std::string ply_header_problem(const std::string& path) {
   return "malformed PLY header: no end_header";
 }
 
+// Checks the vertex lines of an OBJ file before assimp reads it: assimp parses a coordinate that
+// is not a number as 0 or skips it (`v 0 1 zz` then surfaced as "vertex index out of range"),
+// and reads at float precision, where a finite value beyond 3.4e38 becomes infinite. Returns an
+// empty string if every `v` line holds 3 or 4 numbers within float's range, else the problem
+// (with the line number).
+std::string obj_vertex_problem(const std::string& path) {
+  std::ifstream in(path, std::ios::binary);
+  std::string line;
+  std::size_t vertex = 0;
+  for (std::size_t number = 1; std::getline(in, line); ++number) {
+    std::istringstream words(line);
+    std::string w;
+    if (!(words >> w) || w != "v") continue;
+    int count = 0;
+    const std::string where = "line " + std::to_string(number) + ": vertex " + std::to_string(vertex);
+    while (words >> w) {
+      if (w[0] == '#') break;
+      char* end = nullptr;
+      const double x = std::strtod(w.c_str(), &end);
+      if (end != w.c_str() + w.size()) return where + ": '" + w.substr(0, 40) + "' is not a number";
+      if (count < 3 && std::isfinite(x) && std::abs(x) > 3.4028234663852886e38)
+        return where + ": coordinate " + w.substr(0, 40) +
+               " is outside the float range (|x| <= 3.4e38) mesh files are read in";
+      ++count;
+    }
+    if (count < 3) return where + " has " + std::to_string(count) + " coordinates, expected 3";
+    ++vertex;
+  }
+  return "";
+}
+
 // OFF is read here, not by assimp: assimp 5.2's OFF reader crashes (SEGV, or an assertion in
 // its triangulation) on malformed files, found by fuzzing. Format: optional "OFF" keyword, then
 // "V F E", V lines "x y z", F lines "n i1 .. in" (extra values, e.g. colours, ignored); '#'
@@ -167,6 +200,8 @@ Mesh read_off(const std::string& path) {
     if (!p.allFinite())
       throw InputError("peelcd::load_mesh(): '" + path + "': vertex " + std::to_string(v) +
                        " has a NaN or infinite coordinate");
+    if (p.cwiseAbs().maxCoeff() > 3.4028234663852886e38)
+      throw fail("vertex " + std::to_string(v) + ": a coordinate is outside the float range (|x| <= 3.4e38) the image stage works in");
     auto [it, inserted] = weld.emplace(p, std::uint32_t(mesh.vertices.size()));
     if (inserted) mesh.vertices.push_back(p);
     remap[std::size_t(v)] = it->second;
@@ -208,6 +243,9 @@ const aiScene* import_checked(const std::string& path, Assimp::Importer& importe
   if (ext == ".off") return nullptr;
   if (const std::string problem = ply_header_problem(path); !problem.empty())
     throw InputError("peelcd::load_mesh(): '" + path + "': " + problem);
+  if (ext == ".obj")
+    if (const std::string problem = obj_vertex_problem(path); !problem.empty())
+      throw InputError("peelcd::load_mesh(): '" + path + "': malformed OBJ: " + problem);
   const aiScene* scene = importer.ReadFile(path, 0);
   if (!scene || !scene->mRootNode || (scene->mFlags & AI_SCENE_FLAGS_INCOMPLETE))
     throw InputError("peelcd::load_mesh(): '" + path + "': cannot read it as a mesh: " +

@@ -1,5 +1,6 @@
 #include "peelcd/io/scene.h"
 
+#include "peelcd/core/detector.h"
 #include "peelcd/io/error.h"
 #include "peelcd/io/mesh_io.h"
 
@@ -230,8 +231,8 @@ std::vector<Object> load_objects(const Scene& scene) {
       } catch (const std::invalid_argument& e) {
         throw InputError(std::string("peelcd::load_objects(): ") + e.what());
       }
-      // The image stage uploads float coordinates: beyond float's range a vertex becomes infinite.
-      constexpr double kFloatMax = 3.4028234663852886e38;
+      // The image stage uploads float coordinates: beyond float's range a vertex becomes infinite
+      // (kFloatMax, the limit Detector::detect() checks too).
       for (const Vec3& v : o.mesh.vertices)
         if (!v.allFinite() || v.cwiseAbs().maxCoeff() > kFloatMax) {
           char buf[160];

@@ -7,6 +7,10 @@
 
 #include <catch2/catch.hpp>
 
+#include <condition_variable>
+#include <mutex>
+#include <thread>
+
 using namespace peelcd;
 
 namespace {
@@ -113,4 +117,129 @@ TEST_CASE("bad meshes and poses give exceptions that name the object and the pro
   // Impossible options name the option.
   request.options.resolution = 1 << 20;
   CHECK_THROWS_WITH(collide(*detector, rigid, other, request, result), Catch::Contains("resolution 1048576"));
+}
+
+namespace {
+
+// A CPU image stage whose first peel of a frame waits until released: holds a frame open on one
+// thread while another thread calls the same detector.
+class GatedStage : public ImageStage {
+ public:
+  const std::string& backend() const override { return inner_.backend(); }
+  const std::string& renderer() const override { return inner_.renderer(); }
+  const std::string& version() const override { return inner_.version(); }
+  int max_resolution() const override { return inner_.max_resolution(); }
+  void begin_frame() override {  // only the first frame waits
+    std::unique_lock<std::mutex> lock(m_);
+    if (entered_) return;
+    entered_ = true;
+    cv_.notify_all();
+    cv_.wait(lock, [&] { return released_; });
+  }
+  void peel(const PeelJob& job, PeelResult& out, Timings& timings) override { inner_.peel(job, out, timings); }
+  void wait_entered() {
+    std::unique_lock<std::mutex> lock(m_);
+    cv_.wait(lock, [&] { return entered_; });
+  }
+  void release() {
+    std::lock_guard<std::mutex> lock(m_);
+    released_ = true;
+    cv_.notify_all();
+  }
+
+ private:
+  CpuImageStage inner_;
+  std::mutex m_;
+  std::condition_variable cv_;
+  bool entered_ = false, released_ = false;
+};
+
+}  // namespace
+
+TEST_CASE("one detector called from a second thread during a frame throws a clear error, no crash", "[api]") {
+  auto stage = std::make_shared<GatedStage>();
+  Detector detector(stage);
+  const Mesh a = make_uv_sphere(Vec3(0, 0, 0), 1.0, 10, 20), b = make_uv_sphere(Vec3(1.2, 0.3, 0.1), 0.8, 10, 20);
+  std::vector<Object> objects(2);
+  objects[0].mesh = a, objects[0].name = "a";
+  objects[1].mesh = b, objects[1].name = "b";
+  DetectOptions opt;
+  opt.stage = Stage::image;  // the frame reaches the stage (and waits there)
+  FrameResult first;
+  std::thread owner([&] { detector.detect(objects, opt, first); });
+  stage->wait_entered();
+  FrameResult second;
+  CHECK_THROWS_WITH(detector.detect(objects, opt, second),
+                    Catch::Contains("second thread") && Catch::Contains("one detector per thread"));
+  stage->release();
+  owner.join();
+  // The first frame completed untouched, and the detector is free again.
+  CHECK(first.pairs.size() == 1);
+  CHECK(!first.pairs[0].colliding.empty());
+  detector.detect(objects, opt, second);
+  CHECK(second.pairs[0].colliding.size() == first.pairs[0].colliding.size());
+}
+
+TEST_CASE("messages name the right argument: collide(Mesh...)'s b and its poses; a zero-scale pose is refused",
+          "[api]") {
+  auto detector = cpu_detector();
+  const Mesh good = make_box(Vec3(0, 0, 0), Vec3(1, 1, 1));
+  Mesh bad = good;
+  bad.vertices[3].x() = std::nan("");
+  CollisionRequest request;
+  CollisionResult result;
+  const Eigen::Affine3d I = Eigen::Affine3d::Identity();
+  CHECK_THROWS_WITH(collide(*detector, good, I, bad, I, request, result),
+                    Catch::Contains("'b'") && !Catch::Contains("object 0") && Catch::Contains("vertex 3"));
+  CHECK_THROWS_WITH(collide(*detector, bad, I, good, I, request, result), Catch::Contains("'a'"));
+  Eigen::Affine3d nan_pose = I;
+  nan_pose.translation().y() = std::nan("");
+  CHECK_THROWS_WITH(collide(*detector, good, I, good, nan_pose, request, result),
+                    Catch::Contains("peelcd::collide(): pose_b") && !Catch::Contains("set_pose"));
+  // A zero scale collapses the mesh to a point: refused where the pose is given, and by the detector.
+  const auto g = std::make_shared<const CollisionGeometry>(good, "g");
+  CollisionObject rigid(g, I, "lid");
+  Eigen::Affine3d flat = I;
+  flat.linear() *= 0.0;
+  CHECK_THROWS_WITH(rigid.set_pose(flat), Catch::Contains("'lid'") && Catch::Contains("singular"));
+  CHECK_THROWS_WITH(collide(*detector, good, I, good, flat, request, result), Catch::Contains("pose_b is singular"));
+}
+
+TEST_CASE("coordinates beyond float range: refused by any frame that may use the image stage, exact path exact",
+          "[api]") {
+  const Mesh sphere = make_uv_sphere(Vec3(0, 0, 0), 1.0, 12, 24);
+  const Mesh other = make_uv_sphere(Vec3(1.2, 0.3, 0.1), 0.9, 12, 24);
+  const auto with_far_vertex = [&](double far) {
+    Mesh m = sphere;
+    m.vertices.back() = Vec3(0, 0, far);  // the pole: stretched into a long spike
+    return m;
+  };
+  const Eigen::Affine3d I = Eigen::Affine3d::Identity();
+  CollisionRequest request;
+  CollisionResult result;
+  for (const double far : {1e38, 3.4e38}) {  // within float range: every exact pair found
+    INFO("far vertex at z = " << far);
+    const Mesh a = with_far_vertex(far);
+    const std::vector<std::uint64_t> exact = exact_colliding_pairs(a, other);
+    REQUIRE(!exact.empty());
+    for (const Stage stage : {Stage::image, Stage::exact, Stage::automatic}) {
+      auto detector = cpu_detector();
+      request.options.stage = stage;
+      collide(*detector, a, I, other, I, request, result);
+      CHECK(score_contacts(exact, result.contacts).missed == 0);
+    }
+  }
+  for (const double far : {1e39, 1e155, 1e300}) {
+    INFO("far vertex at z = " << far);
+    const Mesh a = with_far_vertex(far);
+    auto detector = cpu_detector();
+    for (const Stage stage : {Stage::image, Stage::automatic}) {
+      request.options.stage = stage;
+      CHECK_THROWS_WITH(collide(*detector, a, I, other, I, request, result),
+                        Catch::Contains("'a'") && Catch::Contains("outside the float range (|x| <= 3.4e38)"));
+    }
+    request.options.stage = Stage::exact;  // the exact CPU path takes every finite double
+    collide(*detector, a, I, other, I, request, result);
+    CHECK(score_contacts(exact_colliding_pairs(a, other), result.contacts).missed == 0);
+  }
 }

@@ -112,8 +112,16 @@ TEST_CASE("bad mesh files give an error that names the file and the problem", "[
                       "");
   require_input_error(write_temp("garbled.stl", std::string("solid x\nfacet normal 0 0 1\nouter loop\nvertex 0 0") + '\0' + "\x7f\x01garbage"), "");
   require_input_error(write_temp("binary_short.stl", std::string(90, '\0')), "");
-  require_input_error(write_temp("short_vertex.obj", "v 0 0\nv 1 0 0\nv 0 1 0\nf 1 2 3\n"), "cannot read");
-  require_input_error(write_temp("letters.obj", "v a b c\nv 1 0 0\nv 0 1 0\nf 1 2 3\n"), "cannot read");
+  require_input_error(write_temp("short_vertex.obj", "v 0 0\nv 1 0 0\nv 0 1 0\nf 1 2 3\n"),
+                      "malformed OBJ: line 1: vertex 0 has 2 coordinates, expected 3");
+  require_input_error(write_temp("letters.obj", "v a b c\nv 1 0 0\nv 0 1 0\nf 1 2 3\n"), "line 1: vertex 0: 'a' is not a number");
+  // A coordinate that is not a number is named as such, not as a bad face index.
+  require_input_error(write_temp("zz.obj", "v 0 0 0\nv 1 0 0\n# c\nv 0 1 zz\nf 1 2 3\n"), "line 4: vertex 2: 'zz' is not a number");
+  // A finite value beyond float range is not "NaN or infinite".
+  require_input_error(write_temp("huge.obj", "v 0 0 0\nv 1e39 0 0\nv 0 1 0\nf 1 2 3\n"),
+                      "vertex 1: coordinate 1e39 is outside the float range (|x| <= 3.4e38)");
+  require_input_error(write_temp("huge.off", "OFF\n3 1 0\n0 0 0\n0 -1e39 0\n0 1 0\n3 0 1 2\n"),
+                      "vertex 1: a coordinate is outside the float range (|x| <= 3.4e38)");
   require_input_error(write_temp("bad_face.obj", "v 0 0 0\nv 1 0 0\nv 0 1 0\nf 1 2 3 x\n"), "cannot read");
   require_input_error(write_temp("binary.obj", std::string("\x00\x01\x02garbage\xff\xfe", 12)), "cannot read");
   require_input_error(write_temp("truncated.off", "OFF\n4 2 0\n0 0 0\n1 0 0\n0 1 0\n0 0 1\n3 0 1 2\n"), "truncated");

@@ -33,9 +33,22 @@ struct CapturedView {
 // vertex list, IDs that fit the layers' 31 bits, a rigid object's shape with as many triangles
 // as its world mesh. Throws std::invalid_argument naming the object (index and name) and the
 // problem. Empty meshes are allowed (they overlap nothing).
-void validate_objects(const std::vector<Object>& objects);
-void validate_objects(const std::vector<const Object*>& objects);
-void validate_object(const Object& object, std::size_t index);
+// With `float_range` (any frame that may use the image stage, which works in float), a
+// coordinate beyond float's range (|x| > 3.4e38) is refused too; the exact CPU path alone
+// (Stage::exact) takes every finite double. A rigid pose must be finite and invertible.
+void validate_objects(const std::vector<Object>& objects, bool float_range = true);
+void validate_objects(const std::vector<const Object*>& objects, bool float_range = true);
+void validate_object(const Object& object, std::size_t index, bool float_range = true);
+// The same, the message naming the object by `label` (e.g. "object 'b'").
+void validate_object(const Object& object, const std::string& label, bool float_range = true);
+
+// The largest finite float: the image stage's coordinate range.
+constexpr double kFloatMax = 3.4028234663852886e38;
+// Empty if `p` is finite (and, with `float_range`, within float's range), else the problem in
+// words ("has a NaN or infinite coordinate", "(x, y, z) is outside the float range ...").
+std::string coordinate_problem(const Vec3& p, bool float_range);
+// Empty if `pose` is usable (finite, its linear part invertible), else the problem in words.
+std::string pose_problem(const Eigen::Affine3d& pose);
 
 // Checks the options (ranges, finiteness) against a stage whose largest view is
 // `max_resolution`. Throws std::invalid_argument naming the option.
