@@ -21,6 +21,7 @@
 #if PEELCD_HAVE_OSMESA
 #include "peelcd/gl_osmesa/osmesa_context.h"
 #endif
+#include "data.h"
 #include "peelcd/io/error.h"
 #include "peelcd/io/mesh_io.h"
 #include "peelcd/io/output.h"
@@ -466,7 +467,7 @@ int run_dump(const DetectArgs& a, const DumpArgs& d) {
 
 struct GoldenArgs {
   std::vector<std::string> cases;  // empty = every case
-  std::string dir = PEELCD_GOLDEN_DIR;
+  std::string dir;  // empty: the installed or source tree's fixtures/golden (data_dir())
   std::string backend = "osmesa";
   std::string tier = "auto";
   std::string report = "golden-report";
@@ -595,8 +596,8 @@ int run_compare_dumps(const CompareDumpsArgs& a) {
 
 std::unique_ptr<Sequence> make_sequence(const std::string& name, std::size_t frames, bool rigid = true,
                                         std::size_t objects = 200) {
-  if (name == "test1") return make_test1(PEELCD_MESHES_DIR, frames, rigid);
-  if (name == "test2") return make_test2(PEELCD_MESHES_DIR, frames, rigid);
+  if (name == "test1") return make_test1(cli::data_dir("fixtures/meshes"), frames, rigid);
+  if (name == "test2") return make_test2(cli::data_dir("fixtures/meshes"), frames, rigid);
   if (name == "crowd") return make_crowd(objects, frames, rigid);
   throw InputError("peelcd: unknown test scene \"" + name + "\" (expected test1, test2 or crowd)");
 }
@@ -1002,7 +1003,7 @@ void plot_sweep(const std::string& csv_path, const std::string& dir) {
   std::filesystem::create_directories(dir);
   const char* python = std::getenv("PYTHON");
   const std::string py = python ? python : (std::filesystem::exists("/usr/bin/python3") ? "/usr/bin/python3" : "python3");
-  const std::string cmd = "'" + py + "' '" + std::string(PEELCD_SCRIPTS_DIR) + "/plot_sweep.py' '" + csv_path + "' '" + dir + "'";
+  const std::string cmd = "'" + py + "' '" + cli::data_dir("scripts") + "/plot_sweep.py' '" + csv_path + "' '" + dir + "'";
   if (std::system(cmd.c_str()) != 0)
     throw InputError("peelcd sweep: plotting failed (needs python3-matplotlib): " + cmd);
 }
@@ -1284,7 +1285,7 @@ int run_calibrate(const CalibrateArgs& a) {
   Runner runner = make_runner(a.backend, gl::GlOptions{});
   std::printf("peelcd calibrate: %s (%s); median of %d frames per stage\n", runner.backend().c_str(),
               runner.renderer().c_str(), a.repeat);
-  const Calibration cal = calibrate(*runner.detector, PEELCD_MESHES_DIR, a.budgets, a.repeat);
+  const Calibration cal = calibrate(*runner.detector, cli::data_dir("fixtures/meshes"), a.budgets, a.repeat);
   std::printf("%-28s %9s %6s %10s %10s %9s %9s %7s\n", "scene", "triangles", "tile", "image ms", "exact ms",
               "image cand", "exact cand", "faster");
   for (const CalibrationRow& r : cal.rows)
@@ -1371,13 +1372,17 @@ int main(int argc, char** argv) {
       "record", "Write the goldens of CASE... (default: every case) from the OSMesa reference backend into "
                 "<golden-dir>/<case>/expected; review the change like code");
   record->add_option("case", gr.cases, "Case names (folders of the golden dir)");
-  record->add_option("--golden-dir", gr.dir, "Folder of the golden cases")->capture_default_str();
+  record->add_option("--golden-dir", gr.dir,
+                     "Folder of the golden cases (default: fixtures/golden of the source tree, or share/peelcd "
+                     "when installed, or $PEELCD_DATA_DIR)");
   CLI::App* compare = golden->add_subcommand(
       "compare", "Run CASE... (default: every case) on a backend and compare every layer, the PCS and the "
                  "colliding pairs with the goldens; on a difference print the first differing texels and "
                  "write a report with expected / actual / error-mask PNGs. Exit 1 if any case differs");
   compare->add_option("case", gc.cases, "Case names (folders of the golden dir)");
-  compare->add_option("--golden-dir", gc.dir, "Folder of the golden cases")->capture_default_str();
+  compare->add_option("--golden-dir", gc.dir,
+                      "Folder of the golden cases (default: fixtures/golden of the source tree, or share/peelcd "
+                      "when installed, or $PEELCD_DATA_DIR)");
   compare->add_option("--backend", gc.backend, "GL backend: osmesa or egl")->capture_default_str();
   compare->add_option("--tier", gc.tier, "auto (exact on llvmpipe, hardware otherwise), exact or hardware")
       ->capture_default_str();
@@ -1508,8 +1513,14 @@ int main(int argc, char** argv) {
     if (*dump) return run_dump(du, dump_args);
     if (*simulate) return run_simulate(si);
     if (*benchmark) return run_bench(be);
-    if (*record) return run_golden_record(gr);
-    if (*compare) return run_golden_compare(gc);
+    if (*record) {
+      if (gr.dir.empty()) gr.dir = cli::data_dir("fixtures/golden");
+      return run_golden_record(gr);
+    }
+    if (*compare) {
+      if (gc.dir.empty()) gc.dir = cli::data_dir("fixtures/golden");
+      return run_golden_compare(gc);
+    }
     if (*compare_dumps) return run_compare_dumps(cd);
     if (*sweep_merge) return run_sweep_merge(sm);
     if (*sweep) {

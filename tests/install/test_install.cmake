@@ -53,3 +53,28 @@ if(at EQUAL -1)
 endif()
 # find_package(peelcd) without COMPONENTS needs neither FCL nor OpenEXR.
 run(${CMAKE_COMMAND} -S ${SOURCE}/tests/install/no_components -B ${WORK}/no_components -DCMAKE_PREFIX_PATH=${prefix})
+
+# The installed command line runs without the source tree: its data is under share/peelcd.
+foreach(f bin/peelcd share/peelcd/fixtures/meshes/bunny_3k.obj share/peelcd/fixtures/golden/boxes_crossing/case.json
+          share/peelcd/scripts/plot_sweep.py)
+  if(NOT EXISTS ${prefix}/${f})
+    message(FATAL_ERROR "not installed: ${f}")
+  endif()
+endforeach()
+run(${prefix}/bin/peelcd calibrate --backend cpu --repeat 1 --budgets 16)
+run(${prefix}/bin/peelcd golden compare --backend cpu --tier hardware boxes_crossing --report ${WORK}/report)
+# ... and reads it there, not in the build's source tree: with a fixture mesh gone from the
+# prefix, calibrate fails naming the prefix's file.
+file(RENAME ${prefix}/share/peelcd/fixtures/meshes/bunny_3k.obj ${WORK}/bunny_3k.obj)
+execute_process(COMMAND ${prefix}/bin/peelcd calibrate --backend cpu --repeat 1 --budgets 16
+                RESULT_VARIABLE rc OUTPUT_VARIABLE out ERROR_VARIABLE err)
+file(RENAME ${WORK}/bunny_3k.obj ${prefix}/share/peelcd/fixtures/meshes/bunny_3k.obj)
+if(NOT rc EQUAL 2 OR NOT err MATCHES "share/peelcd/fixtures/meshes/bunny_3k.obj': no such file")
+  message(FATAL_ERROR "installed calibrate without its mesh: expected exit 2 naming the installed file, got ${rc}: ${err}")
+endif()
+# $PEELCD_DATA_DIR overrides; a wrong one is named.
+execute_process(COMMAND ${CMAKE_COMMAND} -E env PEELCD_DATA_DIR=${WORK}/nowhere ${prefix}/bin/peelcd golden compare
+                RESULT_VARIABLE rc OUTPUT_VARIABLE out ERROR_VARIABLE err)
+if(NOT rc EQUAL 2 OR NOT err MATCHES "PEELCD_DATA_DIR is set")
+  message(FATAL_ERROR "PEELCD_DATA_DIR=nowhere: expected exit 2 naming it, got ${rc}: ${err}")
+endif()
