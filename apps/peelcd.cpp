@@ -53,6 +53,48 @@ using namespace peelcd;
 
 constexpr int kExitBadInput = 2;
 
+// Output options (--json, --csv, --plot, --out, --report): an empty value is a mistake, refused
+// at parse time (exit 2), not read as "no output".
+const CLI::Validator kOutputPath(
+    [](std::string& value) { return value.empty() ? std::string("an empty path (give a file name, or - for stdout)") : std::string(); },
+    "");
+
+// Help that reads as words: CLI11 writes an option's type and each validator joined by ':'
+// ("INT:INT in [0 - 64]", "FLOAT:FINITE:FLOAT in [-90 - 90]"); this writes "INT in [0, 64]",
+// "FLOAT in [-90, 90]", "INT > 0", "FLOAT >= 0", "{1,2,3}".
+class HelpFormatter : public CLI::Formatter {
+ public:
+  std::string make_option_opts(const CLI::Option* opt) const override {
+    std::string s = CLI::Formatter::make_option_opts(opt);
+    const auto replace_all = [&](const std::string& from, const std::string& to) {
+      for (std::size_t at = s.find(from); at != std::string::npos; at = s.find(from, at + to.size())) s.replace(at, from.size(), to);
+    };
+    for (const char* type : {"INT", "FLOAT", "UINT"}) {
+      const std::string t = type;
+      replace_all(t + ":FINITE:" + t + " in ", t + " in ");
+      replace_all(t + ":" + t + " in ", t + " in ");
+      replace_all(t + ":FINITE", t);
+      replace_all(t + ":POSITIVE", t + " > 0");
+      replace_all(t + ":NONNEGATIVE", t + " >= 0");
+      replace_all(t + ":{", "{");
+    }
+    // "[0 - 64]" -> "[0, 64]"
+    for (std::size_t open = s.find('['); open != std::string::npos; open = s.find('[', open + 1)) {
+      const std::size_t close = s.find(']', open), dash = s.find(" - ", open);
+      if (close != std::string::npos && dash != std::string::npos && dash < close) s.replace(dash, 3, ", ");
+    }
+    return s;
+  }
+};
+
+// A scene's input files: the scene file itself (when there is one) and every mesh it names.
+std::vector<std::string> scene_inputs(const Scene& scene) {
+  std::vector<std::string> inputs;
+  if (std::filesystem::is_regular_file(scene.path)) inputs.push_back(scene.path);
+  for (const SceneObject& o : scene.objects) inputs.push_back(o.mesh_path);
+  return inputs;
+}
+
 // The image stage of a run and the detector over it: GL on OSMesa (the deterministic
 // reference) or EGL without a window, or the CPU model (no GL).
 struct Runner {
@@ -103,6 +145,8 @@ struct DetectArgs {
   int views = 0;  // 0 = not given
   bool check = false;
   bool quiet = false;
+  bool list = false;    // print every colliding triangle pair (default: the summary only)
+  bool status = false;  // exit 1 when nothing collides
   int explain_misses = 0;  // detect --check: explain the first N missed pairs
   std::string backend = "osmesa";
 };
@@ -218,6 +262,7 @@ int run_detect(const DetectArgs& a) {
   const Progress progress;
   progress.phase("peelcd detect: loading the meshes...");
   const Scene scene = detect_input(a.inputs);
+  refuse_overwriting_input(a.json_out, scene_inputs(scene), "peelcd detect: --json");
   const DetectOptions opt = merged_options(scene, a);
   const std::vector<Object> objects = load_objects(scene);
   progress.phase("peelcd detect: running the frame...");
@@ -272,36 +317,55 @@ int run_detect(const DetectArgs& a) {
     else
       std::fprintf(human, "point sampling  view theta=%g phi=%g roll=%g  views=%d  ids=%s  peel=%s  slope=%g  cull=%s\n", opt.theta,
                   opt.phi, opt.roll, opt.views, to_string(opt.ids), to_string(opt.peel), opt.slope, to_string(opt.cull));
-    std::fprintf(human, "stage %s: %zu of %zu ROIs by the exact CPU path, %zu peeled\n", to_string(opt.stage), result.rois_exact,
+    std::fprintf(human, "stage %s: %zu of %zu ROIs by the exact CPU path, %zu peeled", to_string(opt.stage), result.rois_exact,
                 result.pairs.size(), result.pairs.size() - result.rois_exact);
+    if (result.views_exhaustive > 0)
+      std::fprintf(human, " (%zu views fell back to the exhaustive exact test: k-buffer too deep or too large)",
+                   result.views_exhaustive);
+    std::fprintf(human, "\n");
     if (result.pairs.empty()) std::fprintf(human, "no overlapping bounding boxes: no GL work\n");
+    std::size_t colliding = 0, colliding_objects = 0;
     for (const PairResult& p : result.pairs) {
+      colliding += p.colliding.size();
+      colliding_objects += p.colliding.empty() ? 0 : 1;
       if (p.exact_stage) {
         std::fprintf(human, "%s x %s: exact CPU path (predicted %.3f ms; image stage %.3f ms), %zu+%zu tris in the ROI, "
                     "%zu candidates, %zu colliding\n",
                     objects[p.object_a].name.c_str(), objects[p.object_b].name.c_str(), p.predicted_exact_ms,
                     p.predicted_image_ms, p.triangles_in_roi_a, p.triangles_in_roi_b, p.candidates, p.colliding.size());
-      } else
-      std::fprintf(human, "%s x %s: ROI %dx%d, eps %.3g, drawn %zu+%zu of %zu+%zu tris, %d layers, %zu PCS, %zu candidates, %zu colliding\n",
-                  objects[p.object_a].name.c_str(), objects[p.object_b].name.c_str(), p.resolution,
-                  p.resolution, p.epsilon, p.triangles_drawn_a, p.triangles_drawn_b, p.triangles_in_roi_a,
-                  p.triangles_in_roi_b, p.layers,
-                  p.pcs_count, p.candidates, p.colliding.size());
-      std::string line = " ";
-      for (const Contact& c : p.colliding) {
-        line += " (" + std::to_string(c.tri_a) + "," + std::to_string(c.tri_b) + ")";
-        if (line.size() > 90) {
-          std::fprintf(human, "%s\n", line.c_str());
-          line = " ";
-        }
+      } else {
+        std::fprintf(human, "%s x %s: ROI %dx%d, eps %.3g, drawn %zu+%zu of %zu+%zu tris, %d layers, %zu PCS, %zu candidates, %zu colliding\n",
+                    objects[p.object_a].name.c_str(), objects[p.object_b].name.c_str(), p.resolution,
+                    p.resolution, p.epsilon, p.triangles_drawn_a, p.triangles_drawn_b, p.triangles_in_roi_a,
+                    p.triangles_in_roi_b, p.layers,
+                    p.pcs_count, p.candidates, p.colliding.size());
+        if (p.views_exhaustive > 0)  // a fallback is never silent
+          std::fprintf(human, "  path %s: %s\n", pair_path(p), pair_path_reason(p, opt).c_str());
       }
-      if (line.size() > 1) std::fprintf(human, "%s\n", line.c_str());
       if (a.check) {
         const Score& sc = scores[std::size_t(&p - result.pairs.data())];
         std::fprintf(human, "  exact reference: %zu pairs; found %zu, missed %zu (miss ratio %.2f%%), false contacts %zu\n",
                     sc.exact, sc.found, sc.missed, 100.0 * sc.miss_ratio(), sc.false_contacts);
       }
     }
+    std::fprintf(human, "%s: %zu colliding triangle pairs in %zu of %zu overlapping object pairs%s\n",
+                 colliding ? "collision" : "no collision", colliding, colliding_objects, result.pairs.size(),
+                 colliding && !a.list ? " (--list prints them)" : "");
+    if (a.list)
+      for (const PairResult& p : result.pairs) {
+        if (p.colliding.empty()) continue;
+        std::fprintf(human, "%s x %s: triangle pairs (%s, %s)\n", objects[p.object_a].name.c_str(),
+                     objects[p.object_b].name.c_str(), objects[p.object_a].name.c_str(), objects[p.object_b].name.c_str());
+        std::string line = " ";
+        for (const Contact& c : p.colliding) {
+          line += " (" + std::to_string(c.tri_a) + "," + std::to_string(c.tri_b) + ")";
+          if (line.size() > 90) {
+            std::fprintf(human, "%s\n", line.c_str());
+            line = " ";
+          }
+        }
+        if (line.size() > 1) std::fprintf(human, "%s\n", line.c_str());
+      }
     const Timings& t = result.timings;
     std::fprintf(human, "timings (ms%s): aabb %.3f  upload %.3f  gpu %.3f  readback %.3f  cpu %.3f  total %.3f\n",
                 runs.size() > 1 ? (", median of " + std::to_string(runs.size())).c_str() : "",
@@ -324,6 +388,11 @@ int run_detect(const DetectArgs& a) {
                  a.max_miss);
     return 3;
   }
+  if (a.status) {  // for scripts, as grep: 0 when something collides, 1 when nothing does
+    bool any = false;
+    for (const PairResult& p : result.pairs) any = any || !p.colliding.empty();
+    return any ? 0 : 1;
+  }
   return 0;
 }
 
@@ -345,6 +414,7 @@ int run_explain(const DetectArgs& a, const ExplainArgs& x) {
   const Progress progress;
   progress.phase("peelcd explain: loading the meshes...");
   const Scene scene = detect_input(a.inputs);
+  refuse_overwriting_input(a.json_out, scene_inputs(scene), "peelcd explain: --json");
   const DetectOptions opt = merged_options(scene, a);
   const std::vector<Object> objects = load_objects(scene);
   const oracle::PairQuery query = oracle::parse_pair_query(x.pair, objects);
@@ -1017,6 +1087,8 @@ struct SweepMergeArgs {
 
 int run_sweep_merge(const SweepMergeArgs& a) {
   if (!a.csv.empty()) check_output_path(a.csv, "peelcd sweep merge: --csv");
+  if (!a.plot.empty()) check_output_dir(a.plot, "peelcd sweep merge: --plot");
+  refuse_overwriting_input(a.csv, a.inputs, "peelcd sweep merge: --csv");
   struct Row {
     std::size_t config;
     double theta, phi;
@@ -1086,7 +1158,9 @@ int run_sweep_merge(const SweepMergeArgs& a) {
 
 int run_sweep_command(const SweepArgs& a) {
   if (!a.csv.empty()) check_output_path(a.csv, "peelcd sweep: --csv");
+  if (!a.plot.empty()) check_output_dir(a.plot, "peelcd sweep: --plot");
   const Scene scene = load_scene(a.scene);
+  refuse_overwriting_input(a.csv, scene_inputs(scene), "peelcd sweep: --csv");
   const std::vector<Object> objects = load_objects(scene);
   std::vector<SweepConfig> configs;
   for (int res : a.res)
@@ -1311,6 +1385,7 @@ int main(int argc, char** argv) {
   CLI::App app{"peelcd: image-space collision detection between triangle meshes through "
                "alternate surface peeling (OSMesa reference backend)"};
   app.set_version_flag("--version", std::string("peelcd ") + PEELCD_VERSION_STRING);
+  app.formatter(std::make_shared<HelpFormatter>());  // subcommands inherit it
   app.require_subcommand(1);
   DetectArgs d;
   CLI::App* detect = app.add_subcommand(
@@ -1320,7 +1395,10 @@ int main(int argc, char** argv) {
                                         "identity transforms, named by their file names, default options)")
       ->required();
   add_frame_options(detect, d);
-  detect->add_option("--json", d.json_out, "Write the JSON report to FILE, or - for stdout");
+  detect->add_option("--json", d.json_out, "Write the JSON report to FILE, or - for stdout")->check(kOutputPath);
+  detect->add_flag("--list", d.list, "Print every colliding triangle pair (A's triangle, B's) after the summary");
+  detect->add_flag("--status", d.status,
+                   "Exit status for scripts, as grep's: 0 when anything collides, 1 when nothing does (2 bad input, 3 --max-miss)");
   detect->add_option("--repeat", d.repeat, "Run the frame N times and report median timings")
       ->check(kPositive);
   CLI::Option* check_flag =
@@ -1347,8 +1425,8 @@ int main(int argc, char** argv) {
       ->required();
   add_frame_options(explain, ex);
   explain->add_option("--out", explain_args.out, "Write a page (index.html, one zoomed picture per view, "
-                                                 "explain.json) to this folder (must not exist, or be empty)");
-  explain->add_option("--json", ex.json_out, "Write the explanation as JSON to FILE, or - for stdout");
+                                                 "explain.json) to this folder (must not exist, or be empty)")->check(kOutputPath);
+  explain->add_option("--json", ex.json_out, "Write the explanation as JSON to FILE, or - for stdout")->check(kOutputPath);
   explain->add_flag("--quiet", ex.quiet, "No text report");
 
   DetectArgs du;
@@ -1357,7 +1435,7 @@ int main(int argc, char** argv) {
               "the PCS, the colliding pairs, meta.json and a self-contained index.html viewer to a folder");
   dump->add_option("scene", du.scene, "Scene JSON file")->required();
   DumpArgs dump_args;
-  dump->add_option("--out", dump_args.out, "Output folder (must not exist, or be empty)")->required();
+  dump->add_option("--out", dump_args.out, "Output folder (must not exist, or be empty)")->check(kOutputPath)->required();
   dump->add_option("--pair", dump_args.pair, "Only the ROI of objects A and B (names from the scene), e.g. --pair ball3,ball7");
   dump->add_option("--max-rois", dump_args.max_rois, "Refuse a frame with more ROIs than this (a dump writes a folder "
                                                      "per ROI and view); name one with --pair")
@@ -1386,7 +1464,7 @@ int main(int argc, char** argv) {
   compare->add_option("--backend", gc.backend, "GL backend: osmesa or egl")->capture_default_str();
   compare->add_option("--tier", gc.tier, "auto (exact on llvmpipe, hardware otherwise), exact or hardware")
       ->capture_default_str();
-  compare->add_option("--report", gc.report, "Folder for the reports of differing cases")->capture_default_str();
+  compare->add_option("--report", gc.report, "Folder for the reports of differing cases")->check(kOutputPath)->capture_default_str();
   compare->add_option("--peeler", gc.peeler, "abuffer or multipass (default: the default, abuffer)");
   compare->add_option("--resolve", gc.resolve, "auto, gpu or host: where the k-buffer is resolved (default: auto)");
   compare->add_option("--repeat", gc.repeat, "Run and compare each case N times in one process (determinism)")
@@ -1403,7 +1481,7 @@ int main(int argc, char** argv) {
   compare_dumps->add_option("actual", cd.actual, "The dump folder to check")->required();
   compare_dumps->add_option("--tier", cd.tier, "exact (every word) or hardware (another rasterizer's tolerances)")
       ->capture_default_str();
-  compare_dumps->add_option("--report", cd.report, "Folder for the report when they differ")->capture_default_str();
+  compare_dumps->add_option("--report", cd.report, "Folder for the report when they differ")->check(kOutputPath)->capture_default_str();
   SimArgs si;
   CLI::App* simulate = app.add_subcommand(
       "simulate", "Run the paper's dynamic scenes (test1: a walking raptor among 40 billiard balls; test2: a "
@@ -1416,7 +1494,7 @@ int main(int argc, char** argv) {
   simulate->add_option("--frames", si.frames, "Frames")->check(kPositive)->capture_default_str();
   add_frame_options(simulate, si.detect);
   simulate->add_flag("--no-rigid", si.no_rigid, "Pass the rigid objects as plain triangles (no shape caching)");
-  simulate->add_option("--csv", si.csv, "Write one row per frame to FILE, or - for stdout");
+  simulate->add_option("--csv", si.csv, "Write one row per frame to FILE, or - for stdout")->check(kOutputPath);
 
   BenchArgs be;
   CLI::App* benchmark = app.add_subcommand(
@@ -1435,7 +1513,7 @@ int main(int argc, char** argv) {
                                          "tiles by need, as detect does")->capture_default_str()
       ->check(kNonNegative);
   benchmark->add_option("--backend", be.backend, "GL backend: osmesa or egl")->capture_default_str();
-  benchmark->add_option("--csv", be.csv, "Write one row per (frame, method) to FILE, or - for stdout");
+  benchmark->add_option("--csv", be.csv, "Write one row per (frame, method) to FILE, or - for stdout")->check(kOutputPath);
 
   SweepArgs sw;
   CLI::App* sweep = app.add_subcommand(
@@ -1449,8 +1527,8 @@ int main(int argc, char** argv) {
       "merge", "Join the CSVs of sharded sweeps (sweep --shard K/N --csv ...) into one, in (configuration, view) "
                "order, each row once");
   sweep_merge->add_option("csv_files", sm.inputs, "The shards' CSV files")->required();
-  sweep_merge->add_option("--csv", sm.csv, "Write the joined CSV to FILE, or - for stdout");
-  sweep_merge->add_option("--plot", sm.plot, "Write heat maps and the run-time-against-miss-ratio plot to DIR (matplotlib)");
+  sweep_merge->add_option("--csv", sm.csv, "Write the joined CSV to FILE, or - for stdout")->check(kOutputPath);
+  sweep_merge->add_option("--plot", sm.plot, "Write heat maps and the run-time-against-miss-ratio plot to DIR (matplotlib)")->check(kOutputPath);
   sweep->add_option("--res", sw.res, "Resolutions (comma-separated)")->delimiter(',')->check(kPositive)
       ->capture_default_str();
   sweep->add_option("--ids", sw.ids, "ID modes: unique, paper, ring (comma-separated)")->delimiter(',')
@@ -1470,8 +1548,8 @@ int main(int argc, char** argv) {
   sweep->add_option("--phi-step", sw.phi_step, "Latitude step, degrees")->check(kFinite)->check(CLI::Range(1.0, 90.0))
       ->capture_default_str();
   sweep->add_option("--backend", sw.backend, "GL backend: osmesa or egl")->capture_default_str();
-  sweep->add_option("--csv", sw.csv, "Write one row per (configuration, view) to FILE, or - for stdout");
-  sweep->add_option("--plot", sw.plot, "Write heat maps and the run-time-against-miss-ratio plot to DIR (matplotlib)");
+  sweep->add_option("--csv", sw.csv, "Write one row per (configuration, view) to FILE, or - for stdout")->check(kOutputPath);
+  sweep->add_option("--plot", sw.plot, "Write heat maps and the run-time-against-miss-ratio plot to DIR (matplotlib)")->check(kOutputPath);
 
   ClassesArgs ca;
   CLI::App* classes = app.add_subcommand(

@@ -440,6 +440,7 @@ void Detector::detect(const std::vector<const Object*>& object_ptrs, const Detec
     r.pcs.clear();
     r.colliding.clear();
     r.layers = r.passes = 0;
+    r.views_peeled = r.views_exhaustive = 0;
     r.pcs_count = r.candidates = 0;
     r.triangles_drawn_a = r.triangles_drawn_b = 0;
     r.object_a = ia;
@@ -548,6 +549,7 @@ void Detector::detect(const std::vector<const Object*>& object_ptrs, const Detec
       const PeelJob& job = s.jobs[j];
       PeelResult& one = s.peeled[j];
       ++out.rois_peeled;
+      ++r.views_peeled;
       out.gl_passes += one.gl_passes;
       out.pcs_readbacks += one.pcs_readbacks;
       out.triangles_uploaded += one.triangles_uploaded;
@@ -555,6 +557,7 @@ void Detector::detect(const std::vector<const Object*>& object_ptrs, const Detec
       out.shape_uploads += one.shape_uploads;
       if (one.exhaustive) {  // the stage could not resolve the view: every couple of boxes
         ++out.views_exhaustive;
+        ++r.views_exhaustive;
         t0 = Clock::now();
         box_overlap_pairs(ma, *job.triangles[0], mb, *job.triangles[1], s.direct, &s.box_scratch);
         out.timings.cpu += ms_since(t0);

@@ -1,5 +1,7 @@
 #include "peelcd/core/frame.h"
 
+#include <cstdio>
+
 #include "peelcd/core/view.h"
 
 #include <algorithm>
@@ -105,6 +107,35 @@ int tile_resolution(int budget, std::size_t roi_count) {
     n /= 2;
   }
   return std::max(n, std::min(budget, 16));
+}
+
+const char* pair_path(const PairResult& p) {
+  if (p.exact_stage) return "exact";
+  if (p.views_peeled == 0) return "none";
+  if (p.views_exhaustive == 0) return "image";
+  return p.views_exhaustive == p.views_peeled ? "exhaustive" : "image+exhaustive";
+}
+
+std::string pair_path_reason(const PairResult& p, const DetectOptions& o) {
+  char buf[320];
+  if (p.exact_stage) {
+    if (o.stage == Stage::exact) return "--stage exact";
+    std::snprintf(buf, sizeof buf, "routed: the exact CPU path was predicted at %.3f ms, the image stage at %.3f ms",
+                  p.predicted_exact_ms, p.predicted_image_ms);
+    return buf;
+  }
+  if (p.views_peeled == 0) return "contact culling kept no triangle of one object: no contact possible";
+  const std::string why = o.stage == Stage::image ? std::string("--stage image") : [&] {
+    std::snprintf(buf, sizeof buf, "routed: the image stage was predicted at %.3f ms, the exact CPU path at %.3f ms",
+                  p.predicted_image_ms, p.predicted_exact_ms);
+    return std::string(buf);
+  }();
+  if (p.views_exhaustive == 0) return why;
+  std::snprintf(buf, sizeof buf,
+                "; %d of %d views too deep or too large (%dx%d) for the image stage's k-buffer: their triangles' "
+                "box-overlapping couples were tested exactly instead (no layers, no PCS)",
+                p.views_exhaustive, p.views_peeled, p.resolution, p.resolution);
+  return why + buf;
 }
 
 }  // namespace peelcd

@@ -63,6 +63,31 @@ void check_output_path(const std::string& path, const std::string& what) {
     throw InputError(what + " '" + path + "': the file is not writable");
 }
 
+void check_output_dir(const std::string& path, const std::string& what) {
+  if (path.empty()) throw InputError(what + ": an empty path");
+  std::error_code ec;
+  const fs::path target(path);
+  if (fs::exists(target, ec)) {
+    if (!fs::is_directory(target, ec)) throw InputError(what + " '" + path + "': exists and is not a folder");
+    if (access(target.c_str(), W_OK | X_OK) != 0) throw InputError(what + " '" + path + "': cannot write into the folder");
+    return;
+  }
+  const fs::path parent = target.parent_path().empty() ? fs::path(".") : target.parent_path();
+  if (!fs::is_directory(parent, ec))
+    throw InputError(what + " '" + path + "': the folder '" + parent.string() + "' does not exist");
+  if (access(parent.c_str(), W_OK | X_OK) != 0)
+    throw InputError(what + " '" + path + "': cannot write into the folder '" + parent.string() + "'");
+}
+
+void refuse_overwriting_input(const std::string& out, const std::vector<std::string>& inputs, const std::string& what) {
+  if (out.empty() || out == "-") return;
+  std::error_code ec;
+  if (!fs::exists(out, ec)) return;
+  for (const std::string& in : inputs)
+    if (fs::equivalent(out, in, ec))
+      throw InputError(what + " '" + out + "': it is the input '" + in + "'; an output never overwrites an input");
+}
+
 void write_output_file(const std::string& path, const std::string& text, const std::string& what) {
   if (path == "-") {
     std::cout << text << std::flush;

@@ -140,10 +140,21 @@ struct PairResult {
   std::vector<IdPair> pcs;                 // those pairs (ID of A, ID of B), sorted
   std::size_t candidates = 0;              // distinct triangle pairs tested on the CPU
   bool exact_stage = false;                // tested by the exact CPU path (no image work)
+  int views_peeled = 0;                    // ROI views given to the image stage
+  int views_exhaustive = 0;                // of those, views the stage could not hold (a k-buffer
+                                           // deeper or larger than the context allows): their
+                                           // box-overlapping triangle couples were tested exactly
   // The stage router's predictions for this ROI, milliseconds (0 when it did not route).
   double predicted_image_ms = 0.0, predicted_exact_ms = 0.0;
   std::vector<Contact> colliding;          // sorted by (tri_a, tri_b)
 };
+
+// Which path tested a pair, in one word: "exact" (the exact CPU path), "image" (the image
+// stage's PCS), "exhaustive" (every view fell back to box-overlap tests: no layer, no PCS) or
+// "image+exhaustive" (some views did); "none" when culling left no triangle of one object.
+const char* pair_path(const PairResult& pair);
+// Why, in a sentence (`options`: the frame's).
+std::string pair_path_reason(const PairResult& pair, const DetectOptions& options);
 
 struct Timings {  // milliseconds, as in the paper's tables
   double aabb = 0, upload = 0, gpu = 0, readback = 0, cpu = 0, total = 0;

@@ -10,6 +10,7 @@
 #include <signal.h>
 
 #include <string>
+#include <vector>
 
 namespace peelcd {
 
@@ -36,6 +37,14 @@ class DeferSignals {
 
 // Throws InputError ("<what> 'path': ...") when `path` cannot be written as described above.
 void check_output_path(const std::string& path, const std::string& what);
+
+// A folder output (a plot folder): `path` is a writable folder, or does not exist and its parent
+// is a writable folder. Throws InputError ("<what> 'path': ...") otherwise, before any work.
+void check_output_dir(const std::string& path, const std::string& what);
+
+// Throws InputError ("<what> 'out': it is the input 'x'; ...") when the output `out` is one of
+// the `inputs` (the same file, by path or by link): an output never overwrites an input.
+void refuse_overwriting_input(const std::string& out, const std::vector<std::string>& inputs, const std::string& what);
 
 // Writes `text` to `path` as described above. Throws InputError.
 void write_output_file(const std::string& path, const std::string& text, const std::string& what);
