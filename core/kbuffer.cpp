@@ -22,10 +22,8 @@ struct Layer {
 
 // shaders/abuffer_resolve.comp's test_pair, in the same float operations.
 void test_pair(const Layer& t0, const Layer& t1, const KResolveParams& p, std::vector<IdPair>& pcs) {
-  const float dz = std::fabs(as_float(t1.depth) - as_float(t0.depth));
   const float spread = std::fabs(as_float(t1.dzdx) - as_float(t0.dzdx)) + std::fabs(as_float(t1.dzdy) - as_float(t0.dzdy));
-  const float bound = p.epsilon_window + p.slope * spread;
-  if (!(dz < bound)) return;
+  if (!pcs_within_epsilon(as_float(t0.depth), as_float(t1.depth), spread, p.epsilon_window, p.slope)) return;
   const std::uint32_t id0 = (t0.key & 0x7fffffffu) - 1u, id1 = (t1.key & 0x7fffffffu) - 1u;
   const IdPair pair = (t0.key >> 31) == 0u ? IdPair{id0, id1} : IdPair{id1, id0};
   // Neighbouring texels mostly repeat the last pair: keep the list short (the caller makes it

@@ -1,5 +1,7 @@
 #include "peelcd/oracle/dump.h"
 
+#include "peelcd/core/kbuffer.h"
+
 #include "peelcd/io/error.h"
 #include "peelcd/core/reference.h"
 #include "peelcd/io/options_json.h"
@@ -159,6 +161,7 @@ Dump make_dump(const FrameResult& frame, const std::vector<CapturedView>& captur
       v.a_first = c.a_first;
       v.epsilon_window = c.epsilon_window;
       v.slope = c.slope;
+      v.conservative = o.conservative;
       v.geometry = {{"center", vec(c.roi.center)}, {"u", vec(c.roi.frame.u)}, {"v", vec(c.roi.frame.v)},
                     {"d", vec(c.roi.frame.d)},      {"half_uv", c.roi.half_uv}, {"half_depth", c.roi.half_depth},
                     {"box_lo", vec(c.roi.box.lo)},  {"box_hi", vec(c.roi.box.hi)}};
@@ -174,15 +177,28 @@ Dump make_dump(const FrameResult& frame, const std::vector<CapturedView>& captur
 std::vector<bool> pcs_texels(const DumpView& view, std::size_t k) {
   const std::size_t count = std::size_t(view.resolution) * view.resolution;
   std::vector<bool> marks(count, false);
-  if (k == 0 || k >= view.layers.size()) return marks;
+  if (k >= view.layers.size()) return marks;
+  const auto& lk = view.layers[k];
+  if (view.conservative) {  // every layer of the other object whose interval overlaps layer k's
+    for (std::size_t i = 0; i < count; ++i) {
+      if (texel_empty(lk, i)) continue;
+      for (std::size_t j = 0; j < view.layers.size() && !marks[i]; ++j) {
+        const auto& lj = view.layers[j];
+        if (j == k || texel_empty(lj, i) || texel_object(lj, i) == texel_object(lk, i)) continue;
+        marks[i] = pcs_intervals_overlap(as_float(lk[4 * i]), as_float(lk[4 * i + 2]), as_float(lj[4 * i]),
+                                         as_float(lj[4 * i + 2]));
+      }
+    }
+    return marks;
+  }
+  if (k == 0) return marks;
   const auto& l0 = view.layers[k - 1];
-  const auto& l1 = view.layers[k];
+  const auto& l1 = lk;
   for (std::size_t i = 0; i < count; ++i) {
     if (texel_empty(l0, i) || texel_empty(l1, i) || texel_object(l0, i) == texel_object(l1, i)) continue;
-    const float dz = std::fabs(as_float(l1[4 * i]) - as_float(l0[4 * i]));
     const float spread = std::fabs(as_float(l1[4 * i + 2]) - as_float(l0[4 * i + 2])) +
                          std::fabs(as_float(l1[4 * i + 3]) - as_float(l0[4 * i + 3]));
-    marks[i] = dz < view.epsilon_window + view.slope * spread;
+    marks[i] = pcs_within_epsilon(as_float(l0[4 * i]), as_float(l1[4 * i]), spread, view.epsilon_window, view.slope);
   }
   return marks;
 }
@@ -340,6 +356,7 @@ Dump read_dump(const std::string& dir) {
         v.a_first = jv.at("a_first").get<bool>();
         v.epsilon_window = jv.at("epsilon_window").get<float>();
         v.slope = jv.at("slope").get<float>();
+        v.conservative = d.options.value("conservative", false);
         v.geometry = jv.value("geometry", nlohmann::json::object());
         if (v.dir.find("..") != std::string::npos || v.dir.empty() || v.dir.front() == '/')
           throw InputError("peelcd: '" + meta_path.string() + "': view dir \"" + v.dir + "\" is not a relative folder name");

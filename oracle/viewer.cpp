@@ -64,8 +64,10 @@ std::string viewer_html(const Dump& d) {
     << escape(d.shader_hash) << "<br>options " << escape(d.options.dump()) << "</p>\n";
   h << "<p id=\"status\" data-status=\"pending\">viewer: loading</p>\n";
   h << "<p>Each layer: depth (grey, near = bright) | triangle IDs (object A warm, B cool). "
-       "<span class=\"pcs\">Magenta</span> texels: this layer and the one before are of different "
-       "objects and within epsilon (the PCS test, recomputed from the layers).</p>\n";
+       "<span class=\"pcs\">Magenta</span> texels: this layer took part in a PCS by the test the stage used, "
+       "recomputed from the layers: point sampling, this layer and the one before are of different objects and "
+       "within epsilon; conservative, this layer's depth interval overlaps one of the other object's at the "
+       "texel.</p>\n";
   if (d.pairs.empty()) h << "<p>No overlapping bounding boxes: nothing was peeled.</p>\n";
   for (const DumpPair& p : d.pairs) {
     h << "<h2>" << escape(p.name_a) << " (A) &times; " << escape(p.name_b) << " (B)</h2>\n";

@@ -266,6 +266,11 @@ expect("sweep: bad mode" 2 "unknown mode \"fancy\"" sweep ${scene} --mode fancy)
 expect("dump help" 0 "--out" dump --help)
 expect("golden help" 0 "compare" golden --help)
 expect("dump" 0 "1 ROIs, 3 views" dump ${scene} --res 64 --views 3 --out ${WORK}/dump)
+# The viewer marks the texels the default (conservative) stage used: some PCS texels, not 0 everywhere.
+file(READ ${WORK}/dump/index.html viewer_html)
+if(NOT viewer_html MATCHES "[1-9][0-9]* PCS texels")
+  message(SEND_ERROR "dump: the viewer marks no PCS texel in conservative mode")
+endif()
 foreach(f meta.json index.html pair0_bunny_dragon/pcs.txt pair0_bunny_dragon/colliding.txt
         pair0_bunny_dragon/view0/layer00.exr pair0_bunny_dragon/view0/layer00.png pair0_bunny_dragon/view2/pcs.txt)
   if(NOT EXISTS ${WORK}/dump/${f})

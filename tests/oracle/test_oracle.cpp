@@ -207,6 +207,36 @@ TEST_CASE("PCS texels of a layer: different objects within epsilon", "[oracle]")
   CHECK(m2 == 0);
 }
 
+TEST_CASE("PCS texels of a conservative layer: depth intervals of the other object that overlap", "[oracle]") {
+  // One texel row of 3: layer 0 A [0.1, 0.3] everywhere; layer 1 B [0.25, 0.4] at texel 0 (overlaps),
+  // [0.35, 0.5] at texel 1 (apart), empty at texel 2; layer 2 A [0.45, 0.6] at texel 1 (overlaps
+  // layer 1 there, not layer 0's own object).
+  DumpView v;
+  v.resolution = 2;  // 4 texels, the 4th empty everywhere
+  v.conservative = true;
+  const auto bits = [](float f) {
+    std::uint32_t b;
+    std::memcpy(&b, &f, sizeof b);
+    return b;
+  };
+  const auto set = [&](std::vector<std::uint32_t>& l, std::size_t t, std::uint32_t object, float lo, float hi) {
+    l[4 * t] = bits(lo), l[4 * t + 1] = (object << 31) | 7u, l[4 * t + 2] = bits(hi), l[4 * t + 3] = 0u;
+  };
+  v.layers.assign(3, std::vector<std::uint32_t>(16, 0u));
+  for (std::size_t t = 0; t < 3; ++t) set(v.layers[0], t, 0, 0.1f, 0.3f);
+  set(v.layers[1], 0, 1, 0.25f, 0.4f);
+  set(v.layers[1], 1, 1, 0.35f, 0.5f);
+  set(v.layers[2], 1, 0, 0.45f, 0.6f);
+  const auto m0 = pcs_texels(v, 0), m1 = pcs_texels(v, 1), m2 = pcs_texels(v, 2);
+  CHECK((m0[0] && !m0[1] && !m0[2] && !m0[3]));  // layer 0 is in a PCS too (with layer 1) at texel 0
+  CHECK((m1[0] && m1[1] && !m1[2] && !m1[3]));
+  CHECK((!m2[0] && m2[1] && !m2[2] && !m2[3]));
+  // The same layers read as point sampling mark nothing at layer 0 (no layer before it).
+  v.conservative = false;
+  v.epsilon_window = 1e-6f;
+  for (bool b : pcs_texels(v, 0)) CHECK_FALSE(b);
+}
+
 // ---- the hardware tier on real goldens ----
 // What another rasterizer legitimately does (edges one texel off, depths a few ULPs off) must
 // pass; what a broken backend does (a wrong ID inside a triangle, layers out of order, a layer

@@ -37,6 +37,7 @@ struct DumpView {
   int resolution = 0;
   bool a_first = false;
   float epsilon_window = 0, slope = 0;
+  bool conservative = false;  // the frame's stage: intervals (words 0, 2: lower, upper depth)
   nlohmann::json geometry;  // centre, u, v, d, half_uv, half_depth, box (for the record)
   std::vector<std::vector<std::uint32_t>> layers;  // N*N*4 words each, GL row order (bottom first)
   std::vector<IdPair> pcs;
@@ -80,8 +81,10 @@ void write_dump(const Dump& dump, const std::string& dir, bool previews);
 // malformed meta.json, a missing layer, a truncated or foreign EXR, a layer of the wrong size.
 Dump read_dump(const std::string& dir);
 
-// The texels of layer `k` of `view` where it and layer k-1 are of different objects and close
-// enough for the PCS test of shaders/pcs.comp (recomputed on the CPU; used to mark previews).
+// The texels where layer `k` of `view` took part in a PCS, by the test the stage used (recomputed
+// on the CPU; used to mark previews): point sampling, layer k and k-1 of different objects within
+// epsilon (pcs_within_epsilon); conservative, layer k's depth interval overlaps that of any layer
+// of the other object at the texel (pcs_intervals_overlap).
 std::vector<bool> pcs_texels(const DumpView& view, std::size_t k);
 
 // Layer word accessors (shaders/peel.frag layout).
