@@ -101,6 +101,65 @@ bool near_edge(const std::vector<std::uint32_t>& layer, int n, int x, int y, int
   return false;
 }
 
+// The first layer at texel t that takes part in a tie: layers k-1 and k of different objects
+// at one depth (within `tolerance`); `none` if there is none. Another rasterizer's rounding may
+// order the two the other way, keep both or peel past one, so from layer k-1 on the texel may
+// differ (the two are within epsilon of each other: both sides' PCS test pairs them).
+std::size_t first_tie_layer(const std::vector<std::vector<std::uint32_t>>& layers, std::size_t t, double tolerance,
+                            std::size_t none) {
+  for (std::size_t k = 1; k < layers.size(); ++k) {
+    const auto &l0 = layers[k - 1], &l1 = layers[k];
+    if (!texel_empty(l0, t) && !texel_empty(l1, t) && texel_object(l0, t) != texel_object(l1, t) &&
+        depth_distance(l0[4 * t], l1[4 * t]) <= tolerance)
+      return k - 1;
+  }
+  return none;
+}
+
+// Point sampling: the first layer at texel t from which one side's layers are the other's with
+// one fragment more, that fragment a twin of a neighbour in its own sequence: the same ID word (a
+// sliver triangle inside one shared ID's region that one rasterizer sampled and the other did
+// not) or the same object at the same depth (an edge of two triangles of one object through the
+// texel centre, which the fill rules give to one or both); every later layer matching by ID word
+// and depth within `tolerance`. `none` if the texel is not such a shift. The colliding pairs are
+// checked on their own (a lossy configuration's misses against the exact reference).
+std::size_t first_sliver_shift(const std::vector<std::vector<std::uint32_t>>& e,
+                               const std::vector<std::vector<std::uint32_t>>& a, std::size_t t, double tolerance,
+                               std::size_t none) {
+  const auto depth = [&](const std::vector<std::vector<std::uint32_t>>& l, std::size_t k) { return l[k][4 * t]; };
+  const auto word = [&](const std::vector<std::vector<std::uint32_t>>& l, std::size_t k) {
+    return k < l.size() ? l[k][4 * t + 1] : 0u;
+  };
+  const auto count = [&](const std::vector<std::vector<std::uint32_t>>& l) {
+    std::size_t c = 0;
+    while (c < l.size() && word(l, c) != 0u) ++c;
+    return c;
+  };
+  const std::size_t ne = count(e), na = count(a);
+  if (ne != na + 1 && na != ne + 1) return none;
+  const auto& longer = ne > na ? e : a;
+  const auto& shorter = ne > na ? a : e;
+  const std::size_t n_short = std::min(ne, na);
+  std::size_t i = 0;  // the first layer where the two differ by ID word or depth
+  while (i < n_short && word(longer, i) == word(shorter, i) &&
+         depth_distance(depth(longer, i), depth(shorter, i)) <= tolerance)
+    ++i;
+  // The extra fragment i must share its ID word with a neighbour in its own sequence, or lie at
+  // the neighbour's depth on the same object (a texel centre on an edge two triangles of one
+  // object share: one fill rule samples both, the other one).
+  const auto twin = [&](std::size_t j) {
+    if (j >= longer.size() || word(longer, j) == 0u) return false;
+    if (word(longer, j) == word(longer, i)) return true;
+    return (word(longer, j) >> 31) == (word(longer, i) >> 31) &&
+           depth_distance(depth(longer, j), depth(longer, i)) <= tolerance;
+  };
+  if (!((i > 0 && twin(i - 1)) || twin(i + 1))) return none;
+  for (std::size_t k = i; k < n_short; ++k)
+    if (word(longer, k + 1) != word(shorter, k) || depth_distance(depth(longer, k + 1), depth(shorter, k)) > tolerance)
+      return none;
+  return i;
+}
+
 // With shared IDs: is `z` within the golden depths of the texels around (x, y) that hold the same
 // ID word (another triangle of the same ID, one texel off)?
 bool within_neighbour_depths(const std::vector<std::uint32_t>& layer, int n, int x, int y, float z, double tolerance) {
@@ -491,20 +550,19 @@ Comparison compare_dumps(const Dump& e, const Dump& a, Tier tier, std::size_t ma
       const bool shared_ids = e.options.value("ids", std::string("unique")) != "unique";
       const double depth_tolerance = std::max(kDepthTolerance, kDepthFractionOfEpsilon * double(ve.epsilon_window));
       const std::size_t layers = std::min(ve.layers.size(), va.layers.size());
-      // Ties: the first golden layer at each texel that lies at the depth of the layer before it,
-      // of the other object. Another rasterizer's rounding may put one face in front and peel
-      // past the other, so this layer and the ones after it may differ there (hardware tier).
-      std::vector<std::size_t> tie_from(std::size_t(n) * n, ve.layers.size() + va.layers.size());
+      // Where the hardware tier lets a texel differ from some layer on (both sides' layers are
+      // looked at: either rasterizer may be the one that broke the tie or sampled the sliver):
+      // ties (first_tie_layer) and, with point sampling, one fragment more at an edge or a sliver
+      // inside one ID (first_sliver_shift).
+      const std::size_t none = ve.layers.size() + va.layers.size();
+      std::vector<std::size_t> tie_from(std::size_t(n) * n, none);
       if (tier == Tier::hardware)
-        for (std::size_t t = 0; t < tie_from.size(); ++t)
-          for (std::size_t k = 1; k < ve.layers.size(); ++k) {
-            const auto &l0 = ve.layers[k - 1], &l1 = ve.layers[k];
-            if (!texel_empty(l0, t) && !texel_empty(l1, t) && texel_object(l0, t) != texel_object(l1, t) &&
-                depth_distance(l0[4 * t], l1[4 * t]) <= depth_tolerance) {
-              tie_from[t] = k;
-              break;
-            }
-          }
+        for (std::size_t t = 0; t < tie_from.size(); ++t) {
+          tie_from[t] = std::min(first_tie_layer(ve.layers, t, depth_tolerance, none),
+                                 first_tie_layer(va.layers, t, depth_tolerance, none));
+          if (!conservative)
+            tie_from[t] = std::min(tie_from[t], first_sliver_shift(ve.layers, va.layers, t, depth_tolerance, none));
+        }
       static const char* const kChannel[4] = {"Z", "id/object", "dzdx", "dzdy"};
       for (std::size_t k = 0; k < layers; ++k) {
         const auto &le = ve.layers[k], &la = va.layers[k];
