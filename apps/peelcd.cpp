@@ -53,6 +53,13 @@ using namespace peelcd;
 
 constexpr int kExitBadInput = 2;
 
+// The default backend: the software reference where it was built, else EGL (a GPU, or Mesa).
+#if PEELCD_HAVE_OSMESA
+constexpr const char* kDefaultBackend = "osmesa";
+#else
+constexpr const char* kDefaultBackend = "egl";
+#endif
+
 // Output options (--json, --csv, --plot, --out, --report): an empty value is a mistake, refused
 // at parse time (exit 2), not read as "no output".
 const CLI::Validator kOutputPath(
@@ -124,6 +131,10 @@ Runner make_runner(const std::string& backend, const gl::GlOptions& options = {}
   } else if (backend == "cpu") {
     r.stage = std::make_shared<CpuImageStage>();
   } else {
+#if !PEELCD_HAVE_OSMESA
+    if (backend == "osmesa")
+      throw InputError("peelcd: --backend osmesa: this peelcd was built without OSMesa (PEELCD_WITH_OSMESA=OFF): use egl or cpu");
+#endif
     throw InputError("peelcd: --backend: unknown backend \"" + backend + "\" (expected osmesa, egl or cpu)");
   }
   r.detector = std::make_unique<Detector>(r.stage);
@@ -148,7 +159,7 @@ struct DetectArgs {
   bool list = false;    // print every colliding triangle pair (default: the summary only)
   bool status = false;  // exit 1 when nothing collides
   int explain_misses = 0;  // detect --check: explain the first N missed pairs
-  std::string backend = "osmesa";
+  std::string backend = kDefaultBackend;
 };
 
 // `text` parsed by `parse` (returning std::optional), or an InputError: `unknown` "text"
@@ -244,16 +255,16 @@ struct Progress {
 };
 
 // detect's input: one scene file, or two or more mesh files (identity transforms, default options).
-Scene detect_input(const std::vector<std::string>& inputs) {
+Scene detect_input(const std::vector<std::string>& inputs, const std::string& command = "peelcd detect") {
   const auto is_scene = [](const std::string& p) { return std::filesystem::path(p).extension() == ".json"; };
   if (inputs.size() == 1) {
     if (is_node_scene(inputs[0])) return scene_from_meshes(inputs);  // a glTF scene: one object per node
     if (!is_scene(inputs[0]))
-      throw InputError("peelcd detect: '" + inputs[0] + "' is one mesh: give a scene file (.json), a glTF scene (.gltf, .glb) or two or more meshes");
+      throw InputError(command + ": '" + inputs[0] + "' is one mesh: give a scene file (.json), a glTF scene (.gltf, .glb) or two or more meshes");
     return load_scene(inputs[0]);
   }
   for (const std::string& p : inputs)
-    if (is_scene(p)) throw InputError("peelcd detect: '" + p + "': a scene file (.json) goes alone, not among meshes");
+    if (is_scene(p)) throw InputError(command + ": '" + p + "': a scene file (.json) goes alone, not among meshes");
   return scene_from_meshes(inputs);
 }
 
@@ -413,7 +424,7 @@ int run_explain(const DetectArgs& a, const ExplainArgs& x) {
   }
   const Progress progress;
   progress.phase("peelcd explain: loading the meshes...");
-  const Scene scene = detect_input(a.inputs);
+  const Scene scene = detect_input(a.inputs, "peelcd explain");
   refuse_overwriting_input(a.json_out, scene_inputs(scene), "peelcd explain: --json");
   const DetectOptions opt = merged_options(scene, a);
   const std::vector<Object> objects = load_objects(scene);
@@ -468,7 +479,7 @@ struct DumpArgs {
 int run_dump(const DetectArgs& a, const DumpArgs& d) {
   const Progress progress;
   progress.phase("peelcd dump: loading the meshes...");
-  const Scene scene = load_scene(a.scene);
+  const Scene scene = detect_input(a.inputs, "peelcd dump");
   const DetectOptions opt = merged_options(scene, a);
   std::vector<Object> objects = load_objects(scene);
   // Refused before any work: an output that exists and is not an empty folder.
@@ -495,7 +506,7 @@ int run_dump(const DetectArgs& a, const DumpArgs& d) {
       for (std::size_t i = 0; i < objects.size(); ++i)
         if (objects[i].name == name) found = i;
       if (found == objects.size())
-        throw InputError("peelcd dump: --pair: no object named \"" + name + "\" in " + a.scene);
+        throw InputError("peelcd dump: --pair: no object named \"" + name + "\" in " + scene.path);
       original.push_back(found);
     }
     if (original[0] == original[1]) throw InputError("peelcd dump: --pair names one object twice");
@@ -509,7 +520,7 @@ int run_dump(const DetectArgs& a, const DumpArgs& d) {
   {
     const std::size_t rois = count_overlapping_pairs(objects);
     if (rois > d.max_rois)
-      throw InputError("peelcd dump: " + a.scene + " has " + std::to_string(rois) +
+      throw InputError("peelcd dump: " + scene.path + " has " + std::to_string(rois) +
                        " overlapping pairs (ROIs), above --max-rois " + std::to_string(d.max_rois) +
                        ": dump one with --pair A,B, or raise --max-rois");
   }
@@ -531,14 +542,14 @@ int run_dump(const DetectArgs& a, const DumpArgs& d) {
     for (const auto& v : p.views) layers += v.layers.size(), ++views;
   if (!a.quiet)
     std::printf("peelcd dump: %s -> %s: %zu ROIs, %zu views, %zu layers (%s); open %s/index.html\n",
-                a.scene.c_str(), d.out.c_str(), dump.pairs.size(), views, layers, dump.renderer.c_str(), d.out.c_str());
+                scene.path.c_str(), d.out.c_str(), dump.pairs.size(), views, layers, dump.renderer.c_str(), d.out.c_str());
   return 0;
 }
 
 struct GoldenArgs {
   std::vector<std::string> cases;  // empty = every case
   std::string dir;  // empty: the installed or source tree's fixtures/golden (data_dir())
-  std::string backend = "osmesa";
+  std::string backend = kDefaultBackend;
   std::string tier = "auto";
   std::string report = "golden-report";
   std::string peeler;  // empty: the case's (the default)
@@ -795,7 +806,7 @@ struct BenchArgs {
   std::size_t frames = 12;
   std::size_t objects = 200;  // crowd
   int res = 0;  // 0: the shared 512^2 budget, tiles by need (detect's default)
-  std::string backend = "osmesa";
+  std::string backend = kDefaultBackend;
   unsigned threads = 0;  // 0: the machine's (at most 8)
   std::string csv;
 };
@@ -1047,13 +1058,13 @@ struct SweepArgs {
   std::string scene;
   std::vector<int> res = {128, 256};
   std::vector<std::string> ids = {"unique", "paper"};
-  std::vector<std::string> modes = {"paper", "full"};
+  std::vector<std::string> modes = {"paper", "full", "conservative"};  // conservative: the default
   std::vector<double> slopes = {1.0};
   std::vector<int> views = {1};
   std::vector<std::string> culls = {"contact"};
   double theta_step = 30, phi_step = 10;
   std::string csv, plot;
-  std::string backend = "osmesa";
+  std::string backend = kDefaultBackend;
   std::string shard;  // "K/N": the K-th of N deterministic slices of the view directions
 };
 
@@ -1296,7 +1307,7 @@ void add_frame_options(CLI::App* c, DetectArgs& d) {
 }
 
 struct ClassesArgs {
-  std::string backend = "osmesa";
+  std::string backend = kDefaultBackend;
   int repeat = 5;
   int grid = 20;
   std::string only;
@@ -1350,7 +1361,7 @@ int run_classes(const ClassesArgs& a) {
 }
 
 struct CalibrateArgs {
-  std::string backend = "osmesa";
+  std::string backend = kDefaultBackend;
   int repeat = 5;
   std::vector<int> budgets = {128, 512};
 };
@@ -1433,7 +1444,7 @@ int main(int argc, char** argv) {
   CLI::App* dump = app.add_subcommand(
       "dump", "Run one frame and write every peel layer of every ROI view (EXR, lossless; PNG previews), "
               "the PCS, the colliding pairs, meta.json and a self-contained index.html viewer to a folder");
-  dump->add_option("scene", du.scene, "Scene JSON file")->required();
+  dump->add_option("input", du.inputs, "A scene JSON file, a glTF scene, or two or more mesh files (as detect)")->required();
   DumpArgs dump_args;
   dump->add_option("--out", dump_args.out, "Output folder (must not exist, or be empty)")->check(kOutputPath)->required();
   dump->add_option("--pair", dump_args.pair, "Only the ROI of objects A and B (names from the scene), e.g. --pair ball3,ball7");

@@ -261,11 +261,17 @@ if(NOT nlines EQUAL 5)  # header + 4 views (two poles, theta 0 and 180 at phi 0)
   message(SEND_ERROR "sweep csv: ${nlines} lines, expected 5")
 endif()
 expect("sweep: bad mode" 2 "unknown mode \"fancy\"" sweep ${scene} --mode fancy)
+expect("sweep: the default modes include the default, conservative" 0 "conservative" sweep ${scene} --res 16 --ids unique
+       --theta-step 180 --phi-step 90)
 
 # Layer dumps: every layer of every view as EXR and PNG, the PCS, meta.json, the viewer.
 expect("dump help" 0 "--out" dump --help)
 expect("golden help" 0 "compare" golden --help)
 expect("dump" 0 "1 ROIs, 3 views" dump ${scene} --res 64 --views 3 --out ${WORK}/dump)
+# dump takes what detect takes: a glTF scene, two mesh files.
+expect("dump a glTF scene" 0 "1 ROIs" dump ${FIXTURES}/meshes/three_box_nodes.gltf --out ${WORK}/dump_gltf)
+expect("dump two meshes" 0 "1 ROIs" dump ${FIXTURES}/meshes/bunny_3k.obj ${FIXTURES}/meshes/dragon_3k.obj --res 32 --out ${WORK}/dump_meshes)
+expect("dump one mesh" 2 "peelcd dump: .* is one mesh" dump ${FIXTURES}/meshes/bunny_3k.obj --out ${WORK}/dump_one)
 # The viewer marks the texels the default (conservative) stage used: some PCS texels, not 0 everywhere.
 file(READ ${WORK}/dump/index.html viewer_html)
 if(NOT viewer_html MATCHES "[1-9][0-9]* PCS texels")
