@@ -15,6 +15,7 @@
 #include "peelcd/bench/floor.h"
 #include "peelcd/core/cpu_stage.h"
 #include "peelcd/core/detector.h"
+#include "peelcd/core/options.h"
 #include "peelcd/gl/gl_stage.h"
 #include "peelcd/version.h"
 #include "peelcd/gl_egl/egl_context.h"
@@ -41,6 +42,7 @@
 #include <filesystem>
 #include <fstream>
 #include <iostream>
+#include <map>
 #include <memory>
 #include <sstream>
 #include <thread>
@@ -144,12 +146,12 @@ Runner make_runner(const std::string& backend, const gl::GlOptions& options = {}
 struct DetectArgs {
   std::string scene;
   std::vector<std::string> inputs;  // detect: one scene file, or mesh files
-  int res = 0;  // 0 = not given
-  std::string ids, peel, peeler, cull, resolve, stage;
-  double slope = NAN;
-  double theta = NAN, phi = NAN, roll = NAN, epsilon = NAN, edge_texels = NAN;
-  bool conservative = false, no_conservative = false, paper = false, no_batch = false;
-  int threads = -1;  // -1 = not given
+  // The frame's options as given on the command line: each row of the option table
+  // (peelcd/core/options.h) with a flag, by key; a boolean's "--no-" form as "false".
+  std::map<std::string, std::string> options;
+  std::map<std::string, bool> flags_on, flags_off;  // boolean rows: --KEY, --no-KEY
+  std::string peeler, resolve;  // GL stage options (gl::GlOptions)
+  bool paper = false, no_batch = false;
   double max_miss = NAN;  // percent; NaN = report only
   std::string json_out;
   int repeat = 1;
@@ -187,11 +189,10 @@ gl::GlOptions merged_gl_options(const Scene& scene, const std::string& peeler, c
   return o;
 }
 
-// Command-line values override the scene file's.
+// Command-line values override the scene file's (each checked by the option table's rules, the
+// message naming the flag).
 DetectOptions merged_options(const Scene& scene, const DetectArgs& a) {
   DetectOptions o = scene.options;
-  if (a.conservative && a.no_conservative)
-    throw InputError("peelcd: --conservative and --no-conservative contradict each other");
   if (a.paper) {  // the paper's configuration, at the scene's resolution and budget
     const DetectOptions p = paper_options();
     const int res = o.resolution, budget = o.budget;
@@ -199,24 +200,28 @@ DetectOptions merged_options(const Scene& scene, const DetectArgs& a) {
     o.resolution = res;
     o.budget = budget;
   }
-  if (a.conservative) o.conservative = true;
-  if (a.no_conservative) o.conservative = false;
-  if (!std::isnan(a.roll)) o.roll = a.roll;
-  if (a.res > 0) o.resolution = a.res;
-  if (!a.ids.empty()) o.ids = parsed(a.ids, parse_id_mode, "peelcd detect: --ids: unknown ID mode", "paper, ring or unique");
-  if (!a.peel.empty())
-    o.peel = parsed(a.peel, parse_peel_mode, "peelcd detect: --peel: unknown peel mode", "full or alternate");
-  if (!a.cull.empty()) o.cull = parsed(a.cull, parse_cull, "peelcd detect: --cull: unknown culling", "contact or box");
-  if (!a.stage.empty()) o.stage = parsed(a.stage, parse_stage, "peelcd: --stage: unknown stage", "auto, image or exact");
-  if (!std::isnan(a.slope)) o.slope = a.slope;
-  if (a.views) o.views = a.views;
   // --theta/--phi alone turn the paper's frame (roll 0) there, as a scene's "view" does.
-  if ((!std::isnan(a.theta) || !std::isnan(a.phi)) && std::isnan(a.roll)) o.roll = 0.0;
-  if (!std::isnan(a.theta)) o.theta = a.theta;
-  if (!std::isnan(a.phi)) o.phi = a.phi;
-  if (!std::isnan(a.epsilon)) o.epsilon = a.epsilon;
-  if (!std::isnan(a.edge_texels)) o.edge_texels = a.edge_texels;
-  if (a.threads >= 0) o.threads = unsigned(a.threads);
+  bool direction = false;
+  for (const OptionSpec& spec : option_table())
+    direction = direction || (sets_view_direction(spec) && a.options.count(spec.key));
+  if (direction && !a.options.count("roll")) o.roll = 0.0;
+  for (const OptionSpec& spec : option_table()) {
+    if (!spec.flag) continue;
+    if (spec.kind == OptionSpec::Kind::boolean) {
+      const bool on = a.flags_on.count(spec.key) && a.flags_on.at(spec.key);
+      const bool off = a.flags_off.count(spec.key) && a.flags_off.at(spec.key);
+      if (on && off)
+        throw InputError(std::string("peelcd: ") + spec.flag + " and --no-" + (spec.flag + 2) + " contradict each other");
+      if (on || off) spec.set(o, OptionValue(on));
+      continue;
+    }
+    const auto given = a.options.find(spec.key);
+    if (given == a.options.end()) continue;
+    std::string problem;
+    const OptionValue value = parse_option(spec, given->second, problem);
+    if (!problem.empty()) throw InputError(std::string("peelcd: ") + spec.flag + ": " + problem);
+    spec.set(o, value);
+  }
   return o;
 }
 
@@ -1258,52 +1263,42 @@ const CLI::Validator kPositive = finite_number([](double v) { return v > 0.0; },
 const CLI::Validator kNonNegative = finite_number([](double v) { return v >= 0.0; }, "is negative", "NONNEGATIVE");
 
 // The options that shape a frame, shared by detect and dump (they override the scene file's).
+// The frame's options, one flag per row of the option table (peelcd/core/options.h), and the
+// GL stage's and the command line's own.
 void add_frame_options(CLI::App* c, DetectArgs& d) {
-  c->add_option("--res", d.res, "Forced N x N texture per ROI (default: share a 512^2 budget)")
-      ->check(kPositive);
-  c->add_option("--ids", d.ids, "Triangle ID mode: unique (each triangle its own; default), ring (last vertex, whole one-ring: better for point sampling) or paper (last-vertex IDs, T(v) sets)");
-  c->add_option("--peel", d.peel, "Peel mode: full (every surface; default) or alternate (the paper's)");
+  for (const OptionSpec& spec : option_table()) {
+    if (!spec.flag) continue;
+    if (spec.kind == OptionSpec::Kind::boolean) {
+      c->add_flag(spec.flag, d.flags_on[spec.key], spec.help);
+      c->add_flag(std::string("--no-") + (spec.flag + 2), d.flags_off[spec.key],
+                  std::string("Turns ") + spec.flag + " off");
+      continue;
+    }
+    std::string type = spec.kind == OptionSpec::Kind::choice ? "{" + std::string(spec.choices) + "}"
+                       : spec.kind == OptionSpec::Kind::integer ? "INT" : "NUMBER";
+    const auto g = [](double x) {
+      char buf[32];
+      std::snprintf(buf, sizeof buf, "%.10g", x);
+      return std::string(buf);
+    };
+    if (spec.kind != OptionSpec::Kind::choice && std::isfinite(spec.min))
+      type += std::isfinite(spec.max) ? " in [" + g(spec.min) + ", " + g(spec.max) + "]" : " >= " + g(spec.min);
+    // Stored as text, checked after parsing by the table (merged_options): one set of rules.
+    c->add_option_function<std::string>(
+         spec.flag, [&d, key = std::string(spec.key)](const std::string& v) { d.options[key] = v; }, spec.help)
+        ->type_name(type);
+  }
   c->add_option("--peeler", d.peeler, "How layers are made: abuffer (one draw into a per-texel k-buffer of fragments; default) "
                                       "or multipass (one draw per layer); the same layers either way");
-  c->add_option("--cull", d.cull, "Triangles peeled per ROI: contact (only those sharing a grid cell of the ROI with the "
-                                  "other object, the ROI shrunk to them; default) or box (all touching the ROI, the paper's)");
-  c->add_option("--stage", d.stage, "Per ROI: auto (the cheaper of the image stage and the exact CPU path by the "
-                                    "backend's cost model; default of detect), image (always peel) or exact (no image "
-                                    "stage: culling, box overlaps, exact test). dump always peels");
   c->add_option("--resolve", d.resolve, "Where the k-buffer becomes layers and PCS: auto (host on a software renderer such as "
                                         "llvmpipe, else gpu; default), gpu (a compute pass) or host (mapped, resolved on the CPU)");
   c->add_flag("--no-batch", d.no_batch, "GL stage: draw each conservative ROI view on its own instead of packing the "
                                         "frame's views into one k-buffer and one draw (the same results; for comparison)");
-  c->add_option("--slope", d.slope, "Slope-following epsilon, in texels (default 1; 0 = the paper's constant epsilon)")
-      ->check(kNonNegative);
-  c->add_flag("--conservative", d.conservative,
-              "Conservative image stage (the default): every texel a triangle touches, depth intervals, every "
-              "overlapping couple a PCS; no colliding pair can be missed (docs/accuracy.md)");
-  c->add_flag("--no-conservative", d.no_conservative,
-              "Point sampling at texel centres with the epsilon test (the paper's image stage; may miss pairs)");
   c->add_flag("--paper", d.paper,
               "The paper's configuration: point sampling, alternate peeling, paper IDs, constant epsilon, one view "
               "along world x, no culling (other options given override it)");
-  c->add_option("--roll", d.roll, "Turn of the view frame's u and v axes about d, degrees (default 30 with the "
-                                  "default theta 31, phi 51; 0 when --theta or --phi is given)")
-      ->check(kFinite);
-  c->add_option("--views", d.views, "Views fused per ROI: 1 (along d; default), 2 (along d and u) or 3 (d, u and v, three orthogonal views)")
-      ->check(CLI::IsMember({1, 2, 3}));
-  c->add_option("--theta", d.theta, "View longitude, degrees")->check(kFinite);
-  c->add_option("--phi", d.phi, "View latitude, degrees, in [-90, 90]")->check(kFinite)->check(CLI::Range(-90.0, 90.0));
-  c->add_option("--epsilon", d.epsilon, "PCS depth threshold in world units (default: one texel)")
-      ->check(kPositive);
-  c->add_option("--edge-texels", d.edge_texels,
-                "Sharing the budget with contact culling, a ROI's tile is at most K texels per median edge of its "
-                "triangles across the culled region (default 2 with the conservative stage, 12 with point sampling; 0 = always "
-                "the budget's share)")
-      ->check(kNonNegative);
   c->add_option("--backend", d.backend, "Image stage: osmesa (software GL, the reference), egl (GPU, or Mesa without one) or cpu (no GL)")
       ->capture_default_str();
-  c->add_option("--threads", d.threads,
-                "Threads for contact culling and the exact CPU path, object pairs spread over them (default 1; 0 = one "
-                "per core, at most 8); the results do not depend on it")
-      ->check(CLI::Range(0, 64));
 }
 
 struct ClassesArgs {

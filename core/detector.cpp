@@ -2,6 +2,7 @@
 
 #include "peelcd/core/broad_phase.h"
 #include "peelcd/core/cull.h"
+#include "peelcd/core/options.h"
 #include "peelcd/core/reference.h"
 #include "peelcd/core/worker_pool.h"
 
@@ -91,56 +92,56 @@ std::string coordinate_problem(const Vec3& p, bool float_range) {
   return {};
 }
 
+namespace {
+// The checks, the object's label built only on failure (a valid frame allocates nothing).
+template <class Label>
+void check_object(const Object& o, const Label& label, bool float_range) {
+  const Mesh& m = o.mesh;
+  const auto fail = [&](const std::string& problem) { throw std::invalid_argument("peelcd: " + label() + problem); };
+  for (std::size_t v = 0; v < m.vertices.size(); ++v)
+    if (!m.vertices[v].allFinite() || (float_range && m.vertices[v].cwiseAbs().maxCoeff() > kFloatMax))
+      fail(": vertex " + std::to_string(v) + " " + coordinate_problem(m.vertices[v], float_range));
+  const std::size_t n = m.vertices.size();
+  for (std::size_t f = 0; f < m.triangles.size(); ++f)
+    for (std::uint32_t v : m.triangles[f])
+      if (v >= n)
+        fail(": triangle " + std::to_string(f) + " uses vertex " + std::to_string(v) + " but the mesh has " +
+             std::to_string(n) + " vertices");
+  // A layer texel stores object << 31 | ID + 1: IDs must stay below 2^31 - 1.
+  if (std::max(m.triangles.size(), m.vertices.size()) >= 0x7fffffffu)
+    fail(" has 2^31 - 1 or more triangles or vertices; IDs hold 31 bits");
+  if (o.rigid) {
+    if (!o.rigid->shape) fail(": rigid motion without a shape");
+    if (o.rigid->shape->triangles.size() != m.triangles.size())
+      fail(": its rigid shape has " + std::to_string(o.rigid->shape->triangles.size()) + " triangles, its world mesh " +
+           std::to_string(m.triangles.size()));
+    if (const std::string problem = pose_problem(o.rigid->pose); !problem.empty()) fail(": its pose " + problem);
+  }
+}
+}  // namespace
+
 void validate_object(const Object& o, std::size_t i, bool float_range) {
-  validate_object(o, object_label(o, i), float_range);
+  check_object(o, [&] { return object_label(o, i); }, float_range);
 }
 
 void validate_object(const Object& o, const std::string& label, bool float_range) {
-  // Messages are built only on failure: a valid frame allocates nothing here.
-  {
-    const Mesh& m = o.mesh;
-    const auto fail = [&](const std::string& problem) { throw std::invalid_argument("peelcd: " + label + problem); };
-    for (std::size_t v = 0; v < m.vertices.size(); ++v)
-      if (!m.vertices[v].allFinite() || (float_range && m.vertices[v].cwiseAbs().maxCoeff() > kFloatMax))
-        fail(": vertex " + std::to_string(v) + " " + coordinate_problem(m.vertices[v], float_range));
-    const std::size_t n = m.vertices.size();
-    for (std::size_t f = 0; f < m.triangles.size(); ++f)
-      for (std::uint32_t v : m.triangles[f])
-        if (v >= n)
-          fail(": triangle " + std::to_string(f) + " uses vertex " + std::to_string(v) + " but the mesh has " +
-               std::to_string(n) + " vertices");
-    // A layer texel stores object << 31 | ID + 1: IDs must stay below 2^31 - 1.
-    if (std::max(m.triangles.size(), m.vertices.size()) >= 0x7fffffffu)
-      fail(" has 2^31 - 1 or more triangles or vertices; IDs hold 31 bits");
-    if (o.rigid) {
-      if (!o.rigid->shape) fail(": rigid motion without a shape");
-      if (o.rigid->shape->triangles.size() != m.triangles.size())
-        fail(": its rigid shape has " + std::to_string(o.rigid->shape->triangles.size()) + " triangles, its world mesh " +
-             std::to_string(m.triangles.size()));
-      if (const std::string problem = pose_problem(o.rigid->pose); !problem.empty()) fail(": its pose " + problem);
-    }
-  }
+  check_object(o, [&] { return label; }, float_range);
 }
 
 void validate_options(const DetectOptions& opt, int max_resolution) {
   const char* where = "peelcd: options: ";
-  if (opt.resolution < 0 || opt.resolution > max_resolution)
+  // Every option's range, from the one table (peelcd/core/options.h).
+  for (const OptionSpec& spec : option_table())
+    if (const std::string problem = check_option(spec, spec.get(opt)); !problem.empty())
+      throw std::invalid_argument(std::string(where) + spec.key + " " + problem);
+  // And what depends on the stage: its largest view.
+  if (opt.resolution > max_resolution)
     throw std::invalid_argument(std::string(where) + "resolution " + std::to_string(opt.resolution) + " is outside 1.." +
                                 std::to_string(max_resolution) +
                                 " (the image stage's largest view: GL_MAX_TEXTURE_SIZE on GL; 0 = share the budget)");
-  if (opt.resolution == 0 && (opt.budget <= 0 || opt.budget > max_resolution))
+  if (opt.resolution == 0 && opt.budget > max_resolution)
     throw std::invalid_argument(std::string(where) + "budget " + std::to_string(opt.budget) + " is outside 1.." +
                                 std::to_string(max_resolution) + " (the image stage's largest view)");
-  if (opt.views < 1 || opt.views > 3) throw std::invalid_argument(std::string(where) + "views must be 1, 2 or 3");
-  if (!std::isfinite(opt.theta) || !std::isfinite(opt.phi))
-    throw std::invalid_argument(std::string(where) + "theta and phi must be finite");
-  if (!(opt.slope >= 0.0) || !std::isfinite(opt.slope))
-    throw std::invalid_argument(std::string(where) + "slope must be finite and >= 0");
-  if (!(opt.epsilon >= 0.0) || !std::isfinite(opt.epsilon))
-    throw std::invalid_argument(std::string(where) + "epsilon must be finite and >= 0 (0 = one texel)");
-  if (opt.threads > 64) throw std::invalid_argument(std::string(where) + "threads must be 0 to 64");
-  if (opt.edge_texels && (!(*opt.edge_texels >= 0.0) || !std::isfinite(*opt.edge_texels)))
-    throw std::invalid_argument(std::string(where) + "edge_texels must be finite and >= 0 (0 = the budget's share)");
 }
 
 bool triangle_touches(const Mesh& mesh, std::uint32_t t, const Aabb& box) {

@@ -1,6 +1,7 @@
 #include "peelcd/io/scene.h"
 
 #include "peelcd/core/detector.h"
+#include "peelcd/core/options.h"
 #include "peelcd/io/error.h"
 #include "peelcd/io/mesh_io.h"
 
@@ -54,8 +55,12 @@ Scene parse_scene(const std::string& text, const std::string& path, const std::s
   } catch (const json::exception& e) {  // a syntax error, or a number out of range (fuzzing)
     throw InputError("peelcd::load_scene(): '" + path + "': malformed JSON: " + e.what());
   }
-  c.only_keys(root, "the scene", {"objects", "conservative", "view", "resolution", "budget", "ids", "epsilon", "peel", "slope", "views", "cull", "edge_texels",
-                                    "stage", "peeler", "resolve"});
+  {
+    std::set<std::string> keys = {"objects", "view", "peeler", "resolve"};  // and every top-level option
+    for (const OptionSpec& spec : option_table())
+      if (*spec.group == 0) keys.insert(spec.key);
+    c.only_keys(root, "the scene", keys);
+  }
   Scene scene;
   scene.path = path;
   if (!root.contains("objects")) c.fail("the scene", "missing key \"objects\"");
@@ -97,70 +102,40 @@ Scene parse_scene(const std::string& text, const std::string& path, const std::s
         c.fail("objects[" + std::to_string(i) + "].name",
                "duplicate name \"" + scene.objects[i].name + "\" (also objects[" + std::to_string(j) + "])");
   DetectOptions& opt = scene.options;
+  // The options, from the one table (peelcd/core/options.h): a key at the top level, or in
+  // "view" (theta, phi, roll); each value checked with a message that names its key.
+  const auto read = [&](const OptionSpec& spec, const json& j, const std::string& where) {
+    OptionValue value;
+    switch (spec.kind) {
+      case OptionSpec::Kind::boolean:
+        if (!j.is_boolean()) c.fail(where, "must be true or false");
+        value = j.get<bool>();
+        break;
+      case OptionSpec::Kind::choice:
+        value = c.string(j, where);
+        break;
+      default:
+        if (!j.is_number()) c.fail(where, spec.kind == OptionSpec::Kind::integer ? spec.range : "must be a number");
+        value = j.get<double>();
+    }
+    if (const std::string problem = check_option(spec, value); !problem.empty()) c.fail(where, problem);
+    spec.set(opt, value);
+  };
   if (root.contains("view")) {
     const json& v = root["view"];
-    c.only_keys(v, "view", {"theta", "phi", "roll"});
+    std::set<std::string> keys;
+    for (const OptionSpec& spec : option_table())
+      if (std::string(spec.group) == "view") keys.insert(spec.key);
+    c.only_keys(v, "view", keys);
     // A view that names theta or phi means the paper's frame turned there: roll 0 unless given.
-    if (v.contains("theta") || v.contains("phi")) opt.roll = 0.0;
-    if (v.contains("theta")) opt.theta = c.number(v["theta"], "view.theta");
-    if (v.contains("phi")) opt.phi = c.number(v["phi"], "view.phi");
-    if (v.contains("roll")) opt.roll = c.number(v["roll"], "view.roll");
-    if (opt.phi < -90 || opt.phi > 90) c.fail("view.phi", "must be within [-90, 90] degrees");
+    for (const OptionSpec& spec : option_table())
+      if (sets_view_direction(spec) && v.contains(spec.key)) opt.roll = 0.0;
   }
-  const auto positive_int = [&](const char* key, int& out, bool zero_ok) {
-    if (!root.contains(key)) return;
-    const json& j = root[key];
-    if (!j.is_number_integer()) c.fail(key, "must be an integer");
-    const long long v = j.get<long long>();
-    if (v < (zero_ok ? 0 : 1) || v > (1 << 20)) c.fail(key, zero_ok ? "must be >= 0 (0 = from the budget)" : "must be positive");
-    out = int(v);
-  };
-  positive_int("resolution", opt.resolution, true);
-  positive_int("budget", opt.budget, false);
-  if (root.contains("ids")) {
-    const std::string ids = c.string(root["ids"], "ids");
-    const auto mode = parse_id_mode(ids);
-    if (!mode) c.fail("ids", "unknown ID mode \"" + ids + "\" (expected paper, ring or unique)");
-    opt.ids = *mode;
-  }
-  if (root.contains("epsilon")) {
-    opt.epsilon = c.number(root["epsilon"], "epsilon");
-    if (opt.epsilon < 0) c.fail("epsilon", "must be >= 0 (0 = one texel)");
-  }
-  if (root.contains("peel")) {
-    const std::string peel = c.string(root["peel"], "peel");
-    const auto mode = parse_peel_mode(peel);
-    if (!mode) c.fail("peel", "unknown peel mode \"" + peel + "\" (expected full or alternate)");
-    opt.peel = *mode;
-  }
-  if (root.contains("cull")) {
-    const std::string cull = c.string(root["cull"], "cull");
-    const auto mode = parse_cull(cull);
-    if (!mode) c.fail("cull", "unknown culling \"" + cull + "\" (expected contact or box)");
-    opt.cull = *mode;
-  }
-  if (root.contains("stage")) {
-    const std::string stage = c.string(root["stage"], "stage");
-    const auto mode = parse_stage(stage);
-    if (!mode) c.fail("stage", "unknown stage \"" + stage + "\" (expected auto, image or exact)");
-    opt.stage = *mode;
-  }
-  if (root.contains("views")) {
-    const json& j = root["views"];
-    if (!j.is_number_integer() || j.get<long long>() < 1 || j.get<long long>() > 3) c.fail("views", "must be 1, 2 or 3");
-    opt.views = j.get<int>();
-  }
-  if (root.contains("slope")) {
-    opt.slope = c.number(root["slope"], "slope");
-    if (opt.slope < 0) c.fail("slope", "must be >= 0 (0 = constant epsilon)");
-  }
-  if (root.contains("conservative")) {
-    if (!root["conservative"].is_boolean()) c.fail("conservative", "must be true or false");
-    opt.conservative = root["conservative"].get<bool>();
-  }
-  if (root.contains("edge_texels")) {
-    opt.edge_texels = c.number(root["edge_texels"], "edge_texels");
-    if (*opt.edge_texels < 0) c.fail("edge_texels", "must be >= 0 (0 = the budget's share)");
+  for (const OptionSpec& spec : option_table()) {
+    const std::string group = spec.group;
+    const json* holder = group.empty() ? &root : root.contains(group) ? &root[group] : nullptr;
+    if (holder && holder->contains(spec.key))
+      read(spec, (*holder)[spec.key], group.empty() ? std::string(spec.key) : group + "." + spec.key);
   }
   if (root.contains("peeler")) {
     const std::string peeler = c.string(root["peeler"], "peeler");

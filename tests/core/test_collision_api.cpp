@@ -180,7 +180,7 @@ TEST_CASE("one detector called from a second thread during a frame throws a clea
   CHECK(second.pairs[0].colliding.size() == first.pairs[0].colliding.size());
 }
 
-TEST_CASE("messages name the right argument: collide(Mesh...)'s b and its poses; a zero-scale pose is refused",
+TEST_CASE("messages name the right argument (collide(Mesh...)'s b and its poses) and a zero-scale pose is refused",
           "[api]") {
   auto detector = cpu_detector();
   const Mesh good = make_box(Vec3(0, 0, 0), Vec3(1, 1, 1));

@@ -90,3 +90,76 @@ TEST_CASE("a scene whose mesh file is missing fails on loading, naming the mesh"
   const Scene s = parse_scene(R"({"objects":[{"mesh":"nowhere/none.obj"}]})", "s.json", "/nonexistent-peelcd");
   CHECK_THROWS_WITH(load_objects(s), Catch::Contains("/nonexistent-peelcd/nowhere/none.obj") && Catch::Contains("no such file"));
 }
+
+// ---- the option table (peelcd/core/options.h): one definition, everything derived ----
+
+#include "peelcd/core/options.h"
+#include "peelcd/io/options_json.h"
+
+#include <fstream>
+#include <nlohmann/json.hpp>
+#include <set>
+
+TEST_CASE("every option round-trips scene -> options -> JSON -> options", "[scene][options]") {
+  // A scene that sets every option to a value other than its default.
+  nlohmann::json scene = {{"objects", {{{"mesh", "a.obj"}}}}};
+  const DetectOptions defaults;
+  for (const OptionSpec& spec : option_table()) {
+    nlohmann::json value;
+    switch (spec.kind) {
+      case OptionSpec::Kind::boolean: value = !std::get<bool>(spec.get(defaults)); break;
+      case OptionSpec::Kind::integer: value = std::get<double>(spec.get(defaults)) == spec.min ? spec.min + 1 : spec.min; break;
+      case OptionSpec::Kind::number: value = std::get<double>(spec.get(defaults)) == 7.5 ? 6.25 : 7.5; break;
+      case OptionSpec::Kind::choice: {
+        const std::string now = std::get<std::string>(spec.get(defaults)), all = spec.choices;
+        const std::string first = all.substr(0, all.find(','));
+        value = first != now ? first : all.substr(all.find(',') + 1, all.find(',', all.find(',') + 1) - all.find(',') - 1);
+      }
+    }
+    INFO(spec.key << " = " << value.dump());
+    REQUIRE(check_option(spec, spec.kind == OptionSpec::Kind::choice ? OptionValue(value.get<std::string>())
+                                : spec.kind == OptionSpec::Kind::boolean ? OptionValue(value.get<bool>())
+                                                                         : OptionValue(value.get<double>())) == "");
+    if (*spec.group) scene[spec.group][spec.key] = value;
+    else scene[spec.key] = value;
+  }
+  const Scene s = parse_scene(scene.dump(), "all.json", ".");
+  const nlohmann::json written = options_to_json(s.options);
+  const DetectOptions back = options_from_json(written);
+  for (const OptionSpec& spec : option_table()) {
+    INFO(spec.key);
+    const nlohmann::json& given = *spec.group ? scene[spec.group][spec.key] : scene[spec.key];
+    CHECK(spec.get(s.options) == (given.is_boolean() ? OptionValue(given.get<bool>())
+                                  : given.is_string() ? OptionValue(given.get<std::string>())
+                                                      : OptionValue(given.get<double>())));  // scene -> options
+    CHECK(written.contains(spec.key) == spec.recorded);                                      // -> JSON
+    if (spec.recorded) CHECK(spec.get(back) == spec.get(s.options));                         // -> options
+  }
+  CHECK(options_to_json(back) == written);
+  // Every value the table refuses, the scene refuses with the key named, and so does the reader.
+  CHECK_THAT(error_of(R"({"objects":[{"mesh":"a.obj"}],"threads":65})"), Catch::Contains("threads: must be within 0..64"));
+  CHECK_THROWS_WITH(options_from_json({{"views", 4}}), Catch::Contains("options.views: must be 1, 2 or 3"));
+  CHECK_THROWS_WITH(options_from_json({{"colour", 4}}), Catch::Contains("unknown key \"colour\""));
+}
+
+TEST_CASE("the JSON Schemas list exactly the option table's recorded keys", "[scene][options]") {
+  std::set<std::string> table;
+  for (const OptionSpec& spec : option_table())
+    if (spec.recorded) table.insert(spec.key);
+  for (const char* file : {"result.schema.json", "dump-meta.schema.json"}) {
+    INFO(file);
+    std::ifstream in(std::string(PEELCD_FIXTURES) + "/../docs/schema/" + file);
+    REQUIRE(in);
+    const nlohmann::json schema = nlohmann::json::parse(in);
+    const nlohmann::json& options = schema.contains("$defs") && schema["$defs"].contains("options")
+                                        ? schema["$defs"]["options"]
+                                        : schema["properties"]["options"];
+    std::set<std::string> listed;
+    for (const auto& [key, value] : options["properties"].items()) listed.insert(key);
+    CHECK(listed == table);
+    if (options.contains("required")) {
+      std::set<std::string> required(options["required"].begin(), options["required"].end());
+      CHECK(required == table);
+    }
+  }
+}

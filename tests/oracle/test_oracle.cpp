@@ -391,7 +391,7 @@ void set_sequence(DumpView& v, std::size_t t, const std::vector<std::array<std::
 
 }  // namespace
 
-TEST_CASE("hardware tier: ties kept or broken the other way, and edge or sliver twins, pass; others fail", "[oracle]") {
+TEST_CASE("hardware tier: ties kept or broken the other way, and edge or sliver twins, pass, others fail", "[oracle]") {
   SECTION("boxes_touching_ties: the other object's face kept at the tie depth") {
     const Dump golden = golden_dump("boxes_touching_ties");
     const DumpView& gv = golden.pairs[0].views[0];
