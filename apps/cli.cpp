@@ -1,0 +1,258 @@
+#include "cli.h"
+
+#include "peelcd/core/broad_phase.h"
+#include "peelcd/core/cpu_stage.h"
+#include "peelcd/core/reference.h"
+#include "peelcd/gl_egl/egl_context.h"
+#if PEELCD_HAVE_OSMESA
+#include "peelcd/gl_osmesa/osmesa_context.h"
+#endif
+
+namespace peelcd::cli {
+
+// Output options (--json, --csv, --plot, --out, --report): an empty value is a mistake, refused
+// at parse time (exit 2), not read as "no output".
+const CLI::Validator kOutputPath(
+    [](std::string& value) { return value.empty() ? std::string("an empty path (give a file name, or - for stdout)") : std::string(); },
+    "");
+
+
+// Number checks with messages a person can read. CLI11's own let "nan" through (every
+// comparison with NaN is false; a NaN here would read as "not given") and print the range up
+// to DBL_MAX in full.
+CLI::Validator finite_number(bool (*ok)(double), const char* need, const char* name) {
+  return CLI::Validator(
+      [ok, need](std::string& text) -> std::string {
+        double v = 0.0;
+        std::size_t used = 0;
+        try {
+          v = std::stod(text, &used);
+        } catch (const std::out_of_range&) {
+          return "Value " + text + " is not a finite number";
+        } catch (const std::exception&) {
+          return "Value " + text + " is not a number";
+        }
+        if (used != text.size()) return "Value " + text + " is not a number";
+        if (!std::isfinite(v)) return "Value " + text + " is not a finite number";
+        return ok(v) ? std::string() : "Value " + text + " " + need;
+      },
+      name);
+}
+const CLI::Validator kFinite = finite_number([](double) { return true; }, "", "FINITE");
+const CLI::Validator kPositive = finite_number([](double v) { return v > 0.0; }, "is not positive", "POSITIVE");
+const CLI::Validator kNonNegative = finite_number([](double v) { return v >= 0.0; }, "is negative", "NONNEGATIVE");
+
+
+Runner make_runner(const std::string& backend, const gl::GlOptions& options) {
+  Runner r;
+  std::shared_ptr<gl::Context> context;
+#if PEELCD_HAVE_OSMESA
+  if (backend == "osmesa") context = std::make_shared<gl::OsmesaContext>();
+#endif
+  if (backend == "egl") context = std::make_shared<gl::EglContext>();
+  if (context) {
+    auto stage = std::make_shared<gl::GlImageStage>(context, options);
+    r.gl = stage.get();
+    r.stage = stage;
+  } else if (backend == "cpu") {
+    r.stage = std::make_shared<CpuImageStage>();
+  } else {
+#if !PEELCD_HAVE_OSMESA
+    if (backend == "osmesa")
+      throw InputError("peelcd: --backend osmesa: this peelcd was built without OSMesa (PEELCD_WITH_OSMESA=OFF): use egl or cpu");
+#endif
+    throw InputError("peelcd: --backend: unknown backend \"" + backend + "\" (expected osmesa, egl or cpu)");
+  }
+  r.detector = std::make_unique<Detector>(r.stage);
+  return r;
+}
+
+
+// A scene's input files: the scene file itself (when there is one) and every mesh it names.
+std::vector<std::string> scene_inputs(const Scene& scene) {
+  std::vector<std::string> inputs;
+  if (std::filesystem::is_regular_file(scene.path)) inputs.push_back(scene.path);
+  for (const SceneObject& o : scene.objects) inputs.push_back(o.mesh_path);
+  return inputs;
+}
+
+// --peeler's value, or an InputError naming it.
+Peeler peeler_option(const std::string& text) {
+  return parsed(text, parse_peeler, "peelcd: --peeler: unknown peeler", "abuffer or multipass");
+}
+
+// GL stage options: the scene file's, overridden by the command line's.
+gl::GlOptions merged_gl_options(const Scene& scene, const std::string& peeler, const std::string& resolve,
+                               bool no_batch) {
+  gl::GlOptions o = scene.gl;
+  if (no_batch) o.batch = false;
+  if (!peeler.empty()) o.peeler = peeler_option(peeler);
+  if (!resolve.empty())
+    o.resolve = parsed(resolve, parse_resolve, "peelcd: --resolve: unknown resolve", "auto, gpu or host");
+  return o;
+}
+
+// Command-line values override the scene file's (each checked by the option table's rules, the
+// message naming the flag).
+DetectOptions merged_options(const Scene& scene, const DetectArgs& a) {
+  DetectOptions o = scene.options;
+  if (a.paper) {  // the paper's configuration, at the scene's resolution and budget
+    const DetectOptions p = paper_options();
+    const int res = o.resolution, budget = o.budget;
+    o = p;
+    o.resolution = res;
+    o.budget = budget;
+  }
+  // --theta/--phi alone turn the paper's frame (roll 0) there, as a scene's "view" does.
+  bool direction = false;
+  for (const OptionSpec& spec : option_table())
+    direction = direction || (sets_view_direction(spec) && a.options.count(spec.key));
+  if (direction && !a.options.count("roll")) o.roll = 0.0;
+  for (const OptionSpec& spec : option_table()) {
+    if (!spec.flag) continue;
+    if (spec.kind == OptionSpec::Kind::boolean) {
+      const bool on = a.flags_on.count(spec.key) && a.flags_on.at(spec.key);
+      const bool off = a.flags_off.count(spec.key) && a.flags_off.at(spec.key);
+      if (on && off)
+        throw InputError(std::string("peelcd: ") + spec.flag + " and --no-" + (spec.flag + 2) + " contradict each other");
+      if (on || off) spec.set(o, OptionValue(on));
+      continue;
+    }
+    const auto given = a.options.find(spec.key);
+    if (given == a.options.end()) continue;
+    std::string problem;
+    const OptionValue value = parse_option(spec, given->second, problem);
+    if (!problem.empty()) throw InputError(std::string("peelcd: ") + spec.flag + ": " + problem);
+    spec.set(o, value);
+  }
+  return o;
+}
+
+// Writes `text` to `path` through a temporary file and a rename, so a failure never leaves a
+// half-written file behind. "-" is stdout.
+// --json / --csv outputs: atomic, never destroying (include/peelcd/io/output.h).
+void write_output(const std::string& path, const std::string& text) { write_output_file(path, text + "\n", "peelcd: output"); }
+
+double median(std::vector<double> v) {
+  std::sort(v.begin(), v.end());
+  return v.empty() ? 0.0 : (v.size() % 2 ? v[v.size() / 2] : 0.5 * (v[v.size() / 2 - 1] + v[v.size() / 2]));
+}
+
+// detect's input: one scene file, or two or more mesh files (identity transforms, default options).
+Scene detect_input(const std::vector<std::string>& inputs, const std::string& command) {
+  const auto is_scene = [](const std::string& p) { return std::filesystem::path(p).extension() == ".json"; };
+  if (inputs.size() == 1) {
+    if (is_node_scene(inputs[0])) return scene_from_meshes(inputs);  // a glTF scene: one object per node
+    if (!is_scene(inputs[0]))
+      throw InputError(command + ": '" + inputs[0] + "' is one mesh: give a scene file (.json), a glTF scene (.gltf, .glb) or two or more meshes");
+    return load_scene(inputs[0]);
+  }
+  for (const std::string& p : inputs)
+    if (is_scene(p)) throw InputError(command + ": '" + p + "': a scene file (.json) goes alone, not among meshes");
+  return scene_from_meshes(inputs);
+}
+
+// One frame with every layer captured: the dump of `scene` under `opt` on `backend`.
+// Dumps check the image stage: every ROI is peeled (Stage::image), whatever the router would do.
+oracle::Dump capture_frame(const std::vector<Object>& objects, const DetectOptions& options, Runner& runner) {
+  std::vector<CapturedView> captured;
+  DetectOptions opt = options;
+  opt.stage = Stage::image;
+  runner.detector->capture_layers(&captured);
+  FrameResult result;
+  try {
+    result = runner.detector->detect(objects, opt);
+  } catch (...) {
+    runner.detector->capture_layers(nullptr);
+    throw;
+  }
+  runner.detector->capture_layers(nullptr);
+  return oracle::make_dump(result, captured, objects, opt, runner.stage->renderer(), runner.stage->version(),
+                           runner.backend());
+}
+
+// The broad phase's overlapping object pairs: the ROIs of a frame (before culling).
+std::size_t count_overlapping_pairs(const std::vector<Object>& objects) {
+  std::vector<Aabb> boxes;
+  for (const Object& o : objects) boxes.push_back(bounds(o.mesh));
+  return overlapping_pairs(boxes).size();
+}
+
+// ---- dynamic scenes and benchmarks ----
+
+std::unique_ptr<Sequence> make_sequence(const std::string& name, std::size_t frames, bool rigid,
+                                        std::size_t objects) {
+  if (name == "test1") return make_test1(data_dir("fixtures/meshes"), frames, rigid);
+  if (name == "test2") return make_test2(data_dir("fixtures/meshes"), frames, rigid);
+  if (name == "crowd") return make_crowd(objects, frames, rigid);
+  throw InputError("peelcd: unknown test scene \"" + name + "\" (expected test1, test2 or crowd)");
+}
+
+// Found, missed and false contacts of a frame against the exact pairs of the CGAL peer.
+Score score_frame(const FrameResult& r, const bench::PeerFrame& exact) {
+  Score total;
+  for (std::size_t i = 0; i < exact.objects.size(); ++i) {
+    std::vector<Contact> none;
+    const std::vector<Contact>* found = &none;
+    for (const PairResult& p : r.pairs)
+      if (p.object_a == exact.objects[i].first && p.object_b == exact.objects[i].second) found = &p.colliding;
+    const Score s = score_contacts(exact.per_pair[i], *found);
+    total.exact += s.exact;
+    total.found += s.found;
+    total.missed += s.missed;
+    total.false_contacts += s.false_contacts;
+  }
+  return total;
+}
+
+// "K/N" (1 <= K <= N): which slice of a sharded run this is, as {K - 1, N}; {0, 1} when empty.
+std::pair<std::size_t, std::size_t> parse_shard(const std::string& text, const std::string& what) {
+  if (text.empty()) return {0, 1};
+  std::size_t k = 0, n = 0;
+  char slash = 0, rest = 0;
+  if (std::sscanf(text.c_str(), "%zu%c%zu%c", &k, &slash, &n, &rest) != 3 || slash != '/' || k < 1 || n < 1 || k > n)
+    throw InputError(what + " --shard \"" + text + "\": expected K/N with 1 <= K <= N, e.g. 2/8");
+  return {k - 1, n};
+}
+
+// The options that shape a frame, shared by detect and dump (they override the scene file's).
+// The frame's options, one flag per row of the option table (peelcd/core/options.h), and the
+// GL stage's and the command line's own.
+void add_frame_options(CLI::App* c, DetectArgs& d) {
+  for (const OptionSpec& spec : option_table()) {
+    if (!spec.flag) continue;
+    if (spec.kind == OptionSpec::Kind::boolean) {
+      c->add_flag(spec.flag, d.flags_on[spec.key], spec.help);
+      c->add_flag(std::string("--no-") + (spec.flag + 2), d.flags_off[spec.key],
+                  std::string("Turns ") + spec.flag + " off");
+      continue;
+    }
+    std::string type = spec.kind == OptionSpec::Kind::choice ? "{" + std::string(spec.choices) + "}"
+                       : spec.kind == OptionSpec::Kind::integer ? "INT" : "NUMBER";
+    const auto g = [](double x) {
+      char buf[32];
+      std::snprintf(buf, sizeof buf, "%.10g", x);
+      return std::string(buf);
+    };
+    if (spec.kind != OptionSpec::Kind::choice && std::isfinite(spec.min))
+      type += std::isfinite(spec.max) ? " in [" + g(spec.min) + ", " + g(spec.max) + "]" : " >= " + g(spec.min);
+    // Stored as text, checked after parsing by the table (merged_options): one set of rules.
+    c->add_option_function<std::string>(
+         spec.flag, [&d, key = std::string(spec.key)](const std::string& v) { d.options[key] = v; }, spec.help)
+        ->type_name(type);
+  }
+  c->add_option("--peeler", d.peeler, "How layers are made: abuffer (one draw into a per-texel k-buffer of fragments; default) "
+                                      "or multipass (one draw per layer); the same layers either way");
+  c->add_option("--resolve", d.resolve, "Where the k-buffer becomes layers and PCS: auto (host on a software renderer such as "
+                                        "llvmpipe, else gpu; default), gpu (a compute pass) or host (mapped, resolved on the CPU)");
+  c->add_flag("--no-batch", d.no_batch, "GL stage: draw each conservative ROI view on its own instead of packing the "
+                                        "frame's views into one k-buffer and one draw (the same results; for comparison)");
+  c->add_flag("--paper", d.paper,
+              "The paper's configuration: point sampling, alternate peeling, paper IDs, constant epsilon, one view "
+              "along world x, no culling (other options given override it)");
+  c->add_option("--backend", d.backend, "Image stage: osmesa (software GL, the reference), egl (GPU, or Mesa without one) or cpu (no GL)")
+      ->capture_default_str();
+}
+
+
+}  // namespace peelcd::cli

@@ -1,0 +1,234 @@
+// peelcd detect and explain (the command line; shared parts in cli.h).
+#include "cli.h"
+#include "peelcd/io/result_json.h"
+#include "peelcd/oracle/explain.h"
+
+namespace peelcd::cli {
+
+int run_detect(const DetectArgs& a) {
+  if (!a.json_out.empty()) check_output_path(a.json_out, "peelcd detect: --json");
+  const Progress progress;
+  progress.phase("peelcd detect: loading the meshes...");
+  const Scene scene = detect_input(a.inputs);
+  refuse_overwriting_input(a.json_out, scene_inputs(scene), "peelcd detect: --json");
+  const DetectOptions opt = merged_options(scene, a);
+  const std::vector<Object> objects = load_objects(scene);
+  progress.phase("peelcd detect: running the frame...");
+
+  Runner runner = make_runner(a.backend, merged_gl_options(scene, a.peeler, a.resolve, a.no_batch));
+  FrameResult result;
+  std::vector<Timings> runs;
+  for (int i = 0; i < std::max(1, a.repeat); ++i) {
+    result = runner.detector->detect(objects, opt);
+    runs.push_back(result.timings);
+  }
+  progress.clear();
+  if (runs.size() > 1) {  // report per-stage medians over the repeated frames
+    const auto med = [&](double Timings::*f) {
+      std::vector<double> v;
+      for (const Timings& t : runs) v.push_back(t.*f);
+      return median(v);
+    };
+    result.timings = {med(&Timings::aabb), med(&Timings::upload), med(&Timings::gpu),
+                      med(&Timings::readback), med(&Timings::cpu), med(&Timings::total)};
+  }
+
+  // --check: every pair against the exact reference (in the JSON too).
+  Score total;
+  std::vector<Score> scores;
+  std::vector<oracle::PairQuery> misses;  // in frame order, for --explain-misses
+  if (a.check)
+    for (const PairResult& p : result.pairs) {
+      const std::vector<std::uint64_t> exact = exact_colliding_pairs(objects[p.object_a].mesh, objects[p.object_b].mesh);
+      scores.push_back(score_contacts(exact, p.colliding));
+      if (misses.size() < std::size_t(a.explain_misses))
+        for (const std::uint64_t k : exact) {
+          const bool reported = std::any_of(p.colliding.begin(), p.colliding.end(), [&](const Contact& c) {
+            return c.tri_a == pair_a(k) && c.tri_b == pair_b(k);
+          });
+          if (!reported && misses.size() < std::size_t(a.explain_misses))
+            misses.push_back({p.object_a, p.object_b, pair_a(k), pair_b(k)});
+        }
+      total.exact += scores.back().exact;
+      total.found += scores.back().found;
+      total.missed += scores.back().missed;
+      total.false_contacts += scores.back().false_contacts;
+    }
+  // The human summary: on stdout, or on stderr when the JSON goes to stdout.
+  FILE* const human = a.json_out == "-" ? stderr : stdout;
+  if (!a.quiet) {
+    std::fprintf(human, "peelcd detect: %s  (%zu objects, %s, %s)\n", scene.path.c_str(), objects.size(),
+                runner.backend().c_str(), result.renderer.c_str());
+    if (opt.conservative)
+      std::fprintf(human, "conservative  view theta=%g phi=%g roll=%g  views=%d  ids=%s  cull=%s\n", opt.theta, opt.phi, opt.roll,
+                  opt.views, to_string(opt.ids), to_string(opt.cull));
+    else
+      std::fprintf(human, "point sampling  view theta=%g phi=%g roll=%g  views=%d  ids=%s  peel=%s  slope=%g  cull=%s\n", opt.theta,
+                  opt.phi, opt.roll, opt.views, to_string(opt.ids), to_string(opt.peel), opt.slope, to_string(opt.cull));
+    std::fprintf(human, "stage %s: %zu of %zu ROIs by the exact CPU path, %zu peeled", to_string(opt.stage), result.rois_exact,
+                result.pairs.size(), result.pairs.size() - result.rois_exact);
+    if (result.views_exhaustive > 0)
+      std::fprintf(human, " (%zu views fell back to the exhaustive exact test: k-buffer too deep or too large)",
+                   result.views_exhaustive);
+    std::fprintf(human, "\n");
+    if (result.pairs.empty()) std::fprintf(human, "no overlapping bounding boxes: no GL work\n");
+    std::size_t colliding = 0, colliding_objects = 0;
+    for (const PairResult& p : result.pairs) {
+      colliding += p.colliding.size();
+      colliding_objects += p.colliding.empty() ? 0 : 1;
+      if (p.exact_stage) {
+        std::fprintf(human, "%s x %s: exact CPU path (predicted %.3f ms; image stage %.3f ms), %zu+%zu tris in the ROI, "
+                    "%zu candidates, %zu colliding\n",
+                    objects[p.object_a].name.c_str(), objects[p.object_b].name.c_str(), p.predicted_exact_ms,
+                    p.predicted_image_ms, p.triangles_in_roi_a, p.triangles_in_roi_b, p.candidates, p.colliding.size());
+      } else {
+        std::fprintf(human, "%s x %s: ROI %dx%d, eps %.3g, drawn %zu+%zu of %zu+%zu tris, %d layers, %zu PCS, %zu candidates, %zu colliding\n",
+                    objects[p.object_a].name.c_str(), objects[p.object_b].name.c_str(), p.resolution,
+                    p.resolution, p.epsilon, p.triangles_drawn_a, p.triangles_drawn_b, p.triangles_in_roi_a,
+                    p.triangles_in_roi_b, p.layers,
+                    p.pcs_count, p.candidates, p.colliding.size());
+        if (p.views_exhaustive > 0)  // a fallback is never silent
+          std::fprintf(human, "  path %s: %s\n", pair_path(p), pair_path_reason(p, opt).c_str());
+      }
+      if (a.check) {
+        const Score& sc = scores[std::size_t(&p - result.pairs.data())];
+        std::fprintf(human, "  exact reference: %zu pairs; found %zu, missed %zu (miss ratio %.2f%%), false contacts %zu\n",
+                    sc.exact, sc.found, sc.missed, 100.0 * sc.miss_ratio(), sc.false_contacts);
+      }
+    }
+    std::fprintf(human, "%s: %zu colliding triangle pairs in %zu of %zu overlapping object pairs%s\n",
+                 colliding ? "collision" : "no collision", colliding, colliding_objects, result.pairs.size(),
+                 colliding && !a.list ? " (--list prints them)" : "");
+    if (a.list)
+      for (const PairResult& p : result.pairs) {
+        if (p.colliding.empty()) continue;
+        std::fprintf(human, "%s x %s: triangle pairs (%s, %s)\n", objects[p.object_a].name.c_str(),
+                     objects[p.object_b].name.c_str(), objects[p.object_a].name.c_str(), objects[p.object_b].name.c_str());
+        std::string line = " ";
+        for (const Contact& c : p.colliding) {
+          line += " (" + std::to_string(c.tri_a) + "," + std::to_string(c.tri_b) + ")";
+          if (line.size() > 90) {
+            std::fprintf(human, "%s\n", line.c_str());
+            line = " ";
+          }
+        }
+        if (line.size() > 1) std::fprintf(human, "%s\n", line.c_str());
+      }
+    const Timings& t = result.timings;
+    std::fprintf(human, "timings (ms%s): aabb %.3f  upload %.3f  gpu %.3f  readback %.3f  cpu %.3f  total %.3f\n",
+                runs.size() > 1 ? (", median of " + std::to_string(runs.size())).c_str() : "",
+                t.aabb, t.upload, t.gpu, t.readback, t.cpu, t.total);
+  }
+  if (!a.json_out.empty()) write_output(a.json_out, to_json(result, objects, opt, a.check ? &scores : nullptr).dump(2));
+  if (a.check && !a.quiet)
+    std::fprintf(human, "check: %zu exact pairs, %zu missed (miss ratio %.4f%%)\n", total.exact, total.missed,
+                100.0 * total.miss_ratio());
+  if (!misses.empty()) {  // --explain-misses: the same frame again, every layer captured
+    const oracle::FrameTrace trace(*runner.detector, objects, opt);
+    std::fprintf(human, "explain: the first %zu missed pair(s) (peelcd explain ... --pair A:TRI,B:TRI for the whole walk)\n",
+                 misses.size());
+    for (const oracle::PairQuery& m : misses)
+      std::fprintf(human, "  %s:%u,%s:%u: %s\n", objects[m.object_a].name.c_str(), m.tri_a,
+                   objects[m.object_b].name.c_str(), m.tri_b, trace.explain(m).verdict_line.c_str());
+  }
+  if (a.check && !std::isnan(a.max_miss) && 100.0 * total.miss_ratio() > a.max_miss) {
+    std::fprintf(stderr, "peelcd detect: miss ratio %.4f%% is above --max-miss %g%%\n", 100.0 * total.miss_ratio(),
+                 a.max_miss);
+    return 3;
+  }
+  if (a.status) {  // for scripts, as grep: 0 when something collides, 1 when nothing does
+    bool any = false;
+    for (const PairResult& p : result.pairs) any = any || !p.colliding.empty();
+    return any ? 0 : 1;
+  }
+  return 0;
+}
+
+struct ExplainArgs {
+  std::string pair;  // OBJ_A:TRI_A,OBJ_B:TRI_B
+  std::string out;   // the page's folder
+};
+
+// peelcd explain: why one triangle pair was found or missed (peelcd/oracle/explain.h).
+int run_explain(const DetectArgs& a, const ExplainArgs& x) {
+  if (!a.json_out.empty()) check_output_path(a.json_out, "peelcd explain: --json");
+  if (!x.out.empty()) {
+    const std::filesystem::path out(x.out);
+    if (std::filesystem::exists(out) && !(std::filesystem::is_directory(out) && std::filesystem::is_empty(out)))
+      throw InputError("peelcd explain: --out '" + x.out + "' exists and is not an empty folder");
+    if (!out.parent_path().empty() && !std::filesystem::is_directory(out.parent_path()))
+      throw InputError("peelcd explain: --out '" + x.out + "': the parent folder does not exist");
+  }
+  const Progress progress;
+  progress.phase("peelcd explain: loading the meshes...");
+  const Scene scene = detect_input(a.inputs, "peelcd explain");
+  refuse_overwriting_input(a.json_out, scene_inputs(scene), "peelcd explain: --json");
+  const DetectOptions opt = merged_options(scene, a);
+  const std::vector<Object> objects = load_objects(scene);
+  const oracle::PairQuery query = oracle::parse_pair_query(x.pair, objects);
+  progress.phase("peelcd explain: running the frame...");
+  Runner runner = make_runner(a.backend, merged_gl_options(scene, a.peeler, a.resolve, a.no_batch));
+  const oracle::FrameTrace trace(*runner.detector, objects, opt);
+  const oracle::Explanation e = trace.explain(query);
+  progress.clear();
+  FILE* const human = a.json_out == "-" ? stderr : stdout;
+  if (!a.quiet) std::fputs(oracle::explain_text(e).c_str(), human);
+  if (!a.json_out.empty()) write_output(a.json_out, oracle::to_json(e).dump(2));
+  if (!x.out.empty()) {
+    oracle::write_explain_page(e, x.out);
+    if (!a.quiet) std::fprintf(human, "page: %s/index.html\n", x.out.c_str());
+  }
+  return 0;
+}
+
+
+std::vector<Command> add_detect_commands(CLI::App& app) {
+  auto d_holder = std::make_shared<DetectArgs>();
+  DetectArgs& d = *d_holder;
+  CLI::App* detect = app.add_subcommand(
+      "detect", "Run one frame of collision detection on a scene file or on mesh files and report the colliding "
+                "triangle pairs (indices in each mesh file's triangle order)");
+  detect->add_option("input", d.inputs, "A scene JSON file, or two or more mesh files (OBJ, PLY, STL, glTF, ...: "
+                                        "identity transforms, named by their file names, default options)")
+      ->required();
+  add_frame_options(detect, d);
+  detect->add_option("--json", d.json_out, "Write the JSON report to FILE, or - for stdout")->check(kOutputPath);
+  detect->add_flag("--list", d.list, "Print every colliding triangle pair (A's triangle, B's) after the summary");
+  detect->add_flag("--status", d.status,
+                   "Exit status for scripts, as grep's: 0 when anything collides, 1 when nothing does (2 bad input, 3 --max-miss)");
+  detect->add_option("--repeat", d.repeat, "Run the frame N times and report median timings")
+      ->check(kPositive);
+  CLI::Option* check_flag =
+      detect->add_flag("--check", d.check, "Also run the exact all-pairs reference and print the miss ratio");
+  detect->add_option("--max-miss", d.max_miss,
+                     "With --check: exit 3 when the frame's miss ratio (missed / exact pairs, all object pairs) is "
+                     "above PCT percent (default: report only)")
+      ->check(CLI::Range(0.0, 100.0))
+      ->needs(check_flag);
+  detect->add_flag("--quiet", d.quiet, "No human summary");
+  detect->add_option("--explain-misses", d.explain_misses,
+                     "With --check: run `peelcd explain` on the first N missed pairs and print their verdicts")
+      ->check(kPositive)
+      ->needs(check_flag);
+
+  auto ex_holder = std::make_shared<DetectArgs>();
+  DetectArgs& ex = *ex_holder;
+  auto explain_args_holder = std::make_shared<ExplainArgs>();
+  ExplainArgs& explain_args = *explain_args_holder;
+  CLI::App* explain = app.add_subcommand(
+      "explain", "Say why one triangle pair was found or missed: the exact answer, the ROI, culling, and per view "
+                 "the fragments, the layers and the PCS tests at the segment's texels, then a one-line verdict "
+                 "(docs/debugging.md)");
+  explain->add_option("input", ex.inputs, "A scene JSON file, or two or more mesh files (as detect)")->required();
+  explain->add_option("--pair", explain_args.pair, "The pair: OBJ_A:TRI_A,OBJ_B:TRI_B (object name or index, triangle index)")
+      ->required();
+  add_frame_options(explain, ex);
+  explain->add_option("--out", explain_args.out, "Write a page (index.html, one zoomed picture per view, "
+                                                 "explain.json) to this folder (must not exist, or be empty)")->check(kOutputPath);
+  explain->add_option("--json", ex.json_out, "Write the explanation as JSON to FILE, or - for stdout")->check(kOutputPath);
+  explain->add_flag("--quiet", ex.quiet, "No text report");
+
+  return {{detect, [d_holder] { return run_detect(*d_holder); }},
+          {explain, [ex_holder, explain_args_holder] { return run_explain(*ex_holder, *explain_args_holder); }}};
+}
+}  // namespace peelcd::cli

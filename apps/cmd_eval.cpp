@@ -1,0 +1,121 @@
+// peelcd classes and calibrate (the command line; shared parts in cli.h).
+#include "cli.h"
+#include "peelcd/eval/calibrate.h"
+#include "peelcd/eval/classes.h"
+
+namespace peelcd::cli {
+
+struct ClassesArgs {
+  std::string backend = kDefaultBackend;
+  int repeat = 5;
+  int grid = 20;
+  std::string only;
+};
+
+// The configurations docs/accuracy.md compares on every class: the image stage's (Stage::image:
+// the router would send most of these small ROIs to the exact CPU path, which measures nothing
+// about the image stage), then detect's default with its router.
+std::vector<std::pair<std::string, DetectOptions>> class_configs() {
+  std::vector<std::pair<std::string, DetectOptions>> out;
+  out.emplace_back("paper", paper_options());
+  DetectOptions old;  // the point-sampling default before conservative mode (0.2.0)
+  old.stage = Stage::image;
+  old.conservative = false;
+  old.ids = IdMode::ring;
+  old.theta = old.phi = old.roll = 0.0;
+  old.views = 3;
+  out.emplace_back("point, axis frame, 3 views", old);
+  DetectOptions point;
+  point.stage = Stage::image;
+  point.conservative = false;
+  point.ids = IdMode::ring;
+  point.views = 3;
+  out.emplace_back("point, generic frame, 3 views", point);
+  DetectOptions conservative;
+  conservative.stage = Stage::image;
+  out.emplace_back("conservative (image stage)", conservative);
+  DetectOptions tight = conservative;
+  tight.resolution = 16;
+  out.emplace_back("conservative, 16^2 tiles", tight);
+  out.emplace_back("default (stage auto)", DetectOptions{});
+  return out;
+}
+
+int run_classes(const ClassesArgs& a) {
+  Runner runner = make_runner(a.backend, gl::GlOptions{});
+  std::printf("peelcd classes: %s (%s); median of %d frames; grid %dx%d\n", runner.backend().c_str(),
+              runner.renderer().c_str(), a.repeat, a.grid, a.grid);
+  std::printf("%-24s %-32s %7s %7s %7s %9s %9s %11s %9s\n", "class", "configuration", "exact", "found", "missed",
+              "miss %", "len miss%", "candidates", "ms");
+  for (const GeometryClass& g : geometry_classes(a.grid)) {
+    if (!a.only.empty() && g.name != a.only) continue;
+    for (const auto& [name, opt] : class_configs()) {
+      const ClassRow r = measure_class(*runner.detector, g, name, opt, a.repeat);
+      std::printf("%-24s %-32s %7zu %7zu %7zu %9.3f %9.3f %11zu %9.2f\n", g.name.c_str(), name.c_str(), r.exact, r.found,
+                  r.missed, 100.0 * r.miss_ratio(), 100.0 * r.missed_length_share(), r.candidates, r.median_ms);
+      std::fflush(stdout);
+    }
+  }
+  return 0;
+}
+
+struct CalibrateArgs {
+  std::string backend = kDefaultBackend;
+  int repeat = 5;
+  std::vector<int> budgets = {128, 512};
+};
+
+int run_calibrate(const CalibrateArgs& a) {
+  Runner runner = make_runner(a.backend, gl::GlOptions{});
+  std::printf("peelcd calibrate: %s (%s); median of %d frames per stage\n", runner.backend().c_str(),
+              runner.renderer().c_str(), a.repeat);
+  const Calibration cal = calibrate(*runner.detector, data_dir("fixtures/meshes"), a.budgets, a.repeat);
+  std::printf("%-28s %9s %6s %10s %10s %9s %9s %7s\n", "scene", "triangles", "tile", "image ms", "exact ms",
+              "image cand", "exact cand", "faster");
+  for (const CalibrationRow& r : cal.rows)
+    std::printf("%-28s %9zu %6d %10.3f %10.3f %9zu %9zu %7s\n", r.scene.c_str(), r.triangles, r.tile, r.image_ms, r.exact_ms,
+                r.image_candidates, r.exact_candidates, r.image_ms < r.exact_ms ? "image" : "exact");
+  const StageCost in_image = runner.stage->cost(), in_exact = exact_path_cost();
+  std::printf("\nfitted  image: view_ms %.4f  triangle_us %.4f  texel_ns %.4f\n", cal.image.view_ms, cal.image.triangle_us,
+              cal.image.texel_ns);
+  std::printf("fitted  exact: view_ms %.4f  triangle_us %.4f\n", cal.exact.view_ms, cal.exact.triangle_us);
+  std::printf("in use  image: view_ms %.4f  triangle_us %.4f  texel_ns %.4f\n", in_image.view_ms, in_image.triangle_us,
+              in_image.texel_ns);
+  std::printf("in use  exact: view_ms %.4f  triangle_us %.4f\n", in_exact.view_ms, in_exact.triangle_us);
+  std::printf("router with the fitted models: %zu of %zu ROIs on the slower stage, %.3f ms lost of %.3f ms best\n",
+              cal.wrong_fitted, cal.rows.size(), cal.lost_ms_fitted, cal.best_ms);
+  std::printf("router with the models in use: %zu of %zu ROIs on the slower stage, %.3f ms lost of %.3f ms best\n",
+              cal.wrong_in_use, cal.rows.size(), cal.lost_ms_in_use, cal.best_ms);
+  return 0;
+}
+
+
+std::vector<Command> add_eval_commands(CLI::App& app) {
+  auto ca_holder = std::make_shared<ClassesArgs>();
+  ClassesArgs& ca = *ca_holder;
+  CLI::App* classes = app.add_subcommand(
+      "classes", "Measure every configuration of docs/accuracy.md on the built-in classes of geometry (crossing "
+                 "and touching boxes, a floor, coincident copies, zero-area triangles, a needle, open and "
+                 "self-intersecting meshes, a crowded grid) against the exact reference");
+  classes->add_option("--backend", ca.backend, "Image stage: osmesa, egl or cpu")->capture_default_str();
+  classes->add_option("--repeat", ca.repeat, "Frames per measurement (median time)")->check(kPositive)
+      ->capture_default_str();
+  classes->add_option("--grid", ca.grid, "Side of the crowded grid (N x N spheres)")->check(CLI::Range(2, 64))
+      ->capture_default_str();
+  classes->add_option("--class", ca.only, "Only the class of this name");
+
+  auto cal_holder = std::make_shared<CalibrateArgs>();
+  CalibrateArgs& cal = *cal_holder;
+  CLI::App* calibrate_cmd = app.add_subcommand(
+      "calibrate", "Time one-ROI scenes through the image stage and the exact CPU path and fit the stage router's "
+                   "cost models (docs/performance.md, \"The stage router\")");
+  calibrate_cmd->add_option("--backend", cal.backend, "Image stage: osmesa, egl or cpu")->capture_default_str();
+  calibrate_cmd->add_option("--repeat", cal.repeat, "Frames per measurement (median)")->check(kPositive)
+      ->capture_default_str();
+  calibrate_cmd->add_option("--budgets", cal.budgets, "Texture budgets to time each scene at")
+      ->check(CLI::Range(16, 16384))->capture_default_str();
+
+  return {{classes, [ca_holder] { return run_classes(*ca_holder); }},
+          {calibrate_cmd, [cal_holder] { return run_calibrate(*cal_holder); }}};
+}
+}  // namespace peelcd::cli
