@@ -31,7 +31,8 @@ GlImageStage::Impl::Impl(std::shared_ptr<Context> ctx, const GlOptions& opt)
   peel_program = link({compile(GL_VERTEX_SHADER, shaders::peel_vert, "peel.vert"),
                        compile(GL_FRAGMENT_SHADER, shaders::peel_frag, "peel.frag")},
                       "peel");
-  pcs_program = link({compile(GL_COMPUTE_SHADER, shaders::pcs_comp, "pcs.comp")}, "pcs");
+  const std::string pcs_src = shader_source(shaders::pcs_comp);
+  pcs_program = link({compile(GL_COMPUTE_SHADER, pcs_src.c_str(), "pcs.comp")}, "pcs");
   // The floor (benchmarks): the peel vertex shader and a fragment shader that does nothing.
   floor_program = link({compile(GL_VERTEX_SHADER, shaders::peel_vert, "peel.vert"),
                         compile(GL_FRAGMENT_SHADER, "#version 450 core\nvoid main() {}\n", "floor.frag")},
@@ -39,18 +40,24 @@ GlImageStage::Impl::Impl(std::shared_ptr<Context> ctx, const GlOptions& opt)
   abuffer_program = link({compile(GL_VERTEX_SHADER, shaders::peel_vert, "peel.vert"),
                           compile(GL_FRAGMENT_SHADER, shaders::abuffer_frag, "abuffer.frag")},
                          "abuffer");
-  resolve_program = link({compile(GL_COMPUTE_SHADER, shaders::abuffer_resolve_comp, "abuffer_resolve.comp")},
+  const std::string resolve_src = shader_source(shaders::abuffer_resolve_comp);
+  resolve_program = link({compile(GL_COMPUTE_SHADER, resolve_src.c_str(), "abuffer_resolve.comp")},
                          "abuffer resolve");
   cons_program = link({compile(GL_VERTEX_SHADER, shaders::conservative_vert, "conservative.vert"),
                        compile(GL_GEOMETRY_SHADER, shaders::conservative_geom, "conservative.geom"),
                        compile(GL_FRAGMENT_SHADER, shaders::conservative_frag, "conservative.frag")},
                       "conservative");
   cons_resolve_program =
-      link({compile(GL_COMPUTE_SHADER, shaders::conservative_resolve_comp, "conservative_resolve.comp")},
+      link({compile(GL_COMPUTE_SHADER, shader_source(shaders::conservative_resolve_comp).c_str(),
+                    "conservative_resolve.comp")},
            "conservative resolve");
-  cons_batch_program = link({compile(GL_VERTEX_SHADER, shaders::conservative_batch_vert, "conservative_batch.vert"),
-                             compile(GL_GEOMETRY_SHADER, shaders::conservative_batch_geom, "conservative_batch.geom"),
-                             compile(GL_FRAGMENT_SHADER, shaders::conservative_batch_frag, "conservative_batch.frag")},
+  // The batched program: the same sources with PEELCD_BATCH defined.
+  const std::string batch_vert = shader_source(shaders::conservative_vert, "#define PEELCD_BATCH\n");
+  const std::string batch_geom = shader_source(shaders::conservative_geom, "#define PEELCD_BATCH\n");
+  const std::string batch_frag = shader_source(shaders::conservative_frag, "#define PEELCD_BATCH\n");
+  cons_batch_program = link({compile(GL_VERTEX_SHADER, batch_vert.c_str(), "conservative.vert (PEELCD_BATCH)"),
+                             compile(GL_GEOMETRY_SHADER, batch_geom.c_str(), "conservative.geom (PEELCD_BATCH)"),
+                             compile(GL_FRAGMENT_SHADER, batch_frag.c_str(), "conservative.frag (PEELCD_BATCH)")},
                             "conservative batch");
   u_cb_viewport = gl.GetUniformLocation(cons_batch_program, "viewport");
   u_cb_slots = gl.GetUniformLocation(cons_batch_program, "slots");
@@ -160,6 +167,19 @@ void GlImageStage::Impl::check(const char* where) {
   msg << "peelcd::gl::GlImageStage: GL error 0x" << std::hex << err << " after " << where;
   while ((err = gl.GetError()) != GL_NO_ERROR) msg << ", 0x" << err;
   throw GlError(msg.str());
+}
+
+std::string shader_source(const char* src, const std::string& defines) {
+  std::string out = src;
+  // `defines` right after the #version line (the first line of every source).
+  const std::size_t eol = out.find('\n');
+  out.insert(eol == std::string::npos ? out.size() : eol + 1, defines);
+  // The shared PCS tests where the source asks for them.
+  const std::string include = "#include \"peelcd/core/pcs_test.inc\"";
+  if (const std::size_t at = out.find(include); at != std::string::npos)
+    out.replace(at, include.size(),
+                std::string("#define PEELCD_PCS_FN\n#define PEELCD_ABS abs\n") + shaders::pcs_test_inc);
+  return out;
 }
 
 GLuint GlImageStage::Impl::compile(GLenum type, const char* src, const char* name) {

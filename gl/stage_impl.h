@@ -32,9 +32,7 @@ extern const char* const conservative_vert;
 extern const char* const conservative_geom;
 extern const char* const conservative_frag;
 extern const char* const conservative_resolve_comp;
-extern const char* const conservative_batch_vert;
-extern const char* const conservative_batch_geom;
-extern const char* const conservative_batch_frag;
+extern const char* const pcs_test_inc;  // include/peelcd/core/pcs_test.inc
 extern const char* const shader_sources_hash;
 }  // namespace peelcd::shaders
 
@@ -44,6 +42,10 @@ using Clock = std::chrono::steady_clock;
 inline double ms_since(Clock::time_point t0) {
   return std::chrono::duration<double, std::milli>(Clock::now() - t0).count();
 }
+
+// A shader's source as compiled: `defines` after its #version line, and the shared PCS tests
+// (include/peelcd/core/pcs_test.inc) where it says #include "peelcd/core/pcs_test.inc".
+std::string shader_source(const char* src, const std::string& defines = "");
 
 // One corner of an uploaded triangle: ROI-local position and the corner's ID.
 struct GpuVertex {

@@ -8,6 +8,8 @@
 // ends at the first layer with no such fragment. Depth ties between candidates go to the lower
 // rank, then the earlier-drawn triangle, as GL_LESS does with object A drawn first.
 // The PCS test between adjacent layers is shaders/pcs.comp's, run start included.
+#include "peelcd/core/pcs_test.inc"  // pcs_within_epsilon, pcs_intervals_overlap (shared with C++)
+
 layout(local_size_x = 8, local_size_y = 8) in;
 
 layout(binding = 2, rgba32ui) uniform writeonly uimage2D layer_out;  // capture: layer `emit_layer`
@@ -36,10 +38,9 @@ uniform bool append_pcs;
 uniform int emit_layer;     // -1: none
 
 void test_pair(uvec4 t0, uvec4 t1) {
-  float dz = abs(uintBitsToFloat(t1.x) - uintBitsToFloat(t0.x));
   float spread = abs(uintBitsToFloat(t1.z) - uintBitsToFloat(t0.z)) +
                  abs(uintBitsToFloat(t1.w) - uintBitsToFloat(t0.w));
-  if (!(dz < epsilon_window + slope * spread)) return;
+  if (!pcs_within_epsilon(uintBitsToFloat(t0.x), uintBitsToFloat(t1.x), spread, epsilon_window, slope)) return;
   uint id0 = (t0.y & 0x7fffffffu) - 1u, id1 = (t1.y & 0x7fffffffu) - 1u;
   uint slot = atomicAdd(count, 1u);
   if (slot < capacity) pairs[slot] = (t0.y >> 31) == 0u ? uvec2(id0, id1) : uvec2(id1, id0);

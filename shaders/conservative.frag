@@ -9,8 +9,19 @@ flat in vec3 g_z;
 flat in vec2 g_margin;
 flat in uint g_order;
 
+#ifdef PEELCD_BATCH  // shaders/conservative.vert
+flat in uint g_view;  // view << 1 | object
+struct BatchView {
+  mat4 clip_from_local;
+  mat4 roi_from_object[2];
+  ivec4 info;  // resolution, first texel in the packed k-buffer
+};
+layout(std430, binding = 3) readonly buffer Views { BatchView views[]; };
+uniform uint texels;  // of the packed k-buffer: every view's texels, one after the other
+#else
 uniform uint object_bit;  // 0 for object A, 1 for object B
 uniform int resolution;
+#endif
 uniform uint slots;
 
 layout(std430, binding = 2) buffer Counts { uint counts[]; };
@@ -25,6 +36,10 @@ float min3(vec3 v) { return min(min(v.x, v.y), v.z); }
 float max3(vec3 v) { return max(max(v.x, v.y), v.z); }
 
 void main() {
+#ifdef PEELCD_BATCH
+  int resolution = views[g_view >> 1].info.x;
+  uint object_bit = g_view & 1u;
+#endif
   ivec2 ij = ivec2(gl_FragCoord.xy);
   if (ij.x < 0 || ij.y < 0 || ij.x >= resolution || ij.y >= resolution) return;
   float h = 0.5 + g_margin.x;
@@ -61,8 +76,12 @@ void main() {
   lo = max(lo, 0.0);
   hi = min(hi, 1.0);
   if (!(lo <= hi)) return;
+#ifdef PEELCD_BATCH
+  uint texel = uint(views[g_view >> 1].info.y) + uint(ij.y) * uint(resolution) + uint(ij.x);
+#else
   uint texels = uint(resolution) * uint(resolution);
   uint texel = uint(ij.y) * uint(resolution) + uint(ij.x);
+#endif
   uint s = atomicAdd(counts[texel], 1u);
   if (s >= slots) return;  // the resolve sees the count and asks the host for more slots
   fragments[s * texels + texel] = uvec4(floatBitsToUint(lo), (object_bit << 31) | g_order, floatBitsToUint(hi), 0u);

@@ -5,6 +5,11 @@
 // the texels the triangle really touches. The quad lies at mid depth: nothing is clipped in
 // depth, the fragment computes the triangle's depth interval itself.
 // The arithmetic and the constants are peelcd/core/conservative.h's.
+//
+// PEELCD_BATCH (shaders/conservative.vert): the view's matrix and resolution come from the views
+// buffer; window coordinates are the view's own (texel i of the view at [i, i + 1)), the quad is
+// placed in a viewport of `viewport` texels (the largest view of the batch), and the fragment
+// shader maps the texel into the view's part of the packed k-buffer.
 layout(triangles) in;
 layout(triangle_strip, max_vertices = 4) out;
 
@@ -12,8 +17,20 @@ in vec3 v_local[];
 in vec3 v_mag[];
 flat in uint v_order[];
 
+#ifdef PEELCD_BATCH
+flat in uint v_view[];
+struct BatchView {
+  mat4 clip_from_local;
+  mat4 roi_from_object[2];
+  ivec4 info;
+};
+layout(std430, binding = 3) readonly buffer Views { BatchView views[]; };
+uniform int viewport;
+flat out uint g_view;
+#else
 uniform mat4 clip_from_local;
 uniform int resolution;
+#endif
 
 flat out vec3 g_x;       // window x of the three corners, texels
 flat out vec3 g_y;       // window y
@@ -27,7 +44,14 @@ const float kTexelAbs = 1.0 / 4096.0;
 const float kDepthAbs = 1.0 / 4194304.0;
 
 void main() {
+#ifdef PEELCD_BATCH
+  mat4 clip_from_local = views[v_view[0] >> 1].clip_from_local;
+  float n = float(views[v_view[0] >> 1].info.x);
+  float w = float(viewport);
+#else
   float n = float(resolution);
+  float w = n;
+#endif
   vec3 e = vec3(0.0);
   vec3 wx, wy, wz;
   for (int k = 0; k < 3; ++k) {
@@ -50,7 +74,7 @@ void main() {
   if (hi.x < 0.0 || hi.y < 0.0 || lo.x > n || lo.y > n) return;
   lo = max(lo, vec2(-1.0));
   hi = min(hi, vec2(n + 1.0));
-  vec2 ndc_lo = lo * (2.0 / n) - 1.0, ndc_hi = hi * (2.0 / n) - 1.0;
+  vec2 ndc_lo = lo * (2.0 / w) - 1.0, ndc_hi = hi * (2.0 / w) - 1.0;
   vec2 corners[4] = vec2[4](ndc_lo, vec2(ndc_hi.x, ndc_lo.y), vec2(ndc_lo.x, ndc_hi.y), ndc_hi);
   for (int k = 0; k < 4; ++k) {
     g_x = wx;
@@ -58,6 +82,9 @@ void main() {
     g_z = wz;
     g_margin = vec2(mx, mz);
     g_order = v_order[0];
+#ifdef PEELCD_BATCH
+    g_view = v_view[0];
+#endif
     gl_Position = vec4(corners[k], 0.0, 1.0);
     EmitVertex();
   }

@@ -2,6 +2,8 @@
 // Conservative mode, step 3: per texel, every two fragments of different objects whose depth
 // intervals overlap are a PCS (not only adjacent layers); every fragment is a layer, in
 // (lower depth, object, draw order) order. The same set as core/kbuffer.cpp's host resolve.
+#include "peelcd/core/pcs_test.inc"  // pcs_within_epsilon, pcs_intervals_overlap (shared with C++)
+
 layout(local_size_x = 8, local_size_y = 8) in;
 
 layout(binding = 2, rgba32ui) uniform writeonly uimage2D layer_out;  // capture: layer `emit_layer`
@@ -54,7 +56,7 @@ void main() {
     for (uint j = texel; j < end; j += texels) {
       uvec4 g = texelFetch(fragment_tex, int(j));
       if ((g.y >> 31) != 1u) continue;
-      if (!(lo <= uintBitsToFloat(g.z) && uintBitsToFloat(g.x) <= hi)) continue;
+      if (!pcs_intervals_overlap(lo, hi, uintBitsToFloat(g.x), uintBitsToFloat(g.z))) continue;
       uint slot = atomicAdd(count, 1u);
       if (slot < capacity) pairs[slot] = uvec2(id_of(f), id_of(g));
     }

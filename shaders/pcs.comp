@@ -7,6 +7,8 @@
 // Full peeling also tests layer k+1 against the first surface of the run of same-object layers
 // that ends at layer k (`run_start`): alternate peeling pairs exactly those first surfaces
 // (A1 A2 B: alternate pairs A1-B, adjacency pairs A2-B), so full mode is a superset of it.
+#include "peelcd/core/pcs_test.inc"  // pcs_within_epsilon, pcs_intervals_overlap (shared with C++)
+
 layout(local_size_x = 8, local_size_y = 8) in;
 
 layout(binding = 0) uniform usampler2D layer_k;
@@ -25,10 +27,9 @@ layout(std430, binding = 0) buffer PcsBuffer {
 };
 
 void test_pair(uvec4 t0, uvec4 t1) {
-  float dz = abs(uintBitsToFloat(t1.x) - uintBitsToFloat(t0.x));
   float spread = abs(uintBitsToFloat(t1.z) - uintBitsToFloat(t0.z)) +
                  abs(uintBitsToFloat(t1.w) - uintBitsToFloat(t0.w));
-  if (!(dz < epsilon_window + slope * spread)) return;
+  if (!pcs_within_epsilon(uintBitsToFloat(t0.x), uintBitsToFloat(t1.x), spread, epsilon_window, slope)) return;
   uint id0 = (t0.y & 0x7fffffffu) - 1u, id1 = (t1.y & 0x7fffffffu) - 1u;
   uint slot = atomicAdd(count, 1u);
   if (slot < capacity) pairs[slot] = (t0.y >> 31) == 0u ? uvec2(id0, id1) : uvec2(id1, id0);

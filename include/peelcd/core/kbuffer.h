@@ -79,15 +79,12 @@ class KResolver {
   std::vector<Lane> lanes_;
 };
 
-// The two PCS tests, written once for the host resolve and the oracle (dump previews, the
-// viewer); shaders/abuffer_resolve.comp and shaders/conservative_resolve.comp hold their GLSL
-// twins in the same float operations.
-// Point sampling: adjacent layers at depths z0, z1 (window units) are within epsilon, the bound
-// widened by `slope` times the spread of their depth slopes.
-inline bool pcs_within_epsilon(float z0, float z1, float spread, float epsilon_window, float slope) {
-  return std::fabs(z1 - z0) < epsilon_window + slope * spread;
-}
-// Conservative stage: two fragments' closed depth intervals [lo, hi] overlap.
-inline bool pcs_intervals_overlap(float lo_a, float hi_a, float lo_b, float hi_b) { return !(lo_b > hi_a) && !(lo_a > hi_b); }
+// The two PCS tests (pcs_within_epsilon, pcs_intervals_overlap), one source for this code and
+// the GL stage's resolve shaders: peelcd/core/pcs_test.inc.
+#define PEELCD_PCS_FN inline
+#define PEELCD_ABS std::fabs
+#include "peelcd/core/pcs_test.inc"
+#undef PEELCD_PCS_FN
+#undef PEELCD_ABS
 
 }  // namespace peelcd
