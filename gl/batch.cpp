@@ -1,5 +1,5 @@
 // Batched conservative views (GlImageStage::peel_batch): the ROI views of a frame packed into one
-// k-buffer, view after view, and drawn by one draw call through shaders/conservative_batch.*;
+// k-buffer, view after view, and drawn by one draw call through shaders/conservative.* (PEELCD_BATCH);
 // each view's part then resolved on the host (core/kbuffer.cpp, KBuffer::stride). Per triangle,
 // a buffer names its view and object; per view, a buffer holds its matrix, the objects' poses,
 // its resolution and its first texel. The arithmetic per texel is that of the one-view draw

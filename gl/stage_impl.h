@@ -83,7 +83,7 @@ struct GlImageStage::Impl {
   GLuint cons_program = 0, cons_resolve_program = 0;  // conservative mode
   GLint u_cs_clip = -1, u_cs_model = -1, u_cs_res = -1, u_cs_slots = -1, u_cs_object = -1;
   GLint u_cr_res = -1, u_cr_slots = -1, u_cr_append = -1, u_cr_emit = -1;
-  // Batched conservative views (batch.cpp, shaders/conservative_batch.*).
+  // Batched conservative views (batch.cpp, shaders/conservative.* with PEELCD_BATCH).
   GLuint cons_batch_program = 0;
   GLint u_cb_viewport = -1, u_cb_slots = -1, u_cb_texels = -1;
   GLuint batch_vbo = 0, batch_views = 0, batch_triangles = 0;
