@@ -215,6 +215,15 @@ std::pair<std::size_t, std::size_t> parse_shard(const std::string& text, const s
   return {k - 1, n};
 }
 
+CLI::Option* add_backend_option(CLI::App* c, std::string& backend, bool gl_only) {
+  return c
+      ->add_option("--backend", backend,
+                   gl_only ? "GL backend: osmesa (software GL, the reference) or egl (a GPU, or Mesa without one)"
+                           : "Image stage: osmesa (software GL, the reference), egl (a GPU, or Mesa without one) or "
+                             "cpu (no GL)")
+      ->capture_default_str();
+}
+
 // The options that shape a frame, shared by detect and dump (they override the scene file's).
 // The frame's options, one flag per row of the option table (peelcd/core/options.h), and the
 // GL stage's and the command line's own.
@@ -250,8 +259,7 @@ void add_frame_options(CLI::App* c, DetectArgs& d) {
   c->add_flag("--paper", d.paper,
               "The paper's configuration: point sampling, alternate peeling, paper IDs, constant epsilon, one view "
               "along world x, no culling (other options given override it)");
-  c->add_option("--backend", d.backend, "Image stage: osmesa (software GL, the reference), egl (GPU, or Mesa without one) or cpu (no GL)")
-      ->capture_default_str();
+  add_backend_option(c, d.backend);
 }
 
 

@@ -141,6 +141,8 @@ gl::GlOptions merged_gl_options(const Scene& scene, const std::string& peeler, c
                                bool no_batch = false);
 // Command-line values override the scene file's (each checked by the option table's rules).
 DetectOptions merged_options(const Scene& scene, const DetectArgs& a);
+// --backend, one help text: every image stage, or (`gl_only`) the GL ones.
+CLI::Option* add_backend_option(CLI::App* c, std::string& backend, bool gl_only = false);
 // The frame's options, one flag per row of the option table, and the GL stage's.
 void add_frame_options(CLI::App* c, DetectArgs& d);
 // --json / --csv outputs: atomic, never destroying (peelcd/io/output.h). "-" is stdout.

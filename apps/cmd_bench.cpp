@@ -280,7 +280,7 @@ std::vector<Command> add_bench_commands(CLI::App& app) {
   benchmark->add_option("--res", be.res, "Texture size per ROI for peelcd; 0 = share the 512^2 budget with "
                                          "tiles by need, as detect does")->capture_default_str()
       ->check(kNonNegative);
-  benchmark->add_option("--backend", be.backend, "GL backend: osmesa or egl")->capture_default_str();
+  add_backend_option(benchmark, be.backend, true);
   benchmark->add_option("--csv", be.csv, "Write one row per (frame, method) to FILE, or - for stdout")->check(kOutputPath);
 
   return {{benchmark, [be_holder] { return run_bench(*be_holder); }}};

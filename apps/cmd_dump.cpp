@@ -1,5 +1,6 @@
 // peelcd dump and golden (the command line; shared parts in cli.h).
 #include "cli.h"
+#include "peelcd/oracle/golden.h"
 #include "peelcd/oracle/explain.h"
 
 namespace peelcd::cli {
@@ -97,37 +98,19 @@ struct GoldenArgs {
 constexpr int kExitSkipped = 77;
 
 std::vector<std::string> golden_cases(const GoldenArgs& a) {
-  if (!a.cases.empty()) return a.cases;
-  std::vector<std::string> all;
-  if (!std::filesystem::is_directory(a.dir)) throw InputError("peelcd golden: '" + a.dir + "' is not a folder");
-  for (const auto& e : std::filesystem::directory_iterator(a.dir))
-    if (std::filesystem::exists(e.path() / "case.json")) all.push_back(e.path().filename().string());
-  std::sort(all.begin(), all.end());
-  if (all.empty()) throw InputError("peelcd golden: no cases (folders with a case.json) in '" + a.dir + "'");
-  return all;
-}
-
-std::string case_scene(const GoldenArgs& a, const std::string& name) {
-  const std::string path = a.dir + "/" + name + "/case.json";
-  if (!std::filesystem::exists(path)) throw InputError("peelcd golden: unknown case \"" + name + "\" (no " + path + ")");
-  return path;
+  return a.cases.empty() ? oracle::golden_case_names(a.dir) : a.cases;
 }
 
 int run_golden_record(const GoldenArgs& a) {
   // Goldens come from the reference backend only.
   Runner runner = make_runner("osmesa");
   for (const std::string& name : golden_cases(a)) {
-    const Scene scene = load_scene(case_scene(a, name));
+    const Scene scene = load_scene(oracle::golden_case_scene(a.dir, name));
     const std::vector<Object> objects = load_objects(scene);
     runner.use(scene.gl);
     const oracle::Dump dump = capture_frame(objects, scene.options, runner);
-    const std::string dir = a.dir + "/" + name + "/expected", fresh = dir + ".new";
-    std::error_code ec;
-    const DeferSignals hold;  // Ctrl-C: this case's goldens are replaced whole, or not at all
-    std::filesystem::remove_all(fresh, ec);
-    oracle::write_dump(dump, fresh, false);
-    std::filesystem::remove_all(dir);
-    std::filesystem::rename(fresh, dir);
+    oracle::record_golden_case(dump, a.dir, name);
+    const std::string dir = oracle::golden_case_expected(a.dir, name);
     std::size_t layers = 0;
     for (const auto& p : dump.pairs)
       for (const auto& v : p.views) layers += v.layers.size();
@@ -135,8 +118,6 @@ int run_golden_record(const GoldenArgs& a) {
   }
   return 0;
 }
-
-std::pair<std::size_t, std::size_t> parse_shard(const std::string& text, const std::string& what);
 
 int run_golden_compare(const GoldenArgs& a) {
   Runner runner = make_runner(a.backend);
@@ -155,18 +136,16 @@ int run_golden_compare(const GoldenArgs& a) {
   int failed = 0;
   const auto [shard, shards] = parse_shard(a.shard, "peelcd golden compare:");
   const std::vector<std::string> all_cases = golden_cases(a);
-  std::vector<std::string> cases;
-  for (std::size_t i = 0; i < all_cases.size(); ++i)
-    if (i % shards == shard) cases.push_back(all_cases[i]);
+  const std::vector<std::string> cases = oracle::golden_shard(all_cases, shard, shards);
   if (shards > 1) std::printf("golden compare: shard %zu/%zu: %zu of %zu cases\n", shard + 1, shards, cases.size(), all_cases.size());
   const Progress progress("cases", true);
   std::size_t done = 0;
   for (const std::string& name : cases) {
     progress(done++, cases.size());
-    Scene scene = load_scene(case_scene(a, name));
+    Scene scene = load_scene(oracle::golden_case_scene(a.dir, name));
     runner.use(merged_gl_options(scene, a.peeler, a.resolve));
     const std::vector<Object> objects = load_objects(scene);
-    const oracle::Dump expected = oracle::read_dump(a.dir + "/" + name + "/expected");
+    const oracle::Dump expected = oracle::read_dump(oracle::golden_case_expected(a.dir, name));
     for (int run = 0; run < std::max(1, a.repeat); ++run) {
       const oracle::Dump actual = capture_frame(objects, scene.options, runner);
       const oracle::Comparison c = oracle::compare_dumps(expected, actual, tier);
@@ -250,7 +229,7 @@ std::vector<Command> add_golden_commands(CLI::App& app) {
   compare->add_option("--golden-dir", gc.dir,
                       "Folder of the golden cases (default: fixtures/golden of the source tree, or share/peelcd "
                       "when installed, or $PEELCD_DATA_DIR)");
-  compare->add_option("--backend", gc.backend, "GL backend: osmesa or egl")->capture_default_str();
+  add_backend_option(compare, gc.backend);
   compare->add_option("--tier", gc.tier, "auto (exact on llvmpipe, hardware otherwise), exact or hardware")
       ->capture_default_str();
   compare->add_option("--report", gc.report, "Folder for the reports of differing cases")->check(kOutputPath)->capture_default_str();

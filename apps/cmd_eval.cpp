@@ -97,7 +97,7 @@ std::vector<Command> add_eval_commands(CLI::App& app) {
       "classes", "Measure every configuration of docs/accuracy.md on the built-in classes of geometry (crossing "
                  "and touching boxes, a floor, coincident copies, zero-area triangles, a needle, open and "
                  "self-intersecting meshes, a crowded grid) against the exact reference");
-  classes->add_option("--backend", ca.backend, "Image stage: osmesa, egl or cpu")->capture_default_str();
+  add_backend_option(classes, ca.backend);
   classes->add_option("--repeat", ca.repeat, "Frames per measurement (median time)")->check(kPositive)
       ->capture_default_str();
   classes->add_option("--grid", ca.grid, "Side of the crowded grid (N x N spheres)")->check(CLI::Range(2, 64))
@@ -109,7 +109,7 @@ std::vector<Command> add_eval_commands(CLI::App& app) {
   CLI::App* calibrate_cmd = app.add_subcommand(
       "calibrate", "Time one-ROI scenes through the image stage and the exact CPU path and fit the stage router's "
                    "cost models (docs/performance.md, \"The stage router\")");
-  calibrate_cmd->add_option("--backend", cal.backend, "Image stage: osmesa, egl or cpu")->capture_default_str();
+  add_backend_option(calibrate_cmd, cal.backend);
   calibrate_cmd->add_option("--repeat", cal.repeat, "Frames per measurement (median)")->check(kPositive)
       ->capture_default_str();
   calibrate_cmd->add_option("--budgets", cal.budgets, "Texture budgets to time each scene at")

@@ -208,7 +208,7 @@ std::vector<Command> add_sweep_commands(CLI::App& app) {
       ->check(CLI::Range(1.0, 360.0))->capture_default_str();
   sweep->add_option("--phi-step", sw.phi_step, "Latitude step, degrees")->check(kFinite)->check(CLI::Range(1.0, 90.0))
       ->capture_default_str();
-  sweep->add_option("--backend", sw.backend, "GL backend: osmesa or egl")->capture_default_str();
+  add_backend_option(sweep, sw.backend, true);
   sweep->add_option("--csv", sw.csv, "Write one row per (configuration, view) to FILE, or - for stdout")->check(kOutputPath);
   sweep->add_option("--plot", sw.plot, "Write heat maps and the run-time-against-miss-ratio plot to DIR (matplotlib)")->check(kOutputPath);
 
