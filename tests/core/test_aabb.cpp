@@ -70,8 +70,12 @@ TEST_CASE("a ROI's tile is capped at edge_texels texels per median edge across t
   CHECK(edge_tile_resolution(40, region, 0.25, 12) == 40);    // a share that is not a multiple of 16 stays
   CHECK(edge_tile_resolution(512, region, 0.25, 0) == 512);   // 0: always the share
   CHECK(edge_tile_resolution(512, region, 0.0, 12) == 512);   // no edge to go by
-  CHECK(edge_tile_resolution(512, region, std::nan(""), 12) == 512);
   CHECK(edge_tile_resolution(512, Aabb{}, 0.25, 12) == 512);  // empty region
   const Aabb flat{Vec3(0, 0, 0), Vec3(0, 0, 0)};               // boxes touching at a point
   CHECK(edge_tile_resolution(512, flat, 0.25, 12) == 16);
+}
+
+TEST_CASE("a NaN median edge gives the budget's share", "[aabb][nonfinite]") {
+  const Aabb region{Vec3(0, 0, 0), Vec3(2, 1, 0.5)};
+  CHECK(edge_tile_resolution(512, region, std::nan(""), 12) == 512);
 }

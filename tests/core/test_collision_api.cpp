@@ -80,7 +80,7 @@ TEST_CASE("a deforming object is updated in place, without a copy of its mesh", 
   CHECK_THROWS_AS(ball.set_pose(Eigen::Affine3d::Identity()), std::logic_error);
 }
 
-TEST_CASE("bad meshes and poses give exceptions that name the object and the problem", "[api]") {
+TEST_CASE("bad meshes and poses give exceptions that name the object and the problem", "[api][nonfinite]") {
   auto detector = cpu_detector();
   Mesh bad_index = make_box(Vec3(0, 0, 0), Vec3(1, 1, 1));
   bad_index.triangles[3][1] = 99;
