@@ -1,4 +1,5 @@
 #include "peelcd/core/kbuffer.h"
+#include "peelcd/core/texel.h"
 
 #include <algorithm>
 #include <cmath>
@@ -7,11 +8,7 @@
 namespace peelcd {
 namespace {
 
-float as_float(std::uint32_t bits) {
-  float f;
-  std::memcpy(&f, &bits, sizeof f);
-  return f;
-}
+using texel::as_float;
 
 struct Layer {
   std::uint32_t depth = 0, key = 0, dzdx = 0, dzdy = 0;  // key: object << 31 | ID + 1

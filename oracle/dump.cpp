@@ -70,11 +70,7 @@ std::vector<IdPair> parse_pcs(const std::string& text, const std::string& what) 
   return out;
 }
 
-float as_float(std::uint32_t bits) {
-  float f;
-  std::memcpy(&f, &bits, 4);
-  return f;
-}
+using texel::as_float;
 
 std::string hex(std::uint32_t w) {
   char buf[16];
@@ -128,7 +124,7 @@ std::size_t first_sliver_shift(const std::vector<std::vector<std::uint32_t>>& e,
                                std::size_t none) {
   const auto depth = [&](const std::vector<std::vector<std::uint32_t>>& l, std::size_t k) { return l[k][4 * t]; };
   const auto word = [&](const std::vector<std::vector<std::uint32_t>>& l, std::size_t k) {
-    return k < l.size() ? l[k][4 * t + 1] : 0u;
+    return k < l.size() ? texel::word(l[k], t, texel::kKey) : 0u;
   };
   const auto count = [&](const std::vector<std::vector<std::uint32_t>>& l) {
     std::size_t c = 0;
@@ -170,7 +166,7 @@ bool within_neighbour_depths(const std::vector<std::uint32_t>& layer, int n, int
       const int xx = x + dx, yy = y + dy;
       if (xx < 0 || yy < 0 || xx >= n || yy >= n) continue;
       const std::size_t t = std::size_t(yy) * n + xx;
-      if (layer[4 * t + 1] != w) continue;
+      if (texel::word(layer, t, texel::kKey) != w) continue;
       lo = std::min(lo, double(as_float(layer[4 * t])));
       hi = std::max(hi, double(as_float(layer[4 * t])));
     }
@@ -244,8 +240,8 @@ std::vector<bool> pcs_texels(const DumpView& view, std::size_t k) {
       for (std::size_t j = 0; j < view.layers.size() && !marks[i]; ++j) {
         const auto& lj = view.layers[j];
         if (j == k || texel_empty(lj, i) || texel_object(lj, i) == texel_object(lk, i)) continue;
-        marks[i] = pcs_intervals_overlap(as_float(lk[4 * i]), as_float(lk[4 * i + 2]), as_float(lj[4 * i]),
-                                         as_float(lj[4 * i + 2]));
+        marks[i] = pcs_intervals_overlap(texel::value(lk, i, texel::kDepth), texel::value(lk, i, texel::kUpper),
+                                         texel::value(lj, i, texel::kDepth), texel::value(lj, i, texel::kUpper));
       }
     }
     return marks;
@@ -255,9 +251,10 @@ std::vector<bool> pcs_texels(const DumpView& view, std::size_t k) {
   const auto& l1 = lk;
   for (std::size_t i = 0; i < count; ++i) {
     if (texel_empty(l0, i) || texel_empty(l1, i) || texel_object(l0, i) == texel_object(l1, i)) continue;
-    const float spread = std::fabs(as_float(l1[4 * i + 2]) - as_float(l0[4 * i + 2])) +
-                         std::fabs(as_float(l1[4 * i + 3]) - as_float(l0[4 * i + 3]));
-    marks[i] = pcs_within_epsilon(as_float(l0[4 * i]), as_float(l1[4 * i]), spread, view.epsilon_window, view.slope);
+    const float spread = std::fabs(texel::value(l1, i, texel::kDzdx) - texel::value(l0, i, texel::kDzdx)) +
+                         std::fabs(texel::value(l1, i, texel::kDzdy) - texel::value(l0, i, texel::kDzdy));
+    marks[i] = pcs_within_epsilon(texel::value(l0, i, texel::kDepth), texel::value(l1, i, texel::kDepth), spread,
+                                  view.epsilon_window, view.slope);
   }
   return marks;
 }
@@ -579,14 +576,14 @@ Comparison compare_dumps(const Dump& e, const Dump& a, Tier tier, std::size_t ma
               if (tier == Tier::hardware && k >= tie_from[t]) {
                 tolerated = true;
               } else if (tier == Tier::hardware) {
-                const bool same_surface = le[4 * t + 1] == la[4 * t + 1];
+                const bool same_surface = texel::word(le, t, texel::kKey) == texel::word(la, t, texel::kKey);
                 if (ch == 1 || !same_surface)  // another surface: only next to an edge
                   tolerated = near_edge(le, n, x, gl_row, kIdSilhouetteTexels);
                 else if (ch == 0 || (conservative && ch == 2)) {  // a depth of the same surface
                   // Steep triangles: a vertex snapped to another sub-texel grid moves the depth
                   // plane by up to kSnapTexels times the texel's depth slope.
                   const double slope =
-                      conservative ? 0.0 : std::fabs(as_float(le[4 * t + 2])) + std::fabs(as_float(le[4 * t + 3]));
+                      conservative ? 0.0 : std::fabs(texel::value(le, t, texel::kDzdx)) + std::fabs(texel::value(le, t, texel::kDzdy));
                   tolerated = depth_distance(we, wa) <= std::max(depth_tolerance, kSnapTexels * slope) ||
                               (shared_ids && within_neighbour_depths(le, n, x, gl_row, as_float(wa), depth_tolerance));
                 }

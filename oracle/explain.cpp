@@ -5,6 +5,7 @@
 #include "peelcd/core/cpu_stage.h"
 #include "peelcd/core/cull.h"
 #include "peelcd/core/id_map.h"
+#include "peelcd/core/kbuffer.h"
 #include "peelcd/core/narrow_phase.h"
 #include "peelcd/io/error.h"
 #include "peelcd/io/options_json.h"
@@ -26,11 +27,7 @@ namespace {
 
 namespace fs = std::filesystem;
 
-float as_float(std::uint32_t bits) {
-  float f;
-  std::memcpy(&f, &bits, sizeof f);
-  return f;
-}
+using texel::as_float;
 
 std::string fmt(const char* format, double v) {
   char buf[64];
@@ -299,7 +296,7 @@ Explanation FrameTrace::explain(const PairQuery& query) const {
           l.object = texel_object(layer, t);
           l.id = texel_id1(layer, t) - 1u;
           l.depth = as_float(layer[4 * t]);
-          l.depth_hi = v.conservative ? as_float(layer[4 * t + 2]) : l.depth;
+          l.depth_hi = v.conservative ? texel::value(layer, t, texel::kUpper) : l.depth;
           l.stands_a = l.object == 0 && stand_a.count(l.id);
           l.stands_b = l.object == 1 && stand_b.count(l.id);
           r.layers.push_back(l);
@@ -315,16 +312,17 @@ Explanation FrameTrace::explain(const PairQuery& query) const {
             if (v.conservative) {  // resolve_intervals: j sorts after i; overlap unless lo_j > hi_i
               test.value = y.depth - x.depth_hi;
               test.bound = 0.0f;
-              test.pass = !(y.depth > x.depth_hi);
+              test.pass = pcs_intervals_overlap(x.depth, x.depth_hi, y.depth, y.depth_hi);
             } else {  // kbuffer.cpp's test_pair on adjacent layers, in the same float operations
               const auto& lx = cv.layers[std::size_t(x.layer)];
               const auto& ly = cv.layers[std::size_t(y.layer)];
               test.adjacent = y.layer == x.layer + 1;
-              test.value = std::fabs(as_float(ly[4 * t]) - as_float(lx[4 * t]));
-              const float spread = std::fabs(as_float(ly[4 * t + 2]) - as_float(lx[4 * t + 2])) +
-                                   std::fabs(as_float(ly[4 * t + 3]) - as_float(lx[4 * t + 3]));
-              test.bound = v.epsilon_window + v.slope * spread;
-              test.pass = test.adjacent && test.value < test.bound;
+              const float z0 = texel::value(lx, t, texel::kDepth), z1 = texel::value(ly, t, texel::kDepth);
+              test.value = std::fabs(z1 - z0);
+              const float spread = std::fabs(texel::value(ly, t, texel::kDzdx) - texel::value(lx, t, texel::kDzdx)) +
+                                   std::fabs(texel::value(ly, t, texel::kDzdy) - texel::value(lx, t, texel::kDzdy));
+              test.bound = v.epsilon_window + v.slope * spread;  // for the report; the test itself:
+              test.pass = test.adjacent && pcs_within_epsilon(z0, z1, spread, v.epsilon_window, v.slope);
             }
             r.tests.push_back(test);
           }

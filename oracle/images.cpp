@@ -26,11 +26,7 @@ struct Planes {
   explicit Planes(std::size_t count) : z(count), dzdx(count), dzdy(count), id(count), object(count) {}
 };
 
-float as_float(std::uint32_t w) {
-  float f;
-  std::memcpy(&f, &w, 4);
-  return f;
-}
+using texel::as_float;
 std::uint32_t as_bits(float f) {
   std::uint32_t w;
   std::memcpy(&w, &f, 4);

@@ -16,6 +16,7 @@
 // The format is specified for other writers in docs/dump-format.md (meta.json: the JSON Schema
 // docs/schema/dump-meta.schema.json); kDumpFormat names its version.
 #include "peelcd/core/frame.h"
+#include "peelcd/core/texel.h"
 #include "peelcd/core/detector.h"
 #include "peelcd/gl/gl_stage.h"
 
@@ -87,10 +88,10 @@ Dump read_dump(const std::string& dir);
 // of the other object at the texel (pcs_intervals_overlap).
 std::vector<bool> pcs_texels(const DumpView& view, std::size_t k);
 
-// Layer word accessors (shaders/peel.frag layout).
-inline bool texel_empty(const std::vector<std::uint32_t>& layer, std::size_t i) { return layer[4 * i + 1] == 0; }
-inline std::uint32_t texel_object(const std::vector<std::uint32_t>& layer, std::size_t i) { return layer[4 * i + 1] >> 31; }
-inline std::uint32_t texel_id1(const std::vector<std::uint32_t>& layer, std::size_t i) { return layer[4 * i + 1] & 0x7fffffffu; }
+// Layer word accessors: peelcd/core/texel.h's, by the names the oracle has used.
+inline bool texel_empty(const std::vector<std::uint32_t>& layer, std::size_t i) { return texel::empty(layer, i); }
+inline std::uint32_t texel_object(const std::vector<std::uint32_t>& layer, std::size_t i) { return texel::object(layer, i); }
+inline std::uint32_t texel_id1(const std::vector<std::uint32_t>& layer, std::size_t i) { return texel::id1(layer, i); }
 
 // ---- images ----
 // Writes one layer as EXR (see the layout above); reads it back into N*N*4 words. Throw InputError.
