@@ -44,6 +44,16 @@ bool is_stream(const fs::file_status& s) {
          s.type() == fs::file_type::block || s.type() == fs::file_type::socket;
 }
 
+// The folder `target` would be created in exists and is writable.
+void check_parent_folder(const fs::path& target, const std::string& path, const std::string& what) {
+  std::error_code ec;
+  const fs::path parent = target.parent_path().empty() ? fs::path(".") : target.parent_path();
+  if (!fs::is_directory(parent, ec))
+    throw InputError(what + " '" + path + "': the folder '" + parent.string() + "' does not exist");
+  if (access(parent.c_str(), W_OK | X_OK) != 0)
+    throw InputError(what + " '" + path + "': cannot write into the folder '" + parent.string() + "'");
+}
+
 }  // namespace
 
 void check_output_path(const std::string& path, const std::string& what) {
@@ -54,11 +64,7 @@ void check_output_path(const std::string& path, const std::string& what) {
   const fs::file_status st = fs::status(target, ec);
   if (fs::is_directory(st)) throw InputError(what + " '" + path + "': is a directory");
   if (is_stream(st)) return;
-  const fs::path parent = target.parent_path().empty() ? fs::path(".") : target.parent_path();
-  if (!fs::is_directory(parent, ec))
-    throw InputError(what + " '" + path + "': the folder '" + parent.string() + "' does not exist");
-  if (access(parent.c_str(), W_OK | X_OK) != 0)
-    throw InputError(what + " '" + path + "': cannot write into the folder '" + parent.string() + "'");
+  check_parent_folder(target, path, what);
   if (fs::exists(st) && access(target.c_str(), W_OK) != 0)
     throw InputError(what + " '" + path + "': the file is not writable");
 }
@@ -72,11 +78,7 @@ void check_output_dir(const std::string& path, const std::string& what) {
     if (access(target.c_str(), W_OK | X_OK) != 0) throw InputError(what + " '" + path + "': cannot write into the folder");
     return;
   }
-  const fs::path parent = target.parent_path().empty() ? fs::path(".") : target.parent_path();
-  if (!fs::is_directory(parent, ec))
-    throw InputError(what + " '" + path + "': the folder '" + parent.string() + "' does not exist");
-  if (access(parent.c_str(), W_OK | X_OK) != 0)
-    throw InputError(what + " '" + path + "': cannot write into the folder '" + parent.string() + "'");
+  check_parent_folder(target, path, what);
 }
 
 void refuse_overwriting_input(const std::string& out, const std::vector<std::string>& inputs, const std::string& what) {

@@ -214,11 +214,7 @@ TEST_CASE("PCS texels of a conservative layer: depth intervals of the other obje
   DumpView v;
   v.resolution = 2;  // 4 texels, the 4th empty everywhere
   v.conservative = true;
-  const auto bits = [](float f) {
-    std::uint32_t b;
-    std::memcpy(&b, &f, sizeof b);
-    return b;
-  };
+  const auto bits = [](float f) { return texel::bits_of(f); };
   const auto set = [&](std::vector<std::uint32_t>& l, std::size_t t, std::uint32_t object, float lo, float hi) {
     l[4 * t] = bits(lo), l[4 * t + 1] = (object << 31) | 7u, l[4 * t + 2] = bits(hi), l[4 * t + 3] = 0u;
   };
@@ -361,17 +357,8 @@ TEST_CASE("hardware tier on real goldens: rasterizer differences pass, broken la
 // edge or inside one shared ID. Tolerated; the same edits where no tie or twin explains them fail.
 namespace {
 
-std::uint32_t float_bits(float f) {
-  std::uint32_t b;
-  std::memcpy(&b, &f, sizeof b);
-  return b;
-}
-
-float bits_float(std::uint32_t b) {
-  float f;
-  std::memcpy(&f, &b, sizeof f);
-  return f;
-}
+using texel::bits_of;
+using texel::as_float;
 
 // Texel t's fragments (4 words each) of `view`, front to back.
 std::vector<std::array<std::uint32_t, 4>> texel_sequence(const DumpView& v, std::size_t t) {
@@ -406,7 +393,7 @@ TEST_CASE("hardware tier: ties kept or broken the other way, and edge or sliver 
       twin[1] ^= 0x80000000u;  // the other object, the same ID number
       auto with_tie = seq, with_far = seq;
       with_tie.push_back(twin);
-      twin[0] = float_bits(std::min(1.0f, bits_float(seq[0][0]) + 0.25f));
+      twin[0] = bits_of(std::min(1.0f, as_float(seq[0][0]) + 0.25f));
       with_far.push_back(twin);
       set_sequence(kept.pairs[0].views[0], t, with_tie);
       set_sequence(far.pairs[0].views[0], t, with_far);
