@@ -3,10 +3,6 @@
 #include "peelcd/core/broad_phase.h"
 #include "peelcd/core/cpu_stage.h"
 #include "peelcd/core/reference.h"
-#include "peelcd/gl_egl/egl_context.h"
-#if PEELCD_HAVE_OSMESA
-#include "peelcd/gl_osmesa/osmesa_context.h"
-#endif
 
 namespace peelcd::cli {
 
@@ -45,28 +41,11 @@ const CLI::Validator kNonNegative = finite_number([](double v) { return v >= 0.0
 
 Runner make_runner(const std::string& backend, const gl::GlOptions& options) {
   Runner r;
-  std::shared_ptr<gl::Context> context;
-#if PEELCD_HAVE_OSMESA
-  if (backend == "osmesa") context = std::make_shared<gl::OsmesaContext>();
-#endif
-  if (backend == "egl") context = std::make_shared<gl::EglContext>();
-  if (context) {
-    auto stage = std::make_shared<gl::GlImageStage>(context, options);
-    r.gl = stage.get();
-    r.stage = stage;
-  } else if (backend == "cpu") {
-    r.stage = std::make_shared<CpuImageStage>();
-  } else {
-#if !PEELCD_HAVE_OSMESA
-    if (backend == "osmesa")
-      throw InputError("peelcd: --backend osmesa: this peelcd was built without OSMesa (PEELCD_WITH_OSMESA=OFF): use egl or cpu");
-#endif
-    throw InputError("peelcd: --backend: unknown backend \"" + backend + "\" (expected osmesa, egl or cpu)");
-  }
+  r.stage = make_image_stage(backend, options);  // peelcd/backends.h
+  r.gl = dynamic_cast<gl::GlImageStage*>(r.stage.get());
   r.detector = std::make_unique<Detector>(r.stage);
   return r;
 }
-
 
 // A scene's input files: the scene file itself (when there is one) and every mesh it names.
 std::vector<std::string> scene_inputs(const Scene& scene) {

@@ -3,6 +3,7 @@
 // lives in its own file (apps/cmd_*.cpp) and registers itself with add_*_commands(); apps/main.cpp
 // parses the command line and runs the one chosen.
 #include "data.h"
+#include "peelcd/backends.h"
 #include "peelcd/bench/peers.h"
 #include "peelcd/core/detector.h"
 #include "peelcd/core/reference.h"
@@ -47,12 +48,7 @@ std::vector<Command> add_eval_commands(CLI::App& app);      // classes, calibrat
 
 constexpr int kExitBadInput = 2;
 
-// The default backend: the software reference where it was built, else EGL (a GPU, or Mesa).
-#if PEELCD_HAVE_OSMESA
-constexpr const char* kDefaultBackend = "osmesa";
-#else
-constexpr const char* kDefaultBackend = "egl";
-#endif
+// kDefaultBackend: peelcd/backends.h's (the software reference where it was built, else EGL).
 
 // Output options (--json, --csv, --plot, --out, --report): an empty value is a mistake, refused
 // at parse time (exit 2), not read as "no output".
@@ -61,8 +57,7 @@ extern const CLI::Validator kOutputPath;
 // Numbers with messages a person can read (CLI11's own let "nan" through).
 extern const CLI::Validator kFinite, kPositive, kNonNegative;
 
-// The image stage of a run and the detector over it: GL on OSMesa (the deterministic
-// reference) or EGL without a window, or the CPU model (no GL).
+// The image stage of a run (make_image_stage(), peelcd/backends.h) and the detector over it.
 struct Runner {
   std::shared_ptr<ImageStage> stage;
   gl::GlImageStage* gl = nullptr;  // the GL stage, or null for the CPU stage

@@ -5,9 +5,7 @@
 #include "peelcd/core/reference.h"
 #include "peelcd/gl/pipeline.h"
 #include "peelcd/gl_egl/egl_context.h"
-#if PEELCD_TEST_HAVE_OSMESA
-#include "peelcd/gl_osmesa/osmesa_context.h"
-#endif
+#include "peelcd/backends.h"
 
 #include <cstdlib>
 #include <iostream>
@@ -46,16 +44,11 @@ inline std::string context_renderer(gl::Context& c) {
 
 inline std::shared_ptr<gl::Context> test_context() {
   static const std::shared_ptr<gl::Context> context = [] {
-#if PEELCD_TEST_HAVE_OSMESA
-    auto c = test_backend() == "egl" ? std::shared_ptr<gl::Context>(std::make_shared<gl::EglContext>())
-                                     : std::shared_ptr<gl::Context>(std::make_shared<gl::OsmesaContext>());
-#else
-    if (test_backend() != "egl") {
-      skip_test("PEELCD_TEST_BACKEND=" + test_stack() + ": built without OSMesa");
+    auto c = make_gl_context(test_backend());  // peelcd/backends.h
+    if (!c) {
+      skip_test("PEELCD_TEST_BACKEND=" + test_stack() + ": this build has no such backend");
       std::exit(0);
     }
-    auto c = std::shared_ptr<gl::Context>(std::make_shared<gl::EglContext>());
-#endif
     // A named stack that did not come up as named: the whole test case is a skip, not a pass.
     const std::string stack = test_stack(), renderer = context_renderer(*c);
     const std::string want = stack == "egl-zink" ? "zink" : stack == "egl-llvmpipe" ? "llvmpipe" : "";
