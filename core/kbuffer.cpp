@@ -51,8 +51,11 @@ void resolve_intervals(const std::vector<KFragment>& sorted, std::uint32_t n, co
       out[0] = f.depth, out[1] = (object << 31) | (p.ids[object][f.key & 0x7fffffffu] + 1u), out[2] = f.dzdx;
       out[3] = 0u;
     }
-    const float hi = as_float(f.dzdx);
-    for (std::uint32_t j = i + 1; j < n && !(as_float(sorted[j].depth) > hi); ++j) {
+    const float lo = as_float(f.depth), hi = as_float(f.dzdx);
+    // Sorted by lower depth: the fragments after i overlap it while their lower depth is within
+    // its interval (the shared test, peelcd/core/pcs_test.inc); the first that does not ends it.
+    for (std::uint32_t j = i + 1;
+         j < n && pcs_intervals_overlap(lo, hi, as_float(sorted[j].depth), as_float(sorted[j].dzdx)); ++j) {
       const std::uint32_t other = sorted[j].key >> 31;
       if (other == object) continue;
       const std::uint32_t id_i = p.ids[object][f.key & 0x7fffffffu];
