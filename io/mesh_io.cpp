@@ -1,5 +1,6 @@
 #include "peelcd/io/mesh_io.h"
 
+#include "peelcd/core/detector.h"  // kFloatMax
 #include "peelcd/io/error.h"
 
 #include <assimp/Importer.hpp>
@@ -149,7 +150,7 @@ std::string obj_vertex_problem(const std::string& path) {
       char* end = nullptr;
       const double x = std::strtod(w.c_str(), &end);
       if (end != w.c_str() + w.size()) return where + ": '" + w.substr(0, 40) + "' is not a number";
-      if (count < 3 && std::isfinite(x) && std::abs(x) > 3.4028234663852886e38)
+      if (count < 3 && std::isfinite(x) && std::abs(x) > kFloatMax)
         return where + ": coordinate " + w.substr(0, 40) +
                " is outside the float range (|x| <= 3.4e38) mesh files are read in";
       ++count;
@@ -200,7 +201,7 @@ Mesh read_off(const std::string& path) {
     if (!p.allFinite())
       throw InputError("peelcd::load_mesh(): '" + path + "': vertex " + std::to_string(v) +
                        " has a NaN or infinite coordinate");
-    if (p.cwiseAbs().maxCoeff() > 3.4028234663852886e38)
+    if (p.cwiseAbs().maxCoeff() > kFloatMax)
       throw fail("vertex " + std::to_string(v) + ": a coordinate is outside the float range (|x| <= 3.4e38) the image stage works in");
     auto [it, inserted] = weld.emplace(p, std::uint32_t(mesh.vertices.size()));
     if (inserted) mesh.vertices.push_back(p);

@@ -2,6 +2,8 @@
 // reports (JSON, text, page) are explain_report.cpp.
 #include "peelcd/oracle/explain.h"
 
+#include "explain_words.h"
+
 #include "peelcd/core/cpu_stage.h"
 #include "peelcd/core/cull.h"
 #include "peelcd/core/id_map.h"
@@ -29,12 +31,9 @@ namespace fs = std::filesystem;
 
 using texel::as_float;
 
-std::string fmt(const char* format, double v) {
-  char buf[64];
-  std::snprintf(buf, sizeof buf, format, v);
-  return buf;
-}
-std::string g(double v) { return fmt("%.6g", v); }
+using words::fmt;
+using words::g;
+using words::object_word;
 
 // Window position (texels; texel i spans [i, i + 1)) of world point p in `view`.
 std::array<double, 2> window_of(const RoiView& view, const Vec3& p) {
@@ -68,8 +67,6 @@ const char* verdict_text(Verdict v) {
   }
   return "?";
 }
-
-std::string object_word(std::uint32_t object) { return object == 0 ? "A" : "B"; }
 
 }  // namespace
 

@@ -2,6 +2,8 @@
 // zoomed picture per view. The trace itself is explain.cpp.
 #include "peelcd/oracle/explain.h"
 
+#include "explain_words.h"
+
 #include "peelcd/core/cpu_stage.h"
 #include "peelcd/core/cull.h"
 #include "peelcd/core/id_map.h"
@@ -26,14 +28,8 @@ namespace peelcd::oracle {
 
 namespace fs = std::filesystem;
 
-namespace {
-std::string g(double v) {
-  char buf[64];
-  std::snprintf(buf, sizeof buf, "%.6g", v);
-  return buf;
-}
-std::string object_word(std::uint32_t object) { return object == 0 ? "A" : "B"; }
-}  // namespace
+using words::g;
+using words::object_word;
 
 nlohmann::json to_json(const Explanation& e) {
   using nlohmann::json;

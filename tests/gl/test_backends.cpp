@@ -10,7 +10,7 @@ using namespace peelcd;
 using namespace peelcd::test;
 
 TEST_CASE("OSMesa and EGL (llvmpipe) in one process give identical PCS and contacts", "[backends]") {
-#if !PEELCD_TEST_HAVE_OSMESA
+#if !PEELCD_HAVE_OSMESA
   skip_test("built without OSMesa: the goldens are the reference (golden compare --backend egl)");
   return;
 #else

@@ -7,7 +7,7 @@
 
 #include <catch2/catch.hpp>
 
-#if PEELCD_TEST_OSMESA_RAW
+#if PEELCD_HAVE_OSMESA
 #include <GL/osmesa.h>
 #endif
 
@@ -98,7 +98,7 @@ TEST_CASE("the GL stage shares ownership of its context and gives the caller's c
   CHECK(alive.expired());  // released with the pipeline
 }
 
-#if PEELCD_TEST_OSMESA_RAW
+#if PEELCD_HAVE_OSMESA
 TEST_CASE("an OSMesa context the caller had current is current again after a frame", "[stages]") {
   if (test_backend() != "osmesa") {  // the raw OSMesa context is the osmesa run's concern
     skip_test("needs the osmesa run (PEELCD_TEST_BACKEND=" + test_backend() + ")");
