@@ -1,7 +1,7 @@
 // OSMesa and EGL in one process (docs/design.md section 6): the pipeline calls GL only through
 // pointers resolved from the current context, so both run side by side. On llvmpipe both must
 // give bit-identical results: the same PCS and the same contacts.
-#include "gl_fixture.h"
+#include "../gl/gl_fixture.h"
 #include "peelcd/io/scene.h"
 
 #include <catch2/catch.hpp>
