@@ -303,6 +303,34 @@ std::pair<Vec3, Vec3> intersection_segment(const TriangleCorners& a, const Trian
   return exact_segment(a, b, sa, sb);
 }
 
+bool test_triangle_pair(const TriangleCorners& ca, const TriangleCorners& cb, Contact& contact) {
+  // The six corner/plane signs, each once (certified in double, exact where double cannot
+  // tell); most candidates end here, one triangle strictly on one side of the other's plane.
+  int side_b[3], side_a[3];
+  plane_sides(ca, cb, side_b);
+  if (one_open_side(side_b)) return false;
+  plane_sides(cb, ca, side_a);
+  if (one_open_side(side_a)) return false;
+  if (all_zero(side_a) || all_zero(side_b)) {
+    // Coplanar, or a triangle without area: the general exact test and constructions.
+    if (!triangles_intersect(ca, cb)) return false;
+    std::tie(contact.p, contact.q) = intersection_segment(ca, cb);
+    contact.kind = classify_contact(ca, cb);
+    return true;
+  }
+  // Two proper triangles in two planes (a zero-area triangle has every sign 0 against its own
+  // plane): Guigue-Devillers on the signs, the kind from them, the segment in double where it
+  // is well conditioned.
+  if (!crossing_intersect(ca, cb, side_a, side_b)) return false;
+  const auto both = [](const int s[3]) {
+    return (s[0] < 0 || s[1] < 0 || s[2] < 0) && (s[0] > 0 || s[1] > 0 || s[2] > 0);
+  };
+  contact.kind = both(side_a) && both(side_b) ? ContactKind::crossing : ContactKind::touching;
+  if (!crossing_segment(ca, cb, side_a, side_b, contact.p, contact.q))
+    std::tie(contact.p, contact.q) = exact_segment(ca, cb, simplex(ca), simplex(cb));
+  return true;
+}
+
 void narrow_phase(const Mesh& a, const Mesh& b, const std::vector<std::uint64_t>& candidates,
                   std::vector<Contact>& out, bool boxes_overlap) {
   for (std::uint64_t c : candidates) {
@@ -311,35 +339,10 @@ void narrow_phase(const Mesh& a, const Mesh& b, const std::vector<std::uint64_t>
     // of doubles; boxes that only touch overlap). Skipped when the caller's candidates are
     // pairs of overlapping boxes already.
     if (!boxes_overlap && !triangle_bounds(a, ta).overlaps(triangle_bounds(b, tb))) continue;
-    const TriangleCorners ca = corners(a, ta), cb = corners(b, tb);
-    // The six corner/plane signs, each once (certified in double, exact where double cannot
-    // tell); most candidates end here, one triangle strictly on one side of the other's plane.
-    int side_b[3], side_a[3];
-    plane_sides(ca, cb, side_b);
-    if (one_open_side(side_b)) continue;
-    plane_sides(cb, ca, side_a);
-    if (one_open_side(side_a)) continue;
     Contact contact;
     contact.tri_a = ta;
     contact.tri_b = tb;
-    if (all_zero(side_a) || all_zero(side_b)) {
-      // Coplanar, or a triangle without area: the general exact test and constructions.
-      if (!triangles_intersect(ca, cb)) continue;
-      std::tie(contact.p, contact.q) = intersection_segment(ca, cb);
-      contact.kind = classify_contact(ca, cb);
-    } else {
-      // Two proper triangles in two planes (a zero-area triangle has every sign 0 against
-      // its own plane): Guigue-Devillers on the signs, the kind from them, the segment in
-      // double where it is well conditioned.
-      if (!crossing_intersect(ca, cb, side_a, side_b)) continue;
-      const auto both = [](const int s[3]) {
-        return (s[0] < 0 || s[1] < 0 || s[2] < 0) && (s[0] > 0 || s[1] > 0 || s[2] > 0);
-      };
-      contact.kind = both(side_a) && both(side_b) ? ContactKind::crossing : ContactKind::touching;
-      if (!crossing_segment(ca, cb, side_a, side_b, contact.p, contact.q))
-        std::tie(contact.p, contact.q) = exact_segment(ca, cb, simplex(ca), simplex(cb));
-    }
-    out.push_back(contact);
+    if (test_triangle_pair(corners(a, ta), corners(b, tb), contact)) out.push_back(contact);
   }
 }
 

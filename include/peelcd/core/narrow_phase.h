@@ -41,6 +41,11 @@ ContactKind classify_contact(const TriangleCorners& a, const TriangleCorners& b)
 // polygon) it is the polygon's longest chord among its vertices. Undefined if they are disjoint.
 std::pair<Vec3, Vec3> intersection_segment(const TriangleCorners& a, const TriangleCorners& b);
 
+// The exact test of one couple of triangles (world corners): true when they share a point, with
+// the contact's segment and kind filled in (its triangle indices are the caller's). The same
+// test narrow_phase() runs on each candidate.
+bool test_triangle_pair(const TriangleCorners& a, const TriangleCorners& b, Contact& contact);
+
 // Tests every candidate pair (packed with pack_pair(triA, triB), see id_map.h) and appends
 // the colliding ones to `out` in candidate order. boxes_overlap: every candidate is known to be
 // a pair of overlapping triangle boxes (box_overlap_pairs()'s output), so that first test is

@@ -1,0 +1,192 @@
+#include "peelcd/core/bvh.h"
+
+#include <algorithm>
+#include <cmath>
+#include <numeric>
+
+namespace peelcd {
+namespace {
+
+Aabb corner_box(const std::vector<Vec3>& v, const Tri& f) {
+  Aabb b;
+  b.lo = v[f[0]].cwiseMin(v[f[1]]).cwiseMin(v[f[2]]);
+  b.hi = v[f[0]].cwiseMax(v[f[1]]).cwiseMax(v[f[2]]);
+  return b;
+}
+
+Aabb merged(const Aabb& a, const Aabb& b) {
+  Aabb m;
+  m.lo = a.lo.cwiseMin(b.lo);
+  m.hi = a.hi.cwiseMax(b.hi);
+  return m;
+}
+
+}  // namespace
+
+void Bvh::build(const std::vector<Vec3>& vertices, const std::vector<Tri>& triangles) {
+  const std::size_t n = triangles.size();
+  nodes_.clear();
+  depth_ = 0;
+  boxes_.resize(n);
+  order_.resize(n);
+  leaf_of_.resize(n);
+  std::iota(order_.begin(), order_.end(), 0u);
+  if (n == 0) return;
+  std::vector<Vec3> centroids(n);
+  for (std::size_t t = 0; t < n; ++t) {
+    boxes_[t] = corner_box(vertices, triangles[t]);
+    centroids[t] = boxes_[t].center();
+  }
+  nodes_.reserve(2 * ((n + kBvhLeafSize - 1) / kBvhLeafSize));
+  build_node(0, std::uint32_t(n), 0, 1, centroids);
+  dirty_.assign(nodes_.size(), 0);
+}
+
+std::uint32_t Bvh::build_node(std::uint32_t begin, std::uint32_t end, std::uint32_t parent, std::size_t level,
+                              std::vector<Vec3>& centroids) {
+  const std::uint32_t index = std::uint32_t(nodes_.size());
+  nodes_.emplace_back();
+  nodes_[index].parent = parent;
+  depth_ = std::max(depth_, level);
+  if (end - begin <= kBvhLeafSize) {
+    Aabb box;
+    for (std::uint32_t i = begin; i < end; ++i) {
+      box = merged(box, boxes_[order_[i]]);
+      leaf_of_[order_[i]] = index;
+    }
+    nodes_[index].box = box;
+    nodes_[index].first = begin;
+    nodes_[index].count = end - begin;
+    return index;
+  }
+  Aabb cbox;
+  for (std::uint32_t i = begin; i < end; ++i) cbox.extend(centroids[order_[i]]);
+  int axis = 0;
+  cbox.extent().maxCoeff(&axis);
+  const std::uint32_t mid = begin + (end - begin) / 2;
+  // Ties broken by index: the same tree on every machine.
+  std::nth_element(order_.begin() + begin, order_.begin() + mid, order_.begin() + end,
+                   [&](std::uint32_t a, std::uint32_t b) {
+                     const double ca = centroids[a][axis], cb = centroids[b][axis];
+                     return ca < cb || (ca == cb && a < b);
+                   });
+  build_node(begin, mid, index, level + 1, centroids);  // the left child: index + 1
+  const std::uint32_t right = build_node(mid, end, index, level + 1, centroids);
+  nodes_[index].first = right;
+  nodes_[index].count = 0;
+  nodes_[index].box = merged(nodes_[index + 1].box, nodes_[right].box);
+  return index;
+}
+
+void Bvh::refit_node(std::uint32_t i) {
+  BvhNode& node = nodes_[i];
+  if (node.leaf()) {
+    Aabb box;
+    for (std::uint32_t k = node.first; k < node.first + node.count; ++k) box = merged(box, boxes_[order_[k]]);
+    node.box = box;
+  } else {
+    node.box = merged(nodes_[i + 1].box, nodes_[node.first].box);
+  }
+}
+
+void Bvh::refit(const std::vector<Vec3>& vertices, const std::vector<Tri>& triangles) {
+  for (std::size_t t = 0; t < boxes_.size(); ++t) boxes_[t] = corner_box(vertices, triangles[t]);
+  // Children follow their parents: one sweep from the last node refits bottom-up.
+  for (std::size_t i = nodes_.size(); i-- > 0;) refit_node(std::uint32_t(i));
+}
+
+void Bvh::refit(const std::vector<Vec3>& vertices, const std::vector<Tri>& triangles,
+                const std::vector<std::uint32_t>& changed) {
+  if (nodes_.empty()) return;
+  stack_.clear();
+  for (const std::uint32_t t : changed) {
+    boxes_[t] = corner_box(vertices, triangles[t]);
+    // Mark the leaf and its ancestors once; collect them.
+    for (std::uint32_t n = leaf_of_[t];; n = nodes_[n].parent) {
+      if (dirty_[n]) break;
+      dirty_[n] = 1;
+      stack_.push_back(n);
+      if (n == 0) break;
+    }
+  }
+  // Deepest first: nodes in depth-first order have larger indices than their ancestors.
+  std::sort(stack_.begin(), stack_.end(), std::greater<>());
+  for (const std::uint32_t n : stack_) {
+    refit_node(n);
+    dirty_[n] = 0;
+  }
+}
+
+void Bvh::query(const Aabb& box, std::vector<std::uint32_t>& out) const {
+  out.clear();
+  if (nodes_.empty()) return;
+  std::vector<std::uint32_t> stack{0};
+  while (!stack.empty()) {
+    const std::uint32_t i = stack.back();
+    stack.pop_back();
+    const BvhNode& node = nodes_[i];
+    if (!node.box.overlaps(box)) continue;
+    if (node.leaf()) {
+      for (std::uint32_t k = node.first; k < node.first + node.count; ++k)
+        if (boxes_[order_[k]].overlaps(box)) out.push_back(order_[k]);
+    } else {
+      stack.push_back(node.first);
+      stack.push_back(i + 1);
+    }
+  }
+  std::sort(out.begin(), out.end());
+}
+
+Aabb BvhRelation::to_a(const Aabb& b) const {
+  if (identity) return b;
+  const Vec3 c = b.center(), e = 0.5 * b.extent();
+  const Vec3 center = linear * c + translation;
+  const Vec3 half = abs_linear * e;
+  // Rounding of the products above: a relative 1e-9 of the magnitudes involved covers it.
+  const double grow = 1e-9 * (center.cwiseAbs().maxCoeff() + half.maxCoeff()) + 1e-300;
+  Aabb out;
+  out.lo = center - half - Vec3::Constant(grow);
+  out.hi = center + half + Vec3::Constant(grow);
+  return out;
+}
+
+BvhRelation BvhRelation::between(const Eigen::Affine3d& pose_a, const Eigen::Affine3d& pose_b) {
+  BvhRelation r;
+  const Eigen::Affine3d rel = pose_a.inverse(Eigen::Affine) * pose_b;
+  r.identity = rel.matrix() == Eigen::Matrix4d::Identity();
+  r.linear = rel.linear();
+  r.abs_linear = r.linear.cwiseAbs();
+  r.translation = rel.translation();
+  return r;
+}
+
+void bvh_split(const Bvh& a, const Bvh& b, const BvhRelation& rel, std::size_t tasks,
+               std::vector<BvhNodePair>& out) {
+  out.clear();
+  if (a.empty() || b.empty()) return;
+  std::vector<BvhNodePair> level{{0u, 0u}}, next;
+  const auto& na = a.nodes();
+  const auto& nb = b.nodes();
+  while (!level.empty() && out.size() + level.size() < tasks) {
+    next.clear();
+    for (const auto& [i, j] : level) {
+      const BvhNode& x = na[i];
+      const BvhNode& y = nb[j];
+      if (!x.box.overlaps(rel.to_a(y.box))) continue;
+      if (x.leaf() && y.leaf()) {
+        out.emplace_back(i, j);
+      } else if (x.leaf()) {
+        next.emplace_back(i, j + 1), next.emplace_back(i, y.first);
+      } else if (y.leaf()) {
+        next.emplace_back(i + 1, j), next.emplace_back(x.first, j);
+      } else {  // both split: four children pairs
+        for (const std::uint32_t ci : {i + 1, x.first})
+          for (const std::uint32_t cj : {j + 1, y.first}) next.emplace_back(ci, cj);
+      }
+    }
+    level.swap(next);
+  }
+  out.insert(out.end(), level.begin(), level.end());
+}
+
+}  // namespace peelcd

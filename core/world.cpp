@@ -1,0 +1,485 @@
+#include "peelcd/core/world.h"
+
+#include "peelcd/core/broad_phase.h"
+#include "peelcd/core/cpu_stage.h"
+#include "peelcd/core/id_map.h"
+#include "peelcd/core/narrow_phase.h"
+#include "peelcd/core/worker_pool.h"
+
+#include <algorithm>
+#include <atomic>
+#include <chrono>
+#include <stdexcept>
+
+namespace peelcd {
+namespace {
+
+using Clock = std::chrono::steady_clock;
+double ms_since(Clock::time_point t0) { return std::chrono::duration<double, std::milli>(Clock::now() - t0).count(); }
+
+// The exact path's cost per candidate couple once the trees have found it (the narrow phase:
+// mostly the six plane signs), for the router. Measured with `peelcd bench` on the crossing
+// spheres (2 cores, 2026-11-25; docs/performance.md).
+constexpr double kCandidateUs = 0.12;
+
+struct Body {
+  bool alive = false;
+  bool is_rigid = false;
+  std::string name;
+  std::shared_ptr<const Mesh> shape;  // rigid
+  Mesh mesh;                          // deforming: world space
+  Eigen::Affine3d pose = Eigen::Affine3d::Identity();
+  Bvh tree;
+  // Deforming: the triangles using each vertex (CSR), built on the first move_vertices().
+  std::vector<std::uint32_t> vertex_first, vertex_tris;
+
+  const Mesh& local() const { return is_rigid ? *shape : mesh; }
+  Vec3 world(std::uint32_t v) const { return is_rigid ? Vec3(pose * shape->vertices[v]) : mesh.vertices[v]; }
+  Aabb world_box() const {
+    const Aabb b = tree.box();
+    if (!is_rigid || b.empty()) return b;
+    const Vec3 c = pose * b.center();
+    const Vec3 half = pose.linear().cwiseAbs() * (0.5 * b.extent());
+    const double grow = 1e-9 * (c.cwiseAbs().maxCoeff() + half.maxCoeff()) + 1e-300;
+    Aabb w;
+    w.lo = c - half - Vec3::Constant(grow);
+    w.hi = c + half + Vec3::Constant(grow);
+    return w;
+  }
+};
+
+std::string label_of(const std::string& name, BodyId id) {
+  return "body " + std::to_string(id) + (name.empty() ? "" : " '" + name + "'");
+}
+
+void check_mesh(const Mesh& m, const std::string& label) {
+  const auto fail = [&](const std::string& problem) { throw std::invalid_argument("peelcd::World: " + label + problem); };
+  for (std::size_t v = 0; v < m.vertices.size(); ++v)
+    if (!m.vertices[v].allFinite()) fail(": vertex " + std::to_string(v) + " " + coordinate_problem(m.vertices[v], false));
+  for (std::size_t f = 0; f < m.triangles.size(); ++f)
+    for (const std::uint32_t v : m.triangles[f])
+      if (v >= m.vertices.size())
+        fail(": triangle " + std::to_string(f) + " uses vertex " + std::to_string(v) + " but the mesh has " +
+             std::to_string(m.vertices.size()) + " vertices");
+  if (std::max(m.triangles.size(), m.vertices.size()) >= 0x7fffffffu)
+    fail(" has 2^31 - 1 or more triangles or vertices; IDs hold 31 bits");
+}
+
+void check_pose(const Eigen::Affine3d& pose, const std::string& label) {
+  if (const std::string problem = pose_problem(pose); !problem.empty())
+    throw std::invalid_argument("peelcd::World: " + label + ": its pose " + problem);
+}
+
+// One piece of a pair's traversal: a node pair, the candidates found under it, then (exact
+// path) the contacts among them, in candidate order.
+struct Task {
+  std::size_t pair = 0;
+  BvhNodePair start;
+  std::vector<std::uint64_t> candidates;
+  std::vector<Contact> contacts;
+  std::size_t visited = 0, transformed = 0;
+};
+
+}  // namespace
+
+struct World::Impl {
+  std::shared_ptr<ImageStage> stage;
+  std::unique_ptr<Detector> detector;  // made on the first pair routed to the image stage
+  std::vector<Body> bodies;
+  std::size_t alive = 0;
+  WorldStats stats;
+  FrameResult result;
+  // Frame scratch.
+  std::vector<Aabb> boxes;
+  std::vector<BodyId> ids;
+  std::vector<std::pair<std::size_t, std::size_t>> pairs;
+  std::vector<std::size_t> order;
+  std::vector<Task> tasks;
+  std::vector<BvhNodePair> split;
+  std::vector<std::vector<BvhNodePair>> stacks;  // per lane
+  std::vector<std::uint64_t> candidates, scratch;
+  std::unique_ptr<WorkerPool> pool;
+
+  Body& body(BodyId id, const char* what) {
+    if (id >= bodies.size() || !bodies[id].alive)
+      throw std::invalid_argument(std::string("peelcd::World::") + what + "(): no body " + std::to_string(id));
+    return bodies[id];
+  }
+  const Body& body(BodyId id) const {
+    if (id >= bodies.size() || !bodies[id].alive)
+      throw std::invalid_argument("peelcd::World: no body " + std::to_string(id));
+    return bodies[id];
+  }
+  BodyId add(Body b) {
+    b.alive = true;
+    b.tree.build(b.local().vertices, b.local().triangles);
+    ++stats.builds;
+    ++alive;
+    bodies.push_back(std::move(b));
+    return BodyId(bodies.size() - 1);
+  }
+
+  unsigned lanes_for(const DetectOptions& opt) {
+    if (opt.threads == 1) return 1;
+    if (!pool || (opt.threads != 0 && pool->lanes() != opt.threads)) pool = std::make_unique<WorkerPool>(opt.threads);
+    return pool->lanes();
+  }
+  // body(i, lane) for i in [0, n), spread over the pool's lanes when there are several.
+  template <class Fn>
+  void parallel(std::size_t n, unsigned lanes, Fn&& fn) {
+    if (stacks.size() < lanes) stacks.resize(lanes);
+    if (lanes <= 1 || n <= 1) {
+      for (std::size_t i = 0; i < n; ++i) fn(i, 0u);
+      return;
+    }
+    std::atomic<std::size_t> next{0};
+    auto job = [&](unsigned lane) {
+      for (std::size_t i = next.fetch_add(1); i < n; i = next.fetch_add(1)) fn(i, lane);
+    };
+    pool->run(job);
+  }
+
+  void collide(const DetectOptions& opt, FrameResult& out);
+  void image_pair(const Body& a, const Body& b, const std::vector<std::uint64_t>& candidates, const DetectOptions& opt,
+                  PairResult& r, FrameResult& out);
+};
+
+World::World(std::shared_ptr<ImageStage> stage) : impl_(std::make_unique<Impl>()) {
+  impl_->stage = stage ? std::move(stage) : std::make_shared<CpuImageStage>();
+}
+World::~World() = default;
+
+BodyId World::add_rigid(std::shared_ptr<const Mesh> shape, const Eigen::Affine3d& pose, std::string name) {
+  const std::string label = label_of(name, BodyId(impl_->bodies.size()));
+  if (!shape) throw std::invalid_argument("peelcd::World: " + label + ": no shape");
+  check_mesh(*shape, label);
+  check_pose(pose, label);
+  Body b;
+  b.is_rigid = true;
+  b.name = std::move(name);
+  b.shape = std::move(shape);
+  b.pose = pose;
+  return impl_->add(std::move(b));
+}
+
+BodyId World::add_deforming(Mesh mesh, std::string name) {
+  check_mesh(mesh, label_of(name, BodyId(impl_->bodies.size())));
+  Body b;
+  b.name = std::move(name);
+  b.mesh = std::move(mesh);
+  return impl_->add(std::move(b));
+}
+
+void World::remove(BodyId id) {
+  Body& b = impl_->body(id, "remove");
+  b = Body{};
+  --impl_->alive;
+}
+
+void World::set_pose(BodyId id, const Eigen::Affine3d& pose) {
+  Body& b = impl_->body(id, "set_pose");
+  if (!b.is_rigid) throw std::invalid_argument("peelcd::World::set_pose(): " + label_of(b.name, id) + " is deforming");
+  check_pose(pose, label_of(b.name, id));
+  b.pose = pose;
+}
+
+void World::set_vertices(BodyId id, std::vector<Vec3> vertices) {
+  Body& b = impl_->body(id, "set_vertices");
+  const std::string label = label_of(b.name, id);
+  if (b.is_rigid) throw std::invalid_argument("peelcd::World::set_vertices(): " + label + " is rigid (use set_pose)");
+  if (vertices.size() != b.mesh.vertices.size())
+    throw std::invalid_argument("peelcd::World::set_vertices(): " + label + " has " + std::to_string(b.mesh.vertices.size()) +
+                                " vertices, given " + std::to_string(vertices.size()) + " (a new topology: set_mesh)");
+  for (std::size_t v = 0; v < vertices.size(); ++v)
+    if (!vertices[v].allFinite())
+      throw std::invalid_argument("peelcd::World::set_vertices(): " + label + ": vertex " + std::to_string(v) + " " +
+                                  coordinate_problem(vertices[v], false));
+  b.mesh.vertices = std::move(vertices);
+  b.tree.refit(b.mesh.vertices, b.mesh.triangles);
+  ++impl_->stats.full_refits;
+}
+
+void World::move_vertices(BodyId id, const std::vector<std::uint32_t>& indices, const std::vector<Vec3>& positions) {
+  Body& b = impl_->body(id, "move_vertices");
+  const std::string label = label_of(b.name, id);
+  if (b.is_rigid) throw std::invalid_argument("peelcd::World::move_vertices(): " + label + " is rigid (use set_pose)");
+  if (indices.size() != positions.size())
+    throw std::invalid_argument("peelcd::World::move_vertices(): " + label + ": " + std::to_string(indices.size()) +
+                                " indices but " + std::to_string(positions.size()) + " positions");
+  const std::size_t nv = b.mesh.vertices.size();
+  for (std::size_t k = 0; k < indices.size(); ++k) {
+    if (indices[k] >= nv)
+      throw std::invalid_argument("peelcd::World::move_vertices(): " + label + ": vertex " + std::to_string(indices[k]) +
+                                  " is out of range (the mesh has " + std::to_string(nv) + " vertices)");
+    if (!positions[k].allFinite())
+      throw std::invalid_argument("peelcd::World::move_vertices(): " + label + ": vertex " + std::to_string(indices[k]) +
+                                  " " + coordinate_problem(positions[k], false));
+  }
+  for (std::size_t k = 0; k < indices.size(); ++k) b.mesh.vertices[indices[k]] = positions[k];
+  // Many moved: one sweep over the tree is cheaper than the paths.
+  if (indices.size() * 8 > nv) {
+    b.tree.refit(b.mesh.vertices, b.mesh.triangles);
+    ++impl_->stats.full_refits;
+    return;
+  }
+  if (b.vertex_first.empty()) {  // the vertex -> triangles table, once per topology
+    b.vertex_first.assign(nv + 1, 0);
+    for (const Tri& f : b.mesh.triangles)
+      for (const std::uint32_t v : f) ++b.vertex_first[v + 1];
+    for (std::size_t v = 0; v < nv; ++v) b.vertex_first[v + 1] += b.vertex_first[v];
+    b.vertex_tris.resize(b.vertex_first[nv]);
+    std::vector<std::uint32_t> fill(b.vertex_first.begin(), b.vertex_first.end() - 1);
+    for (std::uint32_t t = 0; t < b.mesh.triangles.size(); ++t)
+      for (const std::uint32_t v : b.mesh.triangles[t]) b.vertex_tris[fill[v]++] = t;
+  }
+  std::vector<std::uint32_t> changed;
+  for (const std::uint32_t v : indices)
+    changed.insert(changed.end(), b.vertex_tris.begin() + b.vertex_first[v], b.vertex_tris.begin() + b.vertex_first[v + 1]);
+  b.tree.refit(b.mesh.vertices, b.mesh.triangles, changed);
+  ++impl_->stats.partial_refits;
+}
+
+void World::set_mesh(BodyId id, Mesh mesh) {
+  Body& b = impl_->body(id, "set_mesh");
+  check_mesh(mesh, label_of(b.name, id));
+  if (b.is_rigid)
+    b.shape = std::make_shared<const Mesh>(std::move(mesh));
+  else
+    b.mesh = std::move(mesh);
+  b.vertex_first.clear();
+  b.vertex_tris.clear();
+  b.tree.build(b.local().vertices, b.local().triangles);
+  ++impl_->stats.builds;
+}
+
+bool World::contains(BodyId id) const { return id < impl_->bodies.size() && impl_->bodies[id].alive; }
+std::size_t World::size() const { return impl_->alive; }
+const std::string& World::name(BodyId id) const { return impl_->body(id).name; }
+bool World::rigid(BodyId id) const { return impl_->body(id).is_rigid; }
+const Mesh& World::mesh(BodyId id) const { return impl_->body(id).local(); }
+const Bvh& World::tree(BodyId id) const { return impl_->body(id).tree; }
+const WorldStats& World::stats() const { return impl_->stats; }
+ImageStage& World::stage() { return *impl_->stage; }
+
+Mesh World::world_mesh(BodyId id) const {
+  const Body& b = impl_->body(id);
+  Mesh m = b.local();
+  if (b.is_rigid)
+    for (std::uint32_t v = 0; v < m.vertices.size(); ++v) m.vertices[v] = b.world(v);
+  return m;
+}
+
+const FrameResult& World::collide(const DetectOptions& options) {
+  impl_->collide(options, impl_->result);
+  return impl_->result;
+}
+
+void World::collide(const DetectOptions& options, FrameResult& out) { impl_->collide(options, out); }
+
+void World::Impl::collide(const DetectOptions& opt, FrameResult& out) {
+  validate_options(opt, stage->max_resolution());
+  const auto t_total = Clock::now();
+  out.timings = Timings{};
+  out.gl_passes = out.rois_peeled = out.triangles_uploaded = out.triangles_indexed = out.shape_uploads = 0;
+  out.pcs_readbacks = out.views_exhaustive = out.rois_exact = 0;
+  stats.node_pairs = stats.candidates = stats.vertices_transformed = 0;
+
+  // The broad phase: each body's box (its tree's root, moved by its pose).
+  auto t0 = Clock::now();
+  boxes.clear();
+  ids.clear();
+  for (BodyId id = 0; id < bodies.size(); ++id) {
+    if (!bodies[id].alive) continue;
+    ids.push_back(id);
+    boxes.push_back(bodies[id].world_box());
+    const Aabb& w = boxes.back();
+    if (opt.stage != Stage::exact && !w.empty() &&
+        std::max(w.lo.cwiseAbs().maxCoeff(), w.hi.cwiseAbs().maxCoeff()) > kFloatMax)
+      throw std::invalid_argument("peelcd::World: " + label_of(bodies[id].name, id) +
+                                  " reaches outside the float range (|x| <= 3.4e38) the image stage works in");
+  }
+  overlapping_pairs(boxes, pairs, order);  // indices into ids, ascending ids: a < b
+
+  // The traversals: per pair, one task, or (several lanes) the node pairs of its first levels.
+  const unsigned lanes = lanes_for(opt);
+  std::size_t used = 0;
+  for (std::size_t p = 0; p < pairs.size(); ++p) {
+    const Body& a = bodies[ids[pairs[p].first]];
+    const Body& b = bodies[ids[pairs[p].second]];
+    const BvhRelation rel = BvhRelation::between(a.pose, b.pose);
+    if (lanes > 1)
+      bvh_split(a.tree, b.tree, rel, 8 * std::size_t(lanes), split);
+    else
+      split.assign(1, BvhNodePair{0u, 0u});
+    for (const BvhNodePair& start : split) {
+      if (used == tasks.size()) tasks.emplace_back();
+      Task& t = tasks[used++];
+      t.pair = p;
+      t.start = start;
+    }
+  }
+  parallel(used, lanes, [&](std::size_t k, unsigned lane) {
+    Task& t = tasks[k];
+    const Body& a = bodies[ids[pairs[t.pair].first]];
+    const Body& b = bodies[ids[pairs[t.pair].second]];
+    const BvhRelation rel = BvhRelation::between(a.pose, b.pose);
+    t.candidates.clear();
+    t.contacts.clear();
+    t.transformed = 0;
+    t.visited = bvh_traverse(a.tree, b.tree, rel, t.start, stacks[lane],
+                             [&](std::uint32_t ta, std::uint32_t tb) { t.candidates.push_back(pack_pair(ta, tb)); });
+  });
+  out.timings.aabb = ms_since(t0);
+
+  // Per pair: the route, then the exact path's narrow phase (over the same tasks) or the image
+  // stage.
+  if (out.pairs.size() < pairs.size()) out.pairs.resize(pairs.size());
+  out.pairs.resize(pairs.size());
+  std::vector<std::size_t> first_task(pairs.size() + 1, used);
+  for (std::size_t k = used; k-- > 0;) first_task[tasks[k].pair] = k;
+  for (std::size_t p = pairs.size(); p-- > 0;)
+    if (first_task[p] > first_task[p + 1]) first_task[p] = first_task[p + 1];
+  const StageCost image_cost = stage->cost();
+  std::vector<char> to_image(pairs.size(), 0);
+  for (std::size_t p = 0; p < pairs.size(); ++p) {
+    PairResult& r = out.pairs[p];
+    r = PairResult{};
+    r.object_a = ids[pairs[p].first];
+    r.object_b = ids[pairs[p].second];
+    r.roi = r.region = intersection(boxes[pairs[p].first], boxes[pairs[p].second]);
+    std::size_t n = 0;
+    for (std::size_t k = first_task[p]; k < first_task[p + 1]; ++k) {
+      n += tasks[k].candidates.size();
+      stats.node_pairs += tasks[k].visited;
+    }
+    stats.candidates += n;
+    r.candidates = n;
+    if (n == 0) continue;  // no couple of boxes overlaps: no contact, nothing to test
+    if (opt.stage == Stage::exact) {
+      r.exact_stage = true;
+    } else if (opt.stage == Stage::image) {
+      to_image[p] = 1;
+    } else {
+      const int tile = opt.resolution > 0 ? opt.resolution : opt.budget;
+      r.predicted_exact_ms = kCandidateUs * 1e-3 * double(n);
+      // The image stage draws at most the candidates' triangles: at most 2n, counted as n.
+      r.predicted_image_ms = double(opt.views) * image_cost.predict_ms(double(n), double(tile) * double(tile));
+      r.exact_stage = r.predicted_exact_ms <= r.predicted_image_ms;
+      to_image[p] = !r.exact_stage;
+    }
+  }
+  t0 = Clock::now();
+  parallel(used, lanes, [&](std::size_t k, unsigned) {
+    Task& t = tasks[k];
+    if (t.candidates.empty() || to_image[t.pair]) return;
+    const Body& a = bodies[ids[pairs[t.pair].first]];
+    const Body& b = bodies[ids[pairs[t.pair].second]];
+    const Mesh& ma = a.local();
+    const Mesh& mb = b.local();
+    std::sort(t.candidates.begin(), t.candidates.end());
+    for (const std::uint64_t c : t.candidates) {
+      const std::uint32_t ta = pair_a(c), tb = pair_b(c);
+      const Tri& fa = ma.triangles[ta];
+      const Tri& fb = mb.triangles[tb];
+      const TriangleCorners ca = {a.world(fa[0]), a.world(fa[1]), a.world(fa[2])};
+      const TriangleCorners cb = {b.world(fb[0]), b.world(fb[1]), b.world(fb[2])};
+      t.transformed += (a.is_rigid ? 3 : 0) + (b.is_rigid ? 3 : 0);
+      // The world boxes first (exact comparisons of the same doubles the test reads).
+      const Vec3 lo_a = ca[0].cwiseMin(ca[1]).cwiseMin(ca[2]), hi_a = ca[0].cwiseMax(ca[1]).cwiseMax(ca[2]);
+      const Vec3 lo_b = cb[0].cwiseMin(cb[1]).cwiseMin(cb[2]), hi_b = cb[0].cwiseMax(cb[1]).cwiseMax(cb[2]);
+      if ((hi_a.array() < lo_b.array()).any() || (hi_b.array() < lo_a.array()).any()) continue;
+      Contact contact;
+      contact.tri_a = ta;
+      contact.tri_b = tb;
+      if (test_triangle_pair(ca, cb, contact)) t.contacts.push_back(contact);
+    }
+  });
+  for (std::size_t p = 0; p < pairs.size(); ++p) {
+    PairResult& r = out.pairs[p];
+    if (r.candidates == 0 || to_image[p]) continue;
+    ++out.rois_exact;
+    for (std::size_t k = first_task[p]; k < first_task[p + 1]; ++k) {
+      r.colliding.insert(r.colliding.end(), tasks[k].contacts.begin(), tasks[k].contacts.end());
+      stats.vertices_transformed += tasks[k].transformed;
+    }
+    std::sort(r.colliding.begin(), r.colliding.end(), [](const Contact& x, const Contact& y) {
+      return x.tri_a < y.tri_a || (x.tri_a == y.tri_a && x.tri_b < y.tri_b);
+    });
+  }
+  out.timings.cpu = ms_since(t0);
+
+  for (std::size_t p = 0; p < pairs.size(); ++p) {
+    if (!to_image[p]) continue;
+    candidates.clear();
+    for (std::size_t k = first_task[p]; k < first_task[p + 1]; ++k)
+      candidates.insert(candidates.end(), tasks[k].candidates.begin(), tasks[k].candidates.end());
+    image_pair(bodies[ids[pairs[p].first]], bodies[ids[pairs[p].second]], candidates, opt, out.pairs[p], out);
+  }
+  out.renderer = stage->renderer();
+  out.timings.total = ms_since(t_total);
+}
+
+// The image stage on one pair: the candidates' triangles of each body, in world space, as two
+// objects (triangle k of each is the k-th of its ascending list), through the Detector; its
+// contacts mapped back to the bodies' triangles.
+void World::Impl::image_pair(const Body& a, const Body& b, const std::vector<std::uint64_t>& cands,
+                             const DetectOptions& opt, PairResult& r, FrameResult& out) {
+  std::vector<std::uint32_t> kept[2];
+  for (const std::uint64_t c : cands) {
+    kept[0].push_back(pair_a(c));
+    kept[1].push_back(pair_b(c));
+  }
+  std::vector<Object> objects(2);
+  const Body* body[2] = {&a, &b};
+  for (int s = 0; s < 2; ++s) {
+    std::sort(kept[s].begin(), kept[s].end());
+    kept[s].erase(std::unique(kept[s].begin(), kept[s].end()), kept[s].end());
+    Mesh& m = objects[s].mesh;
+    const Mesh& local = body[s]->local();
+    for (const std::uint32_t t : kept[s]) {
+      const std::uint32_t base = std::uint32_t(m.vertices.size());
+      for (const std::uint32_t v : local.triangles[t]) m.vertices.push_back(body[s]->world(v));
+      m.triangles.push_back(Tri{base, base + 1, base + 2});
+    }
+    objects[s].name = body[s]->name;
+  }
+  if (!detector) detector = std::make_unique<Detector>(stage);
+  DetectOptions image = opt;
+  image.stage = Stage::image;
+  FrameResult inner;
+  detector->detect(objects, image, inner);
+  if (inner.pairs.empty()) return;
+  const PairResult& ir = inner.pairs.front();
+  const std::size_t candidates = r.candidates;
+  const double pe = r.predicted_exact_ms, pi = r.predicted_image_ms;
+  const std::size_t oa = r.object_a, ob = r.object_b;
+  const Aabb roi = r.roi;
+  r = ir;
+  r.object_a = oa;
+  r.object_b = ob;
+  r.roi = roi;
+  r.predicted_exact_ms = pe;
+  r.predicted_image_ms = pi;
+  r.triangles_in_roi_a = kept[0].size();
+  r.triangles_in_roi_b = kept[1].size();
+  (void)candidates;
+  r.pcs.clear();  // IDs of the peeled copies, not of the bodies: the count (pcs_count) stays
+  for (Contact& c : r.colliding) {
+    c.tri_a = kept[0][c.tri_a];
+    c.tri_b = kept[1][c.tri_b];
+  }
+  std::sort(r.colliding.begin(), r.colliding.end(), [](const Contact& x, const Contact& y) {
+    return x.tri_a < y.tri_a || (x.tri_a == y.tri_a && x.tri_b < y.tri_b);
+  });
+  out.gl_passes += inner.gl_passes;
+  out.rois_peeled += inner.rois_peeled;
+  out.triangles_uploaded += inner.triangles_uploaded;
+  out.pcs_readbacks += inner.pcs_readbacks;
+  out.views_exhaustive += inner.views_exhaustive;
+  out.timings.upload += inner.timings.upload;
+  out.timings.gpu += inner.timings.gpu;
+  out.timings.readback += inner.timings.readback;
+  out.timings.cpu += inner.timings.cpu;
+}
+
+}  // namespace peelcd

@@ -1,0 +1,124 @@
+#pragma once
+// A bounding volume hierarchy over a mesh's triangles, kept across frames: built once in the
+// object's own frame (a rigid object's shape space; a deforming object's world space), refitted
+// when vertices move (all of it, or only the leaves holding changed triangles and their
+// ancestors), rebuilt when the topology changes. peelcd::World keeps one per body.
+//
+// Binary, nodes in depth-first order (a node's left child follows it; its parent comes before
+// it), leaves of at most kBvhLeafSize triangles, split at the median centroid along the longest
+// axis of the centroids' box. Boxes are closed and exact: the min/max of the corners' doubles.
+#include "peelcd/core/aabb.h"
+
+#include <Eigen/Geometry>
+#include <cstdint>
+#include <vector>
+
+namespace peelcd {
+
+constexpr std::uint32_t kBvhLeafSize = 4;
+
+struct BvhNode {
+  Aabb box;
+  std::uint32_t first = 0;   // leaf: first index into Bvh::order(); internal: the right child
+  std::uint32_t count = 0;   // leaf: triangles (>= 1); internal: 0
+  std::uint32_t parent = 0;  // the root's is itself (0)
+  bool leaf() const { return count != 0; }
+};
+
+class Bvh {
+ public:
+  // Builds over `triangles` of `vertices` (indices checked by the caller: validate_mesh).
+  void build(const std::vector<Vec3>& vertices, const std::vector<Tri>& triangles);
+  // Every box again from `vertices` (the same triangles, moved).
+  void refit(const std::vector<Vec3>& vertices, const std::vector<Tri>& triangles);
+  // Only the boxes of `changed` triangles (any order, repeats allowed), their leaves and their
+  // ancestors: O(changed * depth).
+  void refit(const std::vector<Vec3>& vertices, const std::vector<Tri>& triangles,
+             const std::vector<std::uint32_t>& changed);
+
+  bool empty() const { return nodes_.empty(); }
+  std::size_t triangles() const { return boxes_.size(); }
+  // The root's box (empty() for an empty tree).
+  Aabb box() const { return nodes_.empty() ? Aabb{} : nodes_[0].box; }
+  const std::vector<BvhNode>& nodes() const { return nodes_; }
+  const std::vector<std::uint32_t>& order() const { return order_; }  // triangles, leaf by leaf
+  const Aabb& triangle_box(std::uint32_t t) const { return boxes_[t]; }
+  std::size_t depth() const { return depth_; }
+
+  // The triangles whose boxes touch `box` (closed, in the tree's frame), ascending, into `out`.
+  void query(const Aabb& box, std::vector<std::uint32_t>& out) const;
+
+ private:
+  std::uint32_t build_node(std::uint32_t begin, std::uint32_t end, std::uint32_t parent, std::size_t level,
+                           std::vector<Vec3>& centroids);
+  void refit_node(std::uint32_t n);
+  std::vector<BvhNode> nodes_;
+  std::vector<std::uint32_t> order_;
+  std::vector<std::uint32_t> leaf_of_;  // triangle -> its leaf node
+  std::vector<Aabb> boxes_;             // triangle -> its box
+  std::vector<std::uint8_t> dirty_;     // scratch of the partial refit, per node
+  std::vector<std::uint32_t> stack_;    // scratch of the partial refit
+  std::size_t depth_ = 0;
+};
+
+// B's frame into A's, for the traversal of two trees: p_a = linear * p_b + translation. With
+// `identity` (both in world space, e.g. two deforming bodies) boxes are compared as they are.
+struct BvhRelation {
+  Eigen::Matrix3d linear = Eigen::Matrix3d::Identity();
+  Eigen::Matrix3d abs_linear = Eigen::Matrix3d::Identity();
+  Vec3 translation = Vec3::Zero();
+  bool identity = true;
+
+  // B's box as seen from A: the box enclosing its image, grown by a relative 1e-9 so that the
+  // rounding of the transform never drops a pair whose exact images touch.
+  Aabb to_a(const Aabb& b) const;
+  static BvhRelation between(const Eigen::Affine3d& pose_a, const Eigen::Affine3d& pose_b);
+};
+
+// A pair of nodes (A's, B's) still to visit.
+using BvhNodePair = std::pair<std::uint32_t, std::uint32_t>;
+
+// Splits the traversal of (a, b) into at least `tasks` independent node pairs where the trees
+// allow (breadth first from the roots; leaf pairs and disjoint pairs settled on the way: the
+// disjoint dropped, the leaf pairs appended to `tasks_out` like any other).
+void bvh_split(const Bvh& a, const Bvh& b, const BvhRelation& rel, std::size_t tasks,
+               std::vector<BvhNodePair>& tasks_out);
+
+// Every couple (triangle of a, triangle of b) under the node pair `start` whose boxes overlap (B's
+// through `rel`): fn(tri_a, tri_b). `stack` is scratch. Returns the node pairs visited.
+template <class Fn>
+std::size_t bvh_traverse(const Bvh& a, const Bvh& b, const BvhRelation& rel, BvhNodePair start,
+                         std::vector<BvhNodePair>& stack, Fn&& fn) {
+  const auto& na = a.nodes();
+  const auto& nb = b.nodes();
+  std::size_t visited = 0;
+  stack.clear();
+  stack.push_back(start);
+  while (!stack.empty()) {
+    const auto [i, j] = stack.back();
+    stack.pop_back();
+    ++visited;
+    const BvhNode& x = na[i];
+    const BvhNode& y = nb[j];
+    if (!x.box.overlaps(rel.to_a(y.box))) continue;
+    if (x.leaf() && y.leaf()) {
+      for (std::uint32_t u = x.first; u < x.first + x.count; ++u) {
+        const std::uint32_t ta = a.order()[u];
+        const Aabb& ba = a.triangle_box(ta);
+        for (std::uint32_t v = y.first; v < y.first + y.count; ++v) {
+          const std::uint32_t tb = b.order()[v];
+          if (ba.overlaps(rel.to_a(b.triangle_box(tb)))) fn(ta, tb);
+        }
+      }
+    } else if (y.leaf() || (!x.leaf() && x.box.extent().maxCoeff() >= y.box.extent().maxCoeff())) {
+      stack.emplace_back(i + 1, j);
+      stack.emplace_back(x.first, j);
+    } else {
+      stack.emplace_back(i, j + 1);
+      stack.emplace_back(i, y.first);
+    }
+  }
+  return visited;
+}
+
+}  // namespace peelcd
