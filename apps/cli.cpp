@@ -112,10 +112,6 @@ DetectOptions merged_options(const Scene& scene, const DetectArgs& a) {
 // --json / --csv outputs: atomic, never destroying (include/peelcd/io/output.h).
 void write_output(const std::string& path, const std::string& text) { write_output_file(path, text + "\n", "peelcd: output"); }
 
-double median(std::vector<double> v) {
-  std::sort(v.begin(), v.end());
-  return v.empty() ? 0.0 : (v.size() % 2 ? v[v.size() / 2] : 0.5 * (v[v.size() / 2 - 1] + v[v.size() / 2]));
-}
 
 // detect's input: one scene file, or two or more mesh files (identity transforms, default options).
 Scene detect_input(const std::vector<std::string>& inputs, const std::string& command) {
@@ -167,22 +163,6 @@ std::unique_ptr<Sequence> make_sequence(const std::string& name, std::size_t fra
   throw InputError("peelcd: unknown test scene \"" + name + "\" (expected test1, test2 or crowd)");
 }
 
-// Found, missed and false contacts of a frame against the exact pairs of the CGAL peer.
-Score score_frame(const FrameResult& r, const bench::PeerFrame& exact) {
-  Score total;
-  for (std::size_t i = 0; i < exact.objects.size(); ++i) {
-    std::vector<Contact> none;
-    const std::vector<Contact>* found = &none;
-    for (const PairResult& p : r.pairs)
-      if (p.object_a == exact.objects[i].first && p.object_b == exact.objects[i].second) found = &p.colliding;
-    const Score s = score_contacts(exact.per_pair[i], *found);
-    total.exact += s.exact;
-    total.found += s.found;
-    total.missed += s.missed;
-    total.false_contacts += s.false_contacts;
-  }
-  return total;
-}
 
 // "K/N" (1 <= K <= N): which slice of a sharded run this is, as {K - 1, N}; {0, 1} when empty.
 std::pair<std::size_t, std::size_t> parse_shard(const std::string& text, const std::string& what) {

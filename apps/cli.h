@@ -5,6 +5,7 @@
 #include "data.h"
 #include "peelcd/backends.h"
 #include "peelcd/bench/peers.h"
+#include "peelcd/bench/suite.h"
 #include "peelcd/core/detector.h"
 #include "peelcd/core/reference.h"
 #include "peelcd/io/mesh_io.h"
@@ -142,7 +143,7 @@ CLI::Option* add_backend_option(CLI::App* c, std::string& backend, bool gl_only 
 void add_frame_options(CLI::App* c, DetectArgs& d);
 // --json / --csv outputs: atomic, never destroying (peelcd/io/output.h). "-" is stdout.
 void write_output(const std::string& path, const std::string& text);
-double median(std::vector<double> v);
+using bench::median;
 // detect's input (and dump's, explain's): one scene file, a glTF scene, or two or more meshes.
 Scene detect_input(const std::vector<std::string>& inputs, const std::string& command = "peelcd detect");
 // One frame with every layer captured (every ROI peeled, Stage::image).
@@ -152,8 +153,7 @@ std::size_t count_overlapping_pairs(const std::vector<Object>& objects);
 // test1, test2 or crowd.
 std::unique_ptr<Sequence> make_sequence(const std::string& name, std::size_t frames, bool rigid = true,
                                         std::size_t objects = 200);
-// Found, missed and false contacts of a frame against the exact pairs of the CGAL peer.
-Score score_frame(const FrameResult& r, const bench::PeerFrame& exact);
+using bench::score_frame;
 // "K/N" (1 <= K <= N): which slice of a sharded run this is, as {K - 1, N}; {0, 1} when empty.
 std::pair<std::size_t, std::size_t> parse_shard(const std::string& text, const std::string& what);
 

@@ -96,7 +96,7 @@ struct World::Impl {
   std::vector<std::size_t> order;
   std::vector<Task> tasks;
   std::vector<BvhNodePair> split;
-  std::vector<std::vector<BvhNodePair>> stacks;  // per lane
+  std::vector<std::vector<BvhStackEntry>> stacks;  // per lane
   std::vector<std::uint64_t> candidates, scratch;
   std::unique_ptr<WorkerPool> pool;
 
@@ -249,6 +249,17 @@ void World::set_mesh(BodyId id, Mesh mesh) {
   b.vertex_first.clear();
   b.vertex_tris.clear();
   b.tree.build(b.local().vertices, b.local().triangles);
+  ++impl_->stats.builds;
+}
+
+void World::set_shape(BodyId id, std::shared_ptr<const Mesh> shape) {
+  Body& b = impl_->body(id, "set_shape");
+  const std::string label = label_of(b.name, id);
+  if (!b.is_rigid) throw std::invalid_argument("peelcd::World::set_shape(): " + label + " is deforming (use set_mesh)");
+  if (!shape) throw std::invalid_argument("peelcd::World::set_shape(): " + label + ": no shape");
+  check_mesh(*shape, label);
+  b.shape = std::move(shape);
+  b.tree.build(b.shape->vertices, b.shape->triangles);
   ++impl_->stats.builds;
 }
 
@@ -480,6 +491,32 @@ void World::Impl::image_pair(const Body& a, const Body& b, const std::vector<std
   out.timings.gpu += inner.timings.gpu;
   out.timings.readback += inner.timings.readback;
   out.timings.cpu += inner.timings.cpu;
+}
+
+void sync_bodies(World& world, const std::vector<Object>& objects, std::vector<BodyId>& bodies) {
+  if (bodies.empty()) {
+    for (const Object& o : objects)
+      bodies.push_back(o.rigid ? world.add_rigid(o.rigid->shape, o.rigid->pose, o.name) : world.add_deforming(o.mesh, o.name));
+    return;
+  }
+  if (bodies.size() != objects.size())
+    throw std::invalid_argument("peelcd::sync_bodies(): " + std::to_string(objects.size()) + " objects for " +
+                                std::to_string(bodies.size()) + " bodies");
+  for (std::size_t i = 0; i < objects.size(); ++i) {
+    const Object& o = objects[i];
+    const BodyId id = bodies[i];
+    if (bool(o.rigid) != world.rigid(id))
+      throw std::invalid_argument("peelcd::sync_bodies(): object " + std::to_string(i) + " '" + o.name +
+                                  "' changed between rigid and deforming");
+    if (o.rigid) {
+      if (&world.mesh(id) != o.rigid->shape.get()) world.set_shape(id, o.rigid->shape);
+      world.set_pose(id, o.rigid->pose);
+    } else if (o.mesh.triangles == world.mesh(id).triangles) {
+      world.set_vertices(id, o.mesh.vertices);
+    } else {
+      world.set_mesh(id, o.mesh);
+    }
+  }
 }
 
 }  // namespace peelcd

@@ -247,6 +247,54 @@ class Crowd final : public Sequence {
   std::vector<Vec3> centres_;
 };
 
+class CrossingSpheres final : public Sequence {
+ public:
+  CrossingSpheres(int stacks, std::size_t frames, bool wave, bool rigid)
+      : Sequence(frames), stacks_(stacks), wave_(wave), rigid_(rigid) {
+    ball_ = std::make_shared<const Mesh>(make_uv_sphere(Vec3::Zero(), 1.0, stacks, 2 * stacks));
+  }
+  std::string name() const override { return "spheres"; }
+  int phases() const override { return 1; }
+
+  void frame(std::size_t f, std::vector<Object>& objects) const override {
+    objects.resize(2);
+    for (std::size_t k = 0; k < 2; ++k) {
+      Object& o = objects[k];
+      o.name = k ? "sphere B" : "sphere A";
+      const double t = 0.37 * double(f) + 2.1 * double(k);
+      const Vec3 at(k ? 0.6 : -0.6, 0.01 * std::sin(t), 0.01 * std::cos(1.3 * t));
+      const Eigen::Affine3d pose =
+          Eigen::Translation3d(at) *
+          Eigen::AngleAxisd(0.02 * double(f) + 0.7 * double(k), (k ? Vec3(0.2, 0.9, 0.4) : Vec3(0.8, 0.3, 0.5)).normalized());
+      if (o.mesh.triangles.size() != ball_->triangles.size()) o.mesh.triangles = ball_->triangles;
+      o.mesh.vertices.resize(ball_->vertices.size());
+      if (wave_) {
+        // A wave over the surface: the radius along each vertex's direction, moving with f.
+        const double phase = 0.5 * double(f);
+        for (std::size_t i = 0; i < ball_->vertices.size(); ++i) {
+          const Vec3& v = ball_->vertices[i];
+          const double r = 1.0 + 0.01 * std::sin(9.0 * v.x() + phase) * std::cos(7.0 * v.y() - 0.5 * phase);
+          o.mesh.vertices[i] = pose * (r * v);
+        }
+        o.rigid.reset();
+      } else {
+        for (std::size_t i = 0; i < ball_->vertices.size(); ++i) o.mesh.vertices[i] = pose * ball_->vertices[i];
+        if (rigid_) o.rigid = RigidMotion{ball_, pose};
+        else o.rigid.reset();
+      }
+    }
+  }
+
+ private:
+  int stacks_;
+  bool wave_, rigid_;
+  std::shared_ptr<const Mesh> ball_;
+};
+
+std::unique_ptr<Sequence> make_crossing_spheres(int stacks, std::size_t frames, bool wave, bool rigid) {
+  return std::make_unique<CrossingSpheres>(stacks, frames, wave, rigid);
+}
+
 std::unique_ptr<Sequence> make_crowd(std::size_t objects, std::size_t frames, bool rigid) {
   return std::make_unique<Crowd>(objects, frames, rigid);
 }

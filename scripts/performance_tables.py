@@ -34,7 +34,7 @@ def simulate_table(path):
 
 
 def bench_methods(path):
-    """{method: [median, miss, false, xCGAL, xFCL, xfloor]} from a `peelcd bench` table."""
+    """{method: [median, stage, miss, false, xCGAL, xFCL, xfloor]} from a `peelcd bench` table."""
     out = {}
     for line in open(path):
         m = re.match(r"^(peelcd .*?|CGAL.*?|FCL .*?|floor: .*?)\s{2,}(\S.*)$", line.rstrip())
@@ -46,11 +46,11 @@ def bench_methods(path):
 def bench_table(path):
     """Every row of a `peelcd bench` table, with its header lines as a caption."""
     b = bench_methods(path)
-    head = [l.rstrip() for l in open(path) if l.startswith(("peelcd bench:", "threads:", "router"))]
-    rows = ["| method | median ms | miss | false | x CGAL | x FCL | x floor |",
-            "|---|---|---|---|---|---|---|"]
+    head = [l.rstrip() for l in open(path) if l.startswith(("peelcd bench:", "threads:", "World:", "router"))]
+    rows = ["| method | median ms | stage ms | miss | false | x CGAL | x FCL | x floor |",
+            "|---|---|---|---|---|---|---|---|"]
     for name, v in b.items():
-        rows.append("| %s | %s |" % (name, " | ".join(v + [""] * (6 - len(v)))))
+        rows.append("| %s | %s |" % (name, " | ".join(v + [""] * (7 - len(v)))))
     return "\n".join(["`" + h + "`" + "  " for h in head] + [""] + rows)
 
 
@@ -61,7 +61,8 @@ def main():
         "simulate_test2": simulate_table(d + "/simulate_test2.txt"),
     }
     for name in ("bench_default", "bench_default_2threads", "bench_test1", "bench_test2", "bench_crowd",
-                 "bench_crowd_2threads"):
+                 "bench_crowd_2threads", "bench_spheres", "bench_spheres_wave", "bench_spheres_1m",
+                 "bench_spheres_1m_wave", "bench_pile1000"):
         tables[name] = bench_table(d + "/" + name + ".txt")
     rewrite_marked(doc, tables, "performance_tables.py")
 

@@ -78,6 +78,13 @@ struct BvhRelation {
 // A pair of nodes (A's, B's) still to visit.
 using BvhNodePair = std::pair<std::uint32_t, std::uint32_t>;
 
+// A node pair on the traversal's stack, with B's box as seen from A (computed once, when the
+// pair is pushed; descending into A's children keeps it).
+struct BvhStackEntry {
+  std::uint32_t a, b;
+  Aabb b_in_a;
+};
+
 // Splits the traversal of (a, b) into at least `tasks` independent node pairs where the trees
 // allow (breadth first from the roots; leaf pairs and disjoint pairs settled on the way: the
 // disjoint dropped, the leaf pairs appended to `tasks_out` like any other).
@@ -88,34 +95,41 @@ void bvh_split(const Bvh& a, const Bvh& b, const BvhRelation& rel, std::size_t t
 // through `rel`): fn(tri_a, tri_b). `stack` is scratch. Returns the node pairs visited.
 template <class Fn>
 std::size_t bvh_traverse(const Bvh& a, const Bvh& b, const BvhRelation& rel, BvhNodePair start,
-                         std::vector<BvhNodePair>& stack, Fn&& fn) {
+                         std::vector<BvhStackEntry>& stack, Fn&& fn) {
   const auto& na = a.nodes();
   const auto& nb = b.nodes();
   std::size_t visited = 0;
   stack.clear();
-  stack.push_back(start);
+  {
+    const Aabb yb = rel.to_a(nb[start.second].box);
+    if (!na[start.first].box.overlaps(yb)) return 1;
+    stack.push_back({start.first, start.second, yb});
+  }
+  Aabb leaf_boxes[kBvhLeafSize];
   while (!stack.empty()) {
-    const auto [i, j] = stack.back();
+    const BvhStackEntry e = stack.back();
     stack.pop_back();
     ++visited;
-    const BvhNode& x = na[i];
-    const BvhNode& y = nb[j];
-    if (!x.box.overlaps(rel.to_a(y.box))) continue;
+    const BvhNode& x = na[e.a];
+    const BvhNode& y = nb[e.b];
+    // Invariant: x.box overlaps e.b_in_a (tested before the push).
     if (x.leaf() && y.leaf()) {
+      for (std::uint32_t v = 0; v < y.count; ++v) leaf_boxes[v] = rel.to_a(b.triangle_box(b.order()[y.first + v]));
       for (std::uint32_t u = x.first; u < x.first + x.count; ++u) {
         const std::uint32_t ta = a.order()[u];
         const Aabb& ba = a.triangle_box(ta);
-        for (std::uint32_t v = y.first; v < y.first + y.count; ++v) {
-          const std::uint32_t tb = b.order()[v];
-          if (ba.overlaps(rel.to_a(b.triangle_box(tb)))) fn(ta, tb);
-        }
+        if (!ba.overlaps(e.b_in_a)) continue;
+        for (std::uint32_t v = 0; v < y.count; ++v)
+          if (ba.overlaps(leaf_boxes[v])) fn(ta, b.order()[y.first + v]);
       }
-    } else if (y.leaf() || (!x.leaf() && x.box.extent().maxCoeff() >= y.box.extent().maxCoeff())) {
-      stack.emplace_back(i + 1, j);
-      stack.emplace_back(x.first, j);
+    } else if (y.leaf() || (!x.leaf() && x.box.extent().maxCoeff() >= e.b_in_a.extent().maxCoeff())) {
+      for (const std::uint32_t c : {e.a + 1, x.first})
+        if (na[c].box.overlaps(e.b_in_a)) stack.push_back({c, e.b, e.b_in_a});
     } else {
-      stack.emplace_back(i, j + 1);
-      stack.emplace_back(i, y.first);
+      for (const std::uint32_t c : {e.b + 1, y.first}) {
+        const Aabb yb = rel.to_a(nb[c].box);
+        if (x.box.overlaps(yb)) stack.push_back({e.a, c, yb});
+      }
     }
   }
   return visited;

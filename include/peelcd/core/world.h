@@ -74,6 +74,8 @@ class World {
   // A new mesh for the body (fracture, remeshing): its tree rebuilt. A rigid body's becomes its
   // new shape (the pose kept).
   void set_mesh(BodyId body, Mesh mesh);
+  // A rigid body's new shape, shared (its tree rebuilt; the pose kept).
+  void set_shape(BodyId body, std::shared_ptr<const Mesh> shape);
 
   bool contains(BodyId body) const;
   std::size_t size() const;               // bodies held
@@ -98,5 +100,13 @@ class World {
   struct Impl;
   std::unique_ptr<Impl> impl_;
 };
+
+// Brings `world` to a frame given as the frame API's objects (peelcd/core/mesh.h), body
+// `bodies[i]` for objects[i] (added on the first call: `bodies` empty): a rigid object moves
+// its body by its pose (its world mesh is not read; a new shape pointer is a set_mesh), a
+// deforming one replaces its body's vertices (a new topology: set_mesh). A frame of world meshes
+// costs O(vertices) per deforming object here, as it does to produce. An object that changes
+// between rigid and deforming is refused (std::invalid_argument).
+void sync_bodies(World& world, const std::vector<Object>& objects, std::vector<BodyId>& bodies);
 
 }  // namespace peelcd

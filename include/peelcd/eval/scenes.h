@@ -50,6 +50,14 @@ std::unique_ptr<Sequence> make_test2(const std::string& meshes_dir, std::size_t 
 // new vertices every frame). One phase.
 std::unique_ptr<Sequence> make_crowd(std::size_t objects, std::size_t frames, bool rigid = true);
 
+// Two crossing spheres for scale: UV spheres of radius 1 with `stacks` latitude bands and
+// 2 * stacks sectors (4 * stacks * (stacks - 1) triangles: 288 -> 330,624, 570 -> 1,297,320),
+// centres 1.2 apart, so that they cross along a circle of radius 0.8. Each frame both turn a
+// little about tilted axes and drift by up to 0.01: rigid motion (their RigidMotion set when
+// `rigid`). With `wave`, a wave runs over the vertices every frame (radius 1 + 0.01 sin(...)):
+// deforming meshes, new vertices every frame, the same topology. One phase.
+std::unique_ptr<Sequence> make_crossing_spheres(int stacks, std::size_t frames, bool wave, bool rigid = true);
+
 // The torn cloth of test2 at tear fraction t in [0, 1]: an n x n grid over [-3, 3]^2 at height
 // `y`, torn along x = 0.05 from z = -3 to z = -3 + 6t. Exposed for tests.
 Mesh torn_cloth(int n, double t, double y);
