@@ -1,6 +1,7 @@
 // peelcd classes and calibrate (the command line; shared parts in cli.h).
 #include "cli.h"
 #include "peelcd/eval/calibrate.h"
+#include "peelcd/core/world.h"
 #include "peelcd/eval/classes.h"
 
 namespace peelcd::cli {
@@ -63,6 +64,7 @@ struct CalibrateArgs {
   std::string backend = kDefaultBackend;
   int repeat = 5;
   std::vector<int> budgets = {128, 512};
+  std::vector<int> large = {72, 144, 288};  // crossing spheres' stacks (20k, 82k, 330k triangles each)
 };
 
 int run_calibrate(const CalibrateArgs& a) {
@@ -86,6 +88,29 @@ int run_calibrate(const CalibrateArgs& a) {
               cal.wrong_fitted, cal.rows.size(), cal.lost_ms_fitted, cal.best_ms);
   std::printf("router with the models in use: %zu of %zu ROIs on the slower stage, %.3f ms lost of %.3f ms best\n",
               cal.wrong_in_use, cal.rows.size(), cal.lost_ms_in_use, cal.best_ms);
+  std::vector<int> large_stacks;
+  for (const int n : a.large)
+    if (n >= 3) large_stacks.push_back(n);
+  if (large_stacks.empty()) return 0;
+  // Large meshes: the predictions against the frames, both APIs (two crossing rigid spheres).
+  const std::vector<LargeMeshRow> large = calibrate_large_meshes(*runner.detector, large_stacks, a.repeat);
+  std::printf("\nlarge meshes (two crossing rigid spheres; stage auto; median of %d frames after an untimed one):\n", a.repeat);
+  std::printf("%6s %10s %8s | %12s %10s %6s | %10s %12s %10s %6s %10s\n", "stacks", "triangles", "kept", "frame pred",
+              "frame ms", "ratio", "candidates", "World pred", "narrow ms", "ratio", "World ms");
+  double scan_num = 0.0, scan_den = 0.0;
+  for (const LargeMeshRow& r : large) {
+    std::printf("%6d %10zu %8zu | %12.3f %10.3f %6.2f | %10zu %12.3f %10.3f %6.2f %10.3f\n", r.stacks, r.triangles, r.kept,
+                r.frame_predicted_ms, r.frame_ms, r.frame_predicted_ms > 0 ? r.frame_ms / r.frame_predicted_ms : 0.0,
+                r.candidates, r.world_predicted_ms, r.world_narrow_ms,
+                r.world_predicted_ms > 0 ? r.world_narrow_ms / r.world_predicted_ms : 0.0, r.world_ms);
+    // The scan term, fitted: what the frame takes beyond the path's part, per triangle scanned.
+    const double path = r.frame_predicted_ms - in_exact.scan_us * 1e-3 * double(r.triangles);
+    scan_num += (r.frame_ms - path) * double(r.triangles) * 1e-3;
+    scan_den += double(r.triangles) * 1e-3 * double(r.triangles) * 1e-3;
+  }
+  std::printf("(ratio: measured / predicted. frame pred: the route's prediction, scan included (scan_us %.4f in use, "
+              "%.4f fitted here); World pred: its exact path's candidates x %.3f us, against its narrow phase)\n",
+              in_exact.scan_us, scan_den > 0 ? scan_num / scan_den : 0.0, kWorldCandidateUs);
   return 0;
 }
 
@@ -114,6 +139,9 @@ std::vector<Command> add_eval_commands(CLI::App& app) {
       ->capture_default_str();
   calibrate_cmd->add_option("--budgets", cal.budgets, "Texture budgets to time each scene at")
       ->check(CLI::Range(16, 16384))->capture_default_str();
+  calibrate_cmd->add_option("--large", cal.large, "Large meshes: crossing spheres of these latitude bands (4 s (s - 1) "
+                                                  "triangles a sphere), predictions against frames; 0: skip")
+      ->check(CLI::Range(0, 2000))->capture_default_str();
 
   return {{classes, [ca_holder] { return run_classes(*ca_holder); }},
           {calibrate_cmd, [cal_holder] { return run_calibrate(*cal_holder); }}};

@@ -137,9 +137,9 @@ void Bvh::query(const Aabb& box, std::vector<std::uint32_t>& out) const {
   std::sort(out.begin(), out.end());
 }
 
-Aabb BvhRelation::to_a(const Aabb& b) const {
-  if (identity) return b;
-  const Vec3 c = b.center(), e = 0.5 * b.extent();
+Aabb BvhRelation::moved(const Aabb& box, const Eigen::Matrix3d& linear, const Eigen::Matrix3d& abs_linear,
+                        const Vec3& translation) {
+  const Vec3 c = box.center(), e = 0.5 * box.extent();
   const Vec3 center = linear * c + translation;
   const Vec3 half = abs_linear * e;
   // Rounding of the products above: a relative 1e-9 of the magnitudes involved covers it.
@@ -157,6 +157,10 @@ BvhRelation BvhRelation::between(const Eigen::Affine3d& pose_a, const Eigen::Aff
   r.linear = rel.linear();
   r.abs_linear = r.linear.cwiseAbs();
   r.translation = rel.translation();
+  const Eigen::Affine3d inv = pose_b.inverse(Eigen::Affine) * pose_a;
+  r.inv_linear = inv.linear();
+  r.inv_abs_linear = r.inv_linear.cwiseAbs();
+  r.inv_translation = inv.translation();
   return r;
 }
 
@@ -172,7 +176,7 @@ void bvh_split(const Bvh& a, const Bvh& b, const BvhRelation& rel, std::size_t t
     for (const auto& [i, j] : level) {
       const BvhNode& x = na[i];
       const BvhNode& y = nb[j];
-      if (!x.box.overlaps(rel.to_a(y.box))) continue;
+      if (!rel.overlap(x.box, rel.to_a(y.box), y.box)) continue;
       if (x.leaf() && y.leaf()) {
         out.emplace_back(i, j);
       } else if (x.leaf()) {

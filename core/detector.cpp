@@ -178,11 +178,14 @@ namespace {
 // first culling round (the router's count), no fixed part measurable.
 constexpr double kExactViewMs = 0.0;
 constexpr double kExactTriangleUs = 0.16;
+// The scan of culling's first round, per triangle of the two objects (`peelcd calibrate`, large
+// meshes; docs/performance.md).
+constexpr double kScanUs = 0.055;
 }  // namespace
 
 StageCost exact_path_cost() {
   // Fitted by `peelcd calibrate` (docs/performance.md, "The stage router").
-  return StageCost{kExactViewMs, kExactTriangleUs, 0.0};
+  return StageCost{kExactViewMs, kExactTriangleUs, 0.0, kScanUs};
 }
 
 void triangles_touching(const Mesh& mesh, const Aabb& box, std::vector<std::uint32_t>& out) {
@@ -203,6 +206,7 @@ struct PairPlan {
   std::size_t a = 0, b = 0;
   Aabb roi, region;
   std::size_t in_roi_a = 0, in_roi_b = 0;
+  std::size_t scanned = 0;  // triangles of both objects (culling's first round reads them all)
   bool culled_out = false;  // one object has nothing near the other: no contact, no image work
   int tile = 0;
   bool exact = false;  // routed to the exact CPU path
@@ -283,6 +287,7 @@ struct Detector::Impl {
       p.roi = intersection(boxes[p.a], boxes[p.b]);
       p.region = p.roi;
       p.in_roi_a = p.in_roi_b = 0;
+      p.scanned = objects[p.a].mesh.triangles.size() + objects[p.b].mesh.triangles.size();
       p.culled_out = false;
       p.tile = equal;
       p.exact = false;
@@ -362,8 +367,9 @@ struct Detector::Impl {
         continue;
       }
       const double n = double(p.kept_a.size() + p.kept_b.size());
-      p.predicted_exact = exact.predict_ms(n, 0.0);
-      p.predicted_image = views * image.predict_ms(n, double(p.tile) * double(p.tile));
+      const double scan = exact.scan_us * 1e-3 * double(p.scanned);  // paid by both paths
+      p.predicted_exact = scan + exact.predict_ms(n, 0.0);
+      p.predicted_image = scan + views * image.predict_ms(n, double(p.tile) * double(p.tile));
       p.exact = p.predicted_exact <= p.predicted_image;
     }
   }

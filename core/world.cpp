@@ -17,10 +17,14 @@ namespace {
 using Clock = std::chrono::steady_clock;
 double ms_since(Clock::time_point t0) { return std::chrono::duration<double, std::milli>(Clock::now() - t0).count(); }
 
-// The exact path's cost per candidate couple once the trees have found it (the narrow phase:
-// mostly the six plane signs), for the router. Measured with `peelcd bench` on the crossing
-// spheres (2 cores, 2026-11-25; docs/performance.md).
-constexpr double kCandidateUs = 0.12;
+constexpr double kCandidateUs = kWorldCandidateUs;
+
+// A rigid body with fewer triangles than this is moved into world space every frame (its
+// vertices transformed, a world-space copy of its tree refitted): O(its size), a few
+// microseconds, and its boxes are then exact world boxes, where boxes carried through a rotation
+// grow (a small ball's tree seen from a neighbour's frame overlaps far more of it). Larger rigid
+// bodies are never touched beyond what the traversal reaches.
+constexpr std::size_t kWorldFrameTriangles = 4096;
 
 struct Body {
   bool alive = false;
@@ -30,14 +34,35 @@ struct Body {
   Mesh mesh;                          // deforming: world space
   Eigen::Affine3d pose = Eigen::Affine3d::Identity();
   Bvh tree;
+  // A small rigid body this frame: its world vertices and its tree refitted over them.
+  bool world_frame = false;
+  std::vector<Vec3> world_vertices;
+  Bvh world_tree;
   // Deforming: the triangles using each vertex (CSR), built on the first move_vertices().
   std::vector<std::uint32_t> vertex_first, vertex_tris;
 
   const Mesh& local() const { return is_rigid ? *shape : mesh; }
-  Vec3 world(std::uint32_t v) const { return is_rigid ? Vec3(pose * shape->vertices[v]) : mesh.vertices[v]; }
+  Vec3 world(std::uint32_t v) const {
+    return !is_rigid ? mesh.vertices[v] : world_frame ? world_vertices[v] : Vec3(pose * shape->vertices[v]);
+  }
+  // The tree the traversals use and the pose it is posed by: a small rigid body's world copy
+  // (identity), else its own.
+  const Bvh& frame_tree() const { return world_frame ? world_tree : tree; }
+  Eigen::Affine3d frame_pose() const { return world_frame ? Eigen::Affine3d::Identity() : pose; }
+  // Small rigid bodies: into world space for this frame.
+  void enter_frame() {
+    world_frame = is_rigid && shape->triangles.size() < kWorldFrameTriangles;
+    if (!world_frame) return;
+    world_vertices.resize(shape->vertices.size());
+    for (std::size_t v = 0; v < world_vertices.size(); ++v) world_vertices[v] = pose * shape->vertices[v];
+    if (world_tree.triangles() != shape->triangles.size() || world_tree.empty() != tree.empty())
+      world_tree.build(world_vertices, shape->triangles);
+    else
+      world_tree.refit(world_vertices, shape->triangles);
+  }
   Aabb world_box() const {
-    const Aabb b = tree.box();
-    if (!is_rigid || b.empty()) return b;
+    const Aabb b = frame_tree().box();
+    if (!is_rigid || world_frame || b.empty()) return b;
     const Vec3 c = pose * b.center();
     const Vec3 half = pose.linear().cwiseAbs() * (0.5 * b.extent());
     const double grow = 1e-9 * (c.cwiseAbs().maxCoeff() + half.maxCoeff()) + 1e-300;
@@ -249,6 +274,7 @@ void World::set_mesh(BodyId id, Mesh mesh) {
   b.vertex_first.clear();
   b.vertex_tris.clear();
   b.tree.build(b.local().vertices, b.local().triangles);
+  b.world_tree = Bvh{};
   ++impl_->stats.builds;
 }
 
@@ -260,6 +286,7 @@ void World::set_shape(BodyId id, std::shared_ptr<const Mesh> shape) {
   check_mesh(*shape, label);
   b.shape = std::move(shape);
   b.tree.build(b.shape->vertices, b.shape->triangles);
+  b.world_tree = Bvh{};
   ++impl_->stats.builds;
 }
 
@@ -276,7 +303,7 @@ Mesh World::world_mesh(BodyId id) const {
   const Body& b = impl_->body(id);
   Mesh m = b.local();
   if (b.is_rigid)
-    for (std::uint32_t v = 0; v < m.vertices.size(); ++v) m.vertices[v] = b.world(v);
+    for (std::uint32_t v = 0; v < m.vertices.size(); ++v) m.vertices[v] = b.pose * b.shape->vertices[v];
   return m;
 }
 
@@ -301,6 +328,8 @@ void World::Impl::collide(const DetectOptions& opt, FrameResult& out) {
   ids.clear();
   for (BodyId id = 0; id < bodies.size(); ++id) {
     if (!bodies[id].alive) continue;
+    bodies[id].enter_frame();
+    stats.vertices_transformed += bodies[id].world_frame ? bodies[id].world_vertices.size() : 0;
     ids.push_back(id);
     boxes.push_back(bodies[id].world_box());
     const Aabb& w = boxes.back();
@@ -317,9 +346,9 @@ void World::Impl::collide(const DetectOptions& opt, FrameResult& out) {
   for (std::size_t p = 0; p < pairs.size(); ++p) {
     const Body& a = bodies[ids[pairs[p].first]];
     const Body& b = bodies[ids[pairs[p].second]];
-    const BvhRelation rel = BvhRelation::between(a.pose, b.pose);
+    const BvhRelation rel = BvhRelation::between(a.frame_pose(), b.frame_pose());
     if (lanes > 1)
-      bvh_split(a.tree, b.tree, rel, 8 * std::size_t(lanes), split);
+      bvh_split(a.frame_tree(), b.frame_tree(), rel, 8 * std::size_t(lanes), split);
     else
       split.assign(1, BvhNodePair{0u, 0u});
     for (const BvhNodePair& start : split) {
@@ -333,11 +362,11 @@ void World::Impl::collide(const DetectOptions& opt, FrameResult& out) {
     Task& t = tasks[k];
     const Body& a = bodies[ids[pairs[t.pair].first]];
     const Body& b = bodies[ids[pairs[t.pair].second]];
-    const BvhRelation rel = BvhRelation::between(a.pose, b.pose);
+    const BvhRelation rel = BvhRelation::between(a.frame_pose(), b.frame_pose());
     t.candidates.clear();
     t.contacts.clear();
     t.transformed = 0;
-    t.visited = bvh_traverse(a.tree, b.tree, rel, t.start, stacks[lane],
+    t.visited = bvh_traverse(a.frame_tree(), b.frame_tree(), rel, t.start, stacks[lane],
                              [&](std::uint32_t ta, std::uint32_t tb) { t.candidates.push_back(pack_pair(ta, tb)); });
   });
   out.timings.aabb = ms_since(t0);
@@ -394,7 +423,7 @@ void World::Impl::collide(const DetectOptions& opt, FrameResult& out) {
       const Tri& fb = mb.triangles[tb];
       const TriangleCorners ca = {a.world(fa[0]), a.world(fa[1]), a.world(fa[2])};
       const TriangleCorners cb = {b.world(fb[0]), b.world(fb[1]), b.world(fb[2])};
-      t.transformed += (a.is_rigid ? 3 : 0) + (b.is_rigid ? 3 : 0);
+      t.transformed += (a.is_rigid && !a.world_frame ? 3 : 0) + (b.is_rigid && !b.world_frame ? 3 : 0);
       // The world boxes first (exact comparisons of the same doubles the test reads).
       const Vec3 lo_a = ca[0].cwiseMin(ca[1]).cwiseMin(ca[2]), hi_a = ca[0].cwiseMax(ca[1]).cwiseMax(ca[2]);
       const Vec3 lo_b = cb[0].cwiseMin(cb[1]).cwiseMin(cb[2]), hi_b = cb[0].cwiseMax(cb[1]).cwiseMax(cb[2]);

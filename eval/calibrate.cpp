@@ -1,5 +1,10 @@
 #include "peelcd/eval/calibrate.h"
 
+#include "peelcd/core/world.h"
+#include "peelcd/eval/scenes.h"
+
+#include <chrono>
+
 #include "peelcd/core/cull.h"
 #include "peelcd/eval/classes.h"
 #include "peelcd/io/mesh_io.h"
@@ -157,6 +162,56 @@ Calibration calibrate(Detector& detector, const std::string& meshes_dir, const s
     score(in_use_image, in_use_exact, cal.wrong_in_use, cal.lost_ms_in_use);
   }
   return cal;
+}
+
+std::vector<LargeMeshRow> calibrate_large_meshes(Detector& detector, const std::vector<int>& stacks, int repeat) {
+  std::vector<LargeMeshRow> rows;
+  for (const int n : stacks) {
+    LargeMeshRow row;
+    row.stacks = n;
+    const auto seq = make_crossing_spheres(n, std::size_t(repeat) + 1, false);
+    std::vector<Object> objects;
+    seq->frame(0, objects);
+    for (const Object& o : objects) row.triangles += o.mesh.triangles.size();
+    DetectOptions opt;  // the router
+    FrameResult r;
+    World world(detector.stage_ptr());
+    std::vector<BodyId> bodies;
+    std::vector<double> frame_ms, world_ms, narrow_ms;
+    for (int f = 0; f <= repeat; ++f) {  // frame 0 untimed (trees, buffers)
+      seq->frame(std::size_t(f), objects);
+      detector.detect(objects, opt, r);
+      if (f > 0) frame_ms.push_back(r.timings.total);
+      row.frame_predicted_ms = row.kept = 0;
+      for (const PairResult& p : r.pairs) {
+        row.frame_predicted_ms += p.exact_stage ? p.predicted_exact_ms : p.predicted_image_ms;
+        ContactCull cull;
+        if (f == repeat) {
+          cull_to_contact_region(objects[p.object_a].mesh, objects[p.object_b].mesh, p.roi, cull, 1);
+          row.kept += cull.kept_a.size() + cull.kept_b.size();
+        }
+      }
+      const auto t0 = std::chrono::steady_clock::now();
+      sync_bodies(world, objects, bodies);
+      const FrameResult& w = world.collide(opt);
+      const double ms = std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - t0).count();
+      if (f > 0) {
+        world_ms.push_back(ms);
+        narrow_ms.push_back(w.timings.cpu);
+      }
+      row.world_predicted_ms = 0.0;
+      row.candidates = 0;
+      for (const PairResult& p : w.pairs) {
+        row.world_predicted_ms += p.exact_stage ? p.predicted_exact_ms : p.predicted_image_ms;
+        row.candidates += p.candidates;
+      }
+    }
+    row.frame_ms = median_of(frame_ms);
+    row.world_ms = median_of(world_ms);
+    row.world_narrow_ms = median_of(narrow_ms);
+    rows.push_back(row);
+  }
+  return rows;
 }
 
 }  // namespace peelcd

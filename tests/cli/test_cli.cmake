@@ -376,6 +376,7 @@ expect("bench spheres" 0 "spheres .1680 triangles each., 2 frames, 2 objects.*Wo
 expect("bench spheres-wave" 0 "World, stage auto. +[0-9.]+ +[0-9.]+ +0.00% +0 .*FCL 0.7, deforming refit" bench spheres-wave --stacks 21 --frames 2 --short)
 expect("bench crowd" 0 "crowd, 1 frames, 8 objects.*CGAL, cropped" bench crowd --objects 8 --frames 1)
 expect("calibrate help" 0 "cost models" calibrate --help)
+expect("calibrate: large meshes" 0 "large meshes.*stacks +triangles.*\n +10 +720 .*\n +16 +1920 .*ratio: measured / predicted" calibrate --backend cpu --repeat 1 --budgets 16 --large 10 16)
 expect("bench: bad peeler" 2 "unknown peeler" detect ${scene} --peeler magic)
 
 # peelcd explain (docs/debugging.md): one pair's walk and verdict; detect --explain-misses.

@@ -61,7 +61,7 @@ foreach(f bin/peelcd share/peelcd/fixtures/meshes/bunny_3k.obj share/peelcd/fixt
     message(FATAL_ERROR "not installed: ${f}")
   endif()
 endforeach()
-run(${prefix}/bin/peelcd calibrate --backend cpu --repeat 1 --budgets 16)
+run(${prefix}/bin/peelcd calibrate --backend cpu --repeat 1 --budgets 16 --large 12)
 run(${prefix}/bin/peelcd golden compare --backend cpu --tier hardware boxes_crossing --report ${WORK}/report)
 # ... and reads it there, not in the build's source tree: with a fixture mesh gone from the
 # prefix, calibrate fails naming the prefix's file.

@@ -67,12 +67,25 @@ struct BvhRelation {
   Eigen::Matrix3d linear = Eigen::Matrix3d::Identity();
   Eigen::Matrix3d abs_linear = Eigen::Matrix3d::Identity();
   Vec3 translation = Vec3::Zero();
+  // A's frame into B's (the inverse).
+  Eigen::Matrix3d inv_linear = Eigen::Matrix3d::Identity();
+  Eigen::Matrix3d inv_abs_linear = Eigen::Matrix3d::Identity();
+  Vec3 inv_translation = Vec3::Zero();
   bool identity = true;
 
   // B's box as seen from A: the box enclosing its image, grown by a relative 1e-9 so that the
   // rounding of the transform never drops a pair whose exact images touch.
-  Aabb to_a(const Aabb& b) const;
+  Aabb to_a(const Aabb& b) const { return identity ? b : moved(b, linear, abs_linear, translation); }
+  // A's box as seen from B, the same way.
+  Aabb to_b(const Aabb& a) const { return identity ? a : moved(a, inv_linear, inv_abs_linear, inv_translation); }
+  // A's box `a` and B's box `b` (whose image in A's frame is `b_in_a`) may overlap: tested in
+  // both frames (a separating axis among A's three or B's three).
+  bool overlap(const Aabb& a, const Aabb& b_in_a, const Aabb& b) const {
+    return a.overlaps(b_in_a) && (identity || to_b(a).overlaps(b));
+  }
   static BvhRelation between(const Eigen::Affine3d& pose_a, const Eigen::Affine3d& pose_b);
+  static Aabb moved(const Aabb& box, const Eigen::Matrix3d& linear, const Eigen::Matrix3d& abs_linear,
+                    const Vec3& translation);
 };
 
 // A pair of nodes (A's, B's) still to visit.
@@ -102,7 +115,7 @@ std::size_t bvh_traverse(const Bvh& a, const Bvh& b, const BvhRelation& rel, Bvh
   stack.clear();
   {
     const Aabb yb = rel.to_a(nb[start.second].box);
-    if (!na[start.first].box.overlaps(yb)) return 1;
+    if (!rel.overlap(na[start.first].box, yb, nb[start.second].box)) return 1;
     stack.push_back({start.first, start.second, yb});
   }
   Aabb leaf_boxes[kBvhLeafSize];
@@ -119,16 +132,19 @@ std::size_t bvh_traverse(const Bvh& a, const Bvh& b, const BvhRelation& rel, Bvh
         const std::uint32_t ta = a.order()[u];
         const Aabb& ba = a.triangle_box(ta);
         if (!ba.overlaps(e.b_in_a)) continue;
-        for (std::uint32_t v = 0; v < y.count; ++v)
-          if (ba.overlaps(leaf_boxes[v])) fn(ta, b.order()[y.first + v]);
+        const Aabb a_in_b = rel.identity ? ba : rel.to_b(ba);
+        for (std::uint32_t v = 0; v < y.count; ++v) {
+          const std::uint32_t tb = b.order()[y.first + v];
+          if (ba.overlaps(leaf_boxes[v]) && a_in_b.overlaps(b.triangle_box(tb))) fn(ta, tb);
+        }
       }
     } else if (y.leaf() || (!x.leaf() && x.box.extent().maxCoeff() >= e.b_in_a.extent().maxCoeff())) {
       for (const std::uint32_t c : {e.a + 1, x.first})
-        if (na[c].box.overlaps(e.b_in_a)) stack.push_back({c, e.b, e.b_in_a});
+        if (rel.overlap(na[c].box, e.b_in_a, y.box)) stack.push_back({c, e.b, e.b_in_a});
     } else {
       for (const std::uint32_t c : {e.b + 1, y.first}) {
         const Aabb yb = rel.to_a(nb[c].box);
-        if (x.box.overlaps(yb)) stack.push_back({e.a, c, yb});
+        if (rel.overlap(x.box, yb, nb[c].box)) stack.push_back({e.a, c, yb});
       }
     }
   }

@@ -72,6 +72,10 @@ struct StageCost {
   double view_ms = 0.0;
   double triangle_us = 0.0;
   double texel_ns = 0.0;
+  // The frame API's scan before either path: culling reads every triangle of both objects
+  // (us per triangle). The same for both paths (it does not change a route); part of the
+  // predictions so that they say what a pair costs (exact_path_cost() holds it).
+  double scan_us = 0.0;
   double predict_ms(double triangles, double texels) const {
     return view_ms + triangle_us * 1e-3 * triangles + texel_ns * 1e-6 * texels;
   }

@@ -17,8 +17,11 @@
 // the bodies' boxes (the broad phase: each tree's root box, moved by the pose), and per pair of
 // overlapping boxes the node pairs of the two trees that overlap, down to the couples of
 // triangles whose boxes overlap (the candidates, B's boxes seen from A's frame, grown by a
-// relative 1e-9 against rounding). A rigid body's world vertices are computed (pose * vertex)
-// only for the candidates' corners; far triangles are never read.
+// relative 1e-9 against rounding). A large rigid body's world vertices are computed (pose *
+// vertex) only for the candidates' corners; far triangles are never read. A small rigid body
+// (under 4,096 triangles) is moved into world space whole each frame instead (its vertices
+// transformed, a copy of its tree refitted: microseconds), since boxes carried through a
+// rotation are looser and a small body gains more from exact world boxes than it pays.
 //
 // Each pair goes to the exact CPU path (every candidate through the exact triangle test,
 // peelcd/core/narrow_phase.h), or to the image stage (Stage::image, or when the router predicts
@@ -40,6 +43,10 @@ namespace peelcd {
 
 using BodyId = std::uint32_t;
 
+// The router's cost of the World's exact path per candidate couple once the trees have found it
+// (the narrow phase), us: `peelcd calibrate` prints it against what it measures.
+constexpr double kWorldCandidateUs = 0.12;
+
 // What the World did, cumulative since it was made (the counters a test or benchmark reads).
 struct WorldStats {
   std::size_t builds = 0;           // trees built (add_*, set_mesh)
@@ -47,7 +54,7 @@ struct WorldStats {
   std::size_t partial_refits = 0;   // refits of the changed triangles' paths only
   std::size_t node_pairs = 0;       // node pairs visited by the traversals, last frame
   std::size_t candidates = 0;       // triangle couples whose boxes overlap, last frame
-  std::size_t vertices_transformed = 0;  // rigid bodies' world corners computed, last frame
+  std::size_t vertices_transformed = 0;  // rigid bodies' world vertices computed, last frame
 };
 
 class World {

@@ -36,4 +36,18 @@ std::vector<std::pair<std::string, std::vector<Object>>> calibration_scenes(cons
 // frame) and fits the models.
 Calibration calibrate(Detector& detector, const std::string& meshes_dir, const std::vector<int>& budgets, int repeat);
 
+// Large meshes (two crossing rigid spheres, make_crossing_spheres(), at `stacks` bands): what the
+// routers predict against what the frame takes, through the frame API (Stage::automatic: the
+// route's predicted ms, its scan included, against the frame's total) and through the World (its
+// exact path's prediction from the candidates against its narrow phase; its whole frame beside).
+struct LargeMeshRow {
+  int stacks = 0;
+  std::size_t triangles = 0;    // both spheres
+  std::size_t kept = 0;         // the frame API's triangles after one culling round
+  double frame_predicted_ms = 0.0, frame_ms = 0.0;
+  std::size_t candidates = 0;   // the World's candidate couples
+  double world_predicted_ms = 0.0, world_narrow_ms = 0.0, world_ms = 0.0;
+};
+std::vector<LargeMeshRow> calibrate_large_meshes(Detector& detector, const std::vector<int>& stacks, int repeat);
+
 }  // namespace peelcd
