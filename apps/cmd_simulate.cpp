@@ -34,7 +34,8 @@ int run_simulate(const SimArgs& a) {
   Runner runner = make_runner(a.detect.backend, merged_gl_options(Scene{}, a.detect.peeler, a.detect.resolve, a.detect.no_batch));
   std::vector<Object> objects;
   std::string csv = "frame,phase,triangles,rois,rois_exact,rois_peeled,triangles_uploaded,triangles_indexed,shape_uploads,gl_passes,pcs_readbacks,nctp,found,"
-                    "false_contacts,aabb_ms,upload_ms,gpu_ms,readback_ms,cpu_ms,total_ms\n";
+                    "false_contacts,aabb_ms,upload_ms,gpu_ms,readback_ms,cpu_ms,total_ms,gl_draws,gl_dispatches,gl_readbacks,"
+                    "bytes_uploaded,bytes_read\n";
   std::printf("peelcd simulate %s: %zu frames, %s, ids=%s peel=%s slope=%g views=%d res=%s\n", seq->name().c_str(),
               seq->frames(), runner.renderer().c_str(), to_string(opt.ids), to_string(opt.peel), opt.slope,
               opt.views, opt.resolution ? std::to_string(opt.resolution).c_str() : ("budget " + std::to_string(opt.budget)).c_str());
@@ -47,6 +48,7 @@ int run_simulate(const SimArgs& a) {
   };
   std::vector<PhaseSum> phases(seq->phases());
   std::size_t false_total = 0;
+  double gl_sum[5] = {0, 0, 0, 0, 0};  // draws, dispatches, readbacks, bytes up, bytes read
   FrameResult r;  // reused frame after frame, as an application would
   const Progress progress("frames", true);
   for (std::size_t f = 0; f < seq->frames(); ++f) {
@@ -65,11 +67,17 @@ int run_simulate(const SimArgs& a) {
                 r.shape_uploads, r.gl_passes, r.pcs_readbacks, sc.exact, sc.found, 100.0 * sc.miss_ratio(), sc.false_contacts, t.aabb,
                 t.upload + t.gpu, t.readback, t.cpu, t.total);
     char line[512];
-    std::snprintf(line, sizeof line, "%zu,%c,%zu,%zu,%zu,%zu,%zu,%zu,%zu,%zu,%zu,%zu,%zu,%zu,%.4f,%.4f,%.4f,%.4f,%.4f,%.4f\n", f,
+    std::snprintf(line, sizeof line,
+                  "%zu,%c,%zu,%zu,%zu,%zu,%zu,%zu,%zu,%zu,%zu,%zu,%zu,%zu,%.4f,%.4f,%.4f,%.4f,%.4f,%.4f,%zu,%zu,%zu,%zu,%zu\n", f,
                   char('a' + ph), tris, r.pairs.size(), r.rois_exact, r.rois_peeled, r.triangles_uploaded, r.triangles_indexed,
                   r.shape_uploads, r.gl_passes,
                   r.pcs_readbacks, sc.exact, sc.found, sc.false_contacts, t.aabb, t.upload, t.gpu, t.readback, t.cpu,
-                  t.total);
+                  t.total, r.gl_draws, r.gl_dispatches, r.gl_readbacks, r.bytes_uploaded, r.bytes_read);
+    gl_sum[0] += double(r.gl_draws);
+    gl_sum[1] += double(r.gl_dispatches);
+    gl_sum[2] += double(r.gl_readbacks);
+    gl_sum[3] += double(r.bytes_uploaded);
+    gl_sum[4] += double(r.bytes_read);
     csv += line;
     PhaseSum& p = phases[ph];
     ++p.frames;
@@ -101,6 +109,9 @@ int run_simulate(const SimArgs& a) {
     std::printf("\n");
   }
   std::printf("false contacts over all frames: %zu\n", false_total);
+  const double nf = double(std::max<std::size_t>(seq->frames(), 1));
+  std::printf("GL per frame (means): %.1f draws, %.1f dispatches, %.1f readbacks, %.1f KB uploaded, %.1f KB read back\n",
+              gl_sum[0] / nf, gl_sum[1] / nf, gl_sum[2] / nf, gl_sum[3] / nf / 1024.0, gl_sum[4] / nf / 1024.0);
   if (!a.csv.empty()) write_output(a.csv, csv);
   return false_total ? 1 : 0;
 }

@@ -536,11 +536,18 @@ void Detector::detect(const std::vector<const Object*>& object_ptrs, const Detec
     s.jobs[j].triangles[1] = &s.job_tris[2 * j + 1];
   }
 
+  out.gl_draws = out.gl_dispatches = out.gl_readbacks = out.bytes_uploaded = out.bytes_read = 0;
   if (!s.jobs.empty()) {
+    stage.counters = StageCounters{};
     stage.begin_frame();
     scope.stage = &stage;
     if (s.peeled.size() < s.jobs.size()) s.peeled.resize(s.jobs.size());
     stage.peel_batch(s.jobs.data(), s.jobs.size(), s.peeled.data(), out.timings);
+    out.gl_draws = stage.counters.draws;
+    out.gl_dispatches = stage.counters.dispatches;
+    out.gl_readbacks = stage.counters.readbacks;
+    out.bytes_uploaded = stage.counters.bytes_uploaded;
+    out.bytes_read = stage.counters.bytes_read;
   }
 
   for (std::size_t pi = 0; pi < pairs.size(); ++pi) {

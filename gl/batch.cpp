@@ -128,6 +128,7 @@ std::size_t GlImageStage::Impl::peel_conservative_batch(const PeelJob* jobs, std
       gl.NamedBufferData(buffer, GLsizeiptr(capacity), nullptr, GL_STREAM_DRAW);
     }
     gl.NamedBufferSubData(buffer, 0, GLsizeiptr(bytes), data);
+    count_upload(bytes);
   };
   upload_buffer(batch_vbo, batch_vbo_capacity, batch_corners.data(), batch_corners.size() * sizeof(GpuVertex));
   upload_buffer(batch_views, batch_views_capacity, batch_view_data.data(), batch_view_data.size() * sizeof(float));
@@ -156,6 +157,7 @@ std::size_t GlImageStage::Impl::peel_conservative_batch(const PeelJob* jobs, std
   gl.BindVertexArray(vao);
   gl.VertexArrayVertexBuffer(vao, 0, batch_vbo, 0, sizeof(GpuVertex));
   gl.DrawArrays(GL_TRIANGLES, 0, GLsizei(corners_total));
+  count_draw();
   gl.BindFramebuffer(GL_FRAMEBUFFER, 0);
   gl.MemoryBarrier(GL_BUFFER_UPDATE_BARRIER_BIT);
   check("the batched conservative draw");
@@ -166,6 +168,8 @@ std::size_t GlImageStage::Impl::peel_conservative_batch(const PeelJob* jobs, std
   const auto* fragments = static_cast<const KFragment*>(
       gl.MapNamedBufferRange(fragment_buffer, 0, GLsizeiptr(texels * slots * sizeof(KFragment)), GL_MAP_READ_BIT));
   const double map_ms = ms_since(t_map);
+  count_read(texels * 4);
+  count_read(texels * slots * sizeof(KFragment));
   t.readback += map_ms;
   if (!counts || !fragments) {
     if (counts) gl.UnmapNamedBuffer(count_buffer);

@@ -62,6 +62,7 @@ const GlImageStage::Impl::CachedShape& GlImageStage::Impl::cached_shape(const st
   for (std::size_t i = 2; i < corners_local.size(); i += 3) c.provoking_ids.push_back(corners_local[i].id);
   gl.CreateBuffers(1, &c.vbo);
   gl.NamedBufferData(c.vbo, GLsizeiptr(corners_local.size() * sizeof(GpuVertex)), corners_local.data(), GL_STATIC_DRAW);
+  count_upload(corners_local.size() * sizeof(GpuVertex));
   ++shape_uploads;
   return shapes.emplace(std::make_pair(shape.get(), ids), std::move(c)).first->second;
 }
@@ -84,12 +85,14 @@ void GlImageStage::Impl::draw(int slot, GLint u_model) {
     gl.UniformMatrix4fv(u_model, 1, GL_FALSE, identity);
     gl.VertexArrayVertexBuffer(vao, 0, vbo[slot], 0, sizeof(GpuVertex));
     gl.DrawArrays(GL_TRIANGLES, 0, GLsizei(staging[slot].size()));
+    count_draw();
     return;
   }
   gl.UniformMatrix4fv(u_model, 1, GL_FALSE, slot_model[slot].data());
   gl.VertexArrayVertexBuffer(vao, 0, slot_shape[slot]->vbo, 0, sizeof(GpuVertex));
   gl.VertexArrayElementBuffer(vao, ibo[slot]);
   gl.DrawElements(GL_TRIANGLES, GLsizei(indices[slot].size()), GL_UNSIGNED_INT, nullptr);
+  count_draw();
 }
 
 void GlImageStage::Impl::upload(int slot) {
@@ -100,6 +103,7 @@ void GlImageStage::Impl::upload(int slot) {
       gl.NamedBufferData(ibo[slot], ibo_capacity[slot] * sizeof(std::uint32_t), nullptr, GL_STREAM_DRAW);
     }
     gl.NamedBufferSubData(ibo[slot], 0, n * sizeof(std::uint32_t), indices[slot].data());
+    count_upload(n * sizeof(std::uint32_t));
     return;
   }
   const std::size_t n = staging[slot].size();
@@ -108,6 +112,7 @@ void GlImageStage::Impl::upload(int slot) {
     gl.NamedBufferData(vbo[slot], vbo_capacity[slot] * sizeof(GpuVertex), nullptr, GL_STREAM_DRAW);
   }
   gl.NamedBufferSubData(vbo[slot], 0, n * sizeof(GpuVertex), staging[slot].data());
+  count_upload(n * sizeof(GpuVertex));
 }
 
 }  // namespace peelcd::gl

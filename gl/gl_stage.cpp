@@ -11,6 +11,7 @@ GlImageStage::GlImageStage(std::shared_ptr<Context> context, GlOptions options) 
   context->make_current();
   try {
     impl_ = std::make_unique<Impl>(context, options);
+    impl_->counters = &counters;
   } catch (...) {
     context->restore_previous();
     throw;

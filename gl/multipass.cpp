@@ -12,6 +12,7 @@ bool GlImageStage::Impl::peel_multipass(const PeelJob& job, PeelResult& out, Tim
   ensure_layers(n);
   const PcsHeader header{0, pcs_capacity, 0, 0};
   gl.NamedBufferSubData(pcs_buffer, 0, sizeof header, &header);
+  count_upload(sizeof header);
   gl.BindBufferBase(GL_SHADER_STORAGE_BUFFER, 0, pcs_buffer);
 
   gl.UseProgram(peel_program);
@@ -64,12 +65,14 @@ bool GlImageStage::Impl::peel_multipass(const PeelJob& job, PeelResult& out, Tim
     check("a peel pass");
     GLuint any = 0;
     gl.GetQueryObjectuiv(query, GL_QUERY_RESULT, &any);
+    count_read(sizeof any);
     if (!any) break;  // the whole ROI ended
     ++out.layers;
     if (job.capture) {
       std::vector<std::uint32_t>& texels = out.captured.emplace_back(std::size_t(n) * n * 4);
       gl.GetTextureImage(layer_tex[cur], 0, GL_RGBA_INTEGER, GL_UNSIGNED_INT,
                          GLsizei(texels.size() * sizeof(std::uint32_t)), texels.data());
+      count_read(texels.size() * sizeof(std::uint32_t));
       check("layer capture");
     }
     if (k == 0) continue;
@@ -77,6 +80,7 @@ bool GlImageStage::Impl::peel_multipass(const PeelJob& job, PeelResult& out, Tim
     gl.BindTextureUnit(0, layer_tex[prev]);
     gl.BindTextureUnit(1, layer_tex[cur]);
     gl.DispatchCompute(GLuint((n + 7) / 8), GLuint((n + 7) / 8), 1);
+    count_dispatch();
     // The next dispatch reads run_start and appends to the same buffer.
     gl.MemoryBarrier(GL_SHADER_IMAGE_ACCESS_BARRIER_BIT | GL_SHADER_STORAGE_BARRIER_BIT);
     ++out.gl_passes;
@@ -93,8 +97,10 @@ bool GlImageStage::Impl::read_pcs(PeelResult& out, Timings& t, const PcsHeader* 
   PcsHeader got{};
   if (header)
     got = *header;
-  else
+  else {
     gl.GetNamedBufferSubData(pcs_buffer, 0, sizeof got, &got);
+    count_read(sizeof got);
+  }
   if (got.count > pcs_capacity) {
     grow_pcs(got.count + got.count / 2);
     t.readback += ms_since(t_read);
@@ -103,6 +109,7 @@ bool GlImageStage::Impl::read_pcs(PeelResult& out, Timings& t, const PcsHeader* 
   out.pcs.resize(got.count);
   if (got.count) {
     gl.GetNamedBufferSubData(pcs_buffer, sizeof(PcsHeader), GLsizeiptr(got.count) * 8, out.pcs.data());
+    count_read(std::size_t(got.count) * 8);
     ++out.pcs_readbacks;
   }
   check("PCS readback");

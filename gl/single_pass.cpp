@@ -18,6 +18,7 @@ void GlImageStage::Impl::start_kbuffer(int n, std::uint32_t view_slots) {
                              &zero);
   const PcsHeader header{0, pcs_capacity, 0, 0};
   gl.NamedBufferSubData(pcs_buffer, 0, sizeof header, &header);
+  count_upload(sizeof header);
   gl.BindBufferBase(GL_SHADER_STORAGE_BUFFER, 0, pcs_buffer);
   gl.BindBufferBase(GL_SHADER_STORAGE_BUFFER, 1, fragment_buffer);
   gl.BindBufferBase(GL_SHADER_STORAGE_BUFFER, 2, count_buffer);
@@ -44,10 +45,12 @@ void GlImageStage::Impl::capture_resolved(int n, int layers, GLint u_append, GLi
     gl.ClearTexImage(layer_tex[0], 0, GL_RGBA_INTEGER, GL_UNSIGNED_INT, zero4);
     gl.Uniform1i(u_emit, k);
     gl.DispatchCompute(GLuint((n + 7) / 8), GLuint((n + 7) / 8), 1);
+    count_dispatch();
     gl.MemoryBarrier(GL_TEXTURE_UPDATE_BARRIER_BIT | GL_SHADER_IMAGE_ACCESS_BARRIER_BIT);
     std::vector<std::uint32_t>& texels = out.captured.emplace_back(std::size_t(n) * n * 4);
     gl.GetTextureImage(layer_tex[0], 0, GL_RGBA_INTEGER, GL_UNSIGNED_INT, GLsizei(texels.size() * sizeof(std::uint32_t)),
                        texels.data());
+    count_read(texels.size() * sizeof(std::uint32_t));
   }
   check("layer capture");
 }
@@ -110,11 +113,13 @@ bool GlImageStage::Impl::dispatch_resolve(const PeelJob& job, std::size_t fittin
   gl.Uniform1i(u_append, 1);
   gl.Uniform1i(u_emit, -1);
   gl.DispatchCompute(GLuint((n + 7) / 8), GLuint((n + 7) / 8), 1);
+  count_dispatch();
   gl.MemoryBarrier(GL_BUFFER_UPDATE_BARRIER_BIT | GL_SHADER_STORAGE_BARRIER_BIT);
   ++out.gl_passes;
   check(what);
   PcsHeader got{};
   gl.GetNamedBufferSubData(pcs_buffer, 0, sizeof got, &got);
+  count_read(sizeof got);
   if (got.max_fragments > view_slots) {
     t.gpu += ms_since(t_gpu);
     return regrow(got.max_fragments, fitting, job, out, t);
@@ -171,6 +176,8 @@ bool GlImageStage::Impl::resolve_on_host(const PeelJob& job, std::size_t fitting
   const auto* fragments = static_cast<const KFragment*>(gl.MapNamedBufferRange(
       fragment_buffer, 0, GLsizeiptr(texels * view_slots * sizeof(KFragment)), GL_MAP_READ_BIT));
   const double map_ms = ms_since(t_map);  // a wait for the draw, then (llvmpipe) no copy
+  count_read(texels * 4);
+  count_read(texels * view_slots * sizeof(KFragment));
   t.readback += map_ms;
   if (!counts || !fragments) {
     if (counts) gl.UnmapNamedBuffer(count_buffer);

@@ -72,6 +72,15 @@ struct GlImageStage::Impl {
   GLint max_texture = 0;
   std::size_t max_storage_block = 0;  // GL_MAX_SHADER_STORAGE_BLOCK_SIZE, bytes
   bool software_renderer = false;     // GL runs on the CPU: Resolve::automatic resolves on the host
+  // The stage's counters (GlImageStage::counters): every draw, dispatch, upload and readback.
+  StageCounters* counters = nullptr;
+  void count_upload(std::size_t bytes) { counters->bytes_uploaded += bytes; }
+  void count_read(std::size_t bytes) {
+    ++counters->readbacks;
+    counters->bytes_read += bytes;
+  }
+  void count_draw() { ++counters->draws; }
+  void count_dispatch() { ++counters->dispatches; }
 
   // Programs and their uniforms.
   GLuint peel_program = 0, pcs_program = 0, floor_program = 0, abuffer_program = 0, resolve_program = 0;

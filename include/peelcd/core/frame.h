@@ -176,6 +176,9 @@ struct FrameResult {
   std::size_t views_exhaustive = 0;     // conservative views no k-buffer could hold: their
                                         // triangles' box-overlapping couples went to the exact test
   std::size_t rois_exact = 0;           // ROIs the exact CPU path tested (Stage::exact, or routed)
+  // The image stage's GL calls this frame (draws, dispatches, readbacks, bytes up and down; all 0
+  // on the CPU stage and on the exact path).
+  std::size_t gl_draws = 0, gl_dispatches = 0, gl_readbacks = 0, bytes_uploaded = 0, bytes_read = 0;
   std::string renderer;           // GL_RENDERER of the context that ran it
 };
 

@@ -81,9 +81,21 @@ struct StageCost {
   }
 };
 
+// What a stage did on the GL side (FrameResult::gl_counters copies them for a frame): the counts
+// that say whether a frame's GL work follows its ROIs or is constant, measurable on llvmpipe.
+struct StageCounters {
+  std::size_t draws = 0;           // draw calls
+  std::size_t dispatches = 0;      // compute dispatches
+  std::size_t readbacks = 0;       // reads of GL memory by the host (maps, gets): each waits for the GPU
+  std::size_t bytes_uploaded = 0;  // bytes the host wrote into GL buffers (buffer data and sub-data)
+  std::size_t bytes_read = 0;      // bytes the host read back
+};
+
 class ImageStage {
  public:
   virtual ~ImageStage() = default;
+  // Counted by the stage as it works; the Detector zeroes them when a frame begins.
+  StageCounters counters;
   virtual const std::string& backend() const = 0;   // "osmesa", "egl-device", "egl-surfaceless", "cpu"
   virtual const std::string& renderer() const = 0;  // GL_RENDERER, or a description of the CPU model
   virtual const std::string& version() const = 0;   // GL_VERSION, or the CPU model's version

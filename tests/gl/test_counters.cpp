@@ -1,0 +1,93 @@
+// The GL counters of a frame (FrameResult::gl_draws, gl_dispatches, gl_readbacks, bytes_uploaded,
+// bytes_read; peelcd/core/image_stage.h StageCounters): what they count, checked against what the
+// frame must have done. They are the measure of the GPU work's constancy (docs/backends.md).
+#include "gl_fixture.h"
+#include "peelcd/core/primitives.h"
+
+#include <catch2/catch.hpp>
+
+using namespace peelcd;
+using namespace peelcd::test;
+
+namespace {
+
+std::vector<Object> two_rigid_balls(const std::shared_ptr<const Mesh>& ball, double dx) {
+  std::vector<Object> objects(2);
+  for (int k = 0; k < 2; ++k) {
+    Eigen::Affine3d pose = Eigen::Affine3d::Identity();
+    pose.translate(Vec3(k * dx, 0.01 * k, 0.0));
+    objects[std::size_t(k)].name = k ? "b" : "a";
+    objects[std::size_t(k)].mesh = transformed(*ball, Transform{});
+    for (Vec3& v : objects[std::size_t(k)].mesh.vertices) v = pose * v;
+    objects[std::size_t(k)].rigid = RigidMotion{ball, pose};
+  }
+  return objects;
+}
+
+}  // namespace
+
+TEST_CASE("GL counters: a rigid shape's corners are uploaded once, then only per-view indices", "[gl][counters]") {
+  // A fresh shape (never seen by the pipeline): its first frame uploads its corners.
+  auto ball = std::make_shared<const Mesh>(make_uv_sphere(Vec3::Zero(), 1.0, 12, 18));
+  const std::vector<Object> objects = two_rigid_balls(ball, 1.5);
+  DetectOptions opt;
+  opt.stage = Stage::image;
+  opt.views = 1;
+  gl::GlOptions one_view;
+  one_view.batch = false;  // the one-view path: rigid shapes drawn from their resident buffers
+  test_pipeline().set_gl_options(one_view);
+  const FrameResult first = test_pipeline().detect(objects, opt);
+  const FrameResult second = test_pipeline().detect(objects, opt);
+  test_pipeline().set_gl_options(gl::GlOptions{});
+  REQUIRE(first.rois_peeled == 1);
+  CHECK(first.shape_uploads == 1);  // one shape, shared by both objects
+  CHECK(second.shape_uploads == 0);
+  // The difference is the shape's corners (3 per triangle, 16 bytes each), and a PCS header or two
+  // more where the first frame grew its buffers and peeled again.
+  const std::size_t shape_bytes = ball->triangles.size() * 3 * 16;
+  CHECK(first.bytes_uploaded - second.bytes_uploaded >= shape_bytes);
+  CHECK(first.bytes_uploaded - second.bytes_uploaded <= shape_bytes + 64);
+  // What the second frame uploads is indices (3 per drawn triangle, 4 bytes each) and a header.
+  CHECK(second.triangles_uploaded == 0);
+  CHECK(second.triangles_indexed > 0);
+  INFO("second frame: " << second.bytes_uploaded << " bytes, " << second.triangles_indexed << " indexed, " << second.triangles_uploaded << " uploaded, draws " << second.gl_draws << ", readbacks " << second.gl_readbacks << ", passes " << second.gl_passes);
+  CHECK(second.bytes_uploaded >= second.triangles_indexed * 12);
+  CHECK(second.bytes_uploaded <= second.triangles_indexed * 12 + 64);
+  CHECK(second.gl_draws >= 2);  // each object drawn at least once
+  CHECK(second.gl_readbacks >= 1);
+  CHECK(second.bytes_read > 0);
+}
+
+TEST_CASE("GL counters: the exact path and a frame without ROIs do no GL work", "[gl][counters]") {
+  auto ball = std::make_shared<const Mesh>(make_uv_sphere(Vec3::Zero(), 1.0, 8, 12));
+  DetectOptions opt;
+  opt.stage = Stage::exact;
+  const FrameResult exact = test_pipeline().detect(two_rigid_balls(ball, 1.5), opt);
+  CHECK(!exact.pairs.empty());
+  opt.stage = Stage::image;
+  const FrameResult apart = test_pipeline().detect(two_rigid_balls(ball, 5.0), opt);
+  CHECK(apart.pairs.empty());
+  for (const FrameResult* r : {&exact, &apart}) {
+    CHECK(r->gl_draws == 0);
+    CHECK(r->gl_dispatches == 0);
+    CHECK(r->gl_readbacks == 0);
+    CHECK(r->bytes_uploaded == 0);
+    CHECK(r->bytes_read == 0);
+  }
+}
+
+TEST_CASE("GL counters: the batched conservative frame is one draw for every view", "[gl][counters]") {
+  auto ball = std::make_shared<const Mesh>(make_uv_sphere(Vec3::Zero(), 1.0, 10, 14));
+  DetectOptions opt;
+  opt.stage = Stage::image;
+  opt.views = 3;
+  gl::GlOptions host;
+  host.resolve = Resolve::host;  // the batch resolves on the host
+  test_pipeline().set_gl_options(host);
+  const FrameResult r = test_pipeline().detect(two_rigid_balls(ball, 1.5), opt);
+  test_pipeline().set_gl_options(gl::GlOptions{});
+  REQUIRE(r.rois_peeled == 3);
+  CHECK(r.gl_draws == 1);
+  CHECK(r.gl_dispatches == 0);
+  CHECK(r.gl_readbacks == 2);  // the counts and the fragments, mapped once each
+}
