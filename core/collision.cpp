@@ -1,5 +1,7 @@
 #include "peelcd/core/collision.h"
 
+#include "peelcd/core/world.h"
+
 #include <stdexcept>
 
 namespace peelcd {
@@ -95,12 +97,32 @@ void CollisionWorld::add(CollisionObject* object) {
   objects_.push_back(object);
 }
 
-void CollisionWorld::clear() { objects_.clear(); }
+CollisionWorld::~CollisionWorld() = default;
+
+void CollisionWorld::clear() {
+  objects_.clear();
+  bodies_.clear();
+  world_.reset();
+}
 
 const FrameResult& CollisionWorld::detect(const DetectOptions& options) {
-  pointers_.clear();
-  for (CollisionObject* o : objects_) pointers_.push_back(&o->world());
-  detector_->detect(pointers_, options, result_);
+  if (!world_) world_ = std::make_unique<World>(detector_->stage_ptr());
+  for (std::size_t i = 0; i < objects_.size(); ++i) {
+    const CollisionObject& o = *objects_[i];
+    if (i == bodies_.size()) {  // added since the last frame
+      bodies_.push_back(o.rigid() ? world_->add_rigid(o.geometry()->shared_mesh(), o.pose(), o.name())
+                                  : world_->add_deforming(o.world().mesh, o.name()));
+      continue;
+    }
+    if (o.rigid()) {
+      world_->set_pose(bodies_[i], o.pose());
+    } else if (o.world().mesh.triangles == world_->mesh(bodies_[i]).triangles) {
+      world_->set_vertices(bodies_[i], o.world().mesh.vertices);
+    } else {  // fractured: a new topology
+      world_->set_mesh(bodies_[i], o.world().mesh);
+    }
+  }
+  world_->collide(options, result_);
   return result_;
 }
 

@@ -2,16 +2,17 @@
 # Regenerates docs/performance/ and the tables of docs/performance.md: the router's calibration
 # (peelcd calibrate), the two dynamic scenes (peelcd simulate), the benchmarks against CGAL, FCL
 # and the bare-draw floor (peelcd bench: the default scene, test1, test2 and a 400-ball pile,
-# all with one thread per method; the default scene and the crowd again with one per core), and
-# the plots. Needs a built ./build/peelcd and python3-matplotlib (Debian's /usr/bin/python3).
-# About ten minutes on 2 cores; run it on a quiet machine: every number is a median of frames
+# all with one thread per method; the default scene and the crowd again with one per core; the
+# scale scenes: crossing spheres of 330k and 1.3M triangles, rigid and waving, and a 1,000-ball
+# pile), and the plots. Needs a built ./build/peelcd and python3-matplotlib (Debian's /usr/bin/python3).
+# About half an hour on 2 cores; run it on a quiet machine: every number is a median of frames
 # measured side by side.
 set -euo pipefail
 cd "$(dirname "$0")/.."
 out=docs/performance
 mkdir -p "$out"
-./build/peelcd calibrate --backend osmesa > "$out/calibrate_osmesa.txt"
-./build/peelcd calibrate --backend cpu > "$out/calibrate_cpu.txt"
+./build/peelcd calibrate --backend osmesa --large 72 144 288 570 > "$out/calibrate_osmesa.txt"
+./build/peelcd calibrate --backend cpu --large 0 > "$out/calibrate_cpu.txt"
 for t in test1 test2; do
   ./build/peelcd simulate "$t" --frames 40 --csv "$out/simulate_$t.csv" > "$out/simulate_$t.txt"
   ./build/peelcd bench "$t" --frames 12 --threads 1 --csv "$out/bench_$t.csv" > "$out/bench_$t.txt"
@@ -21,6 +22,14 @@ scene=fixtures/scenes/bunny_dragon.json
 ./build/peelcd bench "$scene" --frames 30 > "$out/bench_default_2threads.txt"
 ./build/peelcd bench crowd --objects 400 --frames 6 --threads 1 --csv "$out/bench_crowd.csv" > "$out/bench_crowd.txt"
 ./build/peelcd bench crowd --objects 400 --frames 6 > "$out/bench_crowd_2threads.txt"
+# The scale scenes: two crossing spheres of 330k and 1.3M triangles each, rigid and with a wave
+# over their vertices, and a pile of 1,000 balls (the World, the frame API's router and image
+# stage, the peers, the floors: --short).
+./build/peelcd bench spheres --frames 6 --threads 1 --short > "$out/bench_spheres.txt"
+./build/peelcd bench spheres-wave --frames 6 --threads 1 --short > "$out/bench_spheres_wave.txt"
+./build/peelcd bench spheres --stacks 570 --frames 4 --threads 1 --short > "$out/bench_spheres_1m.txt"
+./build/peelcd bench spheres-wave --stacks 570 --frames 4 --threads 1 --short > "$out/bench_spheres_1m_wave.txt"
+./build/peelcd bench crowd --objects 1000 --frames 4 --threads 1 --short > "$out/bench_pile1000.txt"
 PY=/usr/bin/python3; [ -x "$PY" ] || PY=python3
 "$PY" scripts/plot_performance.py "$out" "$out/bench_default.csv" "$out/bench_test1.csv" "$out/bench_test2.csv" \
   "$out/bench_crowd.csv" --simulate "$out/simulate_test1.csv" "$out/simulate_test2.csv"

@@ -111,12 +111,16 @@ TEST_CASE("the router's models are positive and its choice depends on them only"
 }
 
 // An image stage whose fixed cost per view lies between the exact path's smallest and largest
-// predictions on `objects`: ROIs go to each stage.
+// predictions on `objects` (without the scan both paths pay): ROIs go to each stage.
 StageCost mixed_cost(const std::vector<Object>& objects) {
   Detector probe(std::make_shared<CpuImageStage>());
   std::vector<double> exact;
-  for (const PairResult& p : probe.detect(objects, DetectOptions{}).pairs)
-    if (p.predicted_exact_ms > 0.0) exact.push_back(p.predicted_exact_ms);
+  const double scan_us = exact_path_cost().scan_us;
+  for (const PairResult& p : probe.detect(objects, DetectOptions{}).pairs) {
+    const double scan =
+        scan_us * 1e-3 * double(objects[p.object_a].mesh.triangles.size() + objects[p.object_b].mesh.triangles.size());
+    if (p.predicted_exact_ms > 0.0) exact.push_back(p.predicted_exact_ms - scan);
+  }
   if (exact.empty()) return StageCost{0, 0, 0};
   const auto [lo, hi] = std::minmax_element(exact.begin(), exact.end());
   return StageCost{0.5 * (*lo + *hi), 0.0, 0.0};

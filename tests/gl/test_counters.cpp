@@ -76,7 +76,7 @@ TEST_CASE("GL counters: the exact path and a frame without ROIs do no GL work", 
   }
 }
 
-TEST_CASE("GL counters: the batched conservative frame is one draw for every view", "[gl][counters]") {
+TEST_CASE("GL counters: the batched conservative frame is one draw for every view, after the first", "[gl][counters]") {
   auto ball = std::make_shared<const Mesh>(make_uv_sphere(Vec3::Zero(), 1.0, 10, 14));
   DetectOptions opt;
   opt.stage = Stage::image;
@@ -84,6 +84,9 @@ TEST_CASE("GL counters: the batched conservative frame is one draw for every vie
   gl::GlOptions host;
   host.resolve = Resolve::host;  // the batch resolves on the host
   test_pipeline().set_gl_options(host);
+  // The first frame may draw again after growing the k-buffer's slots (the count is not known
+  // before the draw); the steady state is one draw.
+  test_pipeline().detect(two_rigid_balls(ball, 1.5), opt);
   const FrameResult r = test_pipeline().detect(two_rigid_balls(ball, 1.5), opt);
   test_pipeline().set_gl_options(gl::GlOptions{});
   REQUIRE(r.rois_peeled == 3);

@@ -22,6 +22,8 @@
 
 namespace peelcd {
 
+class World;
+
 // An immutable triangle mesh in its own (local) frame. Validated on construction.
 class CollisionGeometry {
  public:
@@ -48,6 +50,8 @@ class CollisionObject {
   static CollisionObject deforming(Mesh mesh, std::string name = {});
 
   bool rigid() const { return geometry_ != nullptr; }
+  // Rigid objects: the geometry (nullptr for a deforming object).
+  const std::shared_ptr<const CollisionGeometry>& geometry() const { return geometry_; }
   const std::string& name() const { return object_.name; }
   // Rigid objects: the pose, world = pose * local. Throws std::invalid_argument on a pose with a
   // NaN or infinite entry.
@@ -95,10 +99,14 @@ std::size_t collide(Detector& detector, const Mesh& a, const Eigen::Affine3d& po
                     const Eigen::Affine3d& pose_b, const CollisionRequest& request, CollisionResult& result);
 
 // Many objects: every overlapping pair in one frame, the frame's storage reused from frame to
-// frame. Objects are held by pointer: they must outlive the world's use of them.
+// frame. Objects are held by pointer: they must outlive the world's use of them. Built on a
+// World (peelcd/core/world.h): each object is a body with a tree kept across frames; each frame a
+// rigid object's body takes its pose, a deforming object's its vertices (read whole: the object
+// is changed in place, unannounced; a World used directly can be told which vertices moved).
 class CollisionWorld {
  public:
   explicit CollisionWorld(std::shared_ptr<Detector> detector);
+  ~CollisionWorld();
   void add(CollisionObject* object);
   void clear();
   // One frame; the result holds one PairResult per overlapping pair (object indices in the
@@ -108,7 +116,8 @@ class CollisionWorld {
  private:
   std::shared_ptr<Detector> detector_;
   std::vector<CollisionObject*> objects_;
-  std::vector<const Object*> pointers_;
+  std::unique_ptr<World> world_;
+  std::vector<std::uint32_t> bodies_;
   FrameResult result_;
 };
 
