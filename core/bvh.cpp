@@ -138,12 +138,12 @@ void Bvh::query(const Aabb& box, std::vector<std::uint32_t>& out) const {
 }
 
 Aabb BvhRelation::moved(const Aabb& box, const Eigen::Matrix3d& linear, const Eigen::Matrix3d& abs_linear,
-                        const Vec3& translation) {
+                        const Vec3& translation, double reach) {
   const Vec3 c = box.center(), e = 0.5 * box.extent();
   const Vec3 center = linear * c + translation;
   const Vec3 half = abs_linear * e;
   // Rounding of the products above: a relative 1e-9 of the magnitudes involved covers it.
-  const double grow = 1e-9 * (center.cwiseAbs().maxCoeff() + half.maxCoeff()) + 1e-300;
+  const double grow = 1e-9 * (center.cwiseAbs().maxCoeff() + half.maxCoeff() + reach) + 1e-300;
   Aabb out;
   out.lo = center - half - Vec3::Constant(grow);
   out.hi = center + half + Vec3::Constant(grow);
@@ -161,6 +161,11 @@ BvhRelation BvhRelation::between(const Eigen::Affine3d& pose_a, const Eigen::Aff
   r.inv_linear = inv.linear();
   r.inv_abs_linear = r.inv_linear.cwiseAbs();
   r.inv_translation = inv.translation();
+  // World coordinates are pose * vertex: their rounding scales with the translations and with
+  // the linear parts' size times the vertices' (the latter covered by the boxes' own magnitude,
+  // up to the linear parts' norms, folded in here).
+  r.reach = std::max(pose_a.translation().cwiseAbs().maxCoeff(), pose_b.translation().cwiseAbs().maxCoeff()) *
+            std::max({1.0, r.abs_linear.maxCoeff(), r.inv_abs_linear.maxCoeff()});
   return r;
 }
 

@@ -1,6 +1,8 @@
 #include "peelcd/core/world.h"
 
 #include "peelcd/core/broad_phase.h"
+#include "peelcd/core/cull.h"
+#include "peelcd/core/reference.h"
 #include "peelcd/core/cpu_stage.h"
 #include "peelcd/core/id_map.h"
 #include "peelcd/core/narrow_phase.h"
@@ -18,6 +20,7 @@ using Clock = std::chrono::steady_clock;
 double ms_since(Clock::time_point t0) { return std::chrono::duration<double, std::milli>(Clock::now() - t0).count(); }
 
 constexpr double kCandidateUs = kWorldCandidateUs;
+constexpr std::uint32_t kSmallPair = 0xffffffffu;  // a task's start: scan two small world meshes
 
 // A rigid body with fewer triangles than this is moved into world space every frame (its
 // vertices transformed, a world-space copy of its tree refitted): O(its size), a few
@@ -34,35 +37,50 @@ struct Body {
   Mesh mesh;                          // deforming: world space
   Eigen::Affine3d pose = Eigen::Affine3d::Identity();
   Bvh tree;
-  // A small rigid body this frame: its world vertices and its tree refitted over them.
+  // A small rigid body this frame: its world-space mesh, and its tree refitted over it when a
+  // pair with a large body traverses it (world_tree_fresh).
   bool world_frame = false;
-  std::vector<Vec3> world_vertices;
+  Mesh world_copy;
   Bvh world_tree;
+  bool world_tree_fresh = false;
   // Deforming: the triangles using each vertex (CSR), built on the first move_vertices().
   std::vector<std::uint32_t> vertex_first, vertex_tris;
 
   const Mesh& local() const { return is_rigid ? *shape : mesh; }
   Vec3 world(std::uint32_t v) const {
-    return !is_rigid ? mesh.vertices[v] : world_frame ? world_vertices[v] : Vec3(pose * shape->vertices[v]);
+    return !is_rigid ? mesh.vertices[v] : world_frame ? world_copy.vertices[v] : Vec3(pose * shape->vertices[v]);
   }
+  // Small (under kWorldFrameTriangles) and in world space this frame: a pair of two such bodies
+  // is tested as the frame API tests it (one culling round over both meshes, a sweep of the kept
+  // triangles' boxes): for small meshes a scan costs less than the traversal of two trees.
+  bool small() const { return local().triangles.size() < kWorldFrameTriangles; }
+  const Mesh* world_mesh() const { return !is_rigid ? &mesh : world_frame ? &world_copy : nullptr; }
   // The tree the traversals use and the pose it is posed by: a small rigid body's world copy
   // (identity), else its own.
   const Bvh& frame_tree() const { return world_frame ? world_tree : tree; }
   Eigen::Affine3d frame_pose() const { return world_frame ? Eigen::Affine3d::Identity() : pose; }
-  // Small rigid bodies: into world space for this frame.
+  // Small rigid bodies: into world space for this frame (the tree only when needed:
+  // ensure_world_tree()).
   void enter_frame() {
     world_frame = is_rigid && shape->triangles.size() < kWorldFrameTriangles;
+    world_tree_fresh = false;
     if (!world_frame) return;
-    world_vertices.resize(shape->vertices.size());
-    for (std::size_t v = 0; v < world_vertices.size(); ++v) world_vertices[v] = pose * shape->vertices[v];
+    if (world_copy.triangles.size() != shape->triangles.size()) world_copy.triangles = shape->triangles;
+    world_copy.vertices.resize(shape->vertices.size());
+    for (std::size_t v = 0; v < world_copy.vertices.size(); ++v) world_copy.vertices[v] = pose * shape->vertices[v];
+  }
+  void ensure_world_tree() {
+    if (!world_frame || world_tree_fresh) return;
     if (world_tree.triangles() != shape->triangles.size() || world_tree.empty() != tree.empty())
-      world_tree.build(world_vertices, shape->triangles);
+      world_tree.build(world_copy.vertices, world_copy.triangles);
     else
-      world_tree.refit(world_vertices, shape->triangles);
+      world_tree.refit(world_copy.vertices, world_copy.triangles);
+    world_tree_fresh = true;
   }
   Aabb world_box() const {
-    const Aabb b = frame_tree().box();
-    if (!is_rigid || world_frame || b.empty()) return b;
+    if (world_frame) return world_copy.triangles.empty() ? Aabb{} : bounds(world_copy);
+    const Aabb b = tree.box();
+    if (!is_rigid || b.empty()) return b;
     const Vec3 c = pose * b.center();
     const Vec3 half = pose.linear().cwiseAbs() * (0.5 * b.extent());
     const double grow = 1e-9 * (c.cwiseAbs().maxCoeff() + half.maxCoeff()) + 1e-300;
@@ -122,6 +140,12 @@ struct World::Impl {
   std::vector<Task> tasks;
   std::vector<BvhNodePair> split;
   std::vector<std::vector<BvhStackEntry>> stacks;  // per lane
+  struct LaneScratch {
+    ContactCull cull;
+    BoxScratch boxes;
+    std::vector<std::uint64_t> sorted;
+  };
+  std::vector<std::unique_ptr<LaneScratch>> lane_scratch;  // per lane: the small pairs' scan
   std::vector<std::uint64_t> candidates, scratch;
   std::unique_ptr<WorkerPool> pool;
 
@@ -153,6 +177,7 @@ struct World::Impl {
   template <class Fn>
   void parallel(std::size_t n, unsigned lanes, Fn&& fn) {
     if (stacks.size() < lanes) stacks.resize(lanes);
+    while (lane_scratch.size() < lanes) lane_scratch.push_back(std::make_unique<LaneScratch>());
     if (lanes <= 1 || n <= 1) {
       for (std::size_t i = 0; i < n; ++i) fn(i, 0u);
       return;
@@ -275,6 +300,7 @@ void World::set_mesh(BodyId id, Mesh mesh) {
   b.vertex_tris.clear();
   b.tree.build(b.local().vertices, b.local().triangles);
   b.world_tree = Bvh{};
+  b.world_copy = Mesh{};
   ++impl_->stats.builds;
 }
 
@@ -287,6 +313,7 @@ void World::set_shape(BodyId id, std::shared_ptr<const Mesh> shape) {
   b.shape = std::move(shape);
   b.tree.build(b.shape->vertices, b.shape->triangles);
   b.world_tree = Bvh{};
+  b.world_copy = Mesh{};
   ++impl_->stats.builds;
 }
 
@@ -330,7 +357,7 @@ void World::Impl::collide(const DetectOptions& opt, FrameResult& out) {
   for (BodyId id = 0; id < bodies.size(); ++id) {
     if (!bodies[id].alive) continue;
     bodies[id].enter_frame();
-    stats.vertices_transformed += bodies[id].world_frame ? bodies[id].world_vertices.size() : 0;
+    stats.vertices_transformed += bodies[id].world_frame ? bodies[id].world_copy.vertices.size() : 0;
     ids.push_back(id);
     boxes.push_back(bodies[id].world_box());
     const Aabb& w = boxes.back();
@@ -345,13 +372,19 @@ void World::Impl::collide(const DetectOptions& opt, FrameResult& out) {
   const unsigned lanes = lanes_for(opt);
   std::size_t used = 0;
   for (std::size_t p = 0; p < pairs.size(); ++p) {
-    const Body& a = bodies[ids[pairs[p].first]];
-    const Body& b = bodies[ids[pairs[p].second]];
-    const BvhRelation rel = BvhRelation::between(a.frame_pose(), b.frame_pose());
-    if (lanes > 1)
-      bvh_split(a.frame_tree(), b.frame_tree(), rel, 8 * std::size_t(lanes), split);
-    else
-      split.assign(1, BvhNodePair{0u, 0u});
+    Body& a = bodies[ids[pairs[p].first]];
+    Body& b = bodies[ids[pairs[p].second]];
+    if (a.small() && b.small() && a.world_mesh() && b.world_mesh()) {
+      split.assign(1, BvhNodePair{kSmallPair, kSmallPair});
+    } else {
+      a.ensure_world_tree();
+      b.ensure_world_tree();
+      if (lanes > 1)
+        bvh_split(a.frame_tree(), b.frame_tree(), BvhRelation::between(a.frame_pose(), b.frame_pose()),
+                  8 * std::size_t(lanes), split);
+      else
+        split.assign(1, BvhNodePair{0u, 0u});
+    }
     for (const BvhNodePair& start : split) {
       if (used == tasks.size()) tasks.emplace_back();
       Task& t = tasks[used++];
@@ -367,6 +400,15 @@ void World::Impl::collide(const DetectOptions& opt, FrameResult& out) {
     t.candidates.clear();
     t.contacts.clear();
     t.transformed = 0;
+    if (t.start.first == kSmallPair) {  // as the frame API's exact path: one culling round, a sweep
+      const Mesh& ma = *a.world_mesh();
+      const Mesh& mb = *b.world_mesh();
+      LaneScratch& s = *lane_scratch[lane];
+      cull_to_contact_region(ma, mb, intersection(boxes[pairs[t.pair].first], boxes[pairs[t.pair].second]), s.cull, 1);
+      if (!s.cull.box.empty()) box_overlap_pairs(ma, s.cull.kept_a, mb, s.cull.kept_b, t.candidates, &s.boxes);
+      t.visited = 0;
+      return;
+    }
     t.visited = bvh_traverse(a.frame_tree(), b.frame_tree(), rel, t.start, stacks[lane],
                              [&](std::uint32_t ta, std::uint32_t tb) { t.candidates.push_back(pack_pair(ta, tb)); });
   });
@@ -410,11 +452,16 @@ void World::Impl::collide(const DetectOptions& opt, FrameResult& out) {
     }
   }
   t0 = Clock::now();
-  parallel(used, lanes, [&](std::size_t k, unsigned) {
+  parallel(used, lanes, [&](std::size_t k, unsigned lane) {
     Task& t = tasks[k];
     if (t.candidates.empty() || to_image[t.pair]) return;
     const Body& a = bodies[ids[pairs[t.pair].first]];
     const Body& b = bodies[ids[pairs[t.pair].second]];
+    if (t.start.first == kSmallPair) {  // the sweep's pairs: distinct, boxes overlapping, world meshes at hand
+      sort_unique_pairs(t.candidates, lane_scratch[lane]->sorted);
+      narrow_phase(*a.world_mesh(), *b.world_mesh(), t.candidates, t.contacts, /*boxes_overlap=*/true);
+      return;
+    }
     const Mesh& ma = a.local();
     const Mesh& mb = b.local();
     std::sort(t.candidates.begin(), t.candidates.end());

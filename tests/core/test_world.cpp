@@ -292,3 +292,35 @@ TEST_CASE("World: set_mesh rebuilds (fracture): contacts of the new triangles", 
   CHECK(keys(world.collide(opt).pairs.at(0)) == want);
   CHECK(world.stats().builds == 3);
 }
+
+TEST_CASE("World: touching bodies far from the origin, every pose: exactly the reference's pairs", "[world]") {
+  // Faces that touch, moved by large translations and rotations: the world coordinates carry
+  // rounding of the translations' size, which the traversal's grown boxes must cover.
+  auto cube = std::make_shared<const Mesh>(make_grid(Vec3(0, 0, 0), Vec3(1, 0, 0), Vec3(0, 1, 0), 7, 7));
+  std::mt19937 rng(5);
+  std::uniform_real_distribution<double> u(-1.0, 1.0);
+  std::size_t contacts = 0;
+  for (const double far : {0.0, 1e4, 1e7, 1e10}) {
+    for (int k = 0; k < 8; ++k) {
+      const Eigen::AngleAxisd turn(3.0 * u(rng), Vec3(u(rng), u(rng), 1.0).normalized());
+      const Vec3 at = far * Vec3(u(rng), u(rng), u(rng)).normalized();
+      Eigen::Affine3d pa = Eigen::Affine3d::Identity(), pb = Eigen::Affine3d::Identity();
+      pa.translate(at);
+      pa.rotate(turn);
+      // B: the same sheet turned a quarter about an edge line of A's: the two touch along it.
+      pb = pa * Eigen::Translation3d(0.5, 0.0, 0.0) * Eigen::AngleAxisd(M_PI / 2, Vec3::UnitX());
+      World world;
+      const BodyId a = world.add_rigid(cube, pa, "a");
+      const BodyId b = world.add_rigid(cube, pb, "b");
+      DetectOptions opt;
+      opt.stage = Stage::exact;
+      const FrameResult& r = world.collide(opt);
+      const std::vector<std::uint64_t> want = reference(world, a, b);
+      INFO("translation " << far << ", pose " << k);
+      const PairResult* p = find_pair(r, a, b);
+      CHECK((p ? keys(*p) : std::vector<std::uint64_t>{}) == want);
+      contacts += want.size();
+    }
+  }
+  CHECK(contacts > 0);
+}

@@ -72,12 +72,17 @@ struct BvhRelation {
   Eigen::Matrix3d inv_abs_linear = Eigen::Matrix3d::Identity();
   Vec3 inv_translation = Vec3::Zero();
   bool identity = true;
+  // The magnitude of the poses' translations: world coordinates carry rounding of that size,
+  // which the grown boxes must cover too.
+  double reach = 0.0;
 
-  // B's box as seen from A: the box enclosing its image, grown by a relative 1e-9 so that the
-  // rounding of the transform never drops a pair whose exact images touch.
-  Aabb to_a(const Aabb& b) const { return identity ? b : moved(b, linear, abs_linear, translation); }
+  // B's box as seen from A: the box enclosing its image, grown by 1e-9 of the magnitudes
+  // involved (the box's, and the poses' translations: `reach`) so that the rounding of the
+  // transforms, here and in the world coordinates the exact test reads, never drops a pair whose
+  // world-space triangles touch.
+  Aabb to_a(const Aabb& b) const { return identity ? b : moved(b, linear, abs_linear, translation, reach); }
   // A's box as seen from B, the same way.
-  Aabb to_b(const Aabb& a) const { return identity ? a : moved(a, inv_linear, inv_abs_linear, inv_translation); }
+  Aabb to_b(const Aabb& a) const { return identity ? a : moved(a, inv_linear, inv_abs_linear, inv_translation, reach); }
   // A's box `a` and B's box `b` (whose image in A's frame is `b_in_a`) may overlap: tested in
   // both frames (a separating axis among A's three or B's three).
   bool overlap(const Aabb& a, const Aabb& b_in_a, const Aabb& b) const {
@@ -85,7 +90,7 @@ struct BvhRelation {
   }
   static BvhRelation between(const Eigen::Affine3d& pose_a, const Eigen::Affine3d& pose_b);
   static Aabb moved(const Aabb& box, const Eigen::Matrix3d& linear, const Eigen::Matrix3d& abs_linear,
-                    const Vec3& translation);
+                    const Vec3& translation, double reach);
 };
 
 // A pair of nodes (A's, B's) still to visit.
