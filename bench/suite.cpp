@@ -212,7 +212,7 @@ std::string run_suite(const Suite& suite) {
     fcl_refit.frame(objects);
     fcl_rebuild.frame(objects);
   }
-  std::size_t rois = 0, rois_exact = 0, candidates = 0, world_candidates = 0, triangles = 0;
+  std::size_t rois = 0, rois_exact = 0, world_candidates = 0, triangles = 0;
   for (std::size_t f = 0; f < suite.frames; ++f) {
     suite.frame(f, objects);
     const int phase = suite.phase ? suite.phase(f) : 0;
@@ -261,7 +261,6 @@ std::string run_suite(const Suite& suite) {
     rois += frame_api.pairs.size();
     rois_exact += frame_api.rois_exact;
     for (const PairResult& p : rows[0].result.pairs) world_candidates += p.candidates;
-    for (const PairResult& p : frame_api.pairs) candidates += p.exact_stage ? p.candidates : 0;
     if (suite.progress) suite.progress(f + 1, suite.frames);
   }
   for (const Object& o : objects) triangles += o.mesh.triangles.size();
@@ -326,7 +325,6 @@ std::string run_suite(const Suite& suite) {
       std::printf(" %9.2f %9.2f\n", pm[0] / pm[cg], pm[0] / std::min(pm[fr], pm[fb]));
     }
   }
-  (void)candidates;
   return csv;
 }
 

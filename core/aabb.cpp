@@ -8,11 +8,14 @@ Aabb bounds(const Mesh& mesh) {
   return b;
 }
 
-Aabb triangle_bounds(const Mesh& mesh, std::uint32_t tri) {
+Aabb triangle_bounds(const std::vector<Vec3>& v, const Tri& f) {
   Aabb b;
-  for (std::uint32_t v : mesh.triangles[tri]) b.extend(mesh.vertices[v]);
+  b.lo = v[f[0]].cwiseMin(v[f[1]]).cwiseMin(v[f[2]]);
+  b.hi = v[f[0]].cwiseMax(v[f[1]]).cwiseMax(v[f[2]]);
   return b;
 }
+
+Aabb triangle_bounds(const Mesh& mesh, std::uint32_t tri) { return triangle_bounds(mesh.vertices, mesh.triangles[tri]); }
 
 Aabb intersection(const Aabb& a, const Aabb& b) {
   Aabb r;

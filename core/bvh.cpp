@@ -7,13 +7,6 @@
 namespace peelcd {
 namespace {
 
-Aabb corner_box(const std::vector<Vec3>& v, const Tri& f) {
-  Aabb b;
-  b.lo = v[f[0]].cwiseMin(v[f[1]]).cwiseMin(v[f[2]]);
-  b.hi = v[f[0]].cwiseMax(v[f[1]]).cwiseMax(v[f[2]]);
-  return b;
-}
-
 Aabb merged(const Aabb& a, const Aabb& b) {
   Aabb m;
   m.lo = a.lo.cwiseMin(b.lo);
@@ -34,7 +27,7 @@ void Bvh::build(const std::vector<Vec3>& vertices, const std::vector<Tri>& trian
   if (n == 0) return;
   std::vector<Vec3> centroids(n);
   for (std::size_t t = 0; t < n; ++t) {
-    boxes_[t] = corner_box(vertices, triangles[t]);
+    boxes_[t] = triangle_bounds(vertices, triangles[t]);
     centroids[t] = boxes_[t].center();
   }
   nodes_.reserve(2 * ((n + kBvhLeafSize - 1) / kBvhLeafSize));
@@ -90,7 +83,7 @@ void Bvh::refit_node(std::uint32_t i) {
 }
 
 void Bvh::refit(const std::vector<Vec3>& vertices, const std::vector<Tri>& triangles) {
-  for (std::size_t t = 0; t < boxes_.size(); ++t) boxes_[t] = corner_box(vertices, triangles[t]);
+  for (std::size_t t = 0; t < boxes_.size(); ++t) boxes_[t] = triangle_bounds(vertices, triangles[t]);
   // Children follow their parents: one sweep from the last node refits bottom-up.
   for (std::size_t i = nodes_.size(); i-- > 0;) refit_node(std::uint32_t(i));
 }
@@ -100,7 +93,7 @@ void Bvh::refit(const std::vector<Vec3>& vertices, const std::vector<Tri>& trian
   if (nodes_.empty()) return;
   stack_.clear();
   for (const std::uint32_t t : changed) {
-    boxes_[t] = corner_box(vertices, triangles[t]);
+    boxes_[t] = triangle_bounds(vertices, triangles[t]);
     // Mark the leaf and its ancestors once; collect them.
     for (std::uint32_t n = leaf_of_[t];; n = nodes_[n].parent) {
       if (dirty_[n]) break;

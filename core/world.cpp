@@ -81,13 +81,9 @@ struct Body {
     if (world_frame) return world_copy.triangles.empty() ? Aabb{} : bounds(world_copy);
     const Aabb b = tree.box();
     if (!is_rigid || b.empty()) return b;
-    const Vec3 c = pose * b.center();
-    const Vec3 half = pose.linear().cwiseAbs() * (0.5 * b.extent());
-    const double grow = 1e-9 * (c.cwiseAbs().maxCoeff() + half.maxCoeff()) + 1e-300;
-    Aabb w;
-    w.lo = c - half - Vec3::Constant(grow);
-    w.hi = c + half + Vec3::Constant(grow);
-    return w;
+    // The root box moved by the pose, grown as the traversal grows its boxes.
+    return BvhRelation::moved(b, pose.linear(), pose.linear().cwiseAbs(), pose.translation(),
+                              pose.translation().cwiseAbs().maxCoeff());
   }
 };
 
@@ -146,7 +142,9 @@ struct World::Impl {
     std::vector<std::uint64_t> sorted;
   };
   std::vector<std::unique_ptr<LaneScratch>> lane_scratch;  // per lane: the small pairs' scan
-  std::vector<std::uint64_t> candidates, scratch;
+  std::vector<std::uint64_t> candidates;
+  std::vector<std::size_t> first_task;  // pair p's tasks: [first_task[p], first_task[p + 1])
+  std::vector<char> to_image;           // pair p goes to the image stage
   std::unique_ptr<WorkerPool> pool;
 
   Body& body(BodyId id, const char* what) {
@@ -396,7 +394,6 @@ void World::Impl::collide(const DetectOptions& opt, FrameResult& out) {
     Task& t = tasks[k];
     const Body& a = bodies[ids[pairs[t.pair].first]];
     const Body& b = bodies[ids[pairs[t.pair].second]];
-    const BvhRelation rel = BvhRelation::between(a.frame_pose(), b.frame_pose());
     t.candidates.clear();
     t.contacts.clear();
     t.transformed = 0;
@@ -409,6 +406,7 @@ void World::Impl::collide(const DetectOptions& opt, FrameResult& out) {
       t.visited = 0;
       return;
     }
+    const BvhRelation rel = BvhRelation::between(a.frame_pose(), b.frame_pose());
     t.visited = bvh_traverse(a.frame_tree(), b.frame_tree(), rel, t.start, stacks[lane],
                              [&](std::uint32_t ta, std::uint32_t tb) { t.candidates.push_back(pack_pair(ta, tb)); });
   });
@@ -416,17 +414,19 @@ void World::Impl::collide(const DetectOptions& opt, FrameResult& out) {
 
   // Per pair: the route, then the exact path's narrow phase (over the same tasks) or the image
   // stage.
-  if (out.pairs.size() < pairs.size()) out.pairs.resize(pairs.size());
   out.pairs.resize(pairs.size());
-  std::vector<std::size_t> first_task(pairs.size() + 1, used);
+  first_task.assign(pairs.size() + 1, used);
   for (std::size_t k = used; k-- > 0;) first_task[tasks[k].pair] = k;
   for (std::size_t p = pairs.size(); p-- > 0;)
     if (first_task[p] > first_task[p + 1]) first_task[p] = first_task[p + 1];
   const StageCost image_cost = stage->cost();
-  std::vector<char> to_image(pairs.size(), 0);
+  to_image.assign(pairs.size(), 0);
   for (std::size_t p = 0; p < pairs.size(); ++p) {
     PairResult& r = out.pairs[p];
+    std::vector<Contact> colliding = std::move(r.colliding);  // its storage reused frame to frame
+    colliding.clear();
     r = PairResult{};
+    r.colliding = std::move(colliding);
     r.object_a = ids[pairs[p].first];
     r.object_b = ids[pairs[p].second];
     r.roi = r.region = intersection(boxes[pairs[p].first], boxes[pairs[p].second]);
@@ -538,7 +538,6 @@ void World::Impl::image_pair(const Body& a, const Body& b, const std::vector<std
   detector->detect(objects, image, inner);
   if (inner.pairs.empty()) return;
   const PairResult& ir = inner.pairs.front();
-  const std::size_t candidates = r.candidates;
   const double pe = r.predicted_exact_ms, pi = r.predicted_image_ms;
   const std::size_t oa = r.object_a, ob = r.object_b;
   const Aabb roi = r.roi;
@@ -550,7 +549,6 @@ void World::Impl::image_pair(const Body& a, const Body& b, const std::vector<std
   r.predicted_image_ms = pi;
   r.triangles_in_roi_a = kept[0].size();
   r.triangles_in_roi_b = kept[1].size();
-  (void)candidates;
   r.pcs.clear();  // IDs of the peeled copies, not of the bodies: the count (pcs_count) stays
   for (Contact& c : r.colliding) {
     c.tri_a = kept[0][c.tri_a];

@@ -25,6 +25,8 @@ struct Aabb {
 
 Aabb bounds(const Mesh& mesh);
 Aabb triangle_bounds(const Mesh& mesh, std::uint32_t tri);
+// The box of triangle `f`'s corners among `vertices` (triangle_bounds() of a mesh calls it).
+Aabb triangle_bounds(const std::vector<Vec3>& vertices, const Tri& f);
 // The intersection box; empty() when the boxes do not overlap.
 Aabb intersection(const Aabb& a, const Aabb& b);
 

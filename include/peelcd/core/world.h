@@ -21,7 +21,9 @@
 // vertex) only for the candidates' corners; far triangles are never read. A small rigid body
 // (under 4,096 triangles) is moved into world space whole each frame instead (its vertices
 // transformed, a copy of its tree refitted: microseconds), since boxes carried through a
-// rotation are looser and a small body gains more from exact world boxes than it pays.
+// rotation are looser and a small body gains more from exact world boxes than it pays; a pair
+// of two such small world-space bodies is scanned as the frame API's exact path scans it (one
+// culling round, a sweep of the kept triangles' boxes), cheaper than two small trees.
 //
 // Each pair goes to the exact CPU path (every candidate through the exact triangle test,
 // peelcd/core/narrow_phase.h), or to the image stage (Stage::image, or when the router predicts
