@@ -11,6 +11,7 @@
 #include <chrono>
 #include <cmath>
 #include <cstdio>
+#include <numeric>
 #include <stdexcept>
 #include <string>
 #include <thread>
@@ -201,6 +202,19 @@ struct ObjectRefs {
   std::size_t size() const { return p.size(); }
 };
 
+// The self pairs (i, i) of the objects that ask for self-collision (Object::self or
+// DetectOptions::self) and have two triangles or more, merged into the sorted pairs.
+template <class Objects>
+void add_self_pairs(const Objects& objects, const DetectOptions& opt, std::vector<std::pair<std::size_t, std::size_t>>& pairs) {
+  bool any = false;
+  for (std::size_t i = 0; i < objects.size(); ++i)
+    if ((opt.self || objects[i].self) && objects[i].mesh.triangles.size() >= 2) {
+      pairs.emplace_back(i, i);
+      any = true;
+    }
+  if (any) std::sort(pairs.begin(), pairs.end());
+}
+
 // One overlapping pair's plan: its ROI, what contact culling kept, its tile.
 struct PairPlan {
   std::size_t a = 0, b = 0;
@@ -213,6 +227,10 @@ struct PairPlan {
   double predicted_image = 0.0, predicted_exact = 0.0;
   double median_edge = 0.0;  // of the kept triangles (edge_tile_resolution())
   std::vector<std::uint32_t> kept_a, kept_b;
+  // A self pair (a == b): the object's vertex representatives (SelfAdjacency) and its self
+  // candidates (non-adjacent couples whose boxes overlap), found while planning.
+  std::vector<std::uint32_t> rep;
+  std::vector<std::uint64_t> self_candidates;
 };
 
 struct Detector::Impl {
@@ -294,6 +312,10 @@ struct Detector::Impl {
       p.predicted_image = p.predicted_exact = 0.0;
       p.kept_a.clear();
       p.kept_b.clear();
+      if (p.a == p.b) {
+        plan_self(objects[p.a].mesh, opt, p);
+        return;
+      }
       if (opt.cull != Cull::contact) {
         if (opt.stage == Stage::image) return;
         // The router and the exact path need the triangles touching the ROI.
@@ -314,9 +336,46 @@ struct Detector::Impl {
     if (!any_image) return;
     for_pairs(pairs.size(), opt, [&](std::size_t i, Lane& lane) {
       PairPlan& p = plans[i];
-      if (!(p.culled_out || p.exact)) cull_pair(objects, p, kMaxCullRounds, lane.cull);
+      if (!(p.culled_out || p.exact) && p.a != p.b) cull_pair(objects, p, kMaxCullRounds, lane.cull);
     });
     share_budget(opt);  // the same ROIs share it: the image ROIs' needs now final
+  }
+
+  // A self pair's plan: its ROI is the object's box; its candidates are found by a sweep over
+  // all its triangles (self_overlap_pairs()), which is its culling too: the triangles kept are
+  // those in some candidate, the region their box. The image stage peels them as both objects.
+  void plan_self(const Mesh& mesh, const DetectOptions& opt, PairPlan& p) {
+    p.scanned = p.in_roi_a = p.in_roi_b = mesh.triangles.size();
+    vertex_representatives(mesh, opt.self_adjacency, p.rep);
+    p.self_candidates.clear();
+    self_overlap_pairs(mesh, nullptr, p.rep, p.self_candidates);
+    std::sort(p.self_candidates.begin(), p.self_candidates.end());
+    for (const std::uint64_t c : p.self_candidates) {
+      p.kept_a.push_back(pair_a(c));
+      p.kept_a.push_back(pair_b(c));
+    }
+    std::sort(p.kept_a.begin(), p.kept_a.end());
+    p.kept_a.erase(std::unique(p.kept_a.begin(), p.kept_a.end()), p.kept_a.end());
+    p.kept_b = p.kept_a;
+    p.culled_out = p.kept_a.empty();
+    p.region = Aabb{};
+    std::vector<double> edges;
+    for (const std::uint32_t t : p.kept_a) {
+      const Tri& f = mesh.triangles[t];
+      for (int c = 0; c < 3; ++c) p.region.extend(mesh.vertices[f[c]]);
+      edges.push_back((mesh.vertices[f[1]] - mesh.vertices[f[0]]).norm());
+    }
+    p.median_edge = 0.0;
+    if (!edges.empty()) {
+      std::nth_element(edges.begin(), edges.begin() + edges.size() / 2, edges.end());
+      p.median_edge = edges[edges.size() / 2];
+    }
+    if (opt.cull == Cull::box && !p.culled_out) {  // the image stage peels the whole box
+      p.region = p.roi;
+      p.kept_a.resize(mesh.triangles.size());
+      std::iota(p.kept_a.begin(), p.kept_a.end(), 0u);
+      p.kept_b = p.kept_a;
+    }
   }
 
   template <class Objects>
@@ -419,6 +478,7 @@ void Detector::detect(const std::vector<const Object*>& object_ptrs, const Detec
   s.boxes.clear();
   for (std::size_t i = 0; i < objects.size(); ++i) s.boxes.push_back(bounds(objects[i].mesh));
   overlapping_pairs(s.boxes, s.object_pairs, s.order);
+  add_self_pairs(objects, opt, s.object_pairs);
   const auto& pairs = s.object_pairs;
   out.timings.aabb = ms_since(t0);
 
@@ -522,6 +582,11 @@ void Detector::detect(const std::vector<const Object*>& object_ptrs, const Detec
       PairResult& r = out.pairs[pi];
       const Mesh& ma = objects[plan.a].mesh;
       const Mesh& mb = objects[plan.b].mesh;
+      if (plan.a == plan.b) {  // self: the candidates planning found
+        r.candidates = plan.self_candidates.size();
+        narrow_phase(ma, ma, plan.self_candidates, r.colliding, /*boxes_overlap=*/true);
+        return;
+      }
       lane.candidates.clear();
       box_overlap_pairs(ma, plan.kept_a, mb, plan.kept_b, lane.candidates, &lane.boxes);
       sort_unique_pairs(lane.candidates, lane.candidate_scratch);
@@ -612,6 +677,7 @@ void Detector::detect(const std::vector<const Object*>& object_ptrs, const Detec
       s.candidates.insert(s.candidates.end(), s.direct.begin(), s.direct.end());
       sort_unique_pairs(s.candidates, s.candidate_scratch);
     }
+    if (plan.a == plan.b) self_candidates(ma, plan.rep, s.candidates);  // one object peeled as both
     r.candidates = s.candidates.size();
     narrow_phase(ma, mb, s.candidates, r.colliding);
     out.timings.cpu += ms_since(t0);
@@ -632,6 +698,7 @@ void Detector::for_each_view(const std::vector<Object>& objects_in, const Detect
   s.boxes.clear();
   for (const Object& o : objects_in) s.boxes.push_back(bounds(o.mesh));
   overlapping_pairs(s.boxes, s.object_pairs, s.order);
+  add_self_pairs(objects, opt, s.object_pairs);
   s.plan(objects, opt);
   ViewFrame frames[3];
   const std::size_t frame_count = fused_view_frames(opt, frames);

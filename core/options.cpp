@@ -119,6 +119,18 @@ const std::vector<OptionSpec> kTable = {
      K::integer, 0, 64, "must be within 0..64 (0 = one per core, at most 8)", "", "", false,
      [](const DetectOptions& o) { return OptionValue(double(o.threads)); },
      [](DetectOptions& o, const OptionValue& v) { o.threads = unsigned(num(v)); }},
+    {"self", "", "--self",
+     "Self-collision for every object (an object's own \"self\": true in a scene, Object::self in the API, asks it "
+     "for that object alone): pairs of one object's triangles that share a point and no vertex (docs/design.md)",
+     K::boolean, 0, 0, "must be true or false", "", "", kRecordedWhenSet,
+     [](const DetectOptions& o) { return OptionValue(o.self); },
+     [](DetectOptions& o, const OptionValue& v) { o.self = std::get<bool>(v); }},
+    {"self_adjacency", "", "--self-adjacency",
+     "Which triangles of one object are adjacent (never a self pair): index (they share a vertex index; default) or "
+     "position (they share a vertex position: welds the seams of meshes with duplicated vertices)",
+     K::choice, 0, 0, "", "index,position", "adjacency", kRecordedWhenSet,
+     [](const DetectOptions& o) { return OptionValue(std::string(to_string(o.self_adjacency))); },
+     [](DetectOptions& o, const OptionValue& v) { o.self_adjacency = *parse_self_adjacency(word(v)); }},
 };
 
 }  // namespace

@@ -4,6 +4,8 @@
 #include "peelcd/core/narrow_phase.h"
 
 #include <cmath>
+#include <cstdio>
+#include <functional>
 
 namespace peelcd {
 namespace {
@@ -27,6 +29,119 @@ Mesh moved(Mesh m, const Eigen::Affine3d& pose) {
   return m;
 }
 
+
+Mesh grid_surface(int nu, int nv, const std::function<Vec3(double, double)>& at) {
+  Mesh m;
+  for (int j = 0; j <= nv; ++j)
+    for (int i = 0; i <= nu; ++i) m.vertices.push_back(at(double(i) / nu, double(j) / nv));
+  const auto id = [nu](int i, int j) { return std::uint32_t(j * (nu + 1) + i); };
+  for (int j = 0; j < nv; ++j)
+    for (int i = 0; i < nu; ++i) {
+      m.triangles.push_back({id(i, j), id(i + 1, j), id(i + 1, j + 1)});
+      m.triangles.push_back({id(i, j), id(i + 1, j + 1), id(i, j + 1)});
+    }
+  return m;
+}
+
+Mesh folded_sheet(int n, double fold, double sag) {
+  // u runs along the sheet: [0, 1/3] the bottom layer (z = 0, x from 0 to 1), [1/3, 2/3] a half
+  // circle of radius fold / 2 at x = 1 (the crease), [2/3, 1] the top layer back over the bottom
+  // (z = fold), lowered by a bump of depth `sag` centred over the bottom layer's middle.
+  const double r = fold / 2;
+  return grid_surface(3 * n, n, [=](double u, double v) {
+    const double y = v;
+    if (u <= 1.0 / 3) return Vec3(3 * u, y, 0.0);
+    if (u < 2.0 / 3) {
+      const double a = M_PI * (3 * u - 1) - M_PI / 2;  // -pi/2 .. pi/2
+      return Vec3(1.0 + r * std::cos(a), y, r + r * std::sin(a));
+    }
+    const double x = 1.0 - (3 * u - 2);
+    const double d2 = (x - 0.5) * (x - 0.5) + (y - 0.5) * (y - 0.5);
+    return Vec3(x, y, fold - sag * std::exp(-d2 / 0.04));
+  });
+}
+
+// A tube of radius `r` around the trefoil knot (x, y, z) = (sin t + 2 sin 2t, cos t - 2 cos 2t,
+// -sin 3t): a closed mesh (a torus's topology); with r above about 0.61 (half the strands' closest distance) its strands pass through
+// each other where the knot's curve passes close to itself.
+Mesh knotted_tube(int along, int around, double r) {
+  const auto curve = [](double t) {
+    return Vec3(std::sin(t) + 2 * std::sin(2 * t), std::cos(t) - 2 * std::cos(2 * t), -std::sin(3 * t));
+  };
+  Mesh m;
+  for (int i = 0; i < along; ++i) {
+    const double t = 2 * M_PI * i / along;
+    const Vec3 c = curve(t);
+    const Vec3 tangent = (curve(t + 1e-4) - curve(t - 1e-4)).normalized();
+    Vec3 n = tangent.cross(Vec3(0, 0, 1));
+    if (n.norm() < 1e-6) n = tangent.cross(Vec3(1, 0, 0));
+    n.normalize();
+    const Vec3 b = tangent.cross(n);
+    for (int k = 0; k < around; ++k) {
+      const double a = 2 * M_PI * k / around;
+      m.vertices.push_back(c + r * (std::cos(a) * n + std::sin(a) * b));
+    }
+  }
+  const auto id = [&](int i, int k) { return std::uint32_t((i % along) * around + (k % around)); };
+  for (int i = 0; i < along; ++i)
+    for (int k = 0; k < around; ++k) {
+      m.triangles.push_back({id(i, k), id(i + 1, k), id(i + 1, k + 1)});
+      m.triangles.push_back({id(i, k), id(i + 1, k + 1), id(i, k + 1)});
+    }
+  return m;
+}
+
+Object self_object(std::string name, Mesh mesh) {
+  Object o;
+  o.name = std::move(name);
+  o.mesh = std::move(mesh);
+  o.self = true;
+  return o;
+}
+
+}  // namespace
+
+std::vector<GeometryClass> self_classes() {
+  std::vector<GeometryClass> out;
+  Eigen::Affine3d tilt = Eigen::Affine3d::Identity();
+  tilt.rotate(Eigen::AngleAxisd(0.3, Vec3(1, 2, 3).normalized()));
+  out.push_back({"self: folded sheet",
+                 "a sheet folded over itself, its top layer sagging through the bottom one (open, one object)",
+                 {self_object("cloth", moved(folded_sheet(24, 0.1, 0.2), tilt))}});
+  out.push_back({"self: knotted tube",
+                 "a closed tube tied in a trefoil, thick enough that its strands pass through each other",
+                 {self_object("knot", moved(knotted_tube(120, 12, 0.75), tilt))}});
+  {
+    // Two crossing open sheets and an open tube (no caps) through both, as one object: its
+    // pieces share no vertex, so every crossing is a self pair.
+    Mesh m = floor_mesh(6, -1, 1, -1, 1, 0.1);
+    Eigen::Affine3d up = Eigen::Affine3d::Identity();
+    up.rotate(Eigen::AngleAxisd(M_PI / 2, Vec3(1, 0, 0)));
+    append(m, moved(floor_mesh(6, -1, 1, -1, 1, 0.05), up));
+    append(m, grid_surface(16, 4, [](double u, double v) {
+             const double a = 2 * M_PI * u;
+             return Vec3(0.3 + 0.25 * std::cos(a), 0.2 + 0.25 * std::sin(a), -0.8 + 1.6 * v);
+           }));
+    out.push_back({"self: open pieces crossing",
+                   "two crossing open sheets and an open tube through both, one object (open, unconnected pieces)",
+                   {self_object("pieces", moved(m, tilt))}});
+  }
+  for (const double t : {0.6, 0.8, 1.0}) {
+    // A sheet folding over frames: the frame at time t of a fold whose top layer sinks through
+    // the bottom one as t grows (the deforming case; peelcd simulate --scene cloth runs it).
+    char name[64];
+    std::snprintf(name, sizeof name, "self: folding sheet t=%.1f", t);
+    out.push_back({name, "frame t of a sheet folding onto itself and sagging through (deforming over frames)",
+                   {self_object("cloth", moved(folded_sheet(20, 0.3 * (1.2 - t), 0.4 * t), tilt))}});
+  }
+  // Beside another object: the self pairs and the inter-object pairs of a frame together.
+  out.push_back({"self: fold on a ball", "a folded sheet through itself lying on a ball it also crosses",
+                 {self_object("cloth", moved(folded_sheet(20, 0.1, 0.2), tilt)),
+                  object("ball", uv_sphere(tilt * Vec3(0.5, 0.5, -0.25), 0.3, 24, 12))}});
+  return out;
+}
+
+namespace {
 }  // namespace
 
 Mesh box_mesh(const Vec3& lo, const Vec3& hi) {
@@ -187,12 +302,17 @@ ClassRow measure_class(Detector& detector, const GeometryClass& g, const std::st
   // culled away.
   std::vector<Aabb> boxes;
   for (const Object& o : g.objects) boxes.push_back(bounds(o.mesh));
+  // With self-collision asked (Object::self or DetectOptions::self), each such object's self
+  // pairs against the exact self reference too.
   for (std::size_t ia = 0; ia < g.objects.size(); ++ia)
-    for (std::size_t ib = ia + 1; ib < g.objects.size(); ++ib) {
-      if (intersection(boxes[ia], boxes[ib]).empty()) continue;
+    for (std::size_t ib = ia; ib < g.objects.size(); ++ib) {
+      const bool self = ia == ib;
+      if (self && !(options.self || g.objects[ia].self)) continue;
+      if (!self && intersection(boxes[ia], boxes[ib]).empty()) continue;
       const Mesh& a = g.objects[ia].mesh;
       const Mesh& b = g.objects[ib].mesh;
-      const std::vector<std::uint64_t> exact = exact_colliding_pairs(a, b);
+      const std::vector<std::uint64_t> exact =
+          self ? exact_self_pairs(a, options.self_adjacency) : exact_colliding_pairs(a, b);
       if (exact.empty()) continue;
       std::vector<Contact> reported;
       for (const PairResult& p : result.pairs)

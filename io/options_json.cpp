@@ -20,8 +20,12 @@ nlohmann::json option_json(const OptionSpec& spec, const OptionValue& v) {
 
 nlohmann::json options_to_json(const DetectOptions& o) {
   nlohmann::json out = nlohmann::json::object();
-  for (const OptionSpec& spec : option_table())
-    if (spec.recorded) out[spec.key] = option_json(spec, spec.get(o));
+  const DetectOptions defaults;
+  for (const OptionSpec& spec : option_table()) {
+    if (!spec.recorded) continue;
+    if (spec.recorded == kRecordedWhenSet && spec.get(o) == spec.get(defaults)) continue;
+    out[spec.key] = option_json(spec, spec.get(o));
+  }
   return out;
 }
 

@@ -69,7 +69,7 @@ Scene parse_scene(const std::string& text, const std::string& path, const std::s
   for (std::size_t i = 0; i < objs.size(); ++i) {
     const std::string where = "objects[" + std::to_string(i) + "]";
     const json& o = objs[i];
-    c.only_keys(o, where, {"name", "mesh", "transform"});
+    c.only_keys(o, where, {"name", "mesh", "transform", "self"});
     SceneObject so;
     so.name = o.contains("name") ? c.string(o["name"], where + ".name") : "object" + std::to_string(i);
     if (!o.contains("mesh")) c.fail(where, "missing key \"mesh\"");
@@ -91,6 +91,10 @@ Scene parse_scene(const std::string& text, const std::string& path, const std::s
         if (so.transform.degrees != 0 && !(so.transform.axis.norm() > 0)) c.fail(tw + ".rotate.axis", "must not be zero");
       }
       if (t.contains("translate")) so.transform.translate = c.vec3(t["translate"], tw + ".translate");
+    }
+    if (o.contains("self")) {
+      if (!o["self"].is_boolean()) c.fail(where + ".self", "must be true or false");
+      so.self = o["self"].get<bool>();
     }
     scene.objects.push_back(std::move(so));
   }
@@ -201,6 +205,7 @@ std::vector<Object> load_objects(const Scene& scene) {
       o.name = parts.size() == 1 ? so.name : scene.objects.size() == 1 ? part.name : so.name + "/" + part.name;
       const Mesh raw = std::move(part.mesh);
       o.mesh = transformed(raw, so.transform);
+      o.self = so.self;
       try {
         validate_mesh(raw, "'" + so.mesh_path + "'");
       } catch (const std::invalid_argument& e) {

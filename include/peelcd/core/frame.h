@@ -3,6 +3,7 @@
 #include "peelcd/core/aabb.h"
 #include "peelcd/core/id_map.h"
 #include "peelcd/core/narrow_phase.h"
+#include "peelcd/core/self.h"
 #include "peelcd/core/view.h"
 
 #include <optional>
@@ -89,6 +90,10 @@ struct DetectOptions {
   // only; 0 = the hardware's threads, at most 8. The GL stage's host resolve has its own lanes
   // (gl::GlOptions::workers).
   unsigned threads = 1;
+  // Self-collision (docs/design.md, "Self-collision") of every object; an object asks it for
+  // itself alone with Object::self. Off by default: it costs a scan of the object's triangles.
+  bool self = false;
+  SelfAdjacency self_adjacency = SelfAdjacency::index;  // which triangles of one object are adjacent
 };
 
 constexpr double kConservativeEdgeTexels = 2.0;
@@ -123,7 +128,8 @@ void allocate_tiles(int budget, const std::vector<int>& needs, std::vector<int>&
 int edge_tile_resolution(int share, const Aabb& region, double median_edge, double edge_texels);
 
 struct PairResult {
-  std::size_t object_a = 0, object_b = 0;  // indices into the frame's objects, a < b
+  std::size_t object_a = 0, object_b = 0;  // indices into the frame's objects, a < b; a == b: the
+                                           // object's self pairs (tri_a < tri_b)
   Aabb roi;                                // intersection of the two world AABBs
   Aabb region;                             // the box peeled: `roi`, or with Cull::contact the
                                            // ROI shrunk to the kept triangles (empty: none kept)

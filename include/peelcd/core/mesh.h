@@ -52,6 +52,8 @@ struct Object {
   std::string name;
   Mesh mesh;
   std::optional<RigidMotion> rigid;
+  // Test the object against itself too (self-collision; DetectOptions::self asks it for all).
+  bool self = false;
 };
 
 }  // namespace peelcd

@@ -17,6 +17,8 @@ namespace peelcd {
 // An option's value: a flag, a number (integers too: checked integral), a word (choices).
 using OptionValue = std::variant<bool, double, std::string>;
 
+constexpr int kRecordedWhenSet = 2;
+
 struct OptionSpec {
   enum class Kind { boolean, integer, number, choice };
   const char* key;    // scene file and JSON key, e.g. "theta"
@@ -28,8 +30,10 @@ struct OptionSpec {
   const char* range;    // the range in words, for messages: "must be >= 0 (0 = one texel)"
   const char* choices;  // choice: the words, comma-separated ("paper,ring,unique")
   const char* noun;     // choice: what a word names, for messages ("ID mode")
-  bool recorded;        // written where a frame is recorded (the result JSON, dumps): not
-                        // threads, on which no result depends
+  int recorded;         // written where a frame is recorded (the result JSON, dumps): 1 always
+                        // (every option a result depends on), 0 never (threads, on which no
+                        // result depends), kRecordedWhenSet only when not the default (options
+                        // added after goldens were recorded and off in them: self)
   // The effective value (edge_texels unset reads as the mode's default, edge_texels_of()).
   OptionValue (*get)(const DetectOptions&);
   void (*set)(DetectOptions&, const OptionValue&);  // takes a value check_option() accepted

@@ -30,6 +30,12 @@ Mesh uv_sphere(const Vec3& center, double radius, int slices, int stacks);
 //   needle, open self-intersecting, crowded grid (grid_side^2 spheres in light contact).
 std::vector<GeometryClass> geometry_classes(int grid_side = 10);
 
+// Self-collision classes (docs/design.md, "Self-collision"): objects with Object::self set. A
+// folded sheet whose top layer sags through the bottom, a closed tube tied in a trefoil whose
+// strands cross, open unconnected pieces crossing (one object), three frames of a sheet folding
+// onto itself, and a folded sheet crossing a ball (self and inter-object pairs together).
+std::vector<GeometryClass> self_classes();
+
 // The sum of the lengths of the intersection segments of `pairs` (pack_pair(triA, triB)) of
 // meshes `a` and `b`: the "intersection length" whose missed share docs/accuracy.md reports.
 double intersection_length(const Mesh& a, const Mesh& b, const std::vector<std::uint64_t>& pairs);

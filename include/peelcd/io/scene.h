@@ -2,7 +2,9 @@
 // Scene files (JSON):
 //   {"objects": [{"name": "bunny", "mesh": "meshes/bunny.obj",     // relative to the scene file
 //                 "transform": {"scale": 2.5, "rotate": {"axis": [0,0,1], "degrees": 0},
-//                               "translate": [0.8, -0.5, 0]}}, ...],
+//                               "translate": [0.8, -0.5, 0]},
+//                 "self": false},                                   // self-collision of this one
+//                ...],
 //    "view": {"theta": 0, "phi": 0}, "resolution": 0, "budget": 512,
 //    "ids": "paper", "epsilon": 0, "peel": "full", "slope": 1}
 // Everything but "objects" (and each object's "mesh") has a default (core/frame.h). Unknown
@@ -20,6 +22,7 @@ struct SceneObject {
   std::string name;
   std::string mesh_path;  // resolved against the scene file's folder
   Transform transform;
+  bool self = false;  // "self": true: test the object against itself too (Object::self)
 };
 
 struct Scene {

@@ -1,0 +1,46 @@
+#pragma once
+// Self-collision of one object (docs/design.md, "Self-collision"): two triangles of one mesh
+// collide when they share a point and share no vertex. Triangles that share a vertex (adjacent
+// triangles, and a fan around a vertex) touch by construction and are never reported, even
+// where they also meet elsewhere (a fold sharp enough for two triangles of one fan to cross).
+// Which vertices count as shared is the adjacency: by index (the mesh's connectivity, the
+// default), or by position (vertices at bitwise-equal coordinates are one vertex: the seams of
+// an OBJ whose patches duplicate their border vertices, or a soup of unwelded triangles).
+// A self pair is listed like an inter-object pair with object A = object B, tri_a < tri_b.
+#include "peelcd/core/mesh.h"
+#include "peelcd/core/narrow_phase.h"
+
+#include <optional>
+#include <string>
+#include <vector>
+
+namespace peelcd {
+
+enum class SelfAdjacency { index, position };
+const char* to_string(SelfAdjacency adjacency);
+std::optional<SelfAdjacency> parse_self_adjacency(const std::string& text);
+
+// Per vertex, the vertex that stands for it: itself (index), or the first vertex at the same
+// coordinates (position). Two triangles are adjacent when they share a representative.
+void vertex_representatives(const Mesh& mesh, SelfAdjacency adjacency, std::vector<std::uint32_t>& out);
+
+// Triangles t and u share a vertex (through `rep`, vertex_representatives()). A triangle is
+// adjacent to itself.
+bool triangles_adjacent(const Mesh& mesh, const std::vector<std::uint32_t>& rep, std::uint32_t t, std::uint32_t u);
+
+// Candidate self pairs: every couple of the triangles `tris` (all of the mesh when null) whose
+// closed boxes overlap and that are not adjacent, appended as pack_pair(t, u) with t < u, by a
+// sweep along x (the self search of the exact CPU path: no n^2).
+void self_overlap_pairs(const Mesh& mesh, const std::vector<std::uint32_t>* tris, const std::vector<std::uint32_t>& rep,
+                        std::vector<std::uint64_t>& out);
+
+// Makes image-stage candidates (pack_pair(ID of A, ID of B) of the same mesh peeled twice) self
+// candidates: each pair as (min, max), adjacent pairs and a triangle with itself dropped, sorted
+// and unique.
+void self_candidates(const Mesh& mesh, const std::vector<std::uint32_t>& rep, std::vector<std::uint64_t>& pairs);
+
+// The exact self reference: every non-adjacent couple of triangles that share a point, through
+// CGAL's box_self_intersection_d and the exact triangle test; pack_pair(t, u), t < u, sorted.
+std::vector<std::uint64_t> exact_self_pairs(const Mesh& mesh, SelfAdjacency adjacency = SelfAdjacency::index);
+
+}  // namespace peelcd

@@ -1,0 +1,157 @@
+// Self-collision (docs/design.md, "Self-collision"): the definition (adjacent triangles are
+// never pairs; by index or by position), the self search against the exact self reference, and
+// every self class of peelcd/eval/classes.h with no miss on the exact path and on the
+// conservative image stage at any tile; inter-object pairs unchanged beside self pairs.
+#include "peelcd/core/cpu_stage.h"
+#include "peelcd/core/detector.h"
+#include "peelcd/core/id_map.h"
+#include "peelcd/core/reference.h"
+#include "peelcd/core/self.h"
+#include "peelcd/eval/classes.h"
+
+#include <catch2/catch.hpp>
+
+#include <algorithm>
+
+using namespace peelcd;
+
+namespace {
+
+Detector& cpu_detector() {
+  static Detector d(std::make_shared<CpuImageStage>());
+  return d;
+}
+
+std::vector<std::uint64_t> self_pairs_found(const FrameResult& f, std::size_t object) {
+  std::vector<std::uint64_t> out;
+  for (const PairResult& p : f.pairs)
+    if (p.object_a == object && p.object_b == object)
+      for (const Contact& c : p.colliding) out.push_back(pack_pair(c.tri_a, c.tri_b));
+  return out;
+}
+
+// Two triangles crossing each other, as one mesh, in two ways: with distinct vertices (a self
+// pair), and with one corner shared (adjacent: never a pair).
+Mesh two_crossing(bool share_corner) {
+  Mesh m;
+  m.vertices = {{0, 0, 0}, {1, 0, 0}, {0, 1, 0}, {0.2, 0.2, -0.5}, {0.3, 0.2, 0.5}, {0.2, 0.4, 0.5}};
+  m.triangles = {{0, 1, 2}, {3, 4, 5}};
+  if (share_corner) m.triangles[1] = {0, 4, 5};
+  return m;
+}
+
+}  // namespace
+
+TEST_CASE("self pairs: triangles that share a point and no vertex", "[self]") {
+  CHECK(exact_self_pairs(two_crossing(false)) == std::vector<std::uint64_t>{pack_pair(0, 1)});
+  CHECK(exact_self_pairs(two_crossing(true)).empty());  // adjacent: excluded, crossing or not
+
+  // Position adjacency: a duplicated corner (distinct index, same position) counts as shared.
+  Mesh seam = two_crossing(false);
+  seam.vertices[3] = seam.vertices[0];  // triangle 1 starts at triangle 0's first corner
+  CHECK(exact_self_pairs(seam, SelfAdjacency::index) == std::vector<std::uint64_t>{pack_pair(0, 1)});
+  CHECK(exact_self_pairs(seam, SelfAdjacency::position).empty());
+  std::vector<std::uint32_t> rep;
+  vertex_representatives(seam, SelfAdjacency::position, rep);
+  CHECK(rep[3] == 0);
+  CHECK(triangles_adjacent(seam, rep, 0, 1));
+}
+
+TEST_CASE("self on defective meshes: duplicate, zero-area and non-manifold triangles give defined results", "[self]") {
+  Mesh m = floor_mesh(4, 0, 1, 0, 1, 0);  // 32 triangles, a flat open grid: no self pair
+  const std::size_t flat = m.triangles.size();
+  m.triangles.push_back(m.triangles[5]);  // a duplicate of triangle 5 (same indices): adjacent
+  m.triangles.push_back({0, 0, 1});       // zero-area (repeated index): adjacent to its fan
+  // A non-manifold edge: a third triangle on the edge (0, 1), standing up from the sheet.
+  m.vertices.push_back(Vec3(0.1, 0.0, 0.5));
+  m.triangles.push_back({0, 1, std::uint32_t(m.vertices.size() - 1)});
+  // A duplicate with its own vertices (same positions): coplanar with the original, a pair by
+  // index, none by position.
+  const std::uint32_t base = std::uint32_t(m.vertices.size());
+  for (int c = 0; c < 3; ++c) m.vertices.push_back(m.vertices[m.triangles[12][c]]);
+  m.triangles.push_back({base, base + 1, base + 2});
+  const auto by_index = exact_self_pairs(m, SelfAdjacency::index);
+  const auto by_position = exact_self_pairs(m, SelfAdjacency::position);
+  CHECK(std::binary_search(by_index.begin(), by_index.end(), pack_pair(12, std::uint32_t(m.triangles.size() - 1))));
+  CHECK(by_position.empty());
+  // The frame finds exactly the reference's pairs on both paths.
+  std::vector<Object> objects(1);
+  objects[0].name = "defects";
+  objects[0].mesh = m;
+  objects[0].self = true;
+  for (const Stage stage : {Stage::exact, Stage::image})
+    for (const SelfAdjacency adjacency : {SelfAdjacency::index, SelfAdjacency::position}) {
+      DetectOptions opt;
+      opt.stage = stage;
+      opt.self_adjacency = adjacency;
+      const FrameResult f = cpu_detector().detect(objects, opt);
+      auto found = self_pairs_found(f, 0);
+      std::sort(found.begin(), found.end());
+      CHECK(found == (adjacency == SelfAdjacency::index ? by_index : by_position));
+    }
+  CHECK(flat == 32);
+}
+
+TEST_CASE("the self search finds every reference pair's candidate and tests no adjacent pair", "[self]") {
+  for (const GeometryClass& g : self_classes()) {
+    const Mesh& m = g.objects[0].mesh;
+    std::vector<std::uint32_t> rep;
+    vertex_representatives(m, SelfAdjacency::index, rep);
+    std::vector<std::uint64_t> cands;
+    self_overlap_pairs(m, nullptr, rep, cands);
+    std::sort(cands.begin(), cands.end());
+    for (const std::uint64_t c : cands) {
+      REQUIRE(pair_a(c) < pair_b(c));
+      REQUIRE_FALSE(triangles_adjacent(m, rep, pair_a(c), pair_b(c)));
+    }
+    const auto exact = exact_self_pairs(m);
+    INFO(g.name);
+    CHECK(std::includes(cands.begin(), cands.end(), exact.begin(), exact.end()));
+  }
+}
+
+TEST_CASE("every self class: no self pair missed, exact path and conservative image stage at any tile", "[self][classes]") {
+  for (const GeometryClass& g : self_classes()) {
+    for (const Stage stage : {Stage::exact, Stage::image, Stage::automatic})
+      for (const int res : {0, 16, 64}) {
+        if (stage != Stage::image && res != 0) continue;
+        DetectOptions opt;  // the default: conservative
+        opt.stage = stage;
+        opt.resolution = res;
+        const ClassRow r = measure_class(cpu_detector(), g, "default", opt, 1);
+        INFO(g.name << ", stage " << to_string(stage) << ", tile " << res << ": " << r.found << " of " << r.exact);
+        CHECK(r.exact > 0);
+        CHECK(r.missed == 0);
+      }
+  }
+}
+
+TEST_CASE("self pairs beside inter-object pairs: off changes nothing, on keeps every inter-object pair", "[self]") {
+  std::vector<GeometryClass> classes = self_classes();
+  GeometryClass& g = classes.back();  // a folded sheet on a ball
+  REQUIRE(g.objects.size() == 2);
+  DetectOptions opt;
+  opt.stage = Stage::image;
+  const FrameResult on = cpu_detector().detect(g.objects, opt);
+  for (Object& o : g.objects) o.self = false;
+  const FrameResult off = cpu_detector().detect(g.objects, opt);
+  REQUIRE(off.pairs.size() == 1);  // the inter-object pair alone
+  REQUIRE(on.pairs.size() == 2);   // (0, 0) first, then (0, 1)
+  CHECK(on.pairs[0].object_a == 0);
+  CHECK(on.pairs[0].object_b == 0);
+  CHECK(!on.pairs[0].colliding.empty());
+  const auto inter = [](const PairResult& p) {
+    std::vector<std::uint64_t> v;
+    for (const Contact& c : p.colliding) v.push_back(pack_pair(c.tri_a, c.tri_b));
+    return v;
+  };
+  CHECK(inter(on.pairs[1]) == inter(off.pairs[0]));
+  CHECK(inter(off.pairs[0]) == exact_colliding_pairs(g.objects[0].mesh, g.objects[1].mesh));
+  // DetectOptions::self asks it for every object: the ball has no self pair, the cloth its own.
+  opt.self = true;
+  const FrameResult all = cpu_detector().detect(g.objects, opt);
+  REQUIRE(all.pairs.size() == 3);
+  CHECK(all.pairs[2].object_a == 1);
+  CHECK(all.pairs[2].colliding.empty());
+  CHECK(self_pairs_found(all, 0) == self_pairs_found(on, 0));
+}
