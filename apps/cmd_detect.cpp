@@ -39,7 +39,7 @@ int run_detect(const DetectArgs& a) {
   std::vector<oracle::PairQuery> misses;  // in frame order, for --explain-misses
   if (a.check)
     for (const PairResult& p : result.pairs) {
-      const std::vector<std::uint64_t> exact = exact_colliding_pairs(objects[p.object_a].mesh, objects[p.object_b].mesh);
+      const std::vector<std::uint64_t> exact = exact_pair_reference(objects, p.object_a, p.object_b, opt.self_adjacency);
       scores.push_back(score_contacts(exact, p.colliding));
       if (misses.size() < std::size_t(a.explain_misses))
         for (const std::uint64_t k : exact) {

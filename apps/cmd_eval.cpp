@@ -46,13 +46,15 @@ int run_classes(const ClassesArgs& a) {
   Runner runner = make_runner(a.backend, gl::GlOptions{});
   std::printf("peelcd classes: %s (%s); median of %d frames; grid %dx%d\n", runner.backend().c_str(),
               runner.renderer().c_str(), a.repeat, a.grid, a.grid);
-  std::printf("%-24s %-32s %7s %7s %7s %9s %9s %11s %9s\n", "class", "configuration", "exact", "found", "missed",
+  std::printf("%-28s %-32s %7s %7s %7s %9s %9s %11s %9s\n", "class", "configuration", "exact", "found", "missed",
               "miss %", "len miss%", "candidates", "ms");
-  for (const GeometryClass& g : geometry_classes(a.grid)) {
+  std::vector<GeometryClass> classes = geometry_classes(a.grid);
+  for (GeometryClass& g : self_classes()) classes.push_back(std::move(g));  // Object::self set
+  for (const GeometryClass& g : classes) {
     if (!a.only.empty() && g.name != a.only) continue;
     for (const auto& [name, opt] : class_configs()) {
       const ClassRow r = measure_class(*runner.detector, g, name, opt, a.repeat);
-      std::printf("%-24s %-32s %7zu %7zu %7zu %9.3f %9.3f %11zu %9.2f\n", g.name.c_str(), name.c_str(), r.exact, r.found,
+      std::printf("%-28s %-32s %7zu %7zu %7zu %9.3f %9.3f %11zu %9.2f\n", g.name.c_str(), name.c_str(), r.exact, r.found,
                   r.missed, 100.0 * r.miss_ratio(), 100.0 * r.missed_length_share(), r.candidates, r.median_ms);
       std::fflush(stdout);
     }

@@ -46,6 +46,12 @@ std::vector<std::uint64_t> exact_colliding_pairs(const Mesh& a, const Mesh& b) {
   return out;
 }
 
+std::vector<std::uint64_t> exact_pair_reference(const std::vector<Object>& objects, std::size_t ia, std::size_t ib,
+                                                SelfAdjacency adjacency) {
+  if (ia == ib) return exact_self_pairs(objects[ia].mesh, adjacency);
+  return exact_colliding_pairs(objects[ia].mesh, objects[ib].mesh);
+}
+
 namespace {
 // A triangle's closed box for the sweep below.
 struct SweepBox {

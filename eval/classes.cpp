@@ -311,8 +311,7 @@ ClassRow measure_class(Detector& detector, const GeometryClass& g, const std::st
       if (!self && intersection(boxes[ia], boxes[ib]).empty()) continue;
       const Mesh& a = g.objects[ia].mesh;
       const Mesh& b = g.objects[ib].mesh;
-      const std::vector<std::uint64_t> exact =
-          self ? exact_self_pairs(a, options.self_adjacency) : exact_colliding_pairs(a, b);
+      const std::vector<std::uint64_t> exact = exact_pair_reference(g.objects, ia, ib, options.self_adjacency);
       if (exact.empty()) continue;
       std::vector<Contact> reported;
       for (const PairResult& p : result.pairs)

@@ -205,7 +205,7 @@ Dump make_dump(const FrameResult& frame, const std::vector<CapturedView>& captur
       p.kinds.push_back(to_string(c.kind));
     }
     p.has_reference = true;
-    for (std::uint64_t key : exact_colliding_pairs(objects[r.object_a].mesh, objects[r.object_b].mesh))
+    for (std::uint64_t key : exact_pair_reference(objects, r.object_a, r.object_b, o.self_adjacency))
       p.reference.push_back({std::uint32_t(key >> 32), std::uint32_t(key & 0xffffffffu)});
     for (const CapturedView& c : captured) {
       if (c.pair != i) continue;

@@ -2,6 +2,7 @@
 // Exact all-pairs reference (no sampling): CGAL box_intersection_d over per-triangle boxes, then
 // the exact triangle test of narrow_phase.h. It defines nCTP and the miss ratio.
 #include "peelcd/core/narrow_phase.h"
+#include "peelcd/core/self.h"
 
 #include <memory>
 #include <vector>
@@ -10,6 +11,11 @@ namespace peelcd {
 
 // Colliding triangle pairs of A and B, packed with pack_pair(triA, triB), sorted.
 std::vector<std::uint64_t> exact_colliding_pairs(const Mesh& a, const Mesh& b);
+
+// The exact reference of a frame's pair of objects `ia` and `ib`: exact_colliding_pairs() of
+// their meshes, or exact_self_pairs() (with `adjacency`) for a self pair (ia == ib).
+std::vector<std::uint64_t> exact_pair_reference(const std::vector<Object>& objects, std::size_t ia, std::size_t ib,
+                                                SelfAdjacency adjacency);
 
 // Appends pack_pair(triA, triB) for every triangle of `ta` (of A) and of `tb` (of B) whose
 // closed boxes overlap, by a sweep along x: the candidates of the exact CPU path (no image stage).

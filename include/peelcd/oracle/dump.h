@@ -67,7 +67,7 @@ struct Dump {
 };
 
 // Builds a dump from a frame and the views captured while it ran (Detector::capture_layers),
-// with each pair's exact reference (exact_colliding_pairs of the two meshes).
+// with each pair's exact reference (exact_pair_reference(): a self pair's is exact_self_pairs()).
 Dump make_dump(const FrameResult& frame, const std::vector<CapturedView>& captured,
                const std::vector<Object>& objects, const DetectOptions& options, const std::string& renderer,
                const std::string& gl_version, const std::string& backend);
