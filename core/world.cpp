@@ -6,6 +6,7 @@
 #include "peelcd/core/cpu_stage.h"
 #include "peelcd/core/id_map.h"
 #include "peelcd/core/narrow_phase.h"
+#include "peelcd/core/self.h"
 #include "peelcd/core/worker_pool.h"
 
 #include <algorithm>
@@ -21,6 +22,7 @@ double ms_since(Clock::time_point t0) { return std::chrono::duration<double, std
 
 constexpr double kCandidateUs = kWorldCandidateUs;
 constexpr std::uint32_t kSmallPair = 0xffffffffu;  // a task's start: scan two small world meshes
+constexpr std::uint32_t kSelfPair = 0xfffffffeu;   // a task's start: a body's self traversal
 
 // A rigid body with fewer triangles than this is moved into world space every frame (its
 // vertices transformed, a world-space copy of its tree refitted): O(its size), a few
@@ -45,6 +47,29 @@ struct Body {
   bool world_tree_fresh = false;
   // Deforming: the triangles using each vertex (CSR), built on the first move_vertices().
   std::vector<std::uint32_t> vertex_first, vertex_tris;
+  // Self-collision (World::set_self): the vertex representatives of the adjacency in use
+  // (rep_valid: for this topology and `rep_adjacency`); a rigid body's self contacts, in its
+  // shape's frame, found once per shape (a rigid motion changes none of them).
+  bool self = false;
+  bool rep_valid = false;
+  SelfAdjacency rep_adjacency = SelfAdjacency::index;
+  std::vector<std::uint32_t> rep;
+  bool self_cached = false;
+  std::vector<Contact> self_contacts;
+  void topology_changed() {
+    rep_valid = false;
+    self_cached = false;
+  }
+  const std::vector<std::uint32_t>& representatives(SelfAdjacency adjacency) {
+    // By position on a deforming body: the positions of this frame.
+    if (!rep_valid || rep_adjacency != adjacency || (adjacency == SelfAdjacency::position && !is_rigid)) {
+      vertex_representatives(local(), adjacency, rep);
+      rep_adjacency = adjacency;
+      rep_valid = true;
+      self_cached = false;
+    }
+    return rep;
+  }
 
   const Mesh& local() const { return is_rigid ? *shape : mesh; }
   Vec3 world(std::uint32_t v) const {
@@ -188,6 +213,31 @@ struct World::Impl {
   }
 
   void collide(const DetectOptions& opt, FrameResult& out);
+  // A self pair's contacts: its tasks' (in the body's frame), cached for a rigid body, moved to
+  // world space.
+  void self_pair(Body& a, std::size_t first, std::size_t last, PairResult& r) {
+    if (!(a.is_rigid && a.self_cached)) {
+      a.self_contacts.clear();
+      std::size_t n = 0;
+      for (std::size_t k = first; k < last; ++k) {
+        a.self_contacts.insert(a.self_contacts.end(), tasks[k].contacts.begin(), tasks[k].contacts.end());
+        n += tasks[k].candidates.size();
+      }
+      std::sort(a.self_contacts.begin(), a.self_contacts.end(), [](const Contact& x, const Contact& y) {
+        return x.tri_a < y.tri_a || (x.tri_a == y.tri_a && x.tri_b < y.tri_b);
+      });
+      a.self_cached = a.is_rigid;
+      r.candidates = n;
+    } else {
+      r.candidates = 0;  // nothing tested this frame
+    }
+    r.colliding = a.self_contacts;
+    if (a.is_rigid)
+      for (Contact& c : r.colliding) {
+        c.p = a.pose * c.p;
+        c.q = a.pose * c.q;
+      }
+  }
   void image_pair(const Body& a, const Body& b, const std::vector<std::uint64_t>& candidates, const DetectOptions& opt,
                   PairResult& r, FrameResult& out);
 };
@@ -296,6 +346,7 @@ void World::set_mesh(BodyId id, Mesh mesh) {
     b.mesh = std::move(mesh);
   b.vertex_first.clear();
   b.vertex_tris.clear();
+  b.topology_changed();
   b.tree.build(b.local().vertices, b.local().triangles);
   b.world_tree = Bvh{};
   b.world_copy = Mesh{};
@@ -309,11 +360,15 @@ void World::set_shape(BodyId id, std::shared_ptr<const Mesh> shape) {
   if (!shape) throw std::invalid_argument("peelcd::World::set_shape(): " + label + ": no shape");
   check_mesh(*shape, label);
   b.shape = std::move(shape);
+  b.topology_changed();
   b.tree.build(b.shape->vertices, b.shape->triangles);
   b.world_tree = Bvh{};
   b.world_copy = Mesh{};
   ++impl_->stats.builds;
 }
+
+void World::set_self(BodyId id, bool self) { impl_->body(id, "set_self").self = self; }
+bool World::self(BodyId id) const { return impl_->body(id).self; }
 
 bool World::contains(BodyId id) const { return id < impl_->bodies.size() && impl_->bodies[id].alive; }
 std::size_t World::size() const { return impl_->alive; }
@@ -365,6 +420,16 @@ void World::Impl::collide(const DetectOptions& opt, FrameResult& out) {
                                   " reaches outside the float range (|x| <= 3.4e38) the image stage works in");
   }
   overlapping_pairs(boxes, pairs, order);  // indices into ids, ascending ids: a < b
+  // Self pairs (i, i): the bodies asking for self-collision (set_self, DetectOptions::self).
+  bool any_self = false;
+  for (std::size_t i = 0; i < ids.size(); ++i) {
+    Body& b = bodies[ids[i]];
+    if (!(opt.self || b.self) || b.local().triangles.size() < 2) continue;
+    b.representatives(opt.self_adjacency);
+    pairs.emplace_back(i, i);
+    any_self = true;
+  }
+  if (any_self) std::sort(pairs.begin(), pairs.end());
 
   // The traversals: per pair, one task, or (several lanes) the node pairs of its first levels.
   const unsigned lanes = lanes_for(opt);
@@ -372,7 +437,10 @@ void World::Impl::collide(const DetectOptions& opt, FrameResult& out) {
   for (std::size_t p = 0; p < pairs.size(); ++p) {
     Body& a = bodies[ids[pairs[p].first]];
     Body& b = bodies[ids[pairs[p].second]];
-    if (a.small() && b.small() && a.world_mesh() && b.world_mesh()) {
+    if (&a == &b) {  // self: one traversal of the body's own tree (none for a rigid body's cache)
+      split.clear();
+      if (!(a.is_rigid && a.self_cached)) split.assign(1, BvhNodePair{kSelfPair, kSelfPair});
+    } else if (a.small() && b.small() && a.world_mesh() && b.world_mesh()) {
       split.assign(1, BvhNodePair{kSmallPair, kSmallPair});
     } else {
       a.ensure_world_tree();
@@ -397,6 +465,14 @@ void World::Impl::collide(const DetectOptions& opt, FrameResult& out) {
     t.candidates.clear();
     t.contacts.clear();
     t.transformed = 0;
+    if (t.start.first == kSelfPair) {  // in the body's own frame, adjacent couples dropped
+      const Mesh& m = a.local();
+      std::vector<BvhNodePair> stack;
+      t.visited = bvh_self_traverse(a.tree, stack, [&](std::uint32_t x, std::uint32_t y) {
+        if (!triangles_adjacent(m, a.rep, x, y)) t.candidates.push_back(x < y ? pack_pair(x, y) : pack_pair(y, x));
+      });
+      return;
+    }
     if (t.start.first == kSmallPair) {  // as the frame API's exact path: one culling round, a sweep
       const Mesh& ma = *a.world_mesh();
       const Mesh& mb = *b.world_mesh();
@@ -437,6 +513,10 @@ void World::Impl::collide(const DetectOptions& opt, FrameResult& out) {
     }
     stats.candidates += n;
     r.candidates = n;
+    if (r.object_a == r.object_b) {  // self: the exact path always (docs/design.md)
+      r.exact_stage = true;
+      continue;
+    }
     if (n == 0) continue;  // no couple of boxes overlaps: no contact, nothing to test
     if (opt.stage == Stage::exact) {
       r.exact_stage = true;
@@ -457,6 +537,17 @@ void World::Impl::collide(const DetectOptions& opt, FrameResult& out) {
     if (t.candidates.empty() || to_image[t.pair]) return;
     const Body& a = bodies[ids[pairs[t.pair].first]];
     const Body& b = bodies[ids[pairs[t.pair].second]];
+    if (t.start.first == kSelfPair) {  // in the body's own frame (a rigid body's: its shape's)
+      const Mesh& m = a.local();
+      std::sort(t.candidates.begin(), t.candidates.end());
+      for (const std::uint64_t c : t.candidates) {
+        Contact contact;
+        contact.tri_a = pair_a(c);
+        contact.tri_b = pair_b(c);
+        if (test_triangle_pair(corners(m, contact.tri_a), corners(m, contact.tri_b), contact)) t.contacts.push_back(contact);
+      }
+      return;
+    }
     if (t.start.first == kSmallPair) {  // the sweep's pairs: distinct, boxes overlapping, world meshes at hand
       sort_unique_pairs(t.candidates, lane_scratch[lane]->sorted);
       narrow_phase(*a.world_mesh(), *b.world_mesh(), t.candidates, t.contacts, /*boxes_overlap=*/true);
@@ -484,6 +575,11 @@ void World::Impl::collide(const DetectOptions& opt, FrameResult& out) {
   });
   for (std::size_t p = 0; p < pairs.size(); ++p) {
     PairResult& r = out.pairs[p];
+    if (r.object_a == r.object_b) {
+      self_pair(bodies[r.object_a], first_task[p], first_task[p + 1], r);
+      ++out.rois_exact;
+      continue;
+    }
     if (r.candidates == 0 || to_image[p]) continue;
     ++out.rois_exact;
     for (std::size_t k = first_task[p]; k < first_task[p + 1]; ++k) {
@@ -575,8 +671,10 @@ void World::Impl::image_pair(const Body& a, const Body& b, const std::vector<std
 
 void sync_bodies(World& world, const std::vector<Object>& objects, std::vector<BodyId>& bodies) {
   if (bodies.empty()) {
-    for (const Object& o : objects)
+    for (const Object& o : objects) {
       bodies.push_back(o.rigid ? world.add_rigid(o.rigid->shape, o.rigid->pose, o.name) : world.add_deforming(o.mesh, o.name));
+      world.set_self(bodies.back(), o.self);
+    }
     return;
   }
   if (bodies.size() != objects.size())
@@ -588,6 +686,7 @@ void sync_bodies(World& world, const std::vector<Object>& objects, std::vector<B
     if (bool(o.rigid) != world.rigid(id))
       throw std::invalid_argument("peelcd::sync_bodies(): object " + std::to_string(i) + " '" + o.name +
                                   "' changed between rigid and deforming");
+    world.set_self(id, o.self);
     if (o.rigid) {
       if (&world.mesh(id) != o.rigid->shape.get()) world.set_shape(id, o.rigid->shape);
       world.set_pose(id, o.rigid->pose);

@@ -7,6 +7,7 @@
 #include "peelcd/core/id_map.h"
 #include "peelcd/core/reference.h"
 #include "peelcd/core/self.h"
+#include "peelcd/core/world.h"
 #include "peelcd/eval/classes.h"
 
 #include <catch2/catch.hpp>
@@ -154,4 +155,53 @@ TEST_CASE("self pairs beside inter-object pairs: off changes nothing, on keeps e
   CHECK(all.pairs[2].object_a == 1);
   CHECK(all.pairs[2].colliding.empty());
   CHECK(self_pairs_found(all, 0) == self_pairs_found(on, 0));
+}
+
+TEST_CASE("the World's self pairs: its tree against itself, equal to the frame's, rigid bodies cached", "[self][world]") {
+  for (const GeometryClass& g : self_classes()) {
+    DetectOptions opt;
+    opt.stage = Stage::exact;
+    const FrameResult frame = cpu_detector().detect(g.objects, opt);
+    World world;
+    std::vector<BodyId> ids;
+    sync_bodies(world, g.objects, ids);
+    const FrameResult& w = world.collide(opt);
+    INFO(g.name);
+    REQUIRE(w.pairs.size() == frame.pairs.size());
+    for (std::size_t p = 0; p < w.pairs.size(); ++p) {
+      CHECK(w.pairs[p].object_a == frame.pairs[p].object_a);
+      CHECK(w.pairs[p].object_b == frame.pairs[p].object_b);
+      REQUIRE(w.pairs[p].colliding.size() == frame.pairs[p].colliding.size());
+      for (std::size_t c = 0; c < w.pairs[p].colliding.size(); ++c) {
+        CHECK(w.pairs[p].colliding[c].tri_a == frame.pairs[p].colliding[c].tri_a);
+        CHECK(w.pairs[p].colliding[c].tri_b == frame.pairs[p].colliding[c].tri_b);
+      }
+    }
+  }
+  // A rigid self body: its pairs found once on its shape, then moved by the pose.
+  const GeometryClass knot = self_classes()[1];
+  auto shape = std::make_shared<const Mesh>(knot.objects[0].mesh);
+  World world;
+  const BodyId id = world.add_rigid(shape, Eigen::Affine3d::Identity(), "knot");
+  world.set_self(id, true);
+  DetectOptions opt;
+  const std::vector<std::uint64_t> exact = exact_self_pairs(*shape);
+  const FrameResult first = world.collide(opt);
+  REQUIRE(first.pairs.size() == 1);
+  CHECK(first.pairs[0].candidates > 0);
+  CHECK(first.pairs[0].colliding.size() == exact.size());
+  Eigen::Affine3d pose = Eigen::Affine3d::Identity();
+  pose.translate(Vec3(3, -2, 1));
+  pose.rotate(Eigen::AngleAxisd(0.7, Vec3(0, 1, 1).normalized()));
+  world.set_pose(id, pose);
+  const FrameResult moved = world.collide(opt);
+  REQUIRE(moved.pairs.size() == 1);
+  CHECK(moved.pairs[0].candidates == 0);  // nothing tested again: the shape's pairs, cached
+  REQUIRE(moved.pairs[0].colliding.size() == exact.size());
+  for (std::size_t c = 0; c < exact.size(); ++c) {
+    CHECK(pack_pair(moved.pairs[0].colliding[c].tri_a, moved.pairs[0].colliding[c].tri_b) == exact[c]);
+    CHECK((moved.pairs[0].colliding[c].p - pose * first.pairs[0].colliding[c].p).norm() < 1e-12);
+  }
+  world.set_self(id, false);
+  CHECK(world.collide(opt).pairs.empty());
 }

@@ -156,4 +156,58 @@ std::size_t bvh_traverse(const Bvh& a, const Bvh& b, const BvhRelation& rel, Bvh
   return visited;
 }
 
+// Every couple of distinct triangles of one tree whose boxes overlap (closed): fn(t, u), once
+// per couple, in no particular order of t and u (the self-collision search: the caller drops
+// adjacent couples). `stack` is scratch. Returns the node pairs visited.
+template <class Fn>
+std::size_t bvh_self_traverse(const Bvh& tree, std::vector<BvhNodePair>& stack, Fn&& fn) {
+  const auto& n = tree.nodes();
+  if (n.empty()) return 0;
+  std::size_t visited = 0;
+  stack.clear();
+  stack.push_back({0u, 0u});
+  const auto leaf_pairs = [&](const BvhNode& x, const BvhNode& y) {
+    for (std::uint32_t i = x.first; i < x.first + x.count; ++i) {
+      const std::uint32_t t = tree.order()[i];
+      const Aabb& bt = tree.triangle_box(t);
+      for (std::uint32_t j = y.first; j < y.first + y.count; ++j) {
+        const std::uint32_t u = tree.order()[j];
+        if (bt.overlaps(tree.triangle_box(u))) fn(t, u);
+      }
+    }
+  };
+  while (!stack.empty()) {
+    const auto [a, b] = stack.back();
+    stack.pop_back();
+    ++visited;
+    const BvhNode& x = n[a];
+    const BvhNode& y = n[b];
+    if (a == b) {  // a node against itself: its children each against itself and each other
+      if (x.leaf()) {
+        for (std::uint32_t i = x.first; i < x.first + x.count; ++i)
+          for (std::uint32_t j = i + 1; j < x.first + x.count; ++j) {
+            const std::uint32_t t = tree.order()[i], u = tree.order()[j];
+            if (tree.triangle_box(t).overlaps(tree.triangle_box(u))) fn(t, u);
+          }
+        continue;
+      }
+      const std::uint32_t l = a + 1, r = x.first;
+      stack.push_back({l, l});
+      stack.push_back({r, r});
+      if (n[l].box.overlaps(n[r].box)) stack.push_back({l, r});
+      continue;
+    }
+    if (x.leaf() && y.leaf()) {
+      leaf_pairs(x, y);
+    } else if (y.leaf() || (!x.leaf() && x.box.extent().maxCoeff() >= y.box.extent().maxCoeff())) {
+      for (const std::uint32_t c : {a + 1, x.first})
+        if (n[c].box.overlaps(y.box)) stack.push_back({c, b});
+    } else {
+      for (const std::uint32_t c : {b + 1, y.first})
+        if (x.box.overlaps(n[c].box)) stack.push_back({a, c});
+    }
+  }
+  return visited;
+}
+
 }  // namespace peelcd

@@ -86,6 +86,14 @@ class World {
   // A rigid body's new shape, shared (its tree rebuilt; the pose kept).
   void set_shape(BodyId body, std::shared_ptr<const Mesh> shape);
 
+  // Self-collision of the body (docs/design.md, "Self-collision"; DetectOptions::self asks it
+  // for every body): its own tree traversed against itself, adjacent couples dropped, every
+  // remaining couple tested exactly (the World's self pairs take the exact path). A rigid
+  // body's self pairs are found once per shape (a rigid motion changes none) and moved by its
+  // pose; a deforming body's each frame, over its refitted tree.
+  void set_self(BodyId body, bool self);
+  bool self(BodyId body) const;
+
   bool contains(BodyId body) const;
   std::size_t size() const;               // bodies held
   const std::string& name(BodyId body) const;
