@@ -1,6 +1,7 @@
 // peelcd bench (the command line; shared parts in cli.h).
 #include "cli.h"
 #include "peelcd/version.h"
+#include "peelcd/bench/self_bench.h"
 #include "peelcd/bench/suite.h"
 #include "peelcd/core/cpu_stage.h"
 #include "peelcd/core/broad_phase.h"
@@ -13,6 +14,7 @@ struct BenchArgs {
   std::size_t frames = 12;
   std::size_t objects = 200;  // crowd
   int stacks = 288;           // spheres: 330,624 triangles each (570: 1,297,320)
+  int cloth = 130;            // cloth-self: 6 n^2 triangles (130: 101,400)
   int res = 0;  // 0: the shared 512^2 budget, tiles by need (detect's default)
   std::string backend = kDefaultBackend;
   unsigned threads = 0;  // 0: the machine's (at most 8)
@@ -22,6 +24,16 @@ struct BenchArgs {
 
 int run_bench(const BenchArgs& a) {
   if (!a.csv.empty()) check_output_path(a.csv, "peelcd bench: --csv");
+  if (a.scene == "cloth-self") {  // self-collision: its own table (peelcd/bench/self_bench.h)
+    if (a.threads) setenv("LP_NUM_THREADS", std::to_string(a.threads == 1 ? 0 : a.threads).c_str(), 1);
+    bench::SelfSuite self;
+    self.n = a.cloth;
+    self.frames = a.frames;
+    self.stage = make_image_stage(a.backend, gl::GlOptions{});
+    const std::string csv = bench::run_self_suite(self);
+    if (!a.csv.empty()) write_output(a.csv, csv);
+    return 0;
+  }
   std::unique_ptr<Sequence> seq;
   std::vector<Object> fixed;
   bench::Suite suite;
@@ -80,11 +92,14 @@ std::vector<Command> add_bench_commands(CLI::App& app) {
                "deforming ones refitted or rebuilt, its own broad phase) and the bare-draw floor side by side on "
                "the same frames; print medians, miss ratios and ratios");
   benchmark->add_option("scene", be.scene, "test1, test2, crowd, spheres (two crossing rigid spheres), spheres-wave "
-                                           "(the same, a wave over their vertices every frame) or a scene file")
+                                           "(the same, a wave over their vertices every frame), cloth-self (self-collision of a folding "
+                                           "cloth, one thread) or a scene file")
       ->capture_default_str();
   benchmark->add_option("--stacks", be.stacks, "spheres: latitude bands (4 s (s - 1) triangles a sphere: 288 -> 330,624, "
                                                "570 -> 1,297,320)")
       ->check(CLI::Range(3, 2000))->capture_default_str();
+  benchmark->add_option("--cloth", be.cloth, "cloth-self: the cloth's resolution n (6 n^2 triangles: 130 -> 101,400)")
+      ->check(CLI::Range(2, 2000))->capture_default_str();
   benchmark->add_flag("--short", be.short_rows, "Only the World rows, the frame API's router and image stage, the peers "
                                                  "and the floors (for the scale scenes)");
   benchmark->add_option("--objects", be.objects, "Balls of the crowd scene")->check(CLI::Range(2, 5000))

@@ -1,5 +1,6 @@
 #include "peelcd/core/self.h"
 
+#include "peelcd/core/bvh.h"
 #include "peelcd/core/id_map.h"
 
 #include <CGAL/Box_intersection_d/Box_with_info_d.h>
@@ -47,49 +48,28 @@ bool triangles_adjacent(const Mesh& mesh, const std::vector<std::uint32_t>& rep,
   return false;
 }
 
-namespace {
-struct SweepBox {
-  double lo[3], hi[3];
-  std::uint32_t tri;
-};
-}  // namespace
-
 void self_overlap_pairs(const Mesh& mesh, const std::vector<std::uint32_t>* tris, const std::vector<std::uint32_t>& rep,
                         std::vector<std::uint64_t>& out) {
-  const std::size_t n = tris ? tris->size() : mesh.triangles.size();
-  std::vector<SweepBox> boxes(n);
-  for (std::size_t i = 0; i < n; ++i) {
-    const std::uint32_t t = tris ? (*tris)[i] : std::uint32_t(i);
-    const Tri& f = mesh.triangles[t];
-    SweepBox& b = boxes[i];
-    for (int k = 0; k < 3; ++k) {
-      const double x = mesh.vertices[f[0]][k], y = mesh.vertices[f[1]][k], z = mesh.vertices[f[2]][k];
-      b.lo[k] = std::min({x, y, z});
-      b.hi[k] = std::max({x, y, z});
-    }
-    b.tri = t;
+  // A tree over the triangles, traversed against itself (a sweep along one axis meets every
+  // triangle of a sheet's column: O(n^1.5) on a cloth).
+  Mesh sub;
+  const Mesh* m = &mesh;
+  if (tris) {  // the listed triangles only: a sub-mesh over the same vertices
+    sub.triangles.reserve(tris->size());
+    for (const std::uint32_t t : *tris) sub.triangles.push_back(mesh.triangles[t]);
+    m = &sub;
   }
-  // Along the axis of largest spread: a sheet lying in a plane would sweep badly along its normal.
-  double lo[3] = {0, 0, 0}, hi[3] = {0, 0, 0};
-  for (std::size_t i = 0; i < n; ++i)
-    for (int k = 0; k < 3; ++k) {
-      lo[k] = i ? std::min(lo[k], boxes[i].lo[k]) : boxes[i].lo[k];
-      hi[k] = i ? std::max(hi[k], boxes[i].hi[k]) : boxes[i].hi[k];
+  Bvh tree;
+  tree.build(mesh.vertices, m->triangles);
+  std::vector<BvhNodePair> stack;
+  bvh_self_traverse(tree, stack, [&](std::uint32_t x, std::uint32_t y) {
+    if (tris) {
+      x = (*tris)[x];
+      y = (*tris)[y];
     }
-  int ax = 0;
-  for (int k = 1; k < 3; ++k)
-    if (hi[k] - lo[k] > hi[ax] - lo[ax]) ax = k;
-  std::sort(boxes.begin(), boxes.end(), [ax](const SweepBox& x, const SweepBox& y) { return x.lo[ax] < y.lo[ax]; });
-  const int o1 = (ax + 1) % 3, o2 = (ax + 2) % 3;
-  for (std::size_t i = 0; i < n; ++i) {
-    const SweepBox& x = boxes[i];
-    for (std::size_t k = i + 1; k < n && !(boxes[k].lo[ax] > x.hi[ax]); ++k) {
-      const SweepBox& y = boxes[k];
-      if (x.hi[o1] < y.lo[o1] || y.hi[o1] < x.lo[o1] || x.hi[o2] < y.lo[o2] || y.hi[o2] < x.lo[o2]) continue;
-      if (triangles_adjacent(mesh, rep, x.tri, y.tri)) continue;
-      out.push_back(x.tri < y.tri ? pack_pair(x.tri, y.tri) : pack_pair(y.tri, x.tri));
-    }
-  }
+    if (triangles_adjacent(mesh, rep, x, y)) return;
+    out.push_back(x < y ? pack_pair(x, y) : pack_pair(y, x));
+  });
 }
 
 void self_candidates(const Mesh& mesh, const std::vector<std::uint32_t>& rep, std::vector<std::uint64_t>& pairs) {

@@ -142,6 +142,7 @@ struct Task {
   std::vector<std::uint64_t> candidates;
   std::vector<Contact> contacts;
   std::size_t visited = 0, transformed = 0;
+  std::size_t tested = 0;  // a self task's couples given to the exact test
 };
 
 }  // namespace
@@ -161,6 +162,7 @@ struct World::Impl {
   std::vector<Task> tasks;
   std::vector<BvhNodePair> split;
   std::vector<std::vector<BvhStackEntry>> stacks;  // per lane
+  std::vector<std::vector<BvhNodePair>> self_stacks;  // per lane
   struct LaneScratch {
     ContactCull cull;
     BoxScratch boxes;
@@ -200,6 +202,7 @@ struct World::Impl {
   template <class Fn>
   void parallel(std::size_t n, unsigned lanes, Fn&& fn) {
     if (stacks.size() < lanes) stacks.resize(lanes);
+    if (self_stacks.size() < lanes) self_stacks.resize(lanes);
     while (lane_scratch.size() < lanes) lane_scratch.push_back(std::make_unique<LaneScratch>());
     if (lanes <= 1 || n <= 1) {
       for (std::size_t i = 0; i < n; ++i) fn(i, 0u);
@@ -221,7 +224,7 @@ struct World::Impl {
       std::size_t n = 0;
       for (std::size_t k = first; k < last; ++k) {
         a.self_contacts.insert(a.self_contacts.end(), tasks[k].contacts.begin(), tasks[k].contacts.end());
-        n += tasks[k].candidates.size();
+        n += tasks[k].tested;
       }
       std::sort(a.self_contacts.begin(), a.self_contacts.end(), [](const Contact& x, const Contact& y) {
         return x.tri_a < y.tri_a || (x.tri_a == y.tri_a && x.tri_b < y.tri_b);
@@ -465,11 +468,20 @@ void World::Impl::collide(const DetectOptions& opt, FrameResult& out) {
     t.candidates.clear();
     t.contacts.clear();
     t.transformed = 0;
-    if (t.start.first == kSelfPair) {  // in the body's own frame, adjacent couples dropped
-      const Mesh& m = a.local();
-      std::vector<BvhNodePair> stack;
-      t.visited = bvh_self_traverse(a.tree, stack, [&](std::uint32_t x, std::uint32_t y) {
-        if (!triangles_adjacent(m, a.rep, x, y)) t.candidates.push_back(x < y ? pack_pair(x, y) : pack_pair(y, x));
+    t.tested = 0;
+    if (t.start.first == kSelfPair) {  // in the body's own frame, adjacent couples dropped,
+      const Mesh& m = a.local();      // each couple tested as the traversal reaches it
+      t.visited = bvh_self_traverse(a.tree, self_stacks[lane], [&](std::uint32_t x, std::uint32_t y) {
+        if (triangles_adjacent(m, a.rep, x, y)) return;
+        ++t.tested;
+        Contact contact;
+        contact.tri_a = std::min(x, y);
+        contact.tri_b = std::max(x, y);
+        const TriangleCorners ca = corners(m, contact.tri_a), cb = corners(m, contact.tri_b);
+        // Neighbours of a smooth surface are mostly coplanar or nearly so: CGAL's test rejects
+        // them faster than test_triangle_pair()'s signs (same exact answer); the few that meet
+        // get their segment and kind.
+        if (triangles_intersect(ca, cb) && test_triangle_pair(ca, cb, contact)) t.contacts.push_back(contact);
       });
       return;
     }
@@ -537,17 +549,7 @@ void World::Impl::collide(const DetectOptions& opt, FrameResult& out) {
     if (t.candidates.empty() || to_image[t.pair]) return;
     const Body& a = bodies[ids[pairs[t.pair].first]];
     const Body& b = bodies[ids[pairs[t.pair].second]];
-    if (t.start.first == kSelfPair) {  // in the body's own frame (a rigid body's: its shape's)
-      const Mesh& m = a.local();
-      std::sort(t.candidates.begin(), t.candidates.end());
-      for (const std::uint64_t c : t.candidates) {
-        Contact contact;
-        contact.tri_a = pair_a(c);
-        contact.tri_b = pair_b(c);
-        if (test_triangle_pair(corners(m, contact.tri_a), corners(m, contact.tri_b), contact)) t.contacts.push_back(contact);
-      }
-      return;
-    }
+    if (t.start.first == kSelfPair) return;  // tested during the traversal
     if (t.start.first == kSmallPair) {  // the sweep's pairs: distinct, boxes overlapping, world meshes at hand
       sort_unique_pairs(t.candidates, lane_scratch[lane]->sorted);
       narrow_phase(*a.world_mesh(), *b.world_mesh(), t.candidates, t.contacts, /*boxes_overlap=*/true);

@@ -29,8 +29,9 @@ void vertex_representatives(const Mesh& mesh, SelfAdjacency adjacency, std::vect
 bool triangles_adjacent(const Mesh& mesh, const std::vector<std::uint32_t>& rep, std::uint32_t t, std::uint32_t u);
 
 // Candidate self pairs: every couple of the triangles `tris` (all of the mesh when null) whose
-// closed boxes overlap and that are not adjacent, appended as pack_pair(t, u) with t < u, by a
-// sweep along x (the self search of the exact CPU path: no n^2).
+// closed boxes overlap and that are not adjacent, appended as pack_pair(t, u) with t < u, in no
+// particular order: a BVH built over them and traversed against itself (the self search of the
+// frame API's exact CPU path: no n^2; peelcd::World keeps its bodies' trees instead).
 void self_overlap_pairs(const Mesh& mesh, const std::vector<std::uint32_t>* tris, const std::vector<std::uint32_t>& rep,
                         std::vector<std::uint64_t>& out);
 
