@@ -160,7 +160,8 @@ std::unique_ptr<Sequence> make_sequence(const std::string& name, std::size_t fra
   if (name == "test1") return make_test1(data_dir("fixtures/meshes"), frames, rigid);
   if (name == "test2") return make_test2(data_dir("fixtures/meshes"), frames, rigid);
   if (name == "crowd") return make_crowd(objects, frames, rigid);
-  throw InputError("peelcd: unknown test scene \"" + name + "\" (expected test1, test2 or crowd)");
+  if (name == "cloth") return make_folding_cloth(40, frames, rigid);
+  throw InputError("peelcd: unknown test scene \"" + name + "\" (expected test1, test2, crowd or cloth)");
 }
 
 

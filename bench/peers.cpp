@@ -50,9 +50,17 @@ PeerFrame cgal_frame(const std::vector<Object>& objects, unsigned threads) {
   boxes.reserve(objects.size());
   for (const Object& o : objects) boxes.push_back(bounds(o.mesh));
   f.objects = overlapping_pairs(boxes);
+  // Self pairs (i, i) of the objects that ask for them (Object::self): the exact self reference.
+  for (std::size_t i = 0; i < objects.size(); ++i)
+    if (objects[i].self && objects[i].mesh.triangles.size() >= 2) f.objects.emplace_back(i, i);
+  std::sort(f.objects.begin(), f.objects.end());
   f.per_pair.resize(f.objects.size());
   parallel_for(threads > 1 ? pool.get() : nullptr, f.objects.size(), [&](std::size_t i) {
     const auto [a, b] = f.objects[i];
+    if (a == b) {
+      f.per_pair[i] = exact_self_pairs(objects[a].mesh);
+      return;
+    }
     const Mesh& ma = objects[a].mesh;
     const Mesh& mb = objects[b].mesh;
     const Aabb roi = intersection(boxes[a], boxes[b]);

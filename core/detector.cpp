@@ -584,7 +584,7 @@ void Detector::detect(const std::vector<const Object*>& object_ptrs, const Detec
       const Mesh& mb = objects[plan.b].mesh;
       if (plan.a == plan.b) {  // self: the candidates planning found
         r.candidates = plan.self_candidates.size();
-        narrow_phase(ma, ma, plan.self_candidates, r.colliding, /*boxes_overlap=*/true);
+        self_narrow_phase(ma, plan.self_candidates, r.colliding);
         return;
       }
       lane.candidates.clear();
@@ -679,7 +679,10 @@ void Detector::detect(const std::vector<const Object*>& object_ptrs, const Detec
     }
     if (plan.a == plan.b) self_candidates(ma, plan.rep, s.candidates);  // one object peeled as both
     r.candidates = s.candidates.size();
-    narrow_phase(ma, mb, s.candidates, r.colliding);
+    if (plan.a == plan.b)
+      self_narrow_phase(ma, s.candidates, r.colliding);
+    else
+      narrow_phase(ma, mb, s.candidates, r.colliding);
     out.timings.cpu += ms_since(t0);
   }
   out.pairs.resize(used);

@@ -85,6 +85,19 @@ void self_candidates(const Mesh& mesh, const std::vector<std::uint32_t>& rep, st
   sort_unique_pairs(pairs, scratch);
 }
 
+bool test_self_couple(const TriangleCorners& a, const TriangleCorners& b, Contact& contact) {
+  return triangles_intersect(a, b) && test_triangle_pair(a, b, contact);
+}
+
+void self_narrow_phase(const Mesh& mesh, const std::vector<std::uint64_t>& candidates, std::vector<Contact>& out) {
+  for (const std::uint64_t c : candidates) {
+    Contact contact;
+    contact.tri_a = pair_a(c);
+    contact.tri_b = pair_b(c);
+    if (test_self_couple(corners(mesh, contact.tri_a), corners(mesh, contact.tri_b), contact)) out.push_back(contact);
+  }
+}
+
 std::vector<std::uint64_t> exact_self_pairs(const Mesh& mesh, SelfAdjacency adjacency) {
   using Box = CGAL::Box_intersection_d::Box_with_info_d<double, 3, std::uint32_t>;
   std::vector<std::uint32_t> rep;

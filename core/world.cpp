@@ -477,11 +477,7 @@ void World::Impl::collide(const DetectOptions& opt, FrameResult& out) {
         Contact contact;
         contact.tri_a = std::min(x, y);
         contact.tri_b = std::max(x, y);
-        const TriangleCorners ca = corners(m, contact.tri_a), cb = corners(m, contact.tri_b);
-        // Neighbours of a smooth surface are mostly coplanar or nearly so: CGAL's test rejects
-        // them faster than test_triangle_pair()'s signs (same exact answer); the few that meet
-        // get their segment and kind.
-        if (triangles_intersect(ca, cb) && test_triangle_pair(ca, cb, contact)) t.contacts.push_back(contact);
+        if (test_self_couple(corners(m, contact.tri_a), corners(m, contact.tri_b), contact)) t.contacts.push_back(contact);
       });
       return;
     }

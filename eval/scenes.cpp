@@ -2,6 +2,7 @@
 
 #include "peelcd/core/aabb.h"
 #include "peelcd/core/primitives.h"
+#include "peelcd/eval/classes.h"
 #include "peelcd/io/mesh_io.h"
 
 #include <algorithm>
@@ -293,6 +294,41 @@ class CrossingSpheres final : public Sequence {
 
 std::unique_ptr<Sequence> make_crossing_spheres(int stacks, std::size_t frames, bool wave, bool rigid) {
   return std::make_unique<CrossingSpheres>(stacks, frames, wave, rigid);
+}
+
+namespace {
+class FoldingCloth final : public Sequence {
+ public:
+  FoldingCloth(int n, std::size_t frames, bool rigid) : Sequence(frames), n_(n), rigid_(rigid) {
+    ball_ = std::make_shared<const Mesh>(uv_sphere(Vec3(0.5, 0.5, -0.3), 0.35, 32, 16));
+  }
+  std::string name() const override { return "cloth"; }
+  int phases() const override { return 2; }
+  void frame(std::size_t f, std::vector<Object>& objects) const override {
+    objects.resize(2);
+    const double t = frames_ > 1 ? double(f) / double(frames_ - 1) : 1.0;
+    Object& cloth = objects[0];
+    cloth.name = "cloth";
+    cloth.self = true;
+    cloth.rigid.reset();
+    cloth.mesh = folded_sheet(n_, 0.3 * (1.2 - t), 0.4 * t);
+    const double drop = 0.5 * std::max(0.0, 1.0 - 2.0 * t);  // on the ball from halfway
+    for (Vec3& v : cloth.mesh.vertices) v.z() += drop;
+    Object& ball = objects[1];
+    ball.name = "ball";
+    ball.mesh = *ball_;
+    if (rigid_) ball.rigid = RigidMotion{ball_, Eigen::Affine3d::Identity()};
+  }
+
+ private:
+  int n_;
+  bool rigid_;
+  std::shared_ptr<const Mesh> ball_;
+};
+}  // namespace
+
+std::unique_ptr<Sequence> make_folding_cloth(int n, std::size_t frames, bool rigid) {
+  return std::make_unique<FoldingCloth>(n, frames, rigid);
 }
 
 std::unique_ptr<Sequence> make_crowd(std::size_t objects, std::size_t frames, bool rigid) {

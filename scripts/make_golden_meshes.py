@@ -131,6 +131,61 @@ def torn_cloth():
     return [v[i] for i in used], [tuple(remap[i] for i in tri) for tri in final_t]
 
 
+def folded_sheet(n, fold, sag):
+    """eval/classes.cpp folded_sheet(): a unit sheet folded over itself along x = 1, its top layer
+    lowered by a bump `sag` deep (through the bottom layer where sag > fold)."""
+    r = fold / 2
+    nu, nv = 3 * n, n
+    v = []
+    for j in range(nv + 1):
+        for i in range(nu + 1):
+            u, y = i / nu, j / nv
+            if u <= 1.0 / 3:
+                v.append((3 * u, y, 0.0))
+            elif u < 2.0 / 3:
+                a = math.pi * (3 * u - 1) - math.pi / 2
+                v.append((1.0 + r * math.cos(a), y, r + r * math.sin(a)))
+            else:
+                x = 1.0 - (3 * u - 2)
+                d2 = (x - 0.5) ** 2 + (y - 0.5) ** 2
+                v.append((x, y, fold - sag * math.exp(-d2 / 0.04)))
+    at = lambda i, j: j * (nu + 1) + i
+    t = []
+    for j in range(nv):
+        for i in range(nu):
+            t.append((at(i, j), at(i + 1, j), at(i + 1, j + 1)))
+            t.append((at(i, j), at(i + 1, j + 1), at(i, j + 1)))
+    return v, t
+
+
+def knotted_tube(along, around, r):
+    """eval/classes.cpp knotted_tube(): a closed tube around a trefoil, strands crossing."""
+    def curve(t):
+        return (math.sin(t) + 2 * math.sin(2 * t), math.cos(t) - 2 * math.cos(2 * t), -math.sin(3 * t))
+    v = []
+    for i in range(along):
+        t = 2 * math.pi * i / along
+        c = curve(t)
+        p, q = curve(t + 1e-4), curve(t - 1e-4)
+        tan = [p[k] - q[k] for k in range(3)]
+        ln = math.sqrt(sum(x * x for x in tan))
+        tan = [x / ln for x in tan]
+        n = (tan[1], -tan[0], 0.0)  # tangent x (0, 0, 1)
+        ln = math.sqrt(sum(x * x for x in n))
+        n = [x / ln for x in n]
+        b = (tan[1] * n[2] - tan[2] * n[1], tan[2] * n[0] - tan[0] * n[2], tan[0] * n[1] - tan[1] * n[0])
+        for k in range(around):
+            a = 2 * math.pi * k / around
+            v.append(tuple(c[m] + r * (math.cos(a) * n[m] + math.sin(a) * b[m]) for m in range(3)))
+    at = lambda i, k: (i % along) * around + (k % around)
+    t = []
+    for i in range(along):
+        for k in range(around):
+            t.append((at(i, k), at(i + 1, k), at(i + 1, k + 1)))
+            t.append((at(i, k), at(i + 1, k + 1), at(i, k + 1)))
+    return v, t
+
+
 def main():
     os.makedirs(OUT, exist_ok=True)
     write_obj("box_unit.obj", *box((0, 0, 0), (1, 1, 1)), "make_box([0,0,0], [1,1,1])")
@@ -145,6 +200,10 @@ def main():
               "make_uv_sphere([0,0,0], 1, 48, 48): a billiard ball (4.5K triangles), scaled in scenes")
     write_obj("velociraptor_walk_f12.obj", *raptor_frame(12), "velociraptor.obj bent by a travelling wave, frame 12")
     write_obj("cloth_torn.obj", *torn_cloth(), "a 24x24 cloth torn along x = 0.1 (split triangles, new vertices)")
+    write_obj("cloth_folded.obj", *folded_sheet(12, 0.1, 0.2),
+              "folded_sheet(12, 0.1, 0.2): a cloth folded over itself, its top sagging through the bottom")
+    write_obj("knot_tube.obj", *knotted_tube(90, 10, 0.75),
+              "knotted_tube(90, 10, 0.75): a closed tube tied in a trefoil, its strands crossing")
 
 
 if __name__ == "__main__":

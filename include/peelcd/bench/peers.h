@@ -26,7 +26,8 @@ namespace peelcd::bench {
 struct PeerFrame {
   double ms = 0;
   std::size_t pairs = 0;  // colliding triangle pairs reported (all object pairs summed)
-  std::vector<std::pair<std::size_t, std::size_t>> objects;  // the object pairs tested (a < b)
+  std::vector<std::pair<std::size_t, std::size_t>> objects;  // the object pairs tested (a < b; a == b: an
+                                                             // object's self pairs, Object::self)
   // Per entry of `objects`: the reported triangle pairs, packed as core/id_map.h pair keys
   // (tri_a << 32 | tri_b), sorted, distinct.
   std::vector<std::vector<std::uint64_t>> per_pair;

@@ -40,6 +40,16 @@ void self_overlap_pairs(const Mesh& mesh, const std::vector<std::uint32_t>* tris
 // and unique.
 void self_candidates(const Mesh& mesh, const std::vector<std::uint32_t>& rep, std::vector<std::uint64_t>& pairs);
 
+// The exact test of one self couple (two triangles of one object, not adjacent): as
+// test_triangle_pair(), with CGAL's intersection test first. A smooth surface's neighbours are
+// mostly coplanar or nearly so, which CGAL rejects faster than test_triangle_pair()'s signs;
+// the answer is the same exact one.
+bool test_self_couple(const TriangleCorners& a, const TriangleCorners& b, Contact& contact);
+
+// Every self candidate (pack_pair(t, u)) through test_self_couple(), the colliding appended to
+// `out` in candidate order.
+void self_narrow_phase(const Mesh& mesh, const std::vector<std::uint64_t>& candidates, std::vector<Contact>& out);
+
 // The exact self reference: every non-adjacent couple of triangles that share a point, through
 // CGAL's box_self_intersection_d and the exact triangle test; pack_pair(t, u), t < u, sorted.
 std::vector<std::uint64_t> exact_self_pairs(const Mesh& mesh, SelfAdjacency adjacency = SelfAdjacency::index);

@@ -58,6 +58,13 @@ std::unique_ptr<Sequence> make_crowd(std::size_t objects, std::size_t frames, bo
 // deforming meshes, new vertices every frame, the same topology. One phase.
 std::unique_ptr<Sequence> make_crossing_spheres(int stacks, std::size_t frames, bool wave, bool rigid = true);
 
+// A cloth folding onto itself over a ball (self-collision; kinematic, not a physical
+// simulation): a sheet of 6 n^2 triangles folded over itself (folded_sheet(), eval/classes.h),
+// its top layer sagging more and more through its bottom layer, descends onto a rigid ball that
+// finally pokes through its bottom layer. The cloth is a deforming object with Object::self set
+// (new vertices every frame); two phases: (a) falling and folding, (b) on the ball.
+std::unique_ptr<Sequence> make_folding_cloth(int n, std::size_t frames, bool rigid = true);
+
 // The torn cloth of test2 at tear fraction t in [0, 1]: an n x n grid over [-3, 3]^2 at height
 // `y`, torn along x = 0.05 from z = -3 to z = -3 + 6t. Exposed for tests.
 Mesh torn_cloth(int n, double t, double y);
