@@ -119,7 +119,7 @@ PairQuery parse_pair_query(const std::string& text, const std::vector<Object>& o
   PairQuery q;
   side(text.substr(0, comma), q.object_a, q.tri_a);
   side(text.substr(comma + 1), q.object_b, q.tri_b);
-  if (q.object_a == q.object_b) fail("both triangles are of the same object");
+  if (q.object_a == q.object_b && q.tri_a == q.tri_b) fail("a triangle with itself is not a pair");
   return q;
 }
 
@@ -552,7 +552,11 @@ void trace_verdict(Explanation& e, bool has_roi) {
   const ViewReport* found_in = nullptr;
   for (const ViewReport& v : e.views)
     if (!found_in && v.reason == Verdict::found) found_in = &v;
-  if (!e.intersect) {
+  if (e.adjacent) {
+    e.verdict = Verdict::no_contact;
+    e.verdict_line = "no contact: the two triangles share a vertex (adjacent triangles of one object are never a self "
+                     "pair, docs/design.md)";
+  } else if (!e.intersect) {
     if (has_roi && (!e.kept_a || !e.kept_b)) {
       e.verdict = Verdict::culled;
       e.verdict_line = "no contact: the triangles do not intersect; culled before drawing (" +
@@ -612,8 +616,13 @@ void trace_verdict(Explanation& e, bool has_roi) {
 Explanation FrameTrace::explain(const PairQuery& query) const {
   Explanation e;
   PairQuery q = query;
-  if (q.object_a >= objects_.size() || q.object_b >= objects_.size() || q.object_a == q.object_b)
+  if (q.object_a >= objects_.size() || q.object_b >= objects_.size())
     throw std::invalid_argument("peelcd::oracle::FrameTrace::explain(): bad object indices");
+  const bool self = q.object_a == q.object_b;
+  if (self && !(options_.self || objects_[q.object_a].self))
+    throw std::invalid_argument("peelcd explain: both triangles are of '" + objects_[q.object_a].name +
+                                "', which does not ask for self-collision (--self, or \"self\": true on the object)");
+  if (self && q.tri_a > q.tri_b) std::swap(q.tri_a, q.tri_b);
   if (q.object_a > q.object_b) {
     std::swap(q.object_a, q.object_b);
     std::swap(q.tri_a, q.tri_b);
@@ -632,9 +641,12 @@ Explanation FrameTrace::explain(const PairQuery& query) const {
   e.backend = backend_;
   e.renderer = renderer_;
 
-  // 1. The exact answer.
+  // 1. The exact answer (a self couple that shares a vertex is never a pair: docs/design.md).
   const TriangleCorners ca = corners(ma, q.tri_a), cb = corners(mb, q.tri_b);
-  e.intersect = triangles_intersect(ca, cb);
+  std::vector<std::uint32_t> rep;
+  if (self) vertex_representatives(ma, opt.self_adjacency, rep);
+  e.adjacent = self && triangles_adjacent(ma, rep, q.tri_a, q.tri_b);
+  e.intersect = !e.adjacent && triangles_intersect(ca, cb);
   if (e.intersect) {
     e.kind = to_string(classify_contact(ca, cb));
     std::tie(e.p, e.q) = intersection_segment(ca, cb);

@@ -113,6 +113,7 @@ struct Explanation {
   std::string backend, renderer;
   // The exact answer.
   bool intersect = false;
+  bool adjacent = false;  // a self couple (one object's two triangles) that shares a vertex: never a pair
   std::string kind;                // crossing, touching, coplanar, degenerate ("" when disjoint)
   Vec3 p = Vec3::Zero(), q = Vec3::Zero();
   // The frame.
