@@ -6,7 +6,7 @@
 #include "peelcd/core/id_map.h"
 #include "peelcd/core/self.h"
 #include "peelcd/core/world.h"
-#include "peelcd/eval/classes.h"
+#include "peelcd/core/primitives.h"
 
 #include <CGAL/Exact_predicates_inexact_constructions_kernel.h>
 #include <CGAL/Polygon_mesh_processing/self_intersections.h>
@@ -26,7 +26,7 @@ double ms_since(Clock::time_point t0) { return std::chrono::duration<double, std
 // Frame f of the fold: the top layer sinks through the bottom as f grows.
 Mesh cloth_frame(int n, std::size_t f, std::size_t frames) {
   const double t = 0.6 + 0.4 * double(f) / double(std::max<std::size_t>(1, frames - 1));
-  return folded_sheet(n, 0.3 * (1.2 - t), 0.4 * t);
+  return make_folded_sheet(n, 0.3 * (1.2 - t), 0.4 * t);
 }
 
 std::vector<std::uint64_t> keys_of(const std::vector<Contact>& contacts) {

@@ -58,3 +58,35 @@ Mesh make_grid(const Vec3& origin, const Vec3& e1, const Vec3& e2, int n1, int n
 }
 
 }  // namespace peelcd
+
+namespace peelcd {
+
+Mesh make_folded_sheet(int n, double fold, double sag) {
+  // u runs along the sheet: [0, 1/3] the bottom layer (z = 0, x from 0 to 1), [1/3, 2/3] a half
+  // circle of radius fold / 2 at x = 1 (the crease), [2/3, 1] the top layer back over the bottom
+  // (z = fold), lowered by a bump of depth `sag` centred over the bottom layer's middle.
+  const double r = fold / 2;
+  const int nu = 3 * n, nv = n;
+  const auto at = [&](double u, double y) {
+    if (u <= 1.0 / 3) return Vec3(3 * u, y, 0.0);
+    if (u < 2.0 / 3) {
+      const double a = M_PI * (3 * u - 1) - M_PI / 2;  // -pi/2 .. pi/2
+      return Vec3(1.0 + r * std::cos(a), y, r + r * std::sin(a));
+    }
+    const double x = 1.0 - (3 * u - 2);
+    const double d2 = (x - 0.5) * (x - 0.5) + (y - 0.5) * (y - 0.5);
+    return Vec3(x, y, fold - sag * std::exp(-d2 / 0.04));
+  };
+  Mesh m;
+  for (int j = 0; j <= nv; ++j)
+    for (int i = 0; i <= nu; ++i) m.vertices.push_back(at(double(i) / nu, double(j) / nv));
+  const auto id = [nu](int i, int j) { return std::uint32_t(j * (nu + 1) + i); };
+  for (int j = 0; j < nv; ++j)
+    for (int i = 0; i < nu; ++i) {
+      m.triangles.push_back({id(i, j), id(i + 1, j), id(i + 1, j + 1)});
+      m.triangles.push_back({id(i, j), id(i + 1, j + 1), id(i, j + 1)});
+    }
+  return m;
+}
+
+}  // namespace peelcd

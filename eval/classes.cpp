@@ -2,6 +2,7 @@
 
 #include "peelcd/core/id_map.h"
 #include "peelcd/core/narrow_phase.h"
+#include "peelcd/core/primitives.h"
 
 #include <cmath>
 #include <cstdio>
@@ -41,24 +42,6 @@ Mesh grid_surface(int nu, int nv, const std::function<Vec3(double, double)>& at)
       m.triangles.push_back({id(i, j), id(i + 1, j + 1), id(i, j + 1)});
     }
   return m;
-}
-
-Mesh folded_sheet_impl(int n, double fold, double sag) {
-  // u runs along the sheet: [0, 1/3] the bottom layer (z = 0, x from 0 to 1), [1/3, 2/3] a half
-  // circle of radius fold / 2 at x = 1 (the crease), [2/3, 1] the top layer back over the bottom
-  // (z = fold), lowered by a bump of depth `sag` centred over the bottom layer's middle.
-  const double r = fold / 2;
-  return grid_surface(3 * n, n, [=](double u, double v) {
-    const double y = v;
-    if (u <= 1.0 / 3) return Vec3(3 * u, y, 0.0);
-    if (u < 2.0 / 3) {
-      const double a = M_PI * (3 * u - 1) - M_PI / 2;  // -pi/2 .. pi/2
-      return Vec3(1.0 + r * std::cos(a), y, r + r * std::sin(a));
-    }
-    const double x = 1.0 - (3 * u - 2);
-    const double d2 = (x - 0.5) * (x - 0.5) + (y - 0.5) * (y - 0.5);
-    return Vec3(x, y, fold - sag * std::exp(-d2 / 0.04));
-  });
 }
 
 // A tube of radius `r` around the trefoil knot (x, y, z) = (sin t + 2 sin 2t, cos t - 2 cos 2t,
@@ -101,15 +84,13 @@ Object self_object(std::string name, Mesh mesh) {
 
 }  // namespace
 
-Mesh folded_sheet(int n, double fold, double sag) { return folded_sheet_impl(n, fold, sag); }
-
 std::vector<GeometryClass> self_classes() {
   std::vector<GeometryClass> out;
   Eigen::Affine3d tilt = Eigen::Affine3d::Identity();
   tilt.rotate(Eigen::AngleAxisd(0.3, Vec3(1, 2, 3).normalized()));
   out.push_back({"self: folded sheet",
                  "a sheet folded over itself, its top layer sagging through the bottom one (open, one object)",
-                 {self_object("cloth", moved(folded_sheet_impl(24, 0.1, 0.2), tilt))}});
+                 {self_object("cloth", moved(make_folded_sheet(24, 0.1, 0.2), tilt))}});
   out.push_back({"self: knotted tube",
                  "a closed tube tied in a trefoil, thick enough that its strands pass through each other",
                  {self_object("knot", moved(knotted_tube(120, 12, 0.75), tilt))}});
@@ -134,11 +115,11 @@ std::vector<GeometryClass> self_classes() {
     char name[64];
     std::snprintf(name, sizeof name, "self: folding sheet t=%.1f", t);
     out.push_back({name, "frame t of a sheet folding onto itself and sagging through (deforming over frames)",
-                   {self_object("cloth", moved(folded_sheet_impl(20, 0.3 * (1.2 - t), 0.4 * t), tilt))}});
+                   {self_object("cloth", moved(make_folded_sheet(20, 0.3 * (1.2 - t), 0.4 * t), tilt))}});
   }
   // Beside another object: the self pairs and the inter-object pairs of a frame together.
   out.push_back({"self: fold on a ball", "a folded sheet through itself lying on a ball it also crosses",
-                 {self_object("cloth", moved(folded_sheet_impl(20, 0.1, 0.2), tilt)),
+                 {self_object("cloth", moved(make_folded_sheet(20, 0.1, 0.2), tilt)),
                   object("ball", uv_sphere(tilt * Vec3(0.5, 0.5, -0.25), 0.3, 24, 12))}});
   return out;
 }

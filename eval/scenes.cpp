@@ -311,7 +311,7 @@ class FoldingCloth final : public Sequence {
     cloth.name = "cloth";
     cloth.self = true;
     cloth.rigid.reset();
-    cloth.mesh = folded_sheet(n_, 0.3 * (1.2 - t), 0.4 * t);
+    cloth.mesh = make_folded_sheet(n_, 0.3 * (1.2 - t), 0.4 * t);
     const double drop = 0.5 * std::max(0.0, 1.0 - 2.0 * t);  // on the ball from halfway
     for (Vec3& v : cloth.mesh.vertices) v.z() += drop;
     Object& ball = objects[1];

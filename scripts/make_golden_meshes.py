@@ -132,7 +132,7 @@ def torn_cloth():
 
 
 def folded_sheet(n, fold, sag):
-    """eval/classes.cpp folded_sheet(): a unit sheet folded over itself along x = 1, its top layer
+    """core/primitives.cpp make_folded_sheet(): a unit sheet folded over itself along x = 1, its top layer
     lowered by a bump `sag` deep (through the bottom layer where sag > fold)."""
     r = fold / 2
     nu, nv = 3 * n, n

@@ -328,7 +328,7 @@ if(NOT rc EQUAL 0 OR NOT rc2 EQUAL 0)
 endif()
 expect("sweep merge: overlapping shards" 2 "is in both" sweep merge ${WORK}/sweep_s1.csv ${WORK}/sweep_s1.csv --csv ${WORK}/sweep_bad.csv)
 expect("sweep: bad shard" 2 "expected K/N with 1 <= K <= N" sweep ${sweep_args} --shard 4/3)
-expect("golden compare: a shard" 0 "shard 2/5: 4 of 19 cases" golden compare --shard 2/5)
+expect("golden compare: a shard" 0 "shard 2/5: 4 of 21 cases" golden compare --shard 2/5)
 # Progress is for terminals only: with stderr a pipe (as here), nothing but messages.
 execute_process(COMMAND ${PEELCD} golden compare --shard 1/6 OUTPUT_VARIABLE out ERROR_VARIABLE err)
 execute_process(COMMAND ${PEELCD} detect ${scene} --quiet OUTPUT_VARIABLE out2 ERROR_VARIABLE err2)
@@ -358,7 +358,7 @@ expect("golden: unknown case" 2 "unknown case \"nonesuch\"" golden compare nones
 expect("golden: bad tier" 2 "unknown tier" golden compare boxes_crossing --tier fuzzy)
 
 # Dynamic scenes: a few frames of each; the exit status is non-zero on any false contact.
-expect("simulate help" 0 "test1, test2 or crowd" simulate --help)
+expect("simulate help" 0 "test1, test2, crowd" simulate --help)
 expect("simulate crowd" 0 "crowd: 2 frames.*false contacts over all frames: 0" simulate crowd --objects 12 --frames 2)
 expect("simulate crowd, bad count" 2 "objects" simulate crowd --objects 1)
 expect("simulate test1" 0 "summary \\(means per phase.*\\(d\\).*false contacts over all frames: 0"
@@ -406,7 +406,9 @@ validate("explain --json" explain.schema.json ${WORK}/explain.json ${WORK}/expla
 expect("explain: JSON on stdout" 0 "\"schema\": \"peelcd.explain/1\"" explain ${scene} --pair 0:351,1:1283 --json - --quiet)
 expect("explain: unknown object" 2 "--pair 'cat:1,dragon:2': no object named 'cat'" explain ${scene} --pair cat:1,dragon:2)
 expect("explain: triangle out of range" 2 "triangle 99999 is out of range" explain ${scene} --pair bunny:99999,dragon:2)
-expect("explain: same object" 2 "same object" explain ${scene} --pair bunny:1,bunny:2)
+expect("explain: same object, no self" 2 "which does not ask for self-collision" explain ${scene} --pair bunny:1,bunny:2)
+expect("explain: a triangle with itself" 2 "a triangle with itself is not a pair" explain ${scene} --pair bunny:1,bunny:1)
+expect("explain: a self pair" 0 "verdict:" explain ${scene} --self --pair bunny:1,bunny:200)
 expect("explain: --pair required" 2 "--pair is required" explain ${scene})
 expect("explain: page folder not empty" 2 "not an empty folder"
        explain ${scene} --paper --pair bunny:351,dragon:1283 --out ${WORK}/explain_page)

@@ -13,7 +13,7 @@
 namespace peelcd::bench {
 
 struct SelfSuite {
-  int n = 130;              // folded_sheet(n): 6 n^2 triangles (130: 101,400)
+  int n = 130;              // make_folded_sheet(n): 6 n^2 triangles (130: 101,400)
   std::size_t frames = 8;
   std::shared_ptr<ImageStage> stage;  // the frame API's image stage
 };

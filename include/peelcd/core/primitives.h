@@ -15,4 +15,9 @@ Mesh make_uv_sphere(const Vec3& center, double radius, int stacks, int slices);
 // Open grid spanning origin + s*e1 + t*e2, s, t in [0, 1]; n1 x n2 quads, 2 triangles each.
 Mesh make_grid(const Vec3& origin, const Vec3& e1, const Vec3& e2, int n1, int n2);
 
+// A unit sheet (6 n^2 triangles, n across) folded over itself along x = 1: its bottom layer at
+// z = 0 over [0, 1]^2, a half-circle crease, its top layer at z = `fold` lowered by a bump `sag`
+// deep over the bottom's middle (it passes through the bottom layer where sag > fold). Open.
+Mesh make_folded_sheet(int n, double fold, double sag);
+
 }  // namespace peelcd

@@ -36,11 +36,6 @@ std::vector<GeometryClass> geometry_classes(int grid_side = 10);
 // onto itself, and a folded sheet crossing a ball (self and inter-object pairs together).
 std::vector<GeometryClass> self_classes();
 
-// A unit sheet (6 n^2 triangles, n across) folded over itself along x = 1: its bottom layer at
-// z = 0, its top layer at z = `fold`, lowered by a bump `sag` deep over the bottom's middle (it
-// passes through the bottom where sag > fold).
-Mesh folded_sheet(int n, double fold, double sag);
-
 // The sum of the lengths of the intersection segments of `pairs` (pack_pair(triA, triB)) of
 // meshes `a` and `b`: the "intersection length" whose missed share docs/accuracy.md reports.
 double intersection_length(const Mesh& a, const Mesh& b, const std::vector<std::uint64_t>& pairs);

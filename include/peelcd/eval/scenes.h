@@ -59,7 +59,7 @@ std::unique_ptr<Sequence> make_crowd(std::size_t objects, std::size_t frames, bo
 std::unique_ptr<Sequence> make_crossing_spheres(int stacks, std::size_t frames, bool wave, bool rigid = true);
 
 // A cloth folding onto itself over a ball (self-collision; kinematic, not a physical
-// simulation): a sheet of 6 n^2 triangles folded over itself (folded_sheet(), eval/classes.h),
+// simulation): a sheet of 6 n^2 triangles folded over itself (make_folded_sheet(), core/primitives.h),
 // its top layer sagging more and more through its bottom layer, descends onto a rigid ball that
 // finally pokes through its bottom layer. The cloth is a deforming object with Object::self set
 // (new vertices every frame); two phases: (a) falling and folding, (b) on the ball.
