@@ -5,6 +5,38 @@
 
 namespace peelcd::cli {
 
+// A pair's relation when the contacts do not say it all (containment, unknown), and its volume
+// when asked for (with --check, against CGAL's exact volume).
+void print_relation(FILE* human, const PairResult& p, const std::vector<Object>& objects, const DetectOptions& opt,
+                    bool check) {
+  const std::string& na = objects[p.object_a].name;
+  const std::string& nb = objects[p.object_b].name;
+  if (p.relation == Relation::a_inside_b || p.relation == Relation::b_inside_a)
+    std::fprintf(human, "  inside: '%s' is inside '%s' (no surface contact; exact point-in-mesh test)%s%s\n",
+                 (p.relation == Relation::a_inside_b ? na : nb).c_str(), (p.relation == Relation::a_inside_b ? nb : na).c_str(),
+                 p.relation_note.empty() ? "" : ": ", p.relation_note.c_str());
+  else if (p.relation == Relation::unknown)
+    std::fprintf(human, "  relation unknown: %s\n", p.relation_note.c_str());
+  if (!opt.volume || p.object_a == p.object_b) return;
+  if (!p.volume.known) {
+    std::fprintf(human, "  volume unknown: %s\n", p.volume.reason.c_str());
+    return;
+  }
+  const Vec3& g = p.volume.gradient;
+  std::fprintf(human, "  volume %.6g +- %.2g (%dx%d rays per axis); moving '%s' along (%.3g, %.3g, %.3g) reduces it\n",
+               p.volume.volume, p.volume.error, p.volume.resolution, p.volume.resolution, na.c_str(), 0.0 - g.x(), 0.0 - g.y(),
+               0.0 - g.z());
+  if (!check) return;
+  try {
+    const double exact = exact_overlap_volume(objects[p.object_a].mesh, objects[p.object_b].mesh);
+    const double err = std::abs(p.volume.volume - exact);
+    std::fprintf(human, "  exact volume (CGAL corefinement): %.6g; error %.3g (%.3f%%), %s the estimate's +-%.2g\n", exact, err,
+                 exact > 0 ? 100.0 * err / exact : 0.0, err <= p.volume.error ? "within" : "OUTSIDE", p.volume.error);
+  } catch (const std::exception& e) {
+    std::fprintf(human, "  exact volume: not computed (%s)\n", e.what());
+  }
+}
+
 int run_detect(const DetectArgs& a) {
   if (!a.json_out.empty()) check_output_path(a.json_out, "peelcd detect: --json");
   const Progress progress;
@@ -75,7 +107,7 @@ int run_detect(const DetectArgs& a) {
     std::size_t colliding = 0, colliding_objects = 0;
     for (const PairResult& p : result.pairs) {
       colliding += p.colliding.size();
-      colliding_objects += p.colliding.empty() ? 0 : 1;
+      colliding_objects += p.is_collision() ? 1 : 0;
       if (p.exact_stage) {
         std::fprintf(human, "%s x %s: exact CPU path (predicted %.3f ms; image stage %.3f ms), %zu+%zu tris in the ROI, "
                     "%zu candidates, %zu colliding\n",
@@ -95,9 +127,10 @@ int run_detect(const DetectArgs& a) {
         std::fprintf(human, "  exact reference: %zu pairs; found %zu, missed %zu (miss ratio %.2f%%), false contacts %zu\n",
                     sc.exact, sc.found, sc.missed, 100.0 * sc.miss_ratio(), sc.false_contacts);
       }
+      print_relation(human, p, objects, opt, a.check);
     }
     std::fprintf(human, "%s: %zu colliding triangle pairs in %zu of %zu overlapping object pairs%s\n",
-                 colliding ? "collision" : "no collision", colliding, colliding_objects, result.pairs.size(),
+                 colliding_objects ? "collision" : "no collision", colliding, colliding_objects, result.pairs.size(),
                  colliding && !a.list ? " (--list prints them)" : "");
     if (a.list)
       for (const PairResult& p : result.pairs) {
@@ -138,7 +171,7 @@ int run_detect(const DetectArgs& a) {
   }
   if (a.status) {  // for scripts, as grep: 0 when something collides, 1 when nothing does
     bool any = false;
-    for (const PairResult& p : result.pairs) any = any || !p.colliding.empty();
+    for (const PairResult& p : result.pairs) any = any || p.is_collision();
     return any ? 0 : 1;
   }
   return 0;

@@ -59,6 +59,21 @@ int run_classes(const ClassesArgs& a) {
       std::fflush(stdout);
     }
   }
+  if (!a.only.empty()) return 0;
+  // Containment and volume: the relation against the construction's, the volume against CGAL's
+  // exact corefinement (docs/design.md).
+  DetectOptions volume;
+  volume.volume = true;
+  std::printf("\ncontainment and volume (default configuration with --volume; exact volume: CGAL corefinement)\n");
+  std::printf("%-28s %-11s %-11s %12s %12s %12s %10s %8s %9s\n", "class", "expected", "found", "volume", "+- estimate",
+              "exact", "error", "rel %", "ms");
+  for (const ContainmentClass& c : containment_classes()) {
+    const ContainmentRow r = measure_containment(*runner.detector, c, volume, a.repeat);
+    std::printf("%-28s %-11s %-11s %12.6g %12.2g %12.6g %10.2g %8.4f %9.2f%s\n", c.scene.name.c_str(), to_string(r.expected),
+                r.pair ? to_string(r.found) : "(no pair)", r.volume, r.error_bound, r.exact_volume, r.error(),
+                100.0 * r.relative_error(), r.median_ms, r.error() > r.error_bound ? "  ERROR ABOVE ITS ESTIMATE" : "");
+    std::fflush(stdout);
+  }
   return 0;
 }
 

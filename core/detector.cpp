@@ -686,6 +686,10 @@ void Detector::detect(const std::vector<const Object*>& object_ptrs, const Detec
     out.timings.cpu += ms_since(t0);
   }
   out.pairs.resize(used);
+  // Relations (containment where no contact) and, asked for, volumes.
+  t0 = Clock::now();
+  relate_pairs(out.pairs, [&](std::size_t i) -> const Mesh& { return objects[i].mesh; }, s.boxes, opt);
+  out.timings.cpu += ms_since(t0);
   out.timings.total = ms_since(t_total);
 }
 

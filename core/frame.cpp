@@ -139,3 +139,41 @@ std::string pair_path_reason(const PairResult& p, const DetectOptions& o) {
 }
 
 }  // namespace peelcd
+
+namespace peelcd {
+
+void relate_pairs(std::vector<PairResult>& pairs, const std::function<const Mesh&(std::size_t)>& mesh_of,
+                  const std::vector<Aabb>& boxes, const DetectOptions& options) {
+  const int n = options.resolution > 0 ? options.resolution : kVolumeResolution;
+  for (PairResult& p : pairs) {
+    p.relation_note.clear();
+    p.volume = VolumeEstimate{};
+    if (p.object_a == p.object_b) {  // self: from the contacts alone
+      p.relation = Relation::disjoint;
+      for (const Contact& c : p.colliding)
+        p.relation = c.kind == ContactKind::crossing ? Relation::crossing
+                     : p.relation == Relation::crossing ? Relation::crossing : Relation::touching;
+      continue;
+    }
+    const Aabb& ba = boxes[p.object_a];
+    const Aabb& bb = boxes[p.object_b];
+    const bool within = !ba.empty() && !bb.empty() &&
+                        (((ba.lo.array() >= bb.lo.array()).all() && (ba.hi.array() <= bb.hi.array()).all()) ||
+                         ((bb.lo.array() >= ba.lo.array()).all() && (bb.hi.array() <= ba.hi.array()).all()));
+    if (!p.colliding.empty() || !within) {  // from the contacts: no mesh read
+      static const Mesh none;
+      p.relation = p.colliding.empty() ? Relation::disjoint : relate(none, none, ba, bb, p.colliding, p.relation_note);
+    } else {
+      p.relation = relate(mesh_of(p.object_a), mesh_of(p.object_b), ba, bb, p.colliding, p.relation_note);
+    }
+    if (options.volume) {
+      if (p.relation == Relation::disjoint) {  // no overlap: nothing to integrate, 0 if both are closed
+        p.volume = overlap_volume(mesh_of(p.object_a), mesh_of(p.object_b), Aabb{}, n);
+      } else {
+        p.volume = overlap_volume(mesh_of(p.object_a), mesh_of(p.object_b), p.roi, n);
+      }
+    }
+  }
+}
+
+}  // namespace peelcd

@@ -131,6 +131,12 @@ const std::vector<OptionSpec> kTable = {
      K::choice, 0, 0, "", "index,position", "adjacency", kRecordedWhenSet,
      [](const DetectOptions& o) { return OptionValue(std::string(to_string(o.self_adjacency))); },
      [](DetectOptions& o, const OptionValue& v) { o.self_adjacency = *parse_self_adjacency(word(v)); }},
+    {"volume", "", "--volume",
+     "The intersection volume of every pair of closed objects whose boxes overlap, with its error estimate and "
+     "the direction that reduces it (rays over the overlap box; an open or inside-out object gets none, and why)",
+     K::boolean, 0, 0, "must be true or false", "", "", kRecordedWhenSet,
+     [](const DetectOptions& o) { return OptionValue(o.volume); },
+     [](DetectOptions& o, const OptionValue& v) { o.volume = std::get<bool>(v); }},
 };
 
 }  // namespace

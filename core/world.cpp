@@ -10,6 +10,7 @@
 #include "peelcd/core/worker_pool.h"
 
 #include <algorithm>
+#include <map>
 #include <atomic>
 #include <chrono>
 #include <stdexcept>
@@ -172,6 +173,8 @@ struct World::Impl {
   std::vector<std::uint64_t> candidates;
   std::vector<std::size_t> first_task;  // pair p's tasks: [first_task[p], first_task[p + 1])
   std::vector<char> to_image;           // pair p goes to the image stage
+  std::vector<Aabb> body_boxes;         // per BodyId, this frame's world box
+  std::map<std::size_t, Mesh> world_meshes;  // large rigid bodies' world meshes a relation needed
   std::unique_ptr<WorkerPool> pool;
 
   Body& body(BodyId id, const char* what) {
@@ -597,6 +600,27 @@ void World::Impl::collide(const DetectOptions& opt, FrameResult& out) {
       candidates.insert(candidates.end(), tasks[k].candidates.begin(), tasks[k].candidates.end());
     image_pair(bodies[ids[pairs[p].first]], bodies[ids[pairs[p].second]], candidates, opt, out.pairs[p], out);
   }
+  // Relations (containment where no contact) and, asked for, volumes: world meshes made only
+  // for the pairs that need them.
+  t0 = Clock::now();
+  body_boxes.assign(bodies.size(), Aabb{});
+  for (std::size_t i = 0; i < ids.size(); ++i) body_boxes[ids[i]] = boxes[i];
+  world_meshes.clear();
+  relate_pairs(
+      out.pairs,
+      [&](std::size_t id) -> const Mesh& {
+        const Body& b = bodies[id];
+        if (const Mesh* m = b.world_mesh()) return *m;
+        auto it = world_meshes.find(id);
+        if (it == world_meshes.end()) {
+          Mesh m = *b.shape;
+          for (Vec3& v : m.vertices) v = b.pose * v;
+          it = world_meshes.emplace(id, std::move(m)).first;
+        }
+        return it->second;
+      },
+      body_boxes, opt);
+  out.timings.cpu += ms_since(t0);
   out.renderer = stage->renderer();
   out.timings.total = ms_since(t_total);
 }

@@ -68,8 +68,8 @@ Mesh knotted_tube(int along, int around, double r) {
   const auto id = [&](int i, int k) { return std::uint32_t((i % along) * around + (k % around)); };
   for (int i = 0; i < along; ++i)
     for (int k = 0; k < around; ++k) {
-      m.triangles.push_back({id(i, k), id(i + 1, k), id(i + 1, k + 1)});
-      m.triangles.push_back({id(i, k), id(i + 1, k + 1), id(i, k + 1)});
+      m.triangles.push_back({id(i, k), id(i + 1, k + 1), id(i + 1, k)});  // outward
+      m.triangles.push_back({id(i, k), id(i, k + 1), id(i + 1, k + 1)});
     }
   return m;
 }
@@ -126,6 +126,31 @@ std::vector<GeometryClass> self_classes() {
 
 namespace {
 }  // namespace
+
+std::vector<ContainmentClass> containment_classes() {
+  std::vector<ContainmentClass> out;
+  const auto two = [](const char* name, const char* what, Mesh a, Mesh b, Relation r) {
+    ContainmentClass c;
+    c.scene = {name, what, {object("a", std::move(a)), object("b", std::move(b))}};
+    c.expected = r;
+    return c;
+  };
+  out.push_back(two("nested spheres", "a ball wholly inside a larger one, off centre: no surface contact",
+                    uv_sphere(Vec3(0.2, 0.1, 0.0), 0.5, 24, 12), uv_sphere(Vec3(0, 0, 0), 1.0, 48, 24),
+                    Relation::a_inside_b));
+  out.push_back(two("inside a concave mesh", "a small ball inside a knotted tube (concave, genus 1), the tube as A",
+                    knotted_tube(120, 16, 0.5), uv_sphere(Vec3(0, -1, 0), 0.25, 24, 12), Relation::b_inside_a));
+  out.push_back(two("deep sphere overlap", "two spheres whose overlap is about half the smaller one",
+                    uv_sphere(Vec3(0, 0, 0), 1.0, 48, 24), uv_sphere(Vec3(0.9, 0.2, 0.1), 0.8, 48, 24), Relation::crossing));
+  out.push_back(two("boxes, known overlap", "two boxes overlapping in a 0.5 x 0.5 x 0.4 box (volume 0.1)",
+                    box_mesh(Vec3(0, 0, 0), Vec3(1, 1, 1)), box_mesh(Vec3(0.5, 0.25, -1), Vec3(2, 0.75, 0.4)),
+                    Relation::crossing));
+  out.push_back(two("touching boxes, volume 0", "two unit boxes sharing a face: touching, no overlap volume",
+                    box_mesh(Vec3(0, 0, 0), Vec3(1, 1, 1)), box_mesh(Vec3(1, 0, 0), Vec3(2, 1, 1)), Relation::touching));
+  out.push_back(two("disjoint boxes 2e-4 apart", "two unit boxes 2e-4 apart: no pair, nothing inside",
+                    box_mesh(Vec3(0, 0, 0), Vec3(1, 1, 1)), box_mesh(Vec3(1.0002, 0, 0), Vec3(2, 1, 1)), Relation::disjoint));
+  return out;
+}
 
 Mesh box_mesh(const Vec3& lo, const Vec3& hi) {
   Mesh m;
@@ -311,6 +336,37 @@ ClassRow measure_class(Detector& detector, const GeometryClass& g, const std::st
       row.exact_length += intersection_length(a, b, exact);
       row.missed_length += intersection_length(a, b, missed);
     }
+  return row;
+}
+
+}  // namespace peelcd
+
+namespace peelcd {
+
+ContainmentRow measure_containment(Detector& detector, const ContainmentClass& c, const DetectOptions& options, int repeat) {
+  ContainmentRow row;
+  row.class_name = c.scene.name;
+  row.expected = c.expected;
+  FrameResult result;
+  std::vector<double> ms;
+  for (int i = 0; i < std::max(1, repeat); ++i) {
+    detector.detect(c.scene.objects, options, result);
+    ms.push_back(result.timings.total);
+  }
+  std::sort(ms.begin(), ms.end());
+  row.median_ms = ms[ms.size() / 2];
+  const Mesh& a = c.scene.objects[0].mesh;
+  const Mesh& b = c.scene.objects[1].mesh;
+  row.smaller_volume = std::min(analyse_shape(a).signed_volume, analyse_shape(b).signed_volume);
+  for (const PairResult& p : result.pairs) {
+    if (p.object_a != 0 || p.object_b != 1) continue;
+    row.pair = true;
+    row.found = p.relation;
+    row.volume_known = p.volume.known;
+    row.volume = p.volume.volume;
+    row.error_bound = p.volume.error;
+  }
+  if (options.volume && row.pair) row.exact_volume = exact_overlap_volume(a, b);
   return row;
 }
 

@@ -18,7 +18,7 @@ nlohmann::json to_json(const FrameResult& r, const std::vector<Object>& objects,
                        const std::vector<Score>* check) {
   using nlohmann::json;
   json pairs = json::array();
-  std::size_t total = 0;
+  std::size_t total = 0, colliding_objects = 0;
   Score sum;
   for (std::size_t i = 0; i < r.pairs.size(); ++i) {
     const PairResult& p = r.pairs[i];
@@ -27,6 +27,7 @@ nlohmann::json to_json(const FrameResult& r, const std::vector<Object>& objects,
       colliding.push_back({{"tri_a", c.tri_a}, {"tri_b", c.tri_b}, {"kind", to_string(c.kind)},
                            {"segment", {vec(c.p), vec(c.q)}}});
     total += p.colliding.size();
+    colliding_objects += p.is_collision() ? 1 : 0;
     pairs.push_back({{"a", objects[p.object_a].name},
                      {"object_a", p.object_a},
                      {"object_b", p.object_b},
@@ -48,7 +49,18 @@ nlohmann::json to_json(const FrameResult& r, const std::vector<Object>& objects,
                      {"passes", p.passes},
                      {"pcs_count", p.pcs_count},
                      {"candidates", p.candidates},
-                     {"colliding", colliding}});
+                     {"colliding", colliding},
+                     {"relation", to_string(p.relation)},
+                     {"is_collision", p.is_collision()}});
+    if (!p.relation_note.empty()) pairs.back()["relation_note"] = p.relation_note;
+    if (o.volume && p.object_a != p.object_b) {
+      if (p.volume.known)
+        pairs.back()["volume"] = {{"volume", p.volume.volume}, {"error", p.volume.error},
+                                  {"gradient", vec(p.volume.gradient)}, {"resolution", p.volume.resolution},
+                                  {"method", p.volume.method}};
+      else
+        pairs.back()["volume"] = {{"unknown", p.volume.reason}};
+    }
     if (check) {
       const Score& s = check->at(i);
       pairs.back()["check"] = score_json(s);
@@ -61,6 +73,7 @@ nlohmann::json to_json(const FrameResult& r, const std::vector<Object>& objects,
           {"options", options_to_json(o)},
           {"pairs", pairs},
           {"colliding_pairs", total},
+          {"colliding_objects", colliding_objects},
           {"gl_passes", r.gl_passes},
           {"rois_exact", r.rois_exact},
           {"views_exhaustive", r.views_exhaustive},

@@ -3,9 +3,11 @@
 #include "peelcd/core/aabb.h"
 #include "peelcd/core/id_map.h"
 #include "peelcd/core/narrow_phase.h"
+#include "peelcd/core/relation.h"
 #include "peelcd/core/self.h"
 #include "peelcd/core/view.h"
 
+#include <functional>
 #include <optional>
 #include <string>
 #include <vector>
@@ -94,7 +96,13 @@ struct DetectOptions {
   // itself alone with Object::self. Off by default: it costs a scan of the object's triangles.
   bool self = false;
   SelfAdjacency self_adjacency = SelfAdjacency::index;  // which triangles of one object are adjacent
+  // The intersection volume of each pair of closed objects whose boxes overlap
+  // (PairResult::volume; peelcd/core/relation.h), with resolution x resolution rays per axis
+  // (kVolumeResolution when resolution is 0). Off by default.
+  bool volume = false;
 };
+
+constexpr int kVolumeResolution = 256;
 
 constexpr double kConservativeEdgeTexels = 2.0;
 constexpr double kPointEdgeTexels = 12.0;
@@ -153,7 +161,20 @@ struct PairResult {
   // The stage router's predictions for this ROI, milliseconds (0 when it did not route).
   double predicted_image_ms = 0.0, predicted_exact_ms = 0.0;
   std::vector<Contact> colliding;          // sorted by (tri_a, tri_b)
+  // How the two objects relate (peelcd/core/relation.h): from the contacts, or, with none,
+  // containment (a closed object wholly inside the other: a collision with no contact).
+  // Self pairs: crossing, touching or disjoint. `relation_note`: why unknown, or a detail.
+  Relation relation = Relation::disjoint;
+  std::string relation_note;
+  VolumeEstimate volume;  // DetectOptions::volume: the intersection volume (volume.known)
+  // A collision: a contact, or one object inside the other.
+  bool is_collision() const { return !colliding.empty() || colliding_relation(relation); }
 };
+
+// Fills each pair's relation (and with options.volume its volume) from its contacts and the
+// objects' meshes: `mesh_of(i)` gives object i's world mesh (called only when needed).
+void relate_pairs(std::vector<PairResult>& pairs, const std::function<const Mesh&(std::size_t)>& mesh_of,
+                  const std::vector<Aabb>& boxes, const DetectOptions& options);
 
 // Which path tested a pair, in one word: "exact" (the exact CPU path), "image" (the image
 // stage's PCS), "exhaustive" (every view fell back to box-overlap tests: no layer, no PCS) or

@@ -5,6 +5,7 @@
 // its exact contacts are what the construction says (axis-aligned faces, coincident surfaces,
 // zero-area triangles, features thinner than a texel).
 #include "peelcd/core/mesh.h"
+#include "peelcd/core/relation.h"
 
 #include <string>
 #include <vector>
@@ -36,6 +37,15 @@ std::vector<GeometryClass> geometry_classes(int grid_side = 10);
 // onto itself, and a folded sheet crossing a ball (self and inter-object pairs together).
 std::vector<GeometryClass> self_classes();
 
+// Containment and volume classes (docs/design.md, "Containment and intersection volume"): two
+// closed objects each, the relation their construction gives and, where it has one in closed
+// form, the overlap volume (else CGAL's exact volume is the reference).
+struct ContainmentClass {
+  GeometryClass scene;
+  Relation expected = Relation::disjoint;  // of the pair (object 0, object 1); disjoint: no pair
+};
+std::vector<ContainmentClass> containment_classes();
+
 // The sum of the lengths of the intersection segments of `pairs` (pack_pair(triA, triB)) of
 // meshes `a` and `b`: the "intersection length" whose missed share docs/accuracy.md reports.
 double intersection_length(const Mesh& a, const Mesh& b, const std::vector<std::uint64_t>& pairs);
@@ -57,6 +67,21 @@ struct ClassRow {
   double miss_ratio() const { return exact ? double(missed) / double(exact) : 0.0; }
   double missed_length_share() const { return exact_length > 0 ? missed_length / exact_length : 0.0; }
 };
+
+// One containment class measured: the relation found against the expected one, and (options.volume)
+// the volume estimate against CGAL's exact volume.
+struct ContainmentRow {
+  std::string class_name;
+  Relation expected = Relation::disjoint, found = Relation::disjoint;
+  bool pair = false;               // the boxes overlap: the frame has the pair
+  bool volume_known = false;
+  double volume = 0.0, error_bound = 0.0, exact_volume = 0.0;
+  double error() const { return std::abs(volume - exact_volume); }
+  double relative_error() const { return exact_volume > 0 ? error() / exact_volume : error(); }
+  double smaller_volume = 0.0;     // the smaller object's volume (how deep the overlap is)
+  double median_ms = 0.0;
+};
+ContainmentRow measure_containment(Detector& detector, const ContainmentClass& c, const DetectOptions& options, int repeat);
 
 // Runs `options` on `g` with `detector` `repeat` times and scores the last frame.
 ClassRow measure_class(Detector& detector, const GeometryClass& g, const std::string& config,

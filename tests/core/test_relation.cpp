@@ -1,0 +1,103 @@
+// Containment and intersection volume (peelcd/core/relation.h): the shape of a mesh (closed,
+// oriented, inside out), the exact point-in-mesh test, the relation of two objects, and the
+// image-space volume against CGAL's exact corefinement.
+#include "peelcd/core/primitives.h"
+#include "peelcd/core/relation.h"
+
+#include <catch2/catch.hpp>
+
+using namespace peelcd;
+
+namespace {
+Mesh inverted(Mesh m) {
+  for (Tri& t : m.triangles) std::swap(t[1], t[2]);
+  return m;
+}
+}  // namespace
+
+TEST_CASE("a mesh's shape: closed, oriented, outward; open and inside-out named", "[relation]") {
+  const Mesh box = make_box(Vec3(0, 0, 0), Vec3(1, 2, 3));
+  const MeshShape s = analyse_shape(box);
+  CHECK(s.closed);
+  CHECK(s.oriented);
+  CHECK(s.signed_volume == Approx(6.0));
+  CHECK(s.problem().empty());
+  CHECK(s.component_vertex.size() == 1);
+  CHECK_THAT(analyse_shape(inverted(box)).problem(), Catch::Contains("inside out"));
+  Mesh open = box;
+  open.triangles.pop_back();
+  CHECK_THAT(analyse_shape(open).problem(), Catch::Contains("open: 3 boundary edges"));
+  Mesh flipped = box;
+  std::swap(flipped.triangles[0][1], flipped.triangles[0][2]);
+  CHECK_THAT(analyse_shape(flipped).problem(), Catch::Contains("inconsistently oriented"));
+  const Mesh sphere = make_uv_sphere(Vec3(0, 0, 0), 1.0, 12, 24);
+  CHECK(analyse_shape(sphere).problem().empty());
+}
+
+TEST_CASE("point in mesh: exact, also on a grid of points through vertices and edges", "[relation]") {
+  const Mesh box = make_box(Vec3(0, 0, 0), Vec3(1, 1, 1));
+  CHECK(point_inside(box, Vec3(0.5, 0.5, 0.5)));
+  CHECK_FALSE(point_inside(box, Vec3(1.5, 0.5, 0.5)));
+  CHECK_FALSE(point_inside(box, Vec3(0.5, 0.5, -0.5)));
+  // Points under the box's diagonal edges and corners (rays through shared edges and vertices).
+  CHECK(point_inside(box, Vec3(0.5, 0.5, 0.25)));
+  CHECK(point_inside(box, Vec3(0.25, 0.25, 0.1)));
+  CHECK_FALSE(point_inside(box, Vec3(0.0 - 1e-9, 0.5, 0.5)));
+  const Mesh sphere = make_uv_sphere(Vec3(0, 0, 0), 1.0, 12, 24);
+  int wrong = 0;
+  for (int i = -6; i <= 6; ++i)
+    for (int j = -6; j <= 6; ++j)
+      for (int k = -6; k <= 6; ++k) {
+        const Vec3 p(i / 5.0, j / 5.0, k / 5.0);
+        if (std::abs(p.norm() - 1.0) < 0.05) continue;  // near the faceted surface
+        wrong += point_inside(sphere, p) != (p.norm() < 1.0);
+      }
+  CHECK(wrong == 0);
+}
+
+TEST_CASE("relation: crossing, touching, inside either way, disjoint, unknown for an open container", "[relation]") {
+  const Mesh big = make_uv_sphere(Vec3(0, 0, 0), 1.0, 12, 24);
+  const Mesh small = make_uv_sphere(Vec3(0.1, 0.2, 0.0), 0.3, 8, 16);
+  std::string note;
+  CHECK(relate(small, big, {}, note) == Relation::a_inside_b);
+  CHECK(relate(big, small, {}, note) == Relation::b_inside_a);
+  const Mesh far = make_uv_sphere(Vec3(0.5, 0.5, 0.5), 0.1, 8, 16);  // box within, ball outside? inside
+  CHECK(relate(far, big, {}, note) == Relation::a_inside_b);
+  const Mesh corner = make_box(Vec3(0.8, 0.8, 0.8), Vec3(0.9, 0.9, 0.9));  // in the box, outside the ball
+  CHECK(relate(corner, big, {}, note) == Relation::disjoint);
+  Mesh open = big;
+  open.triangles.resize(open.triangles.size() / 2);
+  CHECK(relate(small, open, {}, note) == Relation::unknown);
+  CHECK_THAT(note, Catch::Contains("B is open"));
+  Contact touch;
+  touch.kind = ContactKind::touching;
+  CHECK(relate(small, big, {touch}, note) == Relation::touching);
+  Contact cross;
+  CHECK(relate(small, big, {touch, cross}, note) == Relation::crossing);
+}
+
+TEST_CASE("volume: boxes exact, spheres within the stated error of CGAL's exact volume", "[relation][volume]") {
+  const Mesh a = make_box(Vec3(0, 0, 0), Vec3(1, 1, 1));
+  const Mesh b = make_box(Vec3(0.5, 0.25, -1), Vec3(2, 0.75, 0.4));
+  const Aabb roi = intersection(bounds(a), bounds(b));
+  const VolumeEstimate e = overlap_volume(a, b, roi, 64);
+  REQUIRE(e.known);
+  CHECK(e.volume == Approx(0.5 * 0.5 * 0.4).epsilon(1e-12));
+  CHECK(e.error == Approx(0.0).margin(1e-12));
+  // The overlap grows moving A along +x (B lies that way): the gradient's x is positive.
+  CHECK(e.gradient.x() == Approx(0.5 * 0.4).epsilon(1e-9));
+  CHECK(exact_overlap_volume(a, b) == Approx(0.1).epsilon(1e-12));
+
+  const Mesh s1 = make_uv_sphere(Vec3(0, 0, 0), 1.0, 24, 48);
+  const Mesh s2 = make_uv_sphere(Vec3(0.9, 0.2, 0.1), 0.8, 24, 48);
+  const VolumeEstimate v = overlap_volume(s1, s2, intersection(bounds(s1), bounds(s2)), 256);
+  const double exact = exact_overlap_volume(s1, s2);
+  INFO("estimate " << v.volume << " +- " << v.error << ", exact " << exact);
+  CHECK(std::abs(v.volume - exact) <= v.error);
+  CHECK(std::abs(v.volume - exact) <= 0.01 * exact);
+  CHECK(v.gradient.x() > 0);  // moving A (the left sphere) towards B (+x) grows the overlap
+  // Open or inside-out: no number, the reason.
+  const VolumeEstimate bad = overlap_volume(inverted(s1), s2, intersection(bounds(s1), bounds(s2)), 64);
+  CHECK_FALSE(bad.known);
+  CHECK_THAT(bad.reason, Catch::Contains("A is inside out"));
+}
