@@ -3,6 +3,7 @@
 #include "peelcd/version.h"
 #include "peelcd/bench/self_bench.h"
 #include "peelcd/bench/suite.h"
+#include "peelcd/bench/volume_bench.h"
 #include "peelcd/core/cpu_stage.h"
 #include "peelcd/core/broad_phase.h"
 #include "peelcd/core/aabb.h"
@@ -24,6 +25,13 @@ struct BenchArgs {
 
 int run_bench(const BenchArgs& a) {
   if (!a.csv.empty()) check_output_path(a.csv, "peelcd bench: --csv");
+  if (a.scene == "volume") {  // intersection volume: its own table (peelcd/bench/volume_bench.h)
+    bench::VolumeSuite v;
+    v.frames = a.frames;
+    const std::string csv = bench::run_volume_suite(v);
+    if (!a.csv.empty()) write_output(a.csv, csv);
+    return 0;
+  }
   if (a.scene == "cloth-self") {  // self-collision: its own table (peelcd/bench/self_bench.h)
     if (a.threads) setenv("LP_NUM_THREADS", std::to_string(a.threads == 1 ? 0 : a.threads).c_str(), 1);
     bench::SelfSuite self;
@@ -93,7 +101,8 @@ std::vector<Command> add_bench_commands(CLI::App& app) {
                "the same frames; print medians, miss ratios and ratios");
   benchmark->add_option("scene", be.scene, "test1, test2, crowd, spheres (two crossing rigid spheres), spheres-wave "
                                            "(the same, a wave over their vertices every frame), cloth-self (self-collision of a folding "
-                                           "cloth, one thread) or a scene file")
+                                           "cloth, one thread), volume (the intersection volume of two 99k-triangle "
+                                           "spheres against CGAL) or a scene file")
       ->capture_default_str();
   benchmark->add_option("--stacks", be.stacks, "spheres: latitude bands (4 s (s - 1) triangles a sphere: 288 -> 330,624, "
                                                "570 -> 1,297,320)")
