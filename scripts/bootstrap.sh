@@ -17,6 +17,7 @@ packages=(
   catch2                                           # tests (Catch2 v2)
   python3 python3-jsonschema                       # tests: dump meta.json against its JSON Schema
   python3-matplotlib                               # sweep --plot, scripts/plot_*.py
+  python3-dev pybind11-dev python3-numpy python3-pytest   # the Python module (import peelcd) and its tests
 )
 missing=()
 for p in "${packages[@]}"; do
@@ -32,3 +33,10 @@ fi
 
 cmake -S . -B build -DCMAKE_BUILD_TYPE=Release
 cmake --build build -j "$(nproc)"
+# The Python module into Debian's interpreter's path (/usr/local/lib/python3.X/dist-packages):
+# /usr/bin/python3 -c "import peelcd" works from anywhere (docs/python.md).
+if [ -f build/python/peelcd/__init__.py ]; then
+  sudo_cmd=""
+  [ "$(id -u)" -ne 0 ] && sudo_cmd="sudo"
+  $sudo_cmd cmake --install build --component python --prefix /usr/local
+fi

@@ -1,0 +1,370 @@
+// peelcd's Python module (import peelcd): meshes from NumPy arrays or files, persistent worlds of
+// rigid and deforming bodies, one-shot frames, results as NumPy arrays (docs/python.md).
+// Options are the scene files' keys with the same checks (peelcd/core/options.h); errors are
+// Python exceptions carrying the library's messages (ValueError for bad input, RuntimeError for
+// a backend that cannot start); the GIL is released while a frame runs.
+#include "peelcd/backends.h"
+#include "peelcd/core/detector.h"
+#include "peelcd/core/options.h"
+#include "peelcd/core/reference.h"
+#include "peelcd/core/world.h"
+#include "peelcd/eval/classes.h"
+#include "peelcd/io/error.h"
+#include "peelcd/io/mesh_io.h"
+#include "peelcd/io/scene.h"
+#include "peelcd/version.h"
+
+#include <pybind11/numpy.h>
+#include <pybind11/pybind11.h>
+#include <pybind11/stl.h>
+
+#include <cmath>
+#include <cstring>
+
+namespace py = pybind11;
+using namespace peelcd;
+
+namespace {
+
+// (n, 3) float64, C-contiguous: copied with one memcpy into the library's vertices. Anything
+// else is refused with what it is (no silent conversion).
+std::vector<Vec3> vertices_from(const py::handle& obj, const char* what) {
+  if (!py::isinstance<py::array>(obj)) throw py::type_error(std::string(what) + ": expected a numpy array of shape (n, 3)");
+  const py::array arr = py::reinterpret_borrow<py::array>(obj);
+  if (!arr.dtype().is(py::dtype::of<double>()))
+    throw py::type_error(std::string(what) + ": dtype must be float64, got " + std::string(py::str(arr.dtype())) +
+                         " (use V.astype(np.float64))");
+  if (arr.ndim() != 2 || arr.shape(1) != 3) {
+    std::string shape;
+    for (py::ssize_t i = 0; i < arr.ndim(); ++i) shape += (i ? ", " : "") + std::to_string(arr.shape(i));
+    throw py::value_error(std::string(what) + ": shape must be (n, 3), got (" + shape + ")");
+  }
+  if (!(arr.flags() & py::array::c_style))
+    throw py::value_error(std::string(what) + ": must be C-contiguous (use np.ascontiguousarray(V))");
+  std::vector<Vec3> out(std::size_t(arr.shape(0)));
+  if (!out.empty()) std::memcpy(static_cast<void*>(out.data()), arr.data(), out.size() * sizeof(Vec3));
+  for (std::size_t i = 0; i < out.size(); ++i)
+    if (!out[i].allFinite())
+      throw py::value_error(std::string(what) + ": vertex " + std::to_string(i) + " has a NaN or infinite coordinate");
+  return out;
+}
+
+// (m, 3) of any integer dtype, C-contiguous; indices checked against `vertex_count`.
+std::vector<Tri> triangles_from(const py::handle& obj, std::size_t vertex_count, const char* what) {
+  if (!py::isinstance<py::array>(obj)) throw py::type_error(std::string(what) + ": expected a numpy array of shape (m, 3)");
+  const py::array arr = py::reinterpret_borrow<py::array>(obj);
+  if (arr.dtype().kind() != 'i' && arr.dtype().kind() != 'u')
+    throw py::type_error(std::string(what) + ": dtype must be an integer type, got " + std::string(py::str(arr.dtype())));
+  if (arr.ndim() != 2 || arr.shape(1) != 3) throw py::value_error(std::string(what) + ": shape must be (m, 3)");
+  if (!(arr.flags() & py::array::c_style))
+    throw py::value_error(std::string(what) + ": must be C-contiguous (use np.ascontiguousarray(F))");
+  const py::array_t<std::int64_t> as64 = py::array_t<std::int64_t, py::array::c_style | py::array::forcecast>::ensure(arr);
+  const std::int64_t* p = as64.data();
+  std::vector<Tri> out(std::size_t(arr.shape(0)));
+  for (std::size_t t = 0; t < out.size(); ++t)
+    for (int c = 0; c < 3; ++c) {
+      const std::int64_t v = p[3 * t + c];
+      if (v < 0 || std::uint64_t(v) >= vertex_count)
+        throw py::value_error(std::string(what) + ": triangle " + std::to_string(t) + " uses vertex " + std::to_string(v) +
+                              " but there are " + std::to_string(vertex_count) + " vertices");
+      out[t][c] = std::uint32_t(v);
+    }
+  return out;
+}
+
+std::shared_ptr<const Mesh> mesh_from_arrays(const py::handle& V, const py::handle& F) {
+  Mesh m;
+  m.vertices = vertices_from(V, "V");
+  m.triangles = triangles_from(F, m.vertices.size(), "F");
+  if (m.triangles.empty()) throw py::value_error("F: a mesh needs at least one triangle");
+  return std::make_shared<const Mesh>(std::move(m));
+}
+
+Eigen::Affine3d pose_from(const py::handle& obj) {
+  if (obj.is_none()) return Eigen::Affine3d::Identity();
+  const py::array_t<double, py::array::c_style | py::array::forcecast> a = py::array_t<double, py::array::c_style | py::array::forcecast>::ensure(obj);
+  if (!a || a.ndim() != 2 || a.shape(0) != 4 || a.shape(1) != 4) throw py::value_error("pose: expected a 4x4 matrix");
+  Eigen::Matrix4d m;
+  for (int r = 0; r < 4; ++r)
+    for (int c = 0; c < 4; ++c) m(r, c) = a.at(r, c);
+  if (!m.allFinite()) throw py::value_error("pose: has a NaN or infinite entry");
+  if (m.row(3) != Eigen::RowVector4d(0, 0, 0, 1)) throw py::value_error("pose: the last row must be [0, 0, 0, 1]");
+  Eigen::Affine3d pose;
+  pose.matrix() = m;
+  if (const std::string problem = pose_problem(pose); !problem.empty()) throw py::value_error("pose: " + problem);
+  return pose;
+}
+
+// Keyword options, named as in scene files (theta, stage, self, volume, ...), checked as there.
+DetectOptions options_from(const py::kwargs& kwargs) {
+  DetectOptions o;
+  for (const auto& [k, v] : kwargs) {
+    const std::string key = py::str(k);
+    const OptionSpec* spec = find_option(key);
+    if (!spec) throw py::type_error("unknown option '" + key + "' (the scene files' keys: docs/python.md)");
+    OptionValue value;
+    if (py::isinstance<py::bool_>(v)) value = v.cast<bool>();
+    else if (py::isinstance<py::int_>(v) || py::isinstance<py::float_>(v)) value = v.cast<double>();
+    else if (py::isinstance<py::str>(v)) value = v.cast<std::string>();
+    else throw py::type_error("option '" + key + "': expected a bool, a number or a string");
+    try {
+      set_option(o, *spec, value, "option '" + key + "'");
+    } catch (const std::invalid_argument& e) {
+      throw py::value_error(e.what());
+    }
+  }
+  return o;
+}
+
+std::shared_ptr<ImageStage> stage_for(const std::string& backend) {
+  try {
+    return make_image_stage(backend);
+  } catch (const std::invalid_argument& e) {
+    throw py::value_error(e.what());
+  } catch (const std::exception& e) {
+    throw std::runtime_error(std::string("peelcd: backend '") + backend + "' could not start: " + e.what());
+  }
+}
+
+// One pair of a result, as NumPy arrays.
+py::dict pair_dict(const PairResult& p) {
+  const std::size_t k = p.colliding.size();
+  py::array_t<std::uint32_t> tris({py::ssize_t(k), py::ssize_t(2)});
+  py::array_t<double> seg({py::ssize_t(k), py::ssize_t(2), py::ssize_t(3)});
+  py::list kinds;
+  auto t = tris.mutable_unchecked<2>();
+  auto s = seg.mutable_unchecked<3>();
+  for (std::size_t i = 0; i < k; ++i) {
+    const Contact& c = p.colliding[i];
+    t(i, 0) = c.tri_a;
+    t(i, 1) = c.tri_b;
+    for (int d = 0; d < 3; ++d) {
+      s(i, 0, d) = c.p[d];
+      s(i, 1, d) = c.q[d];
+    }
+    kinds.append(to_string(c.kind));
+  }
+  py::dict d;
+  d["a"] = p.object_a;
+  d["b"] = p.object_b;
+  d["triangles"] = tris;
+  d["kinds"] = kinds;
+  d["segments"] = seg;
+  d["relation"] = to_string(p.relation);
+  d["relation_note"] = p.relation_note;
+  d["is_collision"] = p.is_collision();
+  d["stage"] = p.exact_stage ? "exact" : "image";
+  d["candidates"] = p.candidates;
+  if (p.volume.known) {
+    d["volume"] = p.volume.volume;
+    d["volume_error"] = p.volume.error;
+    d["volume_gradient"] = py::array_t<double>(3, p.volume.gradient.data());
+  } else {
+    d["volume"] = py::none();
+    if (!p.volume.reason.empty()) d["volume_unknown"] = p.volume.reason;
+  }
+  return d;
+}
+
+py::dict result_dict(const FrameResult& r) {
+  py::list pairs;
+  bool any = false;
+  for (const PairResult& p : r.pairs) {
+    pairs.append(pair_dict(p));
+    any = any || p.is_collision();
+  }
+  py::dict d;
+  d["pairs"] = pairs;
+  d["is_collision"] = any;
+  d["total_ms"] = r.timings.total;
+  return d;
+}
+
+template <class Fn>
+auto translate_errors(Fn&& fn) -> decltype(fn()) {
+  try {
+    return fn();
+  } catch (const std::invalid_argument& e) {
+    throw py::value_error(e.what());
+  } catch (const InputError& e) {
+    throw py::value_error(e.what());
+  }
+}
+
+// A persistent world (peelcd::World) with its own image stage.
+struct PyWorld {
+  explicit PyWorld(const std::string& backend) : world(backend == "cpu" ? nullptr : stage_for(backend)) {}
+  World world;
+};
+
+// The frame API on meshes given each call (peelcd::Detector).
+struct PyDetector {
+  explicit PyDetector(const std::string& backend) : detector(stage_for(backend)) {}
+  Detector detector;
+  FrameResult result;
+};
+
+struct PyMesh {
+  std::shared_ptr<const Mesh> mesh;
+};
+
+}  // namespace
+
+PYBIND11_MODULE(_peelcd, m) {
+  m.doc() = "peelcd: image-space collision detection between triangle meshes";
+  m.attr("__version__") = PEELCD_VERSION_STRING;
+
+  py::class_<PyMesh>(m, "Mesh", "A triangle mesh: vertices V (n, 3) float64, triangles F (m, 3) integers")
+      .def(py::init([](const py::handle& V, const py::handle& F) { return PyMesh{mesh_from_arrays(V, F)}; }), py::arg("V"),
+           py::arg("F"))
+      .def_property_readonly("V", [](const PyMesh& self) {
+        py::array_t<double> a({py::ssize_t(self.mesh->vertices.size()), py::ssize_t(3)});
+        if (!self.mesh->vertices.empty()) std::memcpy(a.mutable_data(), self.mesh->vertices.data(), a.nbytes());
+        return a;
+      })
+      .def_property_readonly("F", [](const PyMesh& self) {
+        py::array_t<std::uint32_t> a({py::ssize_t(self.mesh->triangles.size()), py::ssize_t(3)});
+        if (!self.mesh->triangles.empty()) std::memcpy(a.mutable_data(), self.mesh->triangles.data(), a.nbytes());
+        return a;
+      })
+      .def("__repr__", [](const PyMesh& self) {
+        return "<peelcd.Mesh " + std::to_string(self.mesh->vertices.size()) + " vertices, " +
+               std::to_string(self.mesh->triangles.size()) + " triangles>";
+      });
+
+  m.def("load_mesh", [](const std::string& path) {
+    return translate_errors([&] {
+      Mesh mesh = load_mesh(path);
+      validate_mesh(mesh, "'" + path + "'");
+      return PyMesh{std::make_shared<const Mesh>(std::move(mesh))};
+    });
+  }, py::arg("path"), "Loads a mesh file (OBJ, PLY, STL, OFF, glTF, ...) as the command line does");
+
+  m.def("load_scene", [](const std::string& path) {
+    return translate_errors([&] {
+      const Scene scene = load_scene(path);
+      py::list out;
+      for (Object& o : load_objects(scene)) {
+        py::dict d;
+        d["name"] = o.name;
+        d["mesh"] = PyMesh{std::make_shared<const Mesh>(std::move(o.mesh))};
+        d["self"] = o.self;
+        out.append(d);
+      }
+      return out;
+    });
+  }, py::arg("path"), "A scene file's objects in world space: a list of dicts with name, mesh and self");
+
+  py::class_<PyWorld>(m, "World", "Persistent bodies kept across frames (peelcd::World): rigid ones move by their pose, "
+                                  "deforming ones by their vertices")
+      .def(py::init<const std::string&>(), py::arg("backend") = "cpu")
+      .def("add_rigid", [](PyWorld& w, const PyMesh& mesh, const py::object& pose, const std::string& name, bool self) {
+        return translate_errors([&] {
+          const BodyId id = w.world.add_rigid(mesh.mesh, pose_from(pose), name);
+          w.world.set_self(id, self);
+          return id;
+        });
+      }, py::arg("mesh"), py::arg("pose") = py::none(), py::arg("name") = "", py::arg("self_collision") = false)
+      .def("add_deforming", [](PyWorld& w, const PyMesh& mesh, const std::string& name, bool self) {
+        return translate_errors([&] {
+          const BodyId id = w.world.add_deforming(*mesh.mesh, name);
+          w.world.set_self(id, self);
+          return id;
+        });
+      }, py::arg("mesh"), py::arg("name") = "", py::arg("self_collision") = false)
+      .def("set_pose", [](PyWorld& w, BodyId id, const py::object& pose) {
+        translate_errors([&] { w.world.set_pose(id, pose_from(pose)); });
+      }, py::arg("body"), py::arg("pose"))
+      .def("set_vertices", [](PyWorld& w, BodyId id, const py::handle& V) {
+        std::vector<Vec3> v = vertices_from(V, "V");
+        translate_errors([&] { w.world.set_vertices(id, std::move(v)); });
+      }, py::arg("body"), py::arg("V"))
+      .def("set_mesh", [](PyWorld& w, BodyId id, const PyMesh& mesh) {
+        translate_errors([&] { w.world.set_mesh(id, *mesh.mesh); });
+      }, py::arg("body"), py::arg("mesh"), "A new mesh (topology) for the body: fracture, remeshing")
+      .def("set_self", [](PyWorld& w, BodyId id, bool self) { translate_errors([&] { w.world.set_self(id, self); }); },
+           py::arg("body"), py::arg("on"))
+      .def("remove", [](PyWorld& w, BodyId id) { translate_errors([&] { w.world.remove(id); }); }, py::arg("body"))
+      .def("__len__", [](const PyWorld& w) { return w.world.size(); })
+      .def("collide", [](PyWorld& w, const py::kwargs& kwargs) {
+        const DetectOptions opt = options_from(kwargs);
+        const FrameResult* r = nullptr;
+        {
+          py::gil_scoped_release release;
+          r = &translate_errors([&]() -> const FrameResult& { return w.world.collide(opt); });
+        }
+        return result_dict(*r);
+      }, "One frame: every pair of bodies whose boxes overlap. Keyword options as in scene files");
+
+  py::class_<PyDetector>(m, "Detector", "The frame API (peelcd::Detector): the objects given whole each frame")
+      .def(py::init<const std::string&>(), py::arg("backend") = "cpu")
+      .def("detect", [](PyDetector& d, const py::list& objects, const py::kwargs& kwargs) {
+        const DetectOptions opt = options_from(kwargs);
+        std::vector<Object> objs;
+        for (const py::handle& h : objects) {
+          Object o;
+          if (py::isinstance<py::dict>(h)) {
+            const py::dict dd = py::reinterpret_borrow<py::dict>(h);
+            o.mesh = *dd["mesh"].cast<PyMesh>().mesh;
+            if (dd.contains("name")) o.name = dd["name"].cast<std::string>();
+            if (dd.contains("self")) o.self = dd["self"].cast<bool>();
+          } else {
+            o.mesh = *h.cast<PyMesh>().mesh;
+          }
+          objs.push_back(std::move(o));
+        }
+        {
+          py::gil_scoped_release release;
+          translate_errors([&] { d.detector.detect(objs, opt, d.result); });
+        }
+        return result_dict(d.result);
+      }, py::arg("objects"), "One frame of the objects (Mesh, or dicts with mesh, name, self). Keyword options as in scene files");
+
+  m.def("exact_pairs", [](const PyMesh& a, const PyMesh& b) {
+    std::vector<std::uint64_t> k;
+    {
+      py::gil_scoped_release release;
+      k = &a == &b ? exact_self_pairs(*a.mesh) : exact_colliding_pairs(*a.mesh, *b.mesh);
+    }
+    py::array_t<std::uint32_t> out({py::ssize_t(k.size()), py::ssize_t(2)});
+    auto o = out.mutable_unchecked<2>();
+    for (std::size_t i = 0; i < k.size(); ++i) {
+      o(i, 0) = std::uint32_t(k[i] >> 32);
+      o(i, 1) = std::uint32_t(k[i] & 0xffffffffu);
+    }
+    return out;
+  }, py::arg("a"), py::arg("b"), "The exact reference: every colliding triangle pair of two meshes, (k, 2)");
+
+  m.def("classes", []() {
+    // The built-in classes of `peelcd classes` (geometry and self-collision, then containment):
+    // (name, [dict(name, mesh, self)]).
+    py::list out;
+    const auto add = [&](const GeometryClass& g) {
+      py::list objs;
+      for (const Object& o : g.objects) {
+        py::dict d;
+        d["name"] = o.name;
+        d["mesh"] = PyMesh{std::make_shared<const Mesh>(o.mesh)};
+        d["self"] = o.self;
+        objs.append(d);
+      }
+      out.append(py::make_tuple(g.name, objs));
+    };
+    for (const GeometryClass& g : geometry_classes(4)) add(g);
+    for (const GeometryClass& g : self_classes()) add(g);
+    for (const ContainmentClass& c : containment_classes()) add(c.scene);
+    return out;
+  }, "The classes of peelcd classes (crowded grid 4x4): a list of (name, objects)");
+
+  m.def("options", []() {
+    py::dict d;
+    const DetectOptions defaults;
+    for (const OptionSpec& s : option_table()) {
+      const OptionValue v = s.get(defaults);
+      if (const bool* b = std::get_if<bool>(&v)) d[s.key] = *b;
+      else if (const double* x = std::get_if<double>(&v)) d[s.key] = *x;
+      else d[s.key] = std::get<std::string>(v);
+    }
+    return d;
+  }, "Every option (the scene files' keys) with its default");
+}

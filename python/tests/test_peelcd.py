@@ -1,0 +1,142 @@
+"""The Python module against the C++ library and command line (run by ctest: docs/python.md)."""
+import json
+import os
+import resource
+import subprocess
+
+import numpy as np
+import pytest
+
+import peelcd
+
+FIXTURES = os.environ.get("PEELCD_FIXTURES", os.path.join(os.path.dirname(__file__), "..", "..", "fixtures"))
+PEELCD = os.environ.get("PEELCD_BIN", "peelcd")
+BACKEND = "osmesa"  # as the command line's default
+
+
+def cli_json(scene, *args):
+    out = subprocess.run([PEELCD, "detect", scene, "--json", "-", "--quiet", "--backend", BACKEND, *args],
+                         check=True, capture_output=True, text=True).stdout
+    return json.loads(out)
+
+
+def same_pairs(py_result, cli):
+    """Python's pairs equal the command line's JSON: objects, triangle pairs, kinds, relation."""
+    assert len(py_result["pairs"]) == len(cli["pairs"])
+    for p, c in zip(py_result["pairs"], cli["pairs"]):
+        assert (p["a"], p["b"]) == (c["object_a"], c["object_b"])
+        assert p["triangles"].tolist() == [[x["tri_a"], x["tri_b"]] for x in c["colliding"]]
+        assert p["kinds"] == [x["kind"] for x in c["colliding"]]
+        assert p["relation"] == c["relation"]
+        assert p["is_collision"] == c["is_collision"]
+        segs = np.array([x["segment"] for x in c["colliding"]]).reshape(-1, 2, 3)
+        assert np.allclose(p["segments"], segs, rtol=1e-12, atol=1e-12)
+
+
+def test_default_scene_equals_the_command_line():
+    scene = os.path.join(FIXTURES, "scenes", "bunny_dragon.json")
+    objects = peelcd.load_scene(scene)
+    result = peelcd.Detector(BACKEND).detect(objects)
+    same_pairs(result, cli_json(scene))
+    assert result["pairs"][0]["triangles"].shape == (228, 2)
+
+
+def write_obj(path, mesh):
+    with open(path, "w") as f:
+        for v in mesh.V:
+            f.write("v %r %r %r\n" % tuple(float(x) for x in v))
+        for t in mesh.F:
+            f.write("f %d %d %d\n" % tuple(int(i) + 1 for i in t))
+
+
+@pytest.mark.parametrize("name,objects", peelcd.classes(), ids=[n for n, _ in peelcd.classes()])
+def test_every_class_equals_the_command_line(tmp_path, name, objects):
+    # The class's meshes as files and a scene; both sides load them through the same loader.
+    scene = {"objects": []}
+    for i, o in enumerate(objects):
+        path = tmp_path / ("m%d.obj" % i)
+        write_obj(path, o["mesh"])
+        scene["objects"].append({"name": "o%d" % i, "mesh": path.name, "self": o["self"]})
+    scene_path = tmp_path / "scene.json"
+    scene_path.write_text(json.dumps(scene))
+    loaded = peelcd.load_scene(str(scene_path))
+    result = peelcd.Detector(BACKEND).detect(loaded)
+    same_pairs(result, cli_json(str(scene_path)))
+
+
+def test_world_equals_the_frame_api_and_the_exact_reference():
+    objects = peelcd.load_scene(os.path.join(FIXTURES, "scenes", "bunny_dragon.json"))
+    world = peelcd.World()
+    for o in objects:
+        world.add_rigid(o["mesh"], name=o["name"])
+    pairs = world.collide()["pairs"]
+    exact = peelcd.exact_pairs(objects[0]["mesh"], objects[1]["mesh"])
+    assert pairs[0]["triangles"].tolist() == exact.tolist()
+
+
+def test_containment_and_volume():
+    ball = peelcd.load_mesh(os.path.join(FIXTURES, "meshes", "generated", "sphere_24x48.obj"))
+    small = peelcd.Mesh(ball.V * 0.3 + np.array([0.1, 0.0, 0.0]), ball.F)
+    p = peelcd.collide(small, ball, volume=True)
+    assert p["relation"] == "a_inside_b" and p["is_collision"] and len(p["triangles"]) == 0
+    assert abs(p["volume"] - 0.027 * 4.18) < 0.01  # about (0.3)^3 of the faceted unit ball's volume
+
+
+def bad(fn, kind, words):
+    with pytest.raises(kind) as e:
+        fn()
+    assert words in str(e.value)
+
+
+def test_bad_inputs_raise_clear_errors():
+    V = np.array([[0, 0, 0], [1, 0, 0], [0, 1, 0]], dtype=np.float64)
+    F = np.array([[0, 1, 2]])
+    bad(lambda: peelcd.Mesh(V.astype(np.float32), F), TypeError, "dtype must be float64")
+    bad(lambda: peelcd.Mesh(V[:, :2].copy(), F), ValueError, "shape must be (n, 3)")
+    bad(lambda: peelcd.Mesh(V, F.astype(np.float64)), TypeError, "dtype must be an integer type")
+    bad(lambda: peelcd.Mesh(V, np.array([[0, 1, 3]])), ValueError, "uses vertex 3 but there are 3 vertices")
+    bad(lambda: peelcd.Mesh(V, np.array([[0, 1, -1]])), ValueError, "uses vertex -1")
+    nan = V.copy()
+    nan[2, 1] = np.nan
+    bad(lambda: peelcd.Mesh(nan, F), ValueError, "vertex 2 has a NaN")
+    bad(lambda: peelcd.Mesh(np.zeros((6, 3))[::2], F), ValueError, "must be C-contiguous")
+    bad(lambda: peelcd.Mesh(V, np.zeros((0, 3), dtype=np.int32)), ValueError, "at least one triangle")
+    bad(lambda: peelcd.load_mesh("/nonexistent.obj"), ValueError, "/nonexistent.obj")
+    world = peelcd.World()
+    body = world.add_deforming(peelcd.Mesh(V, F))
+    bad(lambda: world.set_vertices(body, np.zeros((4, 3))), ValueError, "has 3 vertices, given 4")
+    bad(lambda: world.set_pose(body, np.eye(4)), ValueError, "is deforming")
+    bad(lambda: world.set_pose(99, np.eye(4)), ValueError, "no body 99")
+    bad(lambda: world.add_rigid(peelcd.Mesh(V, F), pose=np.zeros((4, 4))), ValueError, "last row")
+    bad(lambda: world.collide(views=4), ValueError, "option 'views': must be 1, 2 or 3")
+    bad(lambda: world.collide(stage="fancy"), ValueError, "unknown stage \"fancy\"")
+    bad(lambda: world.collide(colour=1), TypeError, "unknown option 'colour'")
+    bad(lambda: peelcd.World("vulkan"), ValueError, "vulkan")
+
+
+def rss_kb():
+    with open("/proc/self/status") as f:
+        for line in f:
+            if line.startswith("VmRSS:"):
+                return int(line.split()[1])
+    return resource.getrusage(resource.RUSAGE_SELF).ru_maxrss
+
+
+def test_no_leak_over_ten_thousand_frames_of_a_deforming_loop():
+    ball = peelcd.load_mesh(os.path.join(FIXTURES, "meshes", "generated", "ball_16x32.obj"))
+    world = peelcd.World()
+    a = world.add_deforming(ball)
+    b = world.add_rigid(ball, pose=np.diag([1.0, 1.0, 1.0, 1.0]))
+    V0 = ball.V
+    def frames(n, start):
+        for f in range(start, start + n):
+            V = V0 * (1.0 + 0.01 * np.sin(0.1 * f)) + np.array([1.2, 0.0, 0.0])
+            world.set_vertices(a, V)
+            r = world.collide()
+            assert r["is_collision"]
+    frames(1000, 0)  # warm: every buffer at its size
+    before = rss_kb()
+    frames(9000, 1000)
+    grown = rss_kb() - before
+    print("RSS grew by %d KB over 9,000 frames" % grown)
+    assert grown < 2048
