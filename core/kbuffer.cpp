@@ -82,14 +82,14 @@ KResolveResult resolve_range(const KBuffer& kb, const KResolveParams& p, std::si
     }
     if (n == 0) continue;
     if (n == 1 && !layers) {  // one surface: layer 0 or nothing, no pair
-      if (p.full_peel || p.conservative || (kb.fragments[t].key >> 31) == p.first_object)
+      if (p.full_peel || p.conservative || (kb.fragments[kb.offsets ? kb.offsets[t] : t].key >> 31) == p.first_object)
         result.max_layers = std::max(result.max_layers, 1u);
       continue;
     }
     const std::uint32_t flip = p.full_peel || p.conservative ? 0u : p.first_object << 31;
     // Insertion sort: a texel holds a handful of fragments.
     for (std::uint32_t i = 0; i < n; ++i) {
-      const KFragment f = kb.fragments[std::size_t(i) * stride + t];
+      const KFragment f = kb.fragments[kb.offsets ? std::size_t(kb.offsets[t]) + i : std::size_t(i) * stride + t];
       std::uint32_t j = i;
       for (; j > 0 && before(f, sorted[j - 1], flip); --j) sorted[j] = sorted[j - 1];
       sorted[j] = f;

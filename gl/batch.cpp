@@ -17,9 +17,11 @@ void GlImageStage::peel_batch(const PeelJob* jobs, std::size_t count, PeelResult
   Impl& s = *impl_;
   std::size_t i = 0;
   while (i < count) {
-    std::size_t end = i;  // a run of conservative views
-    while (end < count && jobs[end].conservative) ++end;
-    if (end - i < 2 || !s.host_resolve() || !s.options.batch) {
+    // A run of conservative views; on the GPU resolve, without layer capture (dumps and
+    // goldens take every layer of a view: the one-view path).
+    std::size_t end = i;
+    while (end < count && jobs[end].conservative && (s.host_resolve() || !jobs[end].capture)) ++end;
+    if (end - i < 2 || !s.options.batch) {
       s.peel_one(jobs[i], outs[i], timings);
       ++i;
       continue;
@@ -69,12 +71,12 @@ std::size_t GlImageStage::Impl::peel_conservative_batch(const PeelJob* jobs, std
   for (; take < count; ++take) {
     const int n = jobs[take].view.resolution;
     const std::size_t tx = std::size_t(n) * std::size_t(n);
-    if ((texels + tx) * slots > most) break;
+    if (texels + tx > most) break;
     texels += tx;
     largest = std::max(largest, n);
     corners_total += 3 * (jobs[take].triangles[0]->size() + jobs[take].triangles[1]->size());
   }
-  if (take < 2) {  // one view alone fills a k-buffer: the one-view path (it regrows or gives up)
+  if (take < 2) {  // one view alone fills the counts: the one-view path
     peel_one(jobs[0], outs[0], t);
     return 1;
   }
@@ -138,17 +140,14 @@ std::size_t GlImageStage::Impl::peel_conservative_batch(const PeelJob* jobs, std
 
   const auto t_gpu = Clock::now();
   ensure_bare_fbo(std::max(largest, bare_size));
-  ensure_kbuffer(texels, slots);
+  ensure_kbuffer(texels, 1);  // the counts; the fragments are sized by the count pass below
   const GLuint zero = 0;
   gl.ClearNamedBufferSubData(count_buffer, GL_R32UI, 0, GLsizeiptr(texels * 4), GL_RED_INTEGER, GL_UNSIGNED_INT, &zero);
-  gl.BindBufferBase(GL_SHADER_STORAGE_BUFFER, 1, fragment_buffer);
   gl.BindBufferBase(GL_SHADER_STORAGE_BUFFER, 2, count_buffer);
   gl.BindBufferBase(GL_SHADER_STORAGE_BUFFER, 3, batch_views);
   gl.BindBufferBase(GL_SHADER_STORAGE_BUFFER, 4, batch_triangles);
   gl.UseProgram(cons_batch_program);
   gl.Uniform1i(u_cb_viewport, largest);
-  gl.Uniform1ui(u_cb_slots, slots);
-  gl.Uniform1ui(u_cb_texels, GLuint(texels));
   gl.BindFramebuffer(GL_FRAMEBUFFER, bare_fbo);
   gl.Viewport(0, 0, largest, largest);
   gl.Disable(GL_DEPTH_TEST);
@@ -156,45 +155,81 @@ std::size_t GlImageStage::Impl::peel_conservative_batch(const PeelJob* jobs, std
   for (int i = 0; i < 6; ++i) gl.Disable(GL_CLIP_DISTANCE0 + i);
   gl.BindVertexArray(vao);
   gl.VertexArrayVertexBuffer(vao, 0, batch_vbo, 0, sizeof(GpuVertex));
+  // 1. The count pass: each texel's fragments counted, nothing stored.
+  gl.Uniform1i(u_cb_count_only, 1);
+  gl.DrawArrays(GL_TRIANGLES, 0, GLsizei(corners_total));
+  count_draw();
+  gl.MemoryBarrier(GL_BUFFER_UPDATE_BARRIER_BIT);
+  // 2. The counts into offsets (a prefix sum on the host), the k-buffer sized to hold them all.
+  const auto t_counts = Clock::now();
+  batch_counts.resize(texels);
+  gl.GetNamedBufferSubData(count_buffer, 0, GLsizeiptr(texels * 4), batch_counts.data());
+  count_read(texels * 4);
+  t.readback += ms_since(t_counts);
+  batch_offsets.resize(texels);
+  std::size_t total = 0;
+  std::uint32_t deepest = 0;
+  for (std::size_t k = 0; k < texels; ++k) {
+    batch_offsets[k] = std::uint32_t(std::min<std::size_t>(total, 0xffffffffu));
+    total += batch_counts[k];
+    deepest = std::max(deepest, batch_counts[k]);
+  }
+  if (total > most) {  // more fragments than one buffer holds: each view on its own
+    gl.BindFramebuffer(GL_FRAMEBUFFER, 0);
+    for (std::size_t j = 0; j < take; ++j) peel_one(jobs[j], outs[j], t);
+    return take;
+  }
+  const std::size_t offset_bytes = texels * 4;
+  if (offset_bytes > batch_offsets_capacity) {
+    batch_offsets_capacity = std::max(offset_bytes, batch_offsets_capacity * 3 / 2);
+    gl.NamedBufferData(batch_offset_buffer, GLsizeiptr(batch_offsets_capacity), nullptr, GL_STREAM_DRAW);
+  }
+  gl.NamedBufferSubData(batch_offset_buffer, 0, GLsizeiptr(offset_bytes), batch_offsets.data());
+  count_upload(offset_bytes);
+  ensure_fragments(std::max<std::size_t>(total, 1));
+  // 3. The fill pass: every fragment stored at its texel's offset (the counts count again).
+  gl.ClearNamedBufferSubData(count_buffer, GL_R32UI, 0, GLsizeiptr(texels * 4), GL_RED_INTEGER, GL_UNSIGNED_INT, &zero);
+  gl.BindBufferBase(GL_SHADER_STORAGE_BUFFER, 1, fragment_buffer);
+  gl.BindBufferBase(GL_SHADER_STORAGE_BUFFER, 6, batch_offset_buffer);
+  gl.Uniform1i(u_cb_count_only, 0);
   gl.DrawArrays(GL_TRIANGLES, 0, GLsizei(corners_total));
   count_draw();
   gl.BindFramebuffer(GL_FRAMEBUFFER, 0);
-  gl.MemoryBarrier(GL_BUFFER_UPDATE_BARRIER_BIT);
-  check("the batched conservative draw");
+  gl.MemoryBarrier(GL_BUFFER_UPDATE_BARRIER_BIT | GL_TEXTURE_FETCH_BARRIER_BIT);
+  check("the batched conservative draws");
 
+  if (!host_resolve()) {
+    resolve_batch_on_gpu(jobs, take, texels, outs, t);
+    t.gpu += ms_since(t_gpu);
+    outs[0].gl_passes = 2;  // the count and fill draws for the batch
+    return take;
+  }
   const auto t_map = Clock::now();
-  const auto* counts = static_cast<const std::uint32_t*>(
-      gl.MapNamedBufferRange(count_buffer, 0, GLsizeiptr(texels * 4), GL_MAP_READ_BIT));
   const auto* fragments = static_cast<const KFragment*>(
-      gl.MapNamedBufferRange(fragment_buffer, 0, GLsizeiptr(texels * slots * sizeof(KFragment)), GL_MAP_READ_BIT));
+      gl.MapNamedBufferRange(fragment_buffer, 0, GLsizeiptr(total * sizeof(KFragment)), GL_MAP_READ_BIT));
   const double map_ms = ms_since(t_map);
-  count_read(texels * 4);
-  count_read(texels * slots * sizeof(KFragment));
+  count_read(total * sizeof(KFragment));
   t.readback += map_ms;
-  if (!counts || !fragments) {
-    if (counts) gl.UnmapNamedBuffer(count_buffer);
-    if (fragments) gl.UnmapNamedBuffer(fragment_buffer);
+  if (!fragments && total) {
     check("mapping the packed k-buffer");
     throw GlError("peelcd::gl::GlImageStage: mapping the packed k-buffer failed");
   }
-  std::uint32_t deepest = 0;
   base = 0;
   for (std::size_t j = 0; j < take; ++j) {
     const PeelJob& job = jobs[j];
     PeelResult& out = outs[j];
     const int n = job.view.resolution;
     KBuffer kb;
-    kb.counts = counts + base;
-    kb.fragments = fragments + base;
+    kb.counts = batch_counts.data() + base;
+    kb.fragments = fragments;
+    kb.offsets = batch_offsets.data() + base;
     kb.resolution = n;
-    kb.slots = slots;
-    kb.stride = texels;
+    kb.slots = deepest;
     KResolveParams p;
     p.conservative = true;
     p.ids[0] = batch_ids.data();  // keys hold the draw order of the whole batch
     p.ids[1] = batch_ids.data();
     const KResolveResult got = resolver.resolve(kb, p, out.pcs, job.capture ? &out.captured : nullptr);
-    deepest = std::max(deepest, got.max_fragments);
     out.layers = int(got.max_layers);
     out.peel_passes = 1;
     out.epsilon_window = 0.0f;
@@ -202,20 +237,74 @@ std::size_t GlImageStage::Impl::peel_conservative_batch(const PeelJob* jobs, std
     if (!out.pcs.empty()) ++out.pcs_readbacks;
     base += std::size_t(n) * std::size_t(n);
   }
-  gl.UnmapNamedBuffer(count_buffer);
-  gl.UnmapNamedBuffer(fragment_buffer);
+  if (fragments) gl.UnmapNamedBuffer(fragment_buffer);
   check("the host resolve of the packed k-buffer");
   t.gpu += ms_since(t_gpu) - map_ms;
-  outs[0].gl_passes = 1;  // one draw for the batch
-  if (deepest > slots) {  // a texel overflowed: more slots and again, or each view on its own
-    const std::size_t wanted = std::size_t(deepest) * 5 / 4;
-    if (wanted * std::size_t(largest) * std::size_t(largest) <= most) {
-      slots = std::uint32_t(wanted);
-      return 0;  // the caller calls again from the same view
-    }
-    for (std::size_t j = 0; j < take; ++j) peel_one(jobs[j], outs[j], t);
-  }
+  outs[0].gl_passes = 2;  // the count and fill draws for the batch
   return take;
+}
+
+std::uint32_t GlImageStage::Impl::resolve_batch_on_gpu(const PeelJob* jobs, std::size_t take, std::size_t texels,
+                                                       PeelResult* outs, Timings& t) {
+  // Per-view depths, zeroed; the PCS header reset; one dispatch over every texel.
+  const std::size_t layer_bytes = take * sizeof(std::uint32_t);
+  if (layer_bytes > batch_layers_capacity) {
+    batch_layers_capacity = std::max(layer_bytes, batch_layers_capacity * 3 / 2);
+    gl.NamedBufferData(batch_layers, GLsizeiptr(batch_layers_capacity), nullptr, GL_DYNAMIC_READ);
+  }
+  const GLuint zero = 0;
+  gl.ClearNamedBufferSubData(batch_layers, GL_R32UI, 0, GLsizeiptr(layer_bytes), GL_RED_INTEGER, GL_UNSIGNED_INT, &zero);
+  gl.BindBufferBase(GL_SHADER_STORAGE_BUFFER, 0, pcs_buffer);
+  gl.BindBufferBase(GL_SHADER_STORAGE_BUFFER, 4, batch_triangles);
+  gl.BindBufferBase(GL_SHADER_STORAGE_BUFFER, 5, batch_layers);
+  gl.BindTextureUnit(0, count_tex);
+  gl.BindTextureUnit(1, fragment_tex);
+  gl.UseProgram(cons_batch_resolve_program);
+  gl.Uniform1ui(u_cbr_texels, GLuint(texels));
+  gl.BindBufferBase(GL_SHADER_STORAGE_BUFFER, 6, batch_offset_buffer);
+  PcsHeader got{};
+  for (;;) {
+    const PcsHeader header{0, pcs_capacity, 0, 0};
+    gl.NamedBufferSubData(pcs_buffer, 0, sizeof header, &header);
+    count_upload(sizeof header);
+    gl.DispatchCompute(GLuint((texels + 63) / 64), 1, 1);
+    count_dispatch();
+    gl.MemoryBarrier(GL_BUFFER_UPDATE_BARRIER_BIT);
+    const auto t_read = Clock::now();
+    gl.GetNamedBufferSubData(pcs_buffer, 0, sizeof got, &got);
+    count_read(sizeof got);
+    t.readback += ms_since(t_read);
+    if (got.count <= pcs_capacity) break;
+    grow_pcs(got.count + got.count / 2);  // the list did not fit: larger, and the dispatch again
+    gl.BindBufferBase(GL_SHADER_STORAGE_BUFFER, 0, pcs_buffer);
+  }
+  const auto t_read = Clock::now();
+  batch_view_layers.resize(take);
+  gl.GetNamedBufferSubData(batch_layers, 0, GLsizeiptr(layer_bytes), batch_view_layers.data());
+  count_read(layer_bytes);
+  batch_pairs.resize(std::size_t(got.count) * 2);
+  if (got.count) {
+    gl.GetNamedBufferSubData(pcs_buffer, sizeof(PcsHeader), GLsizeiptr(got.count) * 8, batch_pairs.data());
+    count_read(std::size_t(got.count) * 8);
+  }
+  t.readback += ms_since(t_read);
+  check("the GPU resolve of the packed k-buffer");
+  // Draw orders -> the view (job) and the two triangles' IDs.
+  for (std::size_t k = 0; k < got.count; ++k) {
+    const std::uint32_t fa = batch_pairs[2 * k], fb = batch_pairs[2 * k + 1];
+    PeelResult& out = outs[batch_triangle_view[fa] >> 1];
+    out.pcs.push_back(IdPair{batch_ids[fa], batch_ids[fb]});
+  }
+  for (std::size_t j = 0; j < take; ++j) {
+    PeelResult& out = outs[j];
+    out.layers = int(batch_view_layers[j]);
+    out.peel_passes = 1;
+    out.epsilon_window = 0.0f;
+    out.slope = 0.0f;
+    if (!out.pcs.empty()) ++out.pcs_readbacks;
+    (void)jobs;
+  }
+  return got.max_fragments;
 }
 
 }  // namespace peelcd::gl

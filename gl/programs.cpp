@@ -59,6 +59,12 @@ GlImageStage::Impl::Impl(std::shared_ptr<Context> ctx, const GlOptions& opt)
                              compile(GL_GEOMETRY_SHADER, batch_geom.c_str(), "conservative.geom (PEELCD_BATCH)"),
                              compile(GL_FRAGMENT_SHADER, batch_frag.c_str(), "conservative.frag (PEELCD_BATCH)")},
                             "conservative batch");
+  cons_batch_resolve_program =
+      link({compile(GL_COMPUTE_SHADER, shader_source(shaders::conservative_batch_resolve_comp).c_str(),
+                    "conservative_batch_resolve.comp")},
+           "conservative batch resolve");
+  u_cbr_texels = gl.GetUniformLocation(cons_batch_resolve_program, "texels");
+  u_cb_count_only = gl.GetUniformLocation(cons_batch_program, "count_only");
   u_cb_viewport = gl.GetUniformLocation(cons_batch_program, "viewport");
   u_cb_slots = gl.GetUniformLocation(cons_batch_program, "slots");
   u_cb_texels = gl.GetUniformLocation(cons_batch_program, "texels");
@@ -119,6 +125,8 @@ GlImageStage::Impl::Impl(std::shared_ptr<Context> ctx, const GlOptions& opt)
   gl.CreateBuffers(1, &batch_vbo);
   gl.CreateBuffers(1, &batch_views);
   gl.CreateBuffers(1, &batch_triangles);
+  gl.CreateBuffers(1, &batch_layers);
+  gl.CreateBuffers(1, &batch_offset_buffer);
   u_model_peel = gl.GetUniformLocation(peel_program, "roi_from_object");
   gl.CreateQueries(GL_ANY_SAMPLES_PASSED, 1, &query);
   gl.CreateBuffers(1, &pcs_buffer);
@@ -141,9 +149,12 @@ GlImageStage::Impl::~Impl() {
   gl.DeleteProgram(cons_program);
   gl.DeleteProgram(cons_resolve_program);
   gl.DeleteProgram(cons_batch_program);
+  gl.DeleteProgram(cons_batch_resolve_program);
   gl.DeleteBuffers(1, &batch_vbo);
   gl.DeleteBuffers(1, &batch_views);
   gl.DeleteBuffers(1, &batch_triangles);
+  gl.DeleteBuffers(1, &batch_layers);
+  gl.DeleteBuffers(1, &batch_offset_buffer);
   gl.DeleteBuffers(1, &count_buffer);
   gl.DeleteBuffers(1, &fragment_buffer);
   gl.DeleteTextures(1, &count_tex);

@@ -43,6 +43,13 @@ void GlImageStage::Impl::ensure_kbuffer(std::size_t texels, std::size_t view_slo
   }
 }
 
+void GlImageStage::Impl::ensure_fragments(std::size_t fragments) {
+  if (fragments <= kbuffer_fragments) return;
+  kbuffer_fragments = std::max(fragments, kbuffer_fragments * 3 / 2);
+  gl.NamedBufferData(fragment_buffer, GLsizeiptr(kbuffer_fragments * 16), nullptr, GL_DYNAMIC_COPY);
+  gl.TextureBuffer(fragment_tex, GL_RGBA32UI, fragment_buffer);
+}
+
 void GlImageStage::Impl::release_layers() {
   if (!layer_size) return;
   gl.DeleteFramebuffers(2, fbo);

@@ -32,6 +32,7 @@ extern const char* const conservative_vert;
 extern const char* const conservative_geom;
 extern const char* const conservative_frag;
 extern const char* const conservative_resolve_comp;
+extern const char* const conservative_batch_resolve_comp;
 extern const char* const pcs_test_inc;  // include/peelcd/core/pcs_test.inc
 extern const char* const shader_sources_hash;
 }  // namespace peelcd::shaders
@@ -95,6 +96,17 @@ struct GlImageStage::Impl {
   // Batched conservative views (batch.cpp, shaders/conservative.* with PEELCD_BATCH).
   GLuint cons_batch_program = 0;
   GLint u_cb_viewport = -1, u_cb_slots = -1, u_cb_texels = -1;
+  // Its GPU resolve (Resolve::gpu): one dispatch over the packed k-buffer, per-view depths kept
+  // in batch_layers, the PCS list (draw orders) the only thing read back beside two headers.
+  GLuint cons_batch_resolve_program = 0, batch_layers = 0;
+  GLint u_cbr_texels = -1, u_cb_count_only = -1;
+  // The count pass's counts and their prefix sums (the compact packed k-buffer's offsets).
+  GLuint batch_offset_buffer = 0;
+  std::size_t batch_offsets_capacity = 0;  // bytes
+  std::vector<std::uint32_t> batch_counts, batch_offsets;
+  std::size_t batch_layers_capacity = 0;  // bytes
+  std::vector<std::uint32_t> batch_view_layers;
+  std::vector<std::uint32_t> batch_pairs;
   GLuint batch_vbo = 0, batch_views = 0, batch_triangles = 0;
   std::size_t batch_vbo_capacity = 0, batch_views_capacity = 0, batch_triangles_capacity = 0;  // bytes
   std::vector<GpuVertex> batch_corners;
@@ -158,6 +170,7 @@ struct GlImageStage::Impl {
   std::size_t fitting_slots(std::size_t texels) const;
   std::size_t fetchable() const;
   void ensure_kbuffer(std::size_t texels, std::size_t view_slots);
+  void ensure_fragments(std::size_t fragments);  // the fragment buffer holds at least this many
   void release_layers();
   void ensure_layers(int n);
   void ensure_bare_fbo(int n);
@@ -203,6 +216,10 @@ struct GlImageStage::Impl {
   // One view: its geometry uploaded, then peeled by the configured peeler (GlImageStage::peel).
   void peel_one(const PeelJob& job, PeelResult& out, Timings& timings);
   std::size_t peel_conservative_batch(const PeelJob* jobs, std::size_t count, PeelResult* outs, Timings& t);
+  // The GPU resolve of a drawn batch (batch.cpp): each job's PCS and layers; returns the deepest
+  // texel's fragment count.
+  std::uint32_t resolve_batch_on_gpu(const PeelJob* jobs, std::size_t take, std::size_t texels, PeelResult* outs,
+                                     Timings& t);
   bool host_resolve() const {
     return options.resolve == Resolve::host || (options.resolve == Resolve::automatic && software_renderer);
   }

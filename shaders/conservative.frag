@@ -17,7 +17,11 @@ struct BatchView {
   ivec4 info;  // resolution, first texel in the packed k-buffer
 };
 layout(std430, binding = 3) readonly buffer Views { BatchView views[]; };
-uniform uint texels;  // of the packed k-buffer: every view's texels, one after the other
+// The packed k-buffer is compact: a count pass (count_only) counts each texel's fragments, the
+// host turns the counts into offsets, and the fill pass stores texel t's fragments from
+// offsets[t] on: it holds every fragment, with no slot limit and nothing drawn twice to regrow.
+layout(std430, binding = 6) readonly buffer Offsets { uint offsets[]; };
+uniform bool count_only;
 #else
 uniform uint object_bit;  // 0 for object A, 1 for object B
 uniform int resolution;
@@ -83,6 +87,11 @@ void main() {
   uint texel = uint(ij.y) * uint(resolution) + uint(ij.x);
 #endif
   uint s = atomicAdd(counts[texel], 1u);
+#ifdef PEELCD_BATCH
+  if (count_only) return;
+  fragments[offsets[texel] + s] = uvec4(floatBitsToUint(lo), (object_bit << 31) | g_order, floatBitsToUint(hi), 0u);
+#else
   if (s >= slots) return;  // the resolve sees the count and asks the host for more slots
   fragments[s * texels + texel] = uvec4(floatBitsToUint(lo), (object_bit << 31) | g_order, floatBitsToUint(hi), 0u);
+#endif
 }

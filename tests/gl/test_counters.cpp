@@ -3,6 +3,9 @@
 // frame must have done. They are the measure of the GPU work's constancy (docs/backends.md).
 #include "gl_fixture.h"
 #include "peelcd/core/primitives.h"
+#include "peelcd/eval/scenes.h"
+
+#include <array>
 
 #include <catch2/catch.hpp>
 
@@ -76,21 +79,61 @@ TEST_CASE("GL counters: the exact path and a frame without ROIs do no GL work", 
   }
 }
 
-TEST_CASE("GL counters: the batched conservative frame is one draw for every view, after the first", "[gl][counters]") {
+TEST_CASE("GL counters: the batched conservative frame is a count pass and a fill pass for every view", "[gl][counters]") {
   auto ball = std::make_shared<const Mesh>(make_uv_sphere(Vec3::Zero(), 1.0, 10, 14));
   DetectOptions opt;
   opt.stage = Stage::image;
   opt.views = 3;
-  gl::GlOptions host;
-  host.resolve = Resolve::host;  // the batch resolves on the host
-  test_pipeline().set_gl_options(host);
-  // The first frame may draw again after growing the k-buffer's slots (the count is not known
-  // before the draw); the steady state is one draw.
-  test_pipeline().detect(two_rigid_balls(ball, 1.5), opt);
-  const FrameResult r = test_pipeline().detect(two_rigid_balls(ball, 1.5), opt);
-  test_pipeline().set_gl_options(gl::GlOptions{});
-  REQUIRE(r.rois_peeled == 3);
-  CHECK(r.gl_draws == 1);
-  CHECK(r.gl_dispatches == 0);
-  CHECK(r.gl_readbacks == 2);  // the counts and the fragments, mapped once each
+  for (const Resolve resolve : {Resolve::host, Resolve::gpu}) {
+    gl::GlOptions o;
+    o.resolve = resolve;
+    test_pipeline().set_gl_options(o);
+    // The count pass sizes the k-buffer: no frame draws again, the first one neither.
+    const FrameResult first = test_pipeline().detect(two_rigid_balls(ball, 1.5), opt);
+    const FrameResult r = test_pipeline().detect(two_rigid_balls(ball, 1.5), opt);
+    test_pipeline().set_gl_options(gl::GlOptions{});
+    INFO("resolve " << to_string(resolve));
+    REQUIRE(r.rois_peeled == 3);
+    CHECK(first.gl_draws == 2);
+    CHECK(r.gl_draws == 2);
+    if (resolve == Resolve::host) {
+      CHECK(r.gl_dispatches == 0);
+      CHECK(r.gl_readbacks == 2);  // the counts, then the fragments mapped
+    } else {
+      CHECK(r.gl_dispatches == 1);
+      CHECK(r.gl_readbacks == 4);  // the counts, the PCS header, the views' depths, the PCS list
+    }
+  }
+}
+
+TEST_CASE("GL counters: draws, dispatches and readbacks per frame do not depend on the number of ROIs", "[gl][counters]") {
+  // A pile of 4 balls (a few ROIs) and of 400 (about 1,800), conservative, the image stage
+  // forced, both resolves: after the first frame (which may grow the PCS list), the same GL calls.
+  const auto pile_counts = [](std::size_t balls, Resolve resolve) {
+    const std::unique_ptr<Sequence> pile = make_crowd(balls, 3, true);
+    gl::GlOptions o;
+    o.resolve = resolve;
+    test_pipeline().set_gl_options(o);
+    DetectOptions opt;
+    opt.stage = Stage::image;
+    std::vector<Object> objects;
+    FrameResult r;
+    std::array<std::size_t, 4> counts{};
+    for (std::size_t f = 0; f < 3; ++f) {
+      pile->frame(f, objects);
+      test_pipeline().detect(objects, opt, r);
+      counts = {r.gl_draws, r.gl_dispatches, r.gl_readbacks, r.rois_peeled};
+    }
+    test_pipeline().set_gl_options(gl::GlOptions{});
+    return counts;
+  };
+  for (const Resolve resolve : {Resolve::host, Resolve::gpu}) {
+    const auto few = pile_counts(4, resolve);
+    const auto many = pile_counts(400, resolve);
+    INFO("resolve " << to_string(resolve) << ": 4 balls " << few[3] << " views, 400 balls " << many[3] << " views");
+    REQUIRE(many[3] > 100 * few[3] / 4);  // the pile really has many more ROI views
+    CHECK(few[0] == many[0]);  // draws
+    CHECK(few[1] == many[1]);  // dispatches
+    CHECK(few[2] == many[2]);  // readbacks
+  }
 }

@@ -31,6 +31,10 @@ struct KBuffer {
   // packed with others (GlImageStage::peel_batch) passes the packed k-buffer's texel count, with
   // `counts` and `fragments` pointing at the view's first texel.
   std::size_t stride = 0;
+  // Compact layout (the batched views' k-buffer, sized by a count pass): texel t's fragments at
+  // fragments[offsets[t] .. offsets[t] + counts[t]) (`slots` then the deepest count, `stride`
+  // unused). nullptr: the slot layout above.
+  const std::uint32_t* offsets = nullptr;
 };
 
 struct KResolveParams {
