@@ -15,7 +15,7 @@ Mesh inverted(Mesh m) {
 }
 }  // namespace
 
-TEST_CASE("a mesh's shape: closed, oriented, outward; open and inside-out named", "[relation]") {
+TEST_CASE("a mesh's shape: closed, oriented, outward, and open or inside-out named", "[relation]") {
   const Mesh box = make_box(Vec3(0, 0, 0), Vec3(1, 2, 3));
   const MeshShape s = analyse_shape(box);
   CHECK(s.closed);

@@ -115,7 +115,7 @@ TEST_CASE("point sampling keeps ties in both peelers: touching and coincident su
     }
 }
 
-TEST_CASE("conservative views packed into one k-buffer and one draw give each view's layers and PCS",
+TEST_CASE("conservative views packed into one k-buffer and drawn together give each view's layers and PCS",
           "[conservative][batch]") {
   // A crowd frame: rigid balls (poses in the views buffer) in light contact, many ROIs.
   std::vector<Object> objects;
@@ -134,13 +134,20 @@ TEST_CASE("conservative views packed into one k-buffer and one draw give each vi
   const FrameResult b_fast = test_pipeline().detect(objects, opt);  // no capture
   one_by_one.resolve = Resolve::host;
   test_pipeline().set_gl_options(one_by_one);
+  test_pipeline().detect(objects, opt);  // the one-view path grows its k-buffer's slots once
   test_pipeline().capture_layers(&single);
   const FrameResult s = test_pipeline().detect(objects, opt);
   test_pipeline().capture_layers(nullptr);
+  gl::GlOptions gpu;
+  gpu.resolve = Resolve::gpu;  // the batch resolved by one dispatch (shaders/conservative_batch_resolve.comp)
+  test_pipeline().set_gl_options(gpu);
+  const FrameResult g = test_pipeline().detect(objects, opt);
   test_pipeline().set_gl_options(gl::GlOptions{});
   REQUIRE(b.rois_peeled > 8);
+  CHECK(g.gl_passes == 2);
+  CHECK(g.gl_dispatches >= 1);
   CHECK(s.gl_passes == s.rois_peeled);  // one draw per view
-  CHECK(b.gl_passes < 4);               // one draw per packed k-buffer
+  CHECK(b.gl_passes == 2);              // the count and fill draws of the one packed k-buffer
   CHECK(b_fast.gl_passes == b.gl_passes);
   REQUIRE(batched.size() == single.size());
   for (std::size_t v = 0; v < single.size(); ++v) {
@@ -154,6 +161,8 @@ TEST_CASE("conservative views packed into one k-buffer and one draw give each vi
   for (std::size_t i = 0; i < s.pairs.size(); ++i) {
     CHECK(b.pairs[i].colliding.size() == s.pairs[i].colliding.size());
     CHECK(b_fast.pairs[i].pcs == s.pairs[i].pcs);
+    CHECK(g.pairs[i].pcs == s.pairs[i].pcs);
+    CHECK(g.pairs[i].layers == s.pairs[i].layers);
     contacts += s.pairs[i].colliding.size();
   }
   CHECK(contacts > 0);
