@@ -671,8 +671,16 @@ Explanation FrameTrace::explain(const PairQuery& query) const {
       if (cv.pair == pair_index)
         e.views.push_back(trace_view(e, cv, oa, ob, opt, kept_a, kept_b, stand_a, stand_b, ca, cb));
 
-  // 4. The verdict.
+  // 4. The verdict; containment (the objects collide with no triangle pair: docs/design.md).
   trace_verdict(e, pr != nullptr);
+  if (pr && (pr->relation == Relation::a_inside_b || pr->relation == Relation::b_inside_a)) {
+    const bool a_in = pr->relation == Relation::a_inside_b;
+    e.verdict_line += "; the objects collide without contact: '" + (a_in ? e.name_a : e.name_b) + "' is inside '" +
+                      (a_in ? e.name_b : e.name_a) +
+                      "' (one vertex of each of its pieces tested against the other, a closed mesh, exactly)";
+  } else if (pr && pr->relation == Relation::unknown && !pr->relation_note.empty()) {
+    e.verdict_line += "; whether one object is inside the other is unknown: " + pr->relation_note;
+  }
   return e;
 }
 

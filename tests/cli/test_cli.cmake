@@ -35,6 +35,15 @@ expect("detect help" 0 "--ids" detect --help)
 expect("sweep help" 0 "--theta-step" sweep --help)
 expect("no subcommand" 2 "subcommand" )
 expect("default scene" 0 "bunny x dragon: .* colliding" detect ${scene})
+# Containment: a ball inside a ball is a collision without contact (docs/design.md).
+set(nested ${FIXTURES}/scenes/ball_in_ball.json)
+expect("containment: inside" 0 "inside: 'inner' is inside 'outer'.*collision: 0 colliding triangle pairs in 1 of 1" detect ${nested})
+expect("containment: --status" 0 "" detect ${nested} --status --quiet)
+expect("containment: JSON" 0 "\"relation\": \"b_inside_a\"" detect ${nested} --json - --quiet)
+expect("containment: volume checked" 0 "volume 0.05[0-9]+ .*exact volume \\(CGAL corefinement\\): 0.05[0-9]+; .*within the estimate" detect ${nested} --volume --check)
+expect("containment: explain" 0 "'inner' is inside 'outer'" explain ${nested} --pair outer:0,inner:0)
+expect("volume: an open mesh" 0 "volume unknown: B is open"
+       detect ${FIXTURES}/meshes/generated/ball_16x32.obj ${FIXTURES}/meshes/generated/grid_tilted_12x12.obj --volume)
 expect("default scene, checked" 0 "exact reference: 228 pairs.*false contacts 0" detect ${scene} --check)
 # --check can fail: --max-miss turns a miss ratio above it into exit 3 (the paper's configuration
 # misses pairs on this scene; the default, conservative, misses none).
