@@ -77,6 +77,10 @@ Mesh make_folded_sheet(int n, double fold, double sag) {
     const double d2 = (x - 0.5) * (x - 0.5) + (y - 0.5) * (y - 0.5);
     return Vec3(x, y, fold - sag * std::exp(-d2 / 0.04));
   };
+  return make_grid_surface(nu, nv, at);
+}
+
+Mesh make_grid_surface(int nu, int nv, const std::function<Vec3(double, double)>& at) {
   Mesh m;
   for (int j = 0; j <= nv; ++j)
     for (int i = 0; i <= nu; ++i) m.vertices.push_back(at(double(i) / nu, double(j) / nv));

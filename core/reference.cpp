@@ -46,6 +46,24 @@ std::vector<std::uint64_t> exact_colliding_pairs(const Mesh& a, const Mesh& b) {
   return out;
 }
 
+std::vector<std::uint64_t> exact_self_pairs(const Mesh& mesh, SelfAdjacency adjacency) {
+  std::vector<std::uint32_t> rep;
+  vertex_representatives(mesh, adjacency, rep);
+  std::vector<Box> boxes = triangle_boxes(mesh);
+  std::vector<std::uint64_t> out;
+  CGAL::box_self_intersection_d(
+      boxes.begin(), boxes.end(),
+      [&](const Box& x, const Box& y) {
+        const std::uint32_t t = std::min(x.info(), y.info()), u = std::max(x.info(), y.info());
+        if (triangles_adjacent(mesh, rep, t, u)) return;
+        if (triangles_intersect(corners(mesh, t), corners(mesh, u))) out.push_back(pack_pair(t, u));
+      },
+      std::ptrdiff_t(10), CGAL::Box_intersection_d::CLOSED);
+  std::sort(out.begin(), out.end());
+  out.erase(std::unique(out.begin(), out.end()), out.end());
+  return out;
+}
+
 std::vector<std::uint64_t> exact_pair_reference(const std::vector<Object>& objects, std::size_t ia, std::size_t ib,
                                                 SelfAdjacency adjacency) {
   if (ia == ib) return exact_self_pairs(objects[ia].mesh, adjacency);

@@ -3,9 +3,6 @@
 #include "peelcd/core/bvh.h"
 #include "peelcd/core/id_map.h"
 
-#include <CGAL/Box_intersection_d/Box_with_info_d.h>
-#include <CGAL/box_intersection_d.h>
-
 #include <algorithm>
 #include <numeric>
 
@@ -96,37 +93,6 @@ void self_narrow_phase(const Mesh& mesh, const std::vector<std::uint64_t>& candi
     contact.tri_b = pair_b(c);
     if (test_self_couple(corners(mesh, contact.tri_a), corners(mesh, contact.tri_b), contact)) out.push_back(contact);
   }
-}
-
-std::vector<std::uint64_t> exact_self_pairs(const Mesh& mesh, SelfAdjacency adjacency) {
-  using Box = CGAL::Box_intersection_d::Box_with_info_d<double, 3, std::uint32_t>;
-  std::vector<std::uint32_t> rep;
-  vertex_representatives(mesh, adjacency, rep);
-  std::vector<Box> boxes;
-  boxes.reserve(mesh.triangles.size());
-  for (std::uint32_t t = 0; t < mesh.triangles.size(); ++t) {
-    double lo[3], hi[3];
-    for (int k = 0; k < 3; ++k) {
-      lo[k] = hi[k] = mesh.vertices[mesh.triangles[t][0]][k];
-      for (int c = 1; c < 3; ++c) {
-        lo[k] = std::min(lo[k], mesh.vertices[mesh.triangles[t][c]][k]);
-        hi[k] = std::max(hi[k], mesh.vertices[mesh.triangles[t][c]][k]);
-      }
-    }
-    boxes.emplace_back(lo, hi, t);
-  }
-  std::vector<std::uint64_t> out;
-  CGAL::box_self_intersection_d(
-      boxes.begin(), boxes.end(),
-      [&](const Box& x, const Box& y) {
-        const std::uint32_t t = std::min(x.info(), y.info()), u = std::max(x.info(), y.info());
-        if (triangles_adjacent(mesh, rep, t, u)) return;
-        if (triangles_intersect(corners(mesh, t), corners(mesh, u))) out.push_back(pack_pair(t, u));
-      },
-      std::ptrdiff_t(10), CGAL::Box_intersection_d::CLOSED);
-  std::sort(out.begin(), out.end());
-  out.erase(std::unique(out.begin(), out.end()), out.end());
-  return out;
 }
 
 }  // namespace peelcd

@@ -31,19 +31,6 @@ Mesh moved(Mesh m, const Eigen::Affine3d& pose) {
 }
 
 
-Mesh grid_surface(int nu, int nv, const std::function<Vec3(double, double)>& at) {
-  Mesh m;
-  for (int j = 0; j <= nv; ++j)
-    for (int i = 0; i <= nu; ++i) m.vertices.push_back(at(double(i) / nu, double(j) / nv));
-  const auto id = [nu](int i, int j) { return std::uint32_t(j * (nu + 1) + i); };
-  for (int j = 0; j < nv; ++j)
-    for (int i = 0; i < nu; ++i) {
-      m.triangles.push_back({id(i, j), id(i + 1, j), id(i + 1, j + 1)});
-      m.triangles.push_back({id(i, j), id(i + 1, j + 1), id(i, j + 1)});
-    }
-  return m;
-}
-
 // A tube of radius `r` around the trefoil knot (x, y, z) = (sin t + 2 sin 2t, cos t - 2 cos 2t,
 // -sin 3t): a closed mesh (a torus's topology); with r above about 0.61 (half the strands' closest distance) its strands pass through
 // each other where the knot's curve passes close to itself.
@@ -101,7 +88,7 @@ std::vector<GeometryClass> self_classes() {
     Eigen::Affine3d up = Eigen::Affine3d::Identity();
     up.rotate(Eigen::AngleAxisd(M_PI / 2, Vec3(1, 0, 0)));
     append(m, moved(floor_mesh(6, -1, 1, -1, 1, 0.05), up));
-    append(m, grid_surface(16, 4, [](double u, double v) {
+    append(m, make_grid_surface(16, 4, [](double u, double v) {
              const double a = 2 * M_PI * u;
              return Vec3(0.3 + 0.25 * std::cos(a), 0.2 + 0.25 * std::sin(a), -0.8 + 1.6 * v);
            }));

@@ -3,6 +3,8 @@
 // seen from outside.
 #include "peelcd/core/mesh.h"
 
+#include <functional>
+
 namespace peelcd {
 
 // Axis-aligned box [lo, hi]: 8 vertices, 12 triangles.
@@ -14,6 +16,10 @@ Mesh make_uv_sphere(const Vec3& center, double radius, int stacks, int slices);
 
 // Open grid spanning origin + s*e1 + t*e2, s, t in [0, 1]; n1 x n2 quads, 2 triangles each.
 Mesh make_grid(const Vec3& origin, const Vec3& e1, const Vec3& e2, int n1, int n2);
+
+// A surface over an nu x nv grid of quads, two triangles each ((i, j), (i+1, j), (i+1, j+1) and
+// (i, j), (i+1, j+1), (i, j+1)), its vertex (i, j) at `at(i / nu, j / nv)`, row after row.
+Mesh make_grid_surface(int nu, int nv, const std::function<Vec3(double, double)>& at);
 
 // A unit sheet (6 n^2 triangles, n across) folded over itself along x = 1: its bottom layer at
 // z = 0 over [0, 1]^2, a half-circle crease, its top layer at z = `fold` lowered by a bump `sag`

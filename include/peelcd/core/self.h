@@ -51,7 +51,8 @@ bool test_self_couple(const TriangleCorners& a, const TriangleCorners& b, Contac
 void self_narrow_phase(const Mesh& mesh, const std::vector<std::uint64_t>& candidates, std::vector<Contact>& out);
 
 // The exact self reference: every non-adjacent couple of triangles that share a point, through
-// CGAL's box_self_intersection_d and the exact triangle test; pack_pair(t, u), t < u, sorted.
+// CGAL's box_self_intersection_d and the exact triangle test; pack_pair(t, u), t < u, sorted
+// (core/reference.cpp, beside the two-object reference).
 std::vector<std::uint64_t> exact_self_pairs(const Mesh& mesh, SelfAdjacency adjacency = SelfAdjacency::index);
 
 }  // namespace peelcd
