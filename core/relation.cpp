@@ -219,7 +219,7 @@ struct Crossing {
 // One axis at `n` texels across: the volume where both winding numbers are positive, and the
 // gradient's k-th component.
 void cast_axis(const Mesh& a, const Mesh& b, const Aabb& roi, int k, int n, double& volume, double& gradient_k,
-               std::vector<Crossing>& xs) {
+               std::vector<Crossing>& xs, std::vector<float>* per_texel = nullptr) {
   const int iu = (k + 1) % 3, iv = (k + 2) % 3;
   const double u0 = roi.lo[iu], v0 = roi.lo[iv];
   const double hu = (roi.hi[iu] - roi.lo[iu]) / n, hv = (roi.hi[iv] - roi.lo[iv]) / n;
@@ -258,13 +258,17 @@ void cast_axis(const Mesh& a, const Mesh& b, const Aabb& roi, int k, int n, doub
   });
   const double area = hu * hv;
   double length = 0.0, grad = 0.0;
+  if (per_texel) per_texel->assign(std::size_t(n) * std::size_t(n), 0.0f);
   for (std::size_t i = 0; i < xs.size();) {
     std::size_t j = i;
     int w[2] = {0, 0};
     double last = 0.0;
     for (; j < xs.size() && xs[j].texel == xs[i].texel; ++j) {
       const Crossing& x = xs[j];
-      if (w[0] > 0 && w[1] > 0) length += x.depth - last;
+      if (w[0] > 0 && w[1] > 0) {
+        length += x.depth - last;
+        if (per_texel) (*per_texel)[x.texel] += float(x.depth - last);
+      }
       // A's surface inside B: its outward normal's k-component, signed (leaving A along +k
       // means A's normal points along +k).
       if (x.object == 0 && w[1] > 0) grad += x.step > 0 ? -area : area;
@@ -301,6 +305,30 @@ VolumeEstimate overlap_volume(const Mesh& a, const Mesh& b, const Aabb& roi, int
   e.gradient = Vec3(g[0], g[1], g[2]);
   e.error = std::max({std::abs(v[0] - v[2]), std::abs(v[1] - v[2]), std::abs(half_v - v[2])});
   return e;
+}
+
+std::string overlap_lengths(const Mesh& a, const Mesh& b, const Vec3& center, const Vec3& u, const Vec3& v, const Vec3& d,
+                            double half_uv, double half_depth, int n, std::vector<float>& out) {
+  out.clear();
+  for (int side = 0; side < 2; ++side) {
+    const std::string problem = analyse_shape(side == 0 ? a : b).problem();
+    if (!problem.empty()) return std::string(side == 0 ? "A" : "B") + " is " + problem;
+  }
+  const auto in_view = [&](const Mesh& m) {
+    Mesh r = m;
+    for (Vec3& p : r.vertices) {
+      const Vec3 q = p - center;
+      p = Vec3(u.dot(q), v.dot(q), d.dot(q));
+    }
+    return r;
+  };
+  Aabb box;
+  box.lo = Vec3(-half_uv, -half_uv, -half_depth);
+  box.hi = Vec3(half_uv, half_uv, half_depth);
+  std::vector<Crossing> xs;
+  double volume = 0.0, gradient = 0.0;
+  cast_axis(in_view(a), in_view(b), box, 2, n, volume, gradient, xs, &out);
+  return {};
 }
 
 double exact_overlap_volume(const Mesh& a, const Mesh& b) {

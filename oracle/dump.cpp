@@ -222,6 +222,10 @@ Dump make_dump(const FrameResult& frame, const std::vector<CapturedView>& captur
                     {"box_lo", vec(c.roi.box.lo)},  {"box_hi", vec(c.roi.box.hi)}};
       v.layers = c.layers;
       v.pcs = c.pcs;
+      if (o.volume && r.object_a != r.object_b)  // the inside intervals, per texel (docs/design.md)
+        v.inside_note = overlap_lengths(objects[r.object_a].mesh, objects[r.object_b].mesh, c.roi.center, c.roi.frame.u,
+                                        c.roi.frame.v, c.roi.frame.d, c.roi.half_uv, c.roi.half_depth, c.roi.resolution,
+                                        v.inside);
       p.views.push_back(std::move(v));
     }
     d.pairs.push_back(std::move(p));
@@ -303,6 +307,27 @@ void write_dump(const Dump& d, const std::string& dir, bool previews) {
                          {"layers", v.layers.size()},
                          {"pcs", v.pcs.size()},
                          {"geometry", v.geometry}});
+        if (!v.inside.empty()) {  // inside.png: length where both are inside, white = the longest
+          float longest = 0.0f;
+          double sum = 0.0;
+          for (const float x : v.inside) {
+            longest = std::max(longest, x);
+            sum += x;
+          }
+          const int n = v.resolution;
+          Rgb image(n, n);
+          for (int j = 0; j < n; ++j)
+            for (int i = 0; i < n; ++i) {
+              const float x = v.inside[std::size_t(j) * n + i];
+              const auto g = std::uint8_t(longest > 0 ? 40.0f + 215.0f * x / longest : 0.0f);
+              image.set(i, n - 1 - j, x > 0 ? std::array<std::uint8_t, 3>{g, g, g} : std::array<std::uint8_t, 3>{0, 0, 0});
+            }
+          write_png((tmp / v.dir / "inside.png").string(), image);
+          const double texel = 2.0 * v.geometry.value("half_uv", 0.0) / n;
+          views.back()["inside"] = {{"file", "inside.png"}, {"longest", longest}, {"volume", sum * texel * texel}};
+        } else if (!v.inside_note.empty()) {
+          views.back()["inside"] = {{"unknown", v.inside_note}};
+        }
       }
       pairs.push_back({{"dir", p.dir},
                        {"a", p.name_a},

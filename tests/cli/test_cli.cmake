@@ -298,6 +298,13 @@ foreach(f meta.json index.html pair0_bunny_dragon/pcs.txt pair0_bunny_dragon/col
   endif()
 endforeach()
 expect("dump: output exists" 2 "exists and is not an empty folder" dump ${scene} --res 64 --out ${WORK}/dump)
+# With --volume, each view shows the inside intervals: inside.png and their volume in meta.json.
+expect("dump --volume" 0 "1 ROIs" dump ${scene} --res 64 --volume --cull box --out ${WORK}/dump_inside)
+file(READ ${WORK}/dump_inside/meta.json inside_meta)
+if(NOT EXISTS ${WORK}/dump_inside/pair0_bunny_dragon/view0/inside.png OR
+   NOT inside_meta MATCHES "\"inside\": {[^}]*\"volume\": 0\\.4[0-9]")
+  message(SEND_ERROR "dump --volume: no inside.png, or meta.json's inside volume is not about 0.45")
+endif()
 expect("dump: missing parent folder" 2 "the folder '.*/no/such' does not exist" dump ${scene} --out ${WORK}/no/such/dump)
 expect("dump: bad resolution" 2 "resolution 100000 is outside" dump ${scene} --res 100000 --out ${WORK}/dump_bad)
 if(EXISTS ${WORK}/dump_bad OR EXISTS ${WORK}/dump_bad.partial)

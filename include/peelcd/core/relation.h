@@ -69,6 +69,14 @@ struct VolumeEstimate {
 // axis. Open or inside-out meshes give known = false and the reason.
 VolumeEstimate overlap_volume(const Mesh& a, const Mesh& b, const Aabb& roi, int resolution);
 
+// Per texel of an n x n image seen along `d` over the square [-half_uv, half_uv]^2 of the (u, v)
+// plane through `center` (texel (i, j) at j * n + i, u to the right, v up: a ROI view's layout),
+// the length along d, within [-half_depth, half_depth], where both closed meshes are inside:
+// the "inside intervals" a dump shows. Empty when a mesh is not closed and outward: returns
+// why, in words ("A is open: ..."); else empty.
+std::string overlap_lengths(const Mesh& a, const Mesh& b, const Vec3& center, const Vec3& u, const Vec3& v, const Vec3& d,
+                            double half_uv, double half_depth, int n, std::vector<float>& out);
+
 // The exact volume of the intersection (CGAL's corefinement with exact constructions, then
 // volume()): the check of overlap_volume(). Throws std::runtime_error when CGAL refuses the
 // meshes (open, self-intersecting).

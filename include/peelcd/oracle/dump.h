@@ -42,6 +42,10 @@ struct DumpView {
   nlohmann::json geometry;  // centre, u, v, d, half_uv, half_depth, box (for the record)
   std::vector<std::vector<std::uint32_t>> layers;  // N*N*4 words each, GL row order (bottom first)
   std::vector<IdPair> pcs;
+  // With the volume option (closed objects): per texel, the length along d where both objects
+  // are inside (overlap_lengths(), peelcd/core/relation.h), written as inside.png; or why not.
+  std::vector<float> inside;
+  std::string inside_note;
 };
 
 struct DumpPair {
