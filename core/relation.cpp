@@ -235,10 +235,13 @@ void cast_axis(const Mesh& a, const Mesh& b, const Aabb& roi, int k, int n, doub
       const Vec3& c2 = m.vertices[t[2]];
       const double umin = std::min({c0[iu], c1[iu], c2[iu]}), umax = std::max({c0[iu], c1[iu], c2[iu]});
       const double vmin = std::min({c0[iv], c1[iv], c2[iv]}), vmax = std::max({c0[iv], c1[iv], c2[iv]});
-      const int i0 = std::max(0, int(std::ceil((umin - u0) / hu - 0.5)) - 1);
-      const int i1 = std::min(n - 1, int(std::floor((umax - u0) / hu - 0.5)) + 1);
-      const int j0 = std::max(0, int(std::ceil((vmin - v0) / hv - 0.5)) - 1);
-      const int j1 = std::min(n - 1, int(std::floor((vmax - v0) / hv - 0.5)) + 1);
+      // The texel centres the triangle's box may cover (clamped to the grid before any
+      // conversion: a triangle far from the box must not overflow an int).
+      const auto texel = [n](double x) { return int(std::clamp(x, -2.0, double(n) + 1.0)); };
+      const int i0 = std::max(0, texel(std::ceil((umin - u0) / hu - 0.5)) - 1);
+      const int i1 = std::min(n - 1, texel(std::floor((umax - u0) / hu - 0.5)) + 1);
+      const int j0 = std::max(0, texel(std::ceil((vmin - v0) / hv - 0.5)) - 1);
+      const int j1 = std::min(n - 1, texel(std::floor((vmax - v0) / hv - 0.5)) + 1);
       if (i0 > i1 || j0 > j1) continue;
       if (!project(c0, c1, c2, k, p)) continue;
       const Vec3 normal = (c1 - c0).cross(c2 - c0);

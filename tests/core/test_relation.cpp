@@ -87,6 +87,14 @@ TEST_CASE("volume: boxes exact, spheres within the stated error of CGAL's exact 
   // The overlap grows moving A along +x (B lies that way): the gradient's x is positive.
   CHECK(e.gradient.x() == Approx(0.5 * 0.4).epsilon(1e-9));
   CHECK(exact_overlap_volume(a, b) == Approx(0.1).epsilon(1e-12));
+  // A piece of B far outside the overlap box (1e25 away) changes nothing (and converts no huge
+  // coordinate to a texel index).
+  Mesh far = b;
+  const Mesh piece = make_box(Vec3(1e25, -1e25, 3e24), Vec3(1e25 + 1, -1e25 + 1, 3e24 + 1));
+  const auto base = std::uint32_t(far.vertices.size());
+  far.vertices.insert(far.vertices.end(), piece.vertices.begin(), piece.vertices.end());
+  for (const Tri& t : piece.triangles) far.triangles.push_back({t[0] + base, t[1] + base, t[2] + base});
+  CHECK(overlap_volume(a, far, roi, 64).volume == Approx(0.1).epsilon(1e-12));
 
   const Mesh s1 = make_uv_sphere(Vec3(0, 0, 0), 1.0, 24, 48);
   const Mesh s2 = make_uv_sphere(Vec3(0.9, 0.2, 0.1), 0.8, 24, 48);
