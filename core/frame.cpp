@@ -149,10 +149,7 @@ void relate_pairs(std::vector<PairResult>& pairs, const std::function<const Mesh
     p.relation_note.clear();
     p.volume = VolumeEstimate{};
     if (p.object_a == p.object_b) {  // self: from the contacts alone
-      p.relation = Relation::disjoint;
-      for (const Contact& c : p.colliding)
-        p.relation = c.kind == ContactKind::crossing ? Relation::crossing
-                     : p.relation == Relation::crossing ? Relation::crossing : Relation::touching;
+      p.relation = contact_relation(p.colliding);
       continue;
     }
     const Aabb& ba = boxes[p.object_a];
@@ -161,8 +158,7 @@ void relate_pairs(std::vector<PairResult>& pairs, const std::function<const Mesh
                         (((ba.lo.array() >= bb.lo.array()).all() && (ba.hi.array() <= bb.hi.array()).all()) ||
                          ((bb.lo.array() >= ba.lo.array()).all() && (bb.hi.array() <= ba.hi.array()).all()));
     if (!p.colliding.empty() || !within) {  // from the contacts: no mesh read
-      static const Mesh none;
-      p.relation = p.colliding.empty() ? Relation::disjoint : relate(none, none, ba, bb, p.colliding, p.relation_note);
+      p.relation = contact_relation(p.colliding);
     } else {
       p.relation = relate(mesh_of(p.object_a), mesh_of(p.object_b), ba, bb, p.colliding, p.relation_note);
     }

@@ -167,6 +167,13 @@ bool point_inside(const Mesh& container, const Vec3& q) {
   return crossings % 2 == 1;
 }
 
+Relation contact_relation(const std::vector<Contact>& contacts) {
+  if (contacts.empty()) return Relation::disjoint;
+  for (const Contact& c : contacts)
+    if (c.kind == ContactKind::crossing) return Relation::crossing;
+  return Relation::touching;
+}
+
 Relation relate(const Mesh& a, const Mesh& b, const std::vector<Contact>& contacts, std::string& note) {
   return relate(a, b, bounds(a), bounds(b), contacts, note);
 }
@@ -174,11 +181,7 @@ Relation relate(const Mesh& a, const Mesh& b, const std::vector<Contact>& contac
 Relation relate(const Mesh& a, const Mesh& b, const Aabb& ba, const Aabb& bb, const std::vector<Contact>& contacts,
                 std::string& note) {
   note.clear();
-  if (!contacts.empty()) {
-    for (const Contact& c : contacts)
-      if (c.kind == ContactKind::crossing) return Relation::crossing;
-    return Relation::touching;
-  }
+  if (!contacts.empty()) return contact_relation(contacts);
   const auto within = [](const Aabb& x, const Aabb& y) {
     return !x.empty() && !y.empty() && (x.lo.array() >= y.lo.array()).all() && (x.hi.array() <= y.hi.array()).all();
   };

@@ -199,7 +199,7 @@ std::size_t GlImageStage::Impl::peel_conservative_batch(const PeelJob* jobs, std
   check("the batched conservative draws");
 
   if (!host_resolve()) {
-    resolve_batch_on_gpu(jobs, take, texels, outs, t);
+    resolve_batch_on_gpu(take, texels, outs, t);
     t.gpu += ms_since(t_gpu);
     outs[0].gl_passes = 2;  // the count and fill draws for the batch
     return take;
@@ -244,8 +244,7 @@ std::size_t GlImageStage::Impl::peel_conservative_batch(const PeelJob* jobs, std
   return take;
 }
 
-std::uint32_t GlImageStage::Impl::resolve_batch_on_gpu(const PeelJob* jobs, std::size_t take, std::size_t texels,
-                                                       PeelResult* outs, Timings& t) {
+void GlImageStage::Impl::resolve_batch_on_gpu(std::size_t take, std::size_t texels, PeelResult* outs, Timings& t) {
   // Per-view depths, zeroed; the PCS header reset; one dispatch over every texel.
   const std::size_t layer_bytes = take * sizeof(std::uint32_t);
   if (layer_bytes > batch_layers_capacity) {
@@ -302,9 +301,7 @@ std::uint32_t GlImageStage::Impl::resolve_batch_on_gpu(const PeelJob* jobs, std:
     out.epsilon_window = 0.0f;
     out.slope = 0.0f;
     if (!out.pcs.empty()) ++out.pcs_readbacks;
-    (void)jobs;
   }
-  return got.max_fragments;
 }
 
 }  // namespace peelcd::gl

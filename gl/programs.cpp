@@ -66,8 +66,6 @@ GlImageStage::Impl::Impl(std::shared_ptr<Context> ctx, const GlOptions& opt)
   u_cbr_texels = gl.GetUniformLocation(cons_batch_resolve_program, "texels");
   u_cb_count_only = gl.GetUniformLocation(cons_batch_program, "count_only");
   u_cb_viewport = gl.GetUniformLocation(cons_batch_program, "viewport");
-  u_cb_slots = gl.GetUniformLocation(cons_batch_program, "slots");
-  u_cb_texels = gl.GetUniformLocation(cons_batch_program, "texels");
   u_cs_clip = gl.GetUniformLocation(cons_program, "clip_from_local");
   u_cs_model = gl.GetUniformLocation(cons_program, "roi_from_object");
   u_cs_res = gl.GetUniformLocation(cons_program, "resolution");

@@ -95,7 +95,7 @@ struct GlImageStage::Impl {
   GLint u_cr_res = -1, u_cr_slots = -1, u_cr_append = -1, u_cr_emit = -1;
   // Batched conservative views (batch.cpp, shaders/conservative.* with PEELCD_BATCH).
   GLuint cons_batch_program = 0;
-  GLint u_cb_viewport = -1, u_cb_slots = -1, u_cb_texels = -1;
+  GLint u_cb_viewport = -1;
   // Its GPU resolve (Resolve::gpu): one dispatch over the packed k-buffer, per-view depths kept
   // in batch_layers, the PCS list (draw orders) the only thing read back beside two headers.
   GLuint cons_batch_resolve_program = 0, batch_layers = 0;
@@ -216,10 +216,8 @@ struct GlImageStage::Impl {
   // One view: its geometry uploaded, then peeled by the configured peeler (GlImageStage::peel).
   void peel_one(const PeelJob& job, PeelResult& out, Timings& timings);
   std::size_t peel_conservative_batch(const PeelJob* jobs, std::size_t count, PeelResult* outs, Timings& t);
-  // The GPU resolve of a drawn batch (batch.cpp): each job's PCS and layers; returns the deepest
-  // texel's fragment count.
-  std::uint32_t resolve_batch_on_gpu(const PeelJob* jobs, std::size_t take, std::size_t texels, PeelResult* outs,
-                                     Timings& t);
+  // The GPU resolve of a drawn batch (batch.cpp): each job's PCS and layers.
+  void resolve_batch_on_gpu(std::size_t take, std::size_t texels, PeelResult* outs, Timings& t);
   bool host_resolve() const {
     return options.resolve == Resolve::host || (options.resolve == Resolve::automatic && software_renderer);
   }

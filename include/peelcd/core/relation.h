@@ -50,6 +50,9 @@ bool point_inside(const Mesh& container, const Vec3& p);
 // lies within B's (or B's within A's) and the container is closed: one vertex of each connected
 // component of the inner mesh, exactly; unknown (with `note`) when the container is open.
 Relation relate(const Mesh& a, const Mesh& b, const std::vector<Contact>& contacts, std::string& note);
+// The relation the contacts alone give: crossing when one penetrates, touching when all merely
+// touch, disjoint when there is none (a self pair's relation; the first step of relate()).
+Relation contact_relation(const std::vector<Contact>& contacts);
 // The same with the meshes' boxes known (nothing read when no box lies within the other).
 Relation relate(const Mesh& a, const Mesh& b, const Aabb& box_a, const Aabb& box_b, const std::vector<Contact>& contacts,
                 std::string& note);
