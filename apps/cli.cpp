@@ -62,9 +62,10 @@ Peeler peeler_option(const std::string& text) {
 
 // GL stage options: the scene file's, overridden by the command line's.
 gl::GlOptions merged_gl_options(const Scene& scene, const std::string& peeler, const std::string& resolve,
-                               bool no_batch) {
+                               bool no_batch, bool cpu_select) {
   gl::GlOptions o = scene.gl;
   if (no_batch) o.batch = false;
+  if (cpu_select) o.gpu_select = false;
   if (!peeler.empty()) o.peeler = peeler_option(peeler);
   if (!resolve.empty())
     o.resolve = parsed(resolve, parse_resolve, "peelcd: --resolve: unknown resolve", "auto, gpu or host");
@@ -216,6 +217,9 @@ void add_frame_options(CLI::App* c, DetectArgs& d) {
                                         "llvmpipe, else gpu; default), gpu (a compute pass) or host (mapped, resolved on the CPU)");
   c->add_flag("--no-batch", d.no_batch, "GL stage: draw each conservative ROI view on its own instead of packing the "
                                         "frame's views into one k-buffer and one draw (the same results; for comparison)");
+  c->add_flag("--cpu-select", d.cpu_select, "GL stage: in a batch, draw the rigid objects' triangles the host's culling "
+                                            "kept instead of selecting them on the GPU from their resident buffers (fewer "
+                                            "triangles drawn, uploaded every frame; the same contacts)");
   c->add_flag("--paper", d.paper,
               "The paper's configuration: point sampling, alternate peeling, paper IDs, constant epsilon, one view "
               "along world x, no culling (other options given override it)");

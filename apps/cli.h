@@ -82,7 +82,7 @@ struct DetectArgs {
   std::map<std::string, std::string> options;
   std::map<std::string, bool> flags_on, flags_off;  // boolean rows: --KEY, --no-KEY
   std::string peeler, resolve;  // GL stage options (gl::GlOptions)
-  bool paper = false, no_batch = false;
+  bool paper = false, no_batch = false, cpu_select = false;
   double max_miss = NAN;  // percent; NaN = report only
   std::string json_out;
   int repeat = 1;
@@ -134,7 +134,7 @@ std::vector<std::string> scene_inputs(const Scene& scene);
 Peeler peeler_option(const std::string& text);
 // GL stage options: the scene file's, overridden by the command line's.
 gl::GlOptions merged_gl_options(const Scene& scene, const std::string& peeler, const std::string& resolve,
-                               bool no_batch = false);
+                               bool no_batch = false, bool cpu_select = false);
 // Command-line values override the scene file's (each checked by the option table's rules).
 DetectOptions merged_options(const Scene& scene, const DetectArgs& a);
 // --backend, one help text: every image stage, or (`gl_only`) the GL ones.

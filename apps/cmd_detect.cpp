@@ -47,7 +47,7 @@ int run_detect(const DetectArgs& a) {
   const std::vector<Object> objects = load_objects(scene);
   progress.phase("peelcd detect: running the frame...");
 
-  Runner runner = make_runner(a.backend, merged_gl_options(scene, a.peeler, a.resolve, a.no_batch));
+  Runner runner = make_runner(a.backend, merged_gl_options(scene, a.peeler, a.resolve, a.no_batch, a.cpu_select));
   FrameResult result;
   std::vector<Timings> runs;
   for (int i = 0; i < std::max(1, a.repeat); ++i) {
@@ -200,7 +200,7 @@ int run_explain(const DetectArgs& a, const ExplainArgs& x) {
   const std::vector<Object> objects = load_objects(scene);
   const oracle::PairQuery query = oracle::parse_pair_query(x.pair, objects);
   progress.phase("peelcd explain: running the frame...");
-  Runner runner = make_runner(a.backend, merged_gl_options(scene, a.peeler, a.resolve, a.no_batch));
+  Runner runner = make_runner(a.backend, merged_gl_options(scene, a.peeler, a.resolve, a.no_batch, a.cpu_select));
   const oracle::FrameTrace trace(*runner.detector, objects, opt);
   const oracle::Explanation e = trace.explain(query);
   progress.clear();

@@ -31,11 +31,11 @@ int run_simulate(const SimArgs& a) {
   const auto seq = make_sequence(a.test, a.frames, !a.no_rigid, a.objects);
   Scene defaults;
   const DetectOptions opt = merged_options(defaults, a.detect);
-  Runner runner = make_runner(a.detect.backend, merged_gl_options(Scene{}, a.detect.peeler, a.detect.resolve, a.detect.no_batch));
+  Runner runner = make_runner(a.detect.backend, merged_gl_options(Scene{}, a.detect.peeler, a.detect.resolve, a.detect.no_batch, a.detect.cpu_select));
   std::vector<Object> objects;
   std::string csv = "frame,phase,triangles,rois,rois_exact,rois_peeled,triangles_uploaded,triangles_indexed,shape_uploads,gl_passes,pcs_readbacks,nctp,found,"
                     "false_contacts,aabb_ms,upload_ms,gpu_ms,readback_ms,cpu_ms,total_ms,gl_draws,gl_dispatches,gl_readbacks,"
-                    "bytes_uploaded,bytes_read\n";
+                    "bytes_uploaded,bytes_read,geometry_bytes\n";
   std::printf("peelcd simulate %s: %zu frames, %s, ids=%s peel=%s slope=%g views=%d res=%s\n", seq->name().c_str(),
               seq->frames(), runner.renderer().c_str(), to_string(opt.ids), to_string(opt.peel), opt.slope,
               opt.views, opt.resolution ? std::to_string(opt.resolution).c_str() : ("budget " + std::to_string(opt.budget)).c_str());
@@ -48,7 +48,8 @@ int run_simulate(const SimArgs& a) {
   };
   std::vector<PhaseSum> phases(seq->phases());
   std::size_t false_total = 0;
-  double gl_sum[5] = {0, 0, 0, 0, 0};  // draws, dispatches, readbacks, bytes up, bytes read
+  double gl_sum[6] = {0, 0, 0, 0, 0, 0};  // draws, dispatches, readbacks, bytes up, bytes read, geometry bytes
+  double gl_after_first = 0;  // geometry bytes uploaded after the first frame
   FrameResult r;  // reused frame after frame, as an application would
   const Progress progress("frames", true);
   for (std::size_t f = 0; f < seq->frames(); ++f) {
@@ -70,16 +71,18 @@ int run_simulate(const SimArgs& a) {
                 t.upload + t.gpu, t.readback, t.cpu, t.total);
     char line[512];
     std::snprintf(line, sizeof line,
-                  "%zu,%c,%zu,%zu,%zu,%zu,%zu,%zu,%zu,%zu,%zu,%zu,%zu,%zu,%.4f,%.4f,%.4f,%.4f,%.4f,%.4f,%zu,%zu,%zu,%zu,%zu\n", f,
+                  "%zu,%c,%zu,%zu,%zu,%zu,%zu,%zu,%zu,%zu,%zu,%zu,%zu,%zu,%.4f,%.4f,%.4f,%.4f,%.4f,%.4f,%zu,%zu,%zu,%zu,%zu,%zu\n", f,
                   char('a' + ph), tris, r.pairs.size(), r.rois_exact, r.rois_peeled, r.triangles_uploaded, r.triangles_indexed,
                   r.shape_uploads, r.gl_passes,
                   r.pcs_readbacks, sc.exact, sc.found, sc.false_contacts, t.aabb, t.upload, t.gpu, t.readback, t.cpu,
-                  t.total, r.gl_draws, r.gl_dispatches, r.gl_readbacks, r.bytes_uploaded, r.bytes_read);
+                  t.total, r.gl_draws, r.gl_dispatches, r.gl_readbacks, r.bytes_uploaded, r.bytes_read, r.geometry_bytes);
     gl_sum[0] += double(r.gl_draws);
     gl_sum[1] += double(r.gl_dispatches);
     gl_sum[2] += double(r.gl_readbacks);
     gl_sum[3] += double(r.bytes_uploaded);
     gl_sum[4] += double(r.bytes_read);
+    gl_sum[5] += double(r.geometry_bytes);
+    if (f > 0) gl_after_first += double(r.geometry_bytes);
     csv += line;
     PhaseSum& p = phases[ph];
     ++p.frames;
@@ -112,8 +115,10 @@ int run_simulate(const SimArgs& a) {
   }
   std::printf("false contacts over all frames: %zu\n", false_total);
   const double nf = double(std::max<std::size_t>(seq->frames(), 1));
-  std::printf("GL per frame (means): %.1f draws, %.1f dispatches, %.1f readbacks, %.1f KB uploaded, %.1f KB read back\n",
-              gl_sum[0] / nf, gl_sum[1] / nf, gl_sum[2] / nf, gl_sum[3] / nf / 1024.0, gl_sum[4] / nf / 1024.0);
+  std::printf("GL per frame (means): %.1f draws, %.1f dispatches, %.1f readbacks, %.1f KB uploaded (%.1f KB of it mesh "
+              "data; %.1f KB after the first frame), %.1f KB read back\n",
+              gl_sum[0] / nf, gl_sum[1] / nf, gl_sum[2] / nf, gl_sum[3] / nf / 1024.0, gl_sum[5] / nf / 1024.0,
+              seq->frames() > 1 ? gl_after_first / (nf - 1.0) / 1024.0 : 0.0, gl_sum[4] / nf / 1024.0);
   if (!a.csv.empty()) write_output(a.csv, csv);
   return false_total ? 1 : 0;
 }

@@ -601,7 +601,7 @@ void Detector::detect(const std::vector<const Object*>& object_ptrs, const Detec
     s.jobs[j].triangles[1] = &s.job_tris[2 * j + 1];
   }
 
-  out.gl_draws = out.gl_dispatches = out.gl_readbacks = out.bytes_uploaded = out.bytes_read = 0;
+  out.gl_draws = out.gl_dispatches = out.gl_readbacks = out.bytes_uploaded = out.bytes_read = out.geometry_bytes = 0;
   if (!s.jobs.empty()) {
     stage.counters = StageCounters{};
     stage.begin_frame();
@@ -613,6 +613,7 @@ void Detector::detect(const std::vector<const Object*>& object_ptrs, const Detec
     out.gl_readbacks = stage.counters.readbacks;
     out.bytes_uploaded = stage.counters.bytes_uploaded;
     out.bytes_read = stage.counters.bytes_read;
+    out.geometry_bytes = stage.counters.geometry_bytes;
   }
 
   for (std::size_t pi = 0; pi < pairs.size(); ++pi) {

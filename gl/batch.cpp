@@ -66,7 +66,7 @@ std::size_t GlImageStage::Impl::peel_conservative_batch(const PeelJob* jobs, std
                                                         Timings& t) {
   // As many views as one packed k-buffer holds at the current slots (the largest storage block).
   const std::size_t most = std::min(max_storage_block / 16, fetchable());
-  std::size_t texels = 0, take = 0, corners_total = 0;
+  std::size_t texels = 0, take = 0;
   int largest = 0;
   for (; take < count; ++take) {
     const int n = jobs[take].view.resolution;
@@ -74,7 +74,6 @@ std::size_t GlImageStage::Impl::peel_conservative_batch(const PeelJob* jobs, std
     if (texels + tx > most) break;
     texels += tx;
     largest = std::max(largest, n);
-    corners_total += 3 * (jobs[take].triangles[0]->size() + jobs[take].triangles[1]->size());
   }
   if (take < 2) {  // one view alone fills the counts: the one-view path
     peel_one(jobs[0], outs[0], t);
@@ -83,10 +82,13 @@ std::size_t GlImageStage::Impl::peel_conservative_batch(const PeelJob* jobs, std
 
   const auto t0 = Clock::now();
   batch_corners.clear();
-  batch_triangle_view.clear();
+  batch_entry_data.clear();
+  batch_job_data.clear();
   batch_ids.clear();
   batch_view_data.clear();
-  std::size_t base = 0;
+  std::size_t base = 0, invocations = 0;
+  std::size_t shapes_before = shape_uploads;
+  shape_uploads = 0;
   for (std::size_t j = 0; j < take; ++j) {
     const PeelJob& job = jobs[j];
     PeelResult& out = outs[j];
@@ -98,6 +100,7 @@ std::size_t GlImageStage::Impl::peel_conservative_batch(const PeelJob* jobs, std
       const Object& object = *job.objects[slot];
       const bool rigid = object.rigid && object.rigid->shape;
       const Mesh& mesh = rigid ? *object.rigid->shape : object.mesh;
+      const std::uint32_t view_object = std::uint32_t(j) << 1 | std::uint32_t(slot);
       float model[16] = {1, 0, 0, 0, 0, 1, 0, 0, 0, 0, 1, 0, 0, 0, 0, 1};
       if (rigid) {  // ROI-local from shape-local, composed in double, rounded once (as prepare())
         Eigen::Affine3d m = object.rigid->pose;
@@ -107,14 +110,31 @@ std::size_t GlImageStage::Impl::peel_conservative_batch(const PeelJob* jobs, std
       }
       put_matrix(batch_view_data, model);
       const std::vector<std::uint32_t>& tris = *job.triangles[slot];
+      if (rigid) {
+        const std::size_t first = resident_base(object.rigid->shape, job.ids);
+        if (options.gpu_select && !job.capture) {  // the selection pass picks its triangles
+          if (!mesh.triangles.empty())
+            batch_job_data.push_back({std::uint32_t(first), std::uint32_t(mesh.triangles.size()), view_object,
+                                      std::uint32_t(invocations)});
+          invocations += mesh.triangles.size();
+          continue;
+        }
+        for (const std::uint32_t tri : tris) {  // the host's selection, from the resident corners
+          batch_entry_data.push_back({std::uint32_t(first + 3 * std::size_t(tri)), view_object,
+                                      corner_id(mesh, tri, 2, job.ids), 0u});
+          batch_ids.push_back(batch_entry_data.back()[2]);
+        }
+        out.triangles_indexed += tris.size();
+        continue;
+      }
       for (const std::uint32_t tri : tris) {
+        const std::uint32_t corner = std::uint32_t(batch_corners.size());
         for (int k = 0; k < 3; ++k) {
-          const Vec3& p = mesh.vertices[mesh.triangles[tri][k]];
-          const Vec3 local = rigid ? p : Vec3(p - view.center);
+          const Vec3 local = mesh.vertices[mesh.triangles[tri][k]] - view.center;
           batch_corners.push_back({float(local.x()), float(local.y()), float(local.z()), corner_id(mesh, tri, k, job.ids)});
         }
-        batch_triangle_view.push_back(std::uint32_t(j) << 1 | std::uint32_t(slot));
-        batch_ids.push_back(batch_corners.back().id);  // the provoking (last) corner's ID
+        batch_entry_data.push_back({0x80000000u | corner, view_object, batch_corners.back().id, 0u});
+        batch_ids.push_back(batch_corners.back().id);
       }
       out.triangles_uploaded += tris.size();
     }
@@ -124,18 +144,32 @@ std::size_t GlImageStage::Impl::peel_conservative_batch(const PeelJob* jobs, std
     batch_view_data.insert(batch_view_data.end(), info_words, info_words + 4);
     base += std::size_t(view.resolution) * std::size_t(view.resolution);
   }
-  const auto upload_buffer = [&](GLuint buffer, std::size_t& capacity, const void* data, std::size_t bytes) {
-    if (bytes > capacity) {
-      capacity = std::max(bytes, capacity * 3 / 2);
+  outs[0].shape_uploads = shape_uploads;
+  shape_uploads = shapes_before;
+  const std::size_t host_entries = batch_entry_data.size();
+  if (std::max(host_entries + invocations, batch_corners.size()) >= 0x7fffffffu / 3)
+    throw GlError("peelcd::gl::GlImageStage: a batch of " + std::to_string(host_entries + invocations) +
+                  " triangles is more than a draw's order holds (2^31 / 3)");
+  const auto upload_buffer = [&](GLuint buffer, std::size_t& capacity, const void* data, std::size_t bytes,
+                                 std::size_t reserve, bool geometry) {
+    if (std::max(bytes, reserve) > capacity || capacity == 0) {
+      capacity = std::max({bytes, reserve, capacity * 3 / 2, std::size_t(16)});
       gl.NamedBufferData(buffer, GLsizeiptr(capacity), nullptr, GL_STREAM_DRAW);
     }
+    if (bytes == 0) return;
     gl.NamedBufferSubData(buffer, 0, GLsizeiptr(bytes), data);
-    count_upload(bytes);
+    geometry ? count_geometry(bytes) : count_upload(bytes);
   };
-  upload_buffer(batch_vbo, batch_vbo_capacity, batch_corners.data(), batch_corners.size() * sizeof(GpuVertex));
-  upload_buffer(batch_views, batch_views_capacity, batch_view_data.data(), batch_view_data.size() * sizeof(float));
-  upload_buffer(batch_triangles, batch_triangles_capacity, batch_triangle_view.data(),
-                batch_triangle_view.size() * sizeof(std::uint32_t));
+  constexpr std::size_t kEntry = 4 * sizeof(std::uint32_t);
+  upload_buffer(batch_frame, batch_frame_capacity, batch_corners.data(), batch_corners.size() * sizeof(GpuVertex), 0, true);
+  upload_buffer(batch_views, batch_views_capacity, batch_view_data.data(), batch_view_data.size() * sizeof(float), 0, false);
+  // The entries: the host's first, room after them for every triangle the selection may keep.
+  upload_buffer(batch_entries, batch_entries_capacity, batch_entry_data.data(), host_entries * kEntry,
+                (host_entries + invocations) * kEntry, true);
+  upload_buffer(batch_jobs, batch_jobs_capacity, batch_job_data.data(), batch_job_data.size() * kEntry, 0, false);
+  const std::uint32_t command[4] = {std::uint32_t(3 * host_entries), 1u, 0u, 0u};
+  gl.NamedBufferSubData(batch_command, 0, sizeof command, command);
+  count_upload(sizeof command);
   t.upload += ms_since(t0);
 
   const auto t_gpu = Clock::now();
@@ -145,7 +179,23 @@ std::size_t GlImageStage::Impl::peel_conservative_batch(const PeelJob* jobs, std
   gl.ClearNamedBufferSubData(count_buffer, GL_R32UI, 0, GLsizeiptr(texels * 4), GL_RED_INTEGER, GL_UNSIGNED_INT, &zero);
   gl.BindBufferBase(GL_SHADER_STORAGE_BUFFER, 2, count_buffer);
   gl.BindBufferBase(GL_SHADER_STORAGE_BUFFER, 3, batch_views);
-  gl.BindBufferBase(GL_SHADER_STORAGE_BUFFER, 4, batch_triangles);
+  gl.BindBufferBase(GL_SHADER_STORAGE_BUFFER, 4, batch_entries);
+  gl.BindBufferBase(GL_SHADER_STORAGE_BUFFER, 7, resident_buffer);
+  gl.BindBufferBase(GL_SHADER_STORAGE_BUFFER, 8, batch_frame);
+  if (invocations) {  // 0. The selection pass: rigid objects' triangles appended to the entries.
+    gl.BindBufferBase(GL_SHADER_STORAGE_BUFFER, 9, batch_jobs);
+    gl.BindBufferBase(GL_SHADER_STORAGE_BUFFER, 10, batch_command);
+    gl.UseProgram(cons_select_program);
+    const std::size_t groups = (invocations + 63) / 64;
+    const std::size_t gx = std::min<std::size_t>(groups, 65535), gy = (groups + gx - 1) / gx;
+    gl.Uniform1ui(u_sel_jobs, GLuint(batch_job_data.size()));
+    gl.Uniform1ui(u_sel_invocations, GLuint(invocations));
+    gl.Uniform1ui(u_sel_row, GLuint(gx * 64));
+    gl.DispatchCompute(GLuint(gx), GLuint(gy), 1);
+    count_dispatch();
+    gl.MemoryBarrier(GL_SHADER_STORAGE_BARRIER_BIT | GL_COMMAND_BARRIER_BIT);
+  }
+  gl.BindBuffer(GL_DRAW_INDIRECT_BUFFER, batch_command);
   gl.UseProgram(cons_batch_program);
   gl.Uniform1i(u_cb_viewport, largest);
   gl.BindFramebuffer(GL_FRAMEBUFFER, bare_fbo);
@@ -153,19 +203,24 @@ std::size_t GlImageStage::Impl::peel_conservative_batch(const PeelJob* jobs, std
   gl.Disable(GL_DEPTH_TEST);
   gl.Disable(GL_CULL_FACE);
   for (int i = 0; i < 6; ++i) gl.Disable(GL_CLIP_DISTANCE0 + i);
-  gl.BindVertexArray(vao);
-  gl.VertexArrayVertexBuffer(vao, 0, batch_vbo, 0, sizeof(GpuVertex));
+  gl.BindVertexArray(batch_vao);
   // 1. The count pass: each texel's fragments counted, nothing stored.
   gl.Uniform1i(u_cb_count_only, 1);
-  gl.DrawArrays(GL_TRIANGLES, 0, GLsizei(corners_total));
+  gl.DrawArraysIndirect(GL_TRIANGLES, nullptr);
   count_draw();
   gl.MemoryBarrier(GL_BUFFER_UPDATE_BARRIER_BIT);
-  // 2. The counts into offsets (a prefix sum on the host), the k-buffer sized to hold them all.
+  // 2. The counts into offsets (a prefix sum on the host), the k-buffer sized to hold them all;
+  // the triangles drawn (the command's count).
   const auto t_counts = Clock::now();
   batch_counts.resize(texels);
   gl.GetNamedBufferSubData(count_buffer, 0, GLsizeiptr(texels * 4), batch_counts.data());
   count_read(texels * 4);
+  std::uint32_t drawn[4] = {0, 0, 0, 0};
+  gl.GetNamedBufferSubData(batch_command, 0, sizeof drawn, drawn);
+  count_read(sizeof drawn);
   t.readback += ms_since(t_counts);
+  const std::size_t selected = drawn[0] / 3 - host_entries;  // by the selection pass
+  outs[0].triangles_indexed += selected;
   batch_offsets.resize(texels);
   std::size_t total = 0;
   std::uint32_t deepest = 0;
@@ -176,6 +231,8 @@ std::size_t GlImageStage::Impl::peel_conservative_batch(const PeelJob* jobs, std
   }
   if (total > most) {  // more fragments than one buffer holds: each view on its own
     gl.BindFramebuffer(GL_FRAMEBUFFER, 0);
+    gl.BindBuffer(GL_DRAW_INDIRECT_BUFFER, 0);
+    gl.BindVertexArray(vao);
     for (std::size_t j = 0; j < take; ++j) peel_one(jobs[j], outs[j], t);
     return take;
   }
@@ -192,8 +249,10 @@ std::size_t GlImageStage::Impl::peel_conservative_batch(const PeelJob* jobs, std
   gl.BindBufferBase(GL_SHADER_STORAGE_BUFFER, 1, fragment_buffer);
   gl.BindBufferBase(GL_SHADER_STORAGE_BUFFER, 6, batch_offset_buffer);
   gl.Uniform1i(u_cb_count_only, 0);
-  gl.DrawArrays(GL_TRIANGLES, 0, GLsizei(corners_total));
+  gl.DrawArraysIndirect(GL_TRIANGLES, nullptr);
   count_draw();
+  gl.BindBuffer(GL_DRAW_INDIRECT_BUFFER, 0);
+  gl.BindVertexArray(vao);
   gl.BindFramebuffer(GL_FRAMEBUFFER, 0);
   gl.MemoryBarrier(GL_BUFFER_UPDATE_BARRIER_BIT | GL_TEXTURE_FETCH_BARRIER_BIT);
   check("the batched conservative draws");
@@ -203,6 +262,15 @@ std::size_t GlImageStage::Impl::peel_conservative_batch(const PeelJob* jobs, std
     t.gpu += ms_since(t_gpu);
     outs[0].gl_passes = 2;  // the count and fill draws for the batch
     return take;
+  }
+  if (selected) {  // the selection's entries: their IDs, by draw order
+    const auto t_entries = Clock::now();
+    batch_entry_data.resize(host_entries + selected);
+    gl.GetNamedBufferSubData(batch_entries, GLintptr(host_entries * kEntry), GLsizeiptr(selected * kEntry),
+                             batch_entry_data.data() + host_entries);
+    count_read(selected * kEntry);
+    t.readback += ms_since(t_entries);
+    for (std::size_t k = host_entries; k < batch_entry_data.size(); ++k) batch_ids.push_back(batch_entry_data[k][2]);
   }
   const auto t_map = Clock::now();
   const auto* fragments = static_cast<const KFragment*>(
@@ -244,6 +312,53 @@ std::size_t GlImageStage::Impl::peel_conservative_batch(const PeelJob* jobs, std
   return take;
 }
 
+// A rigid shape's first corner in the resident buffer: copied there (GPU to GPU) from its cached
+// buffer (cached_shape(): uploaded the first time the shape is seen) the first time a batch draws
+// it. When the buffer is full, the shapes still held are moved into a larger one.
+std::size_t GlImageStage::Impl::resident_base(const std::shared_ptr<const Mesh>& shape, IdMode ids) {
+  const auto key = std::make_pair(shape.get(), ids);
+  if (auto it = resident.find(key); it != resident.end() && !it->second.owner.expired()) return it->second.base;
+  const CachedShape& cached = cached_shape(shape, ids);
+  const std::size_t corners = cached.corners;
+  resident.erase(key);
+  if (resident_used + corners > resident_capacity) {
+    std::size_t live = 0;
+    for (auto it = resident.begin(); it != resident.end();) {
+      if (it->second.owner.expired()) {
+        it = resident.erase(it);
+      } else {
+        live += it->second.corners;
+        ++it;
+      }
+    }
+    const std::size_t capacity = std::max({live + corners, resident_capacity * 3 / 2, std::size_t(1024)});
+    GLuint grown = 0;
+    gl.CreateBuffers(1, &grown);
+    gl.NamedBufferData(grown, GLsizeiptr(capacity * sizeof(GpuVertex)), nullptr, GL_STATIC_DRAW);
+    std::size_t at = 0;
+    for (auto& [k, r] : resident) {
+      gl.CopyNamedBufferSubData(resident_buffer, grown, GLintptr(r.base * sizeof(GpuVertex)),
+                                GLintptr(at * sizeof(GpuVertex)), GLsizeiptr(r.corners * sizeof(GpuVertex)));
+      r.base = at;
+      at += r.corners;
+    }
+    gl.DeleteBuffers(1, &resident_buffer);
+    resident_buffer = grown;
+    resident_capacity = capacity;
+    resident_used = at;
+  }
+  if (corners)
+    gl.CopyNamedBufferSubData(cached.vbo, resident_buffer, 0, GLintptr(resident_used * sizeof(GpuVertex)),
+                              GLsizeiptr(corners * sizeof(GpuVertex)));
+  ResidentShape r;
+  r.owner = shape;
+  r.base = resident_used;
+  r.corners = corners;
+  resident_used += corners;
+  check("a rigid shape into the resident buffer");
+  return resident.emplace(key, r).first->second.base;
+}
+
 void GlImageStage::Impl::resolve_batch_on_gpu(std::size_t take, std::size_t texels, PeelResult* outs, Timings& t) {
   // Per-view depths, zeroed; the PCS header reset; one dispatch over every texel.
   const std::size_t layer_bytes = take * sizeof(std::uint32_t);
@@ -254,7 +369,7 @@ void GlImageStage::Impl::resolve_batch_on_gpu(std::size_t take, std::size_t texe
   const GLuint zero = 0;
   gl.ClearNamedBufferSubData(batch_layers, GL_R32UI, 0, GLsizeiptr(layer_bytes), GL_RED_INTEGER, GL_UNSIGNED_INT, &zero);
   gl.BindBufferBase(GL_SHADER_STORAGE_BUFFER, 0, pcs_buffer);
-  gl.BindBufferBase(GL_SHADER_STORAGE_BUFFER, 4, batch_triangles);
+  gl.BindBufferBase(GL_SHADER_STORAGE_BUFFER, 4, batch_entries);
   gl.BindBufferBase(GL_SHADER_STORAGE_BUFFER, 5, batch_layers);
   gl.BindTextureUnit(0, count_tex);
   gl.BindTextureUnit(1, fragment_tex);
@@ -262,8 +377,8 @@ void GlImageStage::Impl::resolve_batch_on_gpu(std::size_t take, std::size_t texe
   gl.Uniform1ui(u_cbr_texels, GLuint(texels));
   gl.BindBufferBase(GL_SHADER_STORAGE_BUFFER, 6, batch_offset_buffer);
   PcsHeader got{};
-  for (;;) {
-    const PcsHeader header{0, pcs_capacity, 0, 0};
+  for (;;) {  // the list's pairs are 16 bytes here (IDs and view): half as many fit
+    const PcsHeader header{0, pcs_capacity / 2, 0, 0};
     gl.NamedBufferSubData(pcs_buffer, 0, sizeof header, &header);
     count_upload(sizeof header);
     gl.DispatchCompute(GLuint((texels + 63) / 64), 1, 1);
@@ -273,27 +388,23 @@ void GlImageStage::Impl::resolve_batch_on_gpu(std::size_t take, std::size_t texe
     gl.GetNamedBufferSubData(pcs_buffer, 0, sizeof got, &got);
     count_read(sizeof got);
     t.readback += ms_since(t_read);
-    if (got.count <= pcs_capacity) break;
-    grow_pcs(got.count + got.count / 2);  // the list did not fit: larger, and the dispatch again
+    if (got.count <= pcs_capacity / 2) break;
+    grow_pcs(2 * (got.count + got.count / 2));  // the list did not fit: larger, and the dispatch again
     gl.BindBufferBase(GL_SHADER_STORAGE_BUFFER, 0, pcs_buffer);
   }
   const auto t_read = Clock::now();
   batch_view_layers.resize(take);
   gl.GetNamedBufferSubData(batch_layers, 0, GLsizeiptr(layer_bytes), batch_view_layers.data());
   count_read(layer_bytes);
-  batch_pairs.resize(std::size_t(got.count) * 2);
+  batch_pairs.resize(std::size_t(got.count) * 4);
   if (got.count) {
-    gl.GetNamedBufferSubData(pcs_buffer, sizeof(PcsHeader), GLsizeiptr(got.count) * 8, batch_pairs.data());
-    count_read(std::size_t(got.count) * 8);
+    gl.GetNamedBufferSubData(pcs_buffer, sizeof(PcsHeader), GLsizeiptr(got.count) * 16, batch_pairs.data());
+    count_read(std::size_t(got.count) * 16);
   }
   t.readback += ms_since(t_read);
   check("the GPU resolve of the packed k-buffer");
-  // Draw orders -> the view (job) and the two triangles' IDs.
-  for (std::size_t k = 0; k < got.count; ++k) {
-    const std::uint32_t fa = batch_pairs[2 * k], fb = batch_pairs[2 * k + 1];
-    PeelResult& out = outs[batch_triangle_view[fa] >> 1];
-    out.pcs.push_back(IdPair{batch_ids[fa], batch_ids[fb]});
-  }
+  for (std::size_t k = 0; k < got.count; ++k)  // ID of A's, ID of B's, the view
+    outs[batch_pairs[4 * k + 2]].pcs.push_back(IdPair{batch_pairs[4 * k], batch_pairs[4 * k + 1]});
   for (std::size_t j = 0; j < take; ++j) {
     PeelResult& out = outs[j];
     out.layers = int(batch_view_layers[j]);

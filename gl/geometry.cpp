@@ -62,7 +62,7 @@ const GlImageStage::Impl::CachedShape& GlImageStage::Impl::cached_shape(const st
   for (std::size_t i = 2; i < corners_local.size(); i += 3) c.provoking_ids.push_back(corners_local[i].id);
   gl.CreateBuffers(1, &c.vbo);
   gl.NamedBufferData(c.vbo, GLsizeiptr(corners_local.size() * sizeof(GpuVertex)), corners_local.data(), GL_STATIC_DRAW);
-  count_upload(corners_local.size() * sizeof(GpuVertex));
+  count_geometry(corners_local.size() * sizeof(GpuVertex));
   ++shape_uploads;
   return shapes.emplace(std::make_pair(shape.get(), ids), std::move(c)).first->second;
 }
@@ -103,7 +103,7 @@ void GlImageStage::Impl::upload(int slot) {
       gl.NamedBufferData(ibo[slot], ibo_capacity[slot] * sizeof(std::uint32_t), nullptr, GL_STREAM_DRAW);
     }
     gl.NamedBufferSubData(ibo[slot], 0, n * sizeof(std::uint32_t), indices[slot].data());
-    count_upload(n * sizeof(std::uint32_t));
+    count_geometry(n * sizeof(std::uint32_t));
     return;
   }
   const std::size_t n = staging[slot].size();
@@ -112,7 +112,7 @@ void GlImageStage::Impl::upload(int slot) {
     gl.NamedBufferData(vbo[slot], vbo_capacity[slot] * sizeof(GpuVertex), nullptr, GL_STREAM_DRAW);
   }
   gl.NamedBufferSubData(vbo[slot], 0, n * sizeof(GpuVertex), staging[slot].data());
-  count_upload(n * sizeof(GpuVertex));
+  count_geometry(n * sizeof(GpuVertex));
 }
 
 }  // namespace peelcd::gl

@@ -63,6 +63,12 @@ GlImageStage::Impl::Impl(std::shared_ptr<Context> ctx, const GlOptions& opt)
       link({compile(GL_COMPUTE_SHADER, shader_source(shaders::conservative_batch_resolve_comp).c_str(),
                     "conservative_batch_resolve.comp")},
            "conservative batch resolve");
+  cons_select_program = link({compile(GL_COMPUTE_SHADER, shader_source(shaders::conservative_select_comp).c_str(),
+                                       "conservative_select.comp")},
+                              "conservative select");
+  u_sel_jobs = gl.GetUniformLocation(cons_select_program, "job_count");
+  u_sel_invocations = gl.GetUniformLocation(cons_select_program, "invocations");
+  u_sel_row = gl.GetUniformLocation(cons_select_program, "row");
   u_cbr_texels = gl.GetUniformLocation(cons_batch_resolve_program, "texels");
   u_cb_count_only = gl.GetUniformLocation(cons_batch_program, "count_only");
   u_cb_viewport = gl.GetUniformLocation(cons_batch_program, "viewport");
@@ -120,9 +126,15 @@ GlImageStage::Impl::Impl(std::shared_ptr<Context> ctx, const GlOptions& opt)
   gl.VertexArrayAttribBinding(vao, 1, 0);
   gl.CreateBuffers(2, vbo);
   gl.CreateBuffers(2, ibo);
-  gl.CreateBuffers(1, &batch_vbo);
+  gl.CreateBuffers(1, &batch_frame);
   gl.CreateBuffers(1, &batch_views);
-  gl.CreateBuffers(1, &batch_triangles);
+  gl.CreateBuffers(1, &batch_entries);
+  gl.CreateBuffers(1, &batch_jobs);
+  gl.CreateBuffers(1, &batch_command);
+  gl.NamedBufferData(batch_command, 16, nullptr, GL_DYNAMIC_DRAW);
+  gl.CreateBuffers(1, &resident_buffer);
+  gl.NamedBufferData(resident_buffer, 16, nullptr, GL_STATIC_DRAW);
+  gl.CreateVertexArrays(1, &batch_vao);
   gl.CreateBuffers(1, &batch_layers);
   gl.CreateBuffers(1, &batch_offset_buffer);
   u_model_peel = gl.GetUniformLocation(peel_program, "roi_from_object");
@@ -148,9 +160,14 @@ GlImageStage::Impl::~Impl() {
   gl.DeleteProgram(cons_resolve_program);
   gl.DeleteProgram(cons_batch_program);
   gl.DeleteProgram(cons_batch_resolve_program);
-  gl.DeleteBuffers(1, &batch_vbo);
+  gl.DeleteProgram(cons_select_program);
+  gl.DeleteBuffers(1, &batch_frame);
   gl.DeleteBuffers(1, &batch_views);
-  gl.DeleteBuffers(1, &batch_triangles);
+  gl.DeleteBuffers(1, &batch_entries);
+  gl.DeleteBuffers(1, &batch_jobs);
+  gl.DeleteBuffers(1, &batch_command);
+  gl.DeleteBuffers(1, &resident_buffer);
+  gl.DeleteVertexArrays(1, &batch_vao);
   gl.DeleteBuffers(1, &batch_layers);
   gl.DeleteBuffers(1, &batch_offset_buffer);
   gl.DeleteBuffers(1, &count_buffer);

@@ -33,6 +33,7 @@ extern const char* const conservative_geom;
 extern const char* const conservative_frag;
 extern const char* const conservative_resolve_comp;
 extern const char* const conservative_batch_resolve_comp;
+extern const char* const conservative_select_comp;
 extern const char* const pcs_test_inc;  // include/peelcd/core/pcs_test.inc
 extern const char* const shader_sources_hash;
 }  // namespace peelcd::shaders
@@ -76,6 +77,10 @@ struct GlImageStage::Impl {
   // The stage's counters (GlImageStage::counters): every draw, dispatch, upload and readback.
   StageCounters* counters = nullptr;
   void count_upload(std::size_t bytes) { counters->bytes_uploaded += bytes; }
+  void count_geometry(std::size_t bytes) {  // mesh data: corners, indices, draw entries
+    counters->bytes_uploaded += bytes;
+    counters->geometry_bytes += bytes;
+  }
   void count_read(std::size_t bytes) {
     ++counters->readbacks;
     counters->bytes_read += bytes;
@@ -107,11 +112,31 @@ struct GlImageStage::Impl {
   std::size_t batch_layers_capacity = 0;  // bytes
   std::vector<std::uint32_t> batch_view_layers;
   std::vector<std::uint32_t> batch_pairs;
-  GLuint batch_vbo = 0, batch_views = 0, batch_triangles = 0;
-  std::size_t batch_vbo_capacity = 0, batch_views_capacity = 0, batch_triangles_capacity = 0;  // bytes
+  // The batch's geometry: per view, its matrices (batch_views); the draw's entries (one per
+  // triangle: first corner, view << 1 | object, provoking ID); the corners of deforming objects'
+  // triangles, uploaded per frame (batch_frame); the selection pass's jobs (per view and rigid
+  // object) and the indirect draw's command. Nothing in the vertex array: an empty one.
+  GLuint batch_frame = 0, batch_views = 0, batch_entries = 0, batch_jobs = 0, batch_command = 0, batch_vao = 0;
+  std::size_t batch_frame_capacity = 0, batch_views_capacity = 0, batch_entries_capacity = 0,
+              batch_jobs_capacity = 0;  // bytes
   std::vector<GpuVertex> batch_corners;
-  std::vector<std::uint32_t> batch_triangle_view, batch_ids;
+  std::vector<std::array<std::uint32_t, 4>> batch_entry_data, batch_job_data;
+  std::vector<std::uint32_t> batch_ids;  // the provoking ID by draw order (the host resolve's)
   std::vector<float> batch_view_data;
+  // The selection pass (shaders/conservative_select.comp).
+  GLuint cons_select_program = 0;
+  GLint u_sel_jobs = -1, u_sel_invocations = -1, u_sel_row = -1;
+  // Rigid shapes resident for the batch: one buffer holding every shape a batch drew (its
+  // corners, with IDs, copied GPU to GPU from the shape's cached buffer: uploaded once), each at
+  // its first corner; kept while some object holds the shape, compacted when the buffer grows.
+  struct ResidentShape {
+    std::weak_ptr<const Mesh> owner;
+    std::size_t base = 0, corners = 0;
+  };
+  std::map<std::pair<const Mesh*, IdMode>, ResidentShape> resident;
+  GLuint resident_buffer = 0;
+  std::size_t resident_capacity = 0, resident_used = 0;  // corners
+  std::size_t resident_base(const std::shared_ptr<const Mesh>& shape, IdMode ids);  // batch.cpp
   GLint u_rank_flip = -1;
   GLint u_floor_clip = -1, u_floor_lo = -1, u_floor_hi = -1;
   GLint u_model_peel = -1, u_model_ab = -1, u_model_floor = -1;

@@ -3,9 +3,9 @@
 // frame (texel t's fragments from offsets[t] on) resolved in one dispatch, one invocation per
 // texel of the whole buffer. As
 // shaders/conservative_resolve.comp: every two fragments of different objects whose depth
-// intervals overlap are a PCS; here the pair is written as the two triangles' draw orders in the
-// batch (the host maps them to the view and the IDs: only this list comes back), and each view's
-// deepest texel is kept per view.
+// intervals overlap are a PCS; here the pair is written as the two triangles' IDs and their view
+// (read from the draw's entries: only this list comes back), and each view's deepest texel is
+// kept per view.
 #include "peelcd/core/pcs_test.inc"  // pcs_intervals_overlap (shared with C++)
 
 layout(local_size_x = 64) in;
@@ -17,9 +17,10 @@ layout(std430, binding = 0) buffer PcsBuffer {
   uint capacity;
   uint max_layers;
   uint max_fragments;
-  uvec2 pairs[];
+  uvec4 pairs[];  // ID of A's triangle, ID of B's, view, 0
 };
-layout(std430, binding = 4) readonly buffer BatchTriangles { uint triangle_view[]; };  // view << 1 | object
+// first corner, view << 1 | object, the provoking corner's ID, 0 (shaders/conservative.vert)
+layout(std430, binding = 4) readonly buffer Entries { uvec4 entries[]; };
 layout(std430, binding = 5) buffer ViewLayers { uint view_layers[]; };
 layout(std430, binding = 6) readonly buffer Offsets { uint offsets[]; };  // texel t's first fragment
 
@@ -32,7 +33,7 @@ void main() {
   if (n == 0u) return;
   uint begin = offsets[texel], end = begin + n;
   uint first = texelFetch(fragment_tex, int(begin)).y & 0x7fffffffu;
-  atomicMax(view_layers[triangle_view[first] >> 1], n);
+  atomicMax(view_layers[entries[first].y >> 1], n);
   if (n > max_layers) atomicMax(max_layers, n);
   for (uint i = begin; i < end; ++i) {
     uvec4 f = texelFetch(fragment_tex, int(i));
@@ -43,7 +44,10 @@ void main() {
       if ((g.y >> 31) != 1u) continue;
       if (!pcs_intervals_overlap(lo, hi, uintBitsToFloat(g.x), uintBitsToFloat(g.z))) continue;
       uint slot = atomicAdd(count, 1u);
-      if (slot < capacity) pairs[slot] = uvec2(f.y & 0x7fffffffu, g.y & 0x7fffffffu);
+      if (slot < capacity) {
+        uvec4 ea = entries[f.y & 0x7fffffffu], eb = entries[g.y & 0x7fffffffu];
+        pairs[slot] = uvec4(ea.z, eb.z, ea.y >> 1, 0u);
+      }
     }
   }
 }

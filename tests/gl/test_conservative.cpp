@@ -9,6 +9,7 @@
 
 #include <catch2/catch.hpp>
 
+#include <algorithm>
 #include <cstdlib>
 
 using namespace peelcd;
@@ -127,6 +128,7 @@ TEST_CASE("conservative views packed into one k-buffer and drawn together give e
   one_by_one.batch = false;
   gl::GlOptions host;
   host.resolve = Resolve::host;  // the batch is the host resolve's (the default on llvmpipe)
+  host.gpu_select = false;       // the host's selection of triangles, as the one-view path draws
   test_pipeline().set_gl_options(host);
   test_pipeline().capture_layers(&batched);
   const FrameResult b = test_pipeline().detect(objects, opt);
@@ -140,6 +142,7 @@ TEST_CASE("conservative views packed into one k-buffer and drawn together give e
   test_pipeline().capture_layers(nullptr);
   gl::GlOptions gpu;
   gpu.resolve = Resolve::gpu;  // the batch resolved by one dispatch (shaders/conservative_batch_resolve.comp)
+  gpu.gpu_select = false;
   test_pipeline().set_gl_options(gpu);
   const FrameResult g = test_pipeline().detect(objects, opt);
   test_pipeline().set_gl_options(gl::GlOptions{});
@@ -166,4 +169,50 @@ TEST_CASE("conservative views packed into one k-buffer and drawn together give e
     contacts += s.pairs[i].colliding.size();
   }
   CHECK(contacts > 0);
+}
+
+TEST_CASE("rigid triangles selected on the GPU: a superset of the host's, the same contacts", "[conservative][batch]") {
+  // The selection pass keeps every triangle of a rigid shape that reaches a view's volume; the
+  // host keeps those its contact-region culling keeps. More triangles drawn: each pair's PCS
+  // contains the host-selected one's, and the exact test gives the same contacts.
+  std::vector<Object> objects;
+  make_crowd(60, 2)->frame(1, objects);
+  DetectOptions opt;
+  opt.stage = Stage::image;
+  for (const Resolve resolve : {Resolve::host, Resolve::gpu}) {
+    INFO("resolve " << to_string(resolve));
+    gl::GlOptions o;
+    o.resolve = resolve;
+    o.gpu_select = false;
+    test_pipeline().set_gl_options(o);
+    const FrameResult host = test_pipeline().detect(objects, opt);
+    o.gpu_select = true;
+    test_pipeline().set_gl_options(o);
+    const FrameResult gpu = test_pipeline().detect(objects, opt);
+    const FrameResult again = test_pipeline().detect(objects, opt);  // the shapes resident now
+    test_pipeline().set_gl_options(gl::GlOptions{});
+    REQUIRE(gpu.rois_peeled > 8);
+    CHECK(gpu.gl_dispatches >= 1);  // the selection pass
+    CHECK(gpu.triangles_uploaded == host.triangles_uploaded);  // a deforming object's, as before
+    CHECK(gpu.triangles_indexed > host.triangles_indexed);  // a coarser selection draws more
+    CHECK(again.shape_uploads == 0);
+    REQUIRE(gpu.pairs.size() == host.pairs.size());
+    std::size_t contacts = 0, more = 0;
+    for (std::size_t i = 0; i < host.pairs.size(); ++i) {
+      const PairResult& h = host.pairs[i];
+      const PairResult& g = gpu.pairs[i];
+      INFO("pair " << i);
+      CHECK(std::includes(g.pcs.begin(), g.pcs.end(), h.pcs.begin(), h.pcs.end()));
+      CHECK(g.pcs == again.pairs[i].pcs);
+      more += g.pcs.size() - h.pcs.size();
+      REQUIRE(g.colliding.size() == h.colliding.size());
+      for (std::size_t c = 0; c < h.colliding.size(); ++c) {
+        CHECK(g.colliding[c].tri_a == h.colliding[c].tri_a);
+        CHECK(g.colliding[c].tri_b == h.colliding[c].tri_b);
+      }
+      contacts += h.colliding.size();
+    }
+    CHECK(contacts > 0);
+    CHECK(more > 0);
+  }
 }

@@ -80,11 +80,11 @@ TEST_CASE("GL counters: the exact path and a frame without ROIs do no GL work", 
 }
 
 TEST_CASE("GL counters: the batched conservative frame is a count pass and a fill pass for every view", "[gl][counters]") {
-  auto ball = std::make_shared<const Mesh>(make_uv_sphere(Vec3::Zero(), 1.0, 10, 14));
   DetectOptions opt;
   opt.stage = Stage::image;
   opt.views = 3;
   for (const Resolve resolve : {Resolve::host, Resolve::gpu}) {
+    auto ball = std::make_shared<const Mesh>(make_uv_sphere(Vec3::Zero(), 1.0, 10, 14));  // new to the stage
     gl::GlOptions o;
     o.resolve = resolve;
     test_pipeline().set_gl_options(o);
@@ -96,19 +96,24 @@ TEST_CASE("GL counters: the batched conservative frame is a count pass and a fil
     REQUIRE(r.rois_peeled == 3);
     CHECK(first.gl_draws == 2);
     CHECK(r.gl_draws == 2);
+    // Both balls rigid: their triangles selected on the GPU (one dispatch), no mesh data uploaded
+    // after the first frame.
+    CHECK(first.geometry_bytes > 0);
+    CHECK(r.geometry_bytes == 0);
     if (resolve == Resolve::host) {
-      CHECK(r.gl_dispatches == 0);
-      CHECK(r.gl_readbacks == 2);  // the counts, then the fragments mapped
+      CHECK(r.gl_dispatches == 1);  // the selection
+      CHECK(r.gl_readbacks == 4);   // the counts, the draw's command, the selected IDs, the fragments mapped
     } else {
-      CHECK(r.gl_dispatches == 1);
-      CHECK(r.gl_readbacks == 4);  // the counts, the PCS header, the views' depths, the PCS list
+      CHECK(r.gl_dispatches == 2);  // the selection, the resolve
+      CHECK(r.gl_readbacks == 5);   // the counts, the command, the PCS header, the views' depths, the PCS list
     }
   }
 }
 
 TEST_CASE("GL counters: draws, dispatches and readbacks per frame do not depend on the number of ROIs", "[gl][counters]") {
   // A pile of 4 balls (a few ROIs) and of 400 (about 1,800), conservative, the image stage
-  // forced, both resolves: after the first frame (which may grow the PCS list), the same GL calls.
+  // forced, both resolves: after the first frame (which may grow the PCS list), the same GL calls,
+  // and no mesh data uploaded for the rigid balls.
   const auto pile_counts = [](std::size_t balls, Resolve resolve) {
     const std::unique_ptr<Sequence> pile = make_crowd(balls, 3, true);
     gl::GlOptions o;
@@ -123,6 +128,10 @@ TEST_CASE("GL counters: draws, dispatches and readbacks per frame do not depend 
       pile->frame(f, objects);
       test_pipeline().detect(objects, opt, r);
       counts = {r.gl_draws, r.gl_dispatches, r.gl_readbacks, r.rois_peeled};
+      // Mesh data after the first frame: only the deforming balls' (every fifth ball breathes:
+      // none of 4, 80 of 400), 3 corners of 16 bytes and one 16-byte entry per drawn triangle.
+      if (f > 0) CHECK(r.geometry_bytes == r.triangles_uploaded * 64);
+      if (f > 0 && balls == 4) CHECK(r.geometry_bytes == 0);
     }
     test_pipeline().set_gl_options(gl::GlOptions{});
     return counts;

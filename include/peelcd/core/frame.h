@@ -206,6 +206,8 @@ struct FrameResult {
   // The image stage's GL calls this frame (draws, dispatches, readbacks, bytes up and down; all 0
   // on the CPU stage and on the exact path).
   std::size_t gl_draws = 0, gl_dispatches = 0, gl_readbacks = 0, bytes_uploaded = 0, bytes_read = 0;
+  // Of bytes_uploaded, mesh data (corners, indices, draw entries: StageCounters::geometry_bytes).
+  std::size_t geometry_bytes = 0;
   std::string renderer;           // GL_RENDERER of the context that ran it
 };
 

@@ -88,6 +88,9 @@ struct StageCounters {
   std::size_t dispatches = 0;      // compute dispatches
   std::size_t readbacks = 0;       // reads of GL memory by the host (maps, gets): each waits for the GPU
   std::size_t bytes_uploaded = 0;  // bytes the host wrote into GL buffers (buffer data and sub-data)
+  // Of those, mesh data: corners, corner indices, draw entries (per triangle); the rest is per
+  // view or per texel (matrices, selection jobs, commands, offsets, headers).
+  std::size_t geometry_bytes = 0;
   std::size_t bytes_read = 0;      // bytes the host read back
 };
 

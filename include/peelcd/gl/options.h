@@ -48,6 +48,13 @@ struct GlOptions {
   // draw per frame: GlImageStage::peel_batch); false draws each view on its own (the same layers
   // and PCS; for comparison: peelcd detect/simulate --no-batch).
   bool batch = true;
+  // In a batch, the triangles of rigid objects are selected on the GPU (a compute pass over each
+  // shape's resident corners, per view: those reaching the view's volume; drawn by one indirect
+  // draw) instead of by the host's culling: no per-triangle upload for rigid objects after a
+  // shape's first frame. It draws a superset of the host's selection, so a view's PCS is a
+  // superset of the host-selected one's, and the contacts are the same. Views capturing layers
+  // (dumps, goldens) keep the host's selection. false: the host's (peelcd detect --cpu-select).
+  bool gpu_select = true;
 };
 
 }  // namespace gl
