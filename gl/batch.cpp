@@ -1,9 +1,14 @@
 // Batched conservative views (GlImageStage::peel_batch): the ROI views of a frame packed into one
-// k-buffer, view after view, and drawn by one draw call through shaders/conservative.* (PEELCD_BATCH);
-// each view's part then resolved on the host (core/kbuffer.cpp, KBuffer::stride). Per triangle,
-// a buffer names its view and object; per view, a buffer holds its matrix, the objects' poses,
-// its resolution and its first texel. The arithmetic per texel is that of the one-view draw
-// (shaders/conservative.*), so a view gives the same layers and PCS either way.
+// compact k-buffer and drawn through shaders/conservative.* (PEELCD_BATCH). Rigid shapes are
+// resident (one buffer, each shape copied there once); per view and rigid object a job goes to
+// the selection pass (shaders/conservative_select.comp), which appends the triangles reaching the
+// ROI box to the draw's entries; deforming objects' triangles come from the host (their corners
+// uploaded per frame). A count pass and a fill pass (indirect draws over the entries) fill the
+// k-buffer; each view's part is then resolved on the host (core/kbuffer.cpp) or by one dispatch
+// (shaders/conservative_batch_resolve.comp). Per view, a buffer holds its matrix, the objects'
+// poses, its resolution, its first texel and its ROI box. The arithmetic per texel is that of the
+// one-view draw, so with the host's selection (GlOptions::gpu_select false, and views capturing
+// layers) a view gives the same layers and PCS either way.
 #include "stage_impl.h"
 
 #include <algorithm>
@@ -55,8 +60,8 @@ void GlImageStage::Impl::peel_one(const PeelJob& job, PeelResult& out, Timings& 
 
 namespace {
 
-// One view's record in the views buffer (std430: mat4 clip, mat4 poses[2], ivec4 info).
-constexpr std::size_t kViewWords = 16 + 32 + 4;
+// One view's record in the views buffer (std430: mat4 clip, mat4 poses[2], ivec4 info, vec4 half_box).
+constexpr std::size_t kViewWords = 16 + 32 + 4 + 4;
 
 void put_matrix(std::vector<float>& out, const float* m) { out.insert(out.end(), m, m + 16); }
 
@@ -142,6 +147,8 @@ std::size_t GlImageStage::Impl::peel_conservative_batch(const PeelJob* jobs, std
     float info_words[4];
     std::memcpy(info_words, info, sizeof info);
     batch_view_data.insert(batch_view_data.end(), info_words, info_words + 4);
+    const Vec3 half = 0.5 * view.box.extent();
+    batch_view_data.insert(batch_view_data.end(), {float(half.x()), float(half.y()), float(half.z()), 0.0f});
     base += std::size_t(view.resolution) * std::size_t(view.resolution);
   }
   outs[0].shape_uploads = shape_uploads;

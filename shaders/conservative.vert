@@ -12,6 +12,7 @@ struct BatchView {
   mat4 clip_from_local;
   mat4 roi_from_object[2];  // per object: identity, or a rigid object's pose (ROI-local)
   ivec4 info;               // resolution, first texel in the packed k-buffer, -, -
+  vec4 half_box;  // the ROI box's half extents (ROI-local: the box is centred), -
 };
 layout(std430, binding = 3) readonly buffer Views { BatchView views[]; };
 // first corner (bit 31: frame corners), view << 1 | object, the provoking corner's ID, 0

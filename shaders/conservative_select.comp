@@ -2,10 +2,11 @@
 // Conservative mode, batched (gl/batch.cpp): the GPU selects the triangles of rigid objects that
 // a frame's views draw. A rigid shape lives in the resident buffer (uploaded once); per view and
 // rigid object, a job names the shape's corners and how many triangles it has. One invocation
-// per (job, triangle): the triangle's corners moved into the view's clip space by the view's
-// matrices (as shaders/conservative.vert moves them), and kept when their box reaches the view's
-// volume [-1, 1]^3 grown by `margin` (more than the conservative rasterizer's half texel and
-// its error margins, so every triangle that could leave a fragment is kept). A kept triangle is
+// per (job, triangle): the triangle's corners moved into ROI-local coordinates by the object's
+// matrix for the view (as shaders/conservative.vert moves them), and kept when their box
+// overlaps the ROI box grown by 1e-3 of its largest half extent (the host's culling keeps only
+// triangles whose box overlaps the ROI box, in double: the growth covers the float rounding, so
+// the selection holds every triangle the host's would; it does not cull further). A kept triangle is
 // appended to the draw's entries, and its three vertices to the indirect draw's count (which the
 // host set to the entries it wrote itself, those of deforming objects).
 layout(local_size_x = 64) in;
@@ -14,6 +15,7 @@ struct BatchView {
   mat4 clip_from_local;
   mat4 roi_from_object[2];
   ivec4 info;
+  vec4 half_box;  // the ROI box's half extents (ROI-local: the box is centred), -
 };
 layout(std430, binding = 3) readonly buffer Views { BatchView views[]; };
 layout(std430, binding = 4) writeonly buffer Entries { uvec4 entries[]; };
@@ -37,15 +39,16 @@ void main() {
   uvec4 job = jobs[lo];
   uint corner = job.x + 3u * (i - job.w);
   uint view = job.z >> 1;
-  mat4 m = views[view].clip_from_local * views[view].roi_from_object[job.z & 1u];
-  float margin = 4.0 / float(views[view].info.x) + 1.0 / 256.0;
+  mat4 m = views[view].roi_from_object[job.z & 1u];
+  vec3 h = views[view].half_box.xyz;
+  vec3 reach = h + vec3(1.0e-3 * max(max(h.x, h.y), h.z));
   vec3 lo3 = vec3(3.0e38), hi3 = vec3(-3.0e38);
   for (uint k = 0u; k < 3u; ++k) {
     vec3 p = (m * vec4(uintBitsToFloat(resident[corner + k].xyz), 1.0)).xyz;
     lo3 = min(lo3, p);
     hi3 = max(hi3, p);
   }
-  if (any(greaterThan(lo3, vec3(1.0 + margin))) || any(lessThan(hi3, vec3(-1.0 - margin)))) return;
+  if (any(greaterThan(lo3, reach)) || any(lessThan(hi3, -reach))) return;
   uint slot = atomicAdd(vertex_count, 3u) / 3u;
   entries[slot] = uvec4(corner, job.z, resident[corner + 2u].w, 0u);
 }
