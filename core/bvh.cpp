@@ -121,18 +121,27 @@ void Bvh::refit(const std::vector<Vec3>& vertices, const std::vector<Tri>& trian
 void Bvh::query(const Aabb& box, std::vector<std::uint32_t>& out) const {
   out.clear();
   if (nodes_.empty()) return;
-  std::vector<std::uint32_t> stack{0};
-  while (!stack.empty()) {
-    const std::uint32_t i = stack.back();
-    stack.pop_back();
+  // At most one pending sibling per level, and the root: a fixed stack for any tree this deep.
+  constexpr std::size_t kFixed = 128;
+  std::uint32_t fixed[kFixed];
+  std::vector<std::uint32_t> grown;
+  std::uint32_t* stack = fixed;
+  if (depth_ + 2 > kFixed) {
+    grown.resize(depth_ + 2);
+    stack = grown.data();
+  }
+  std::size_t top = 0;
+  stack[top++] = 0;
+  while (top) {
+    const std::uint32_t i = stack[--top];
     const BvhNode& node = nodes_[i];
     if (!node.box.overlaps(box)) continue;
     if (node.leaf()) {
       for (std::uint32_t k = node.first; k < node.first + node.count; ++k)
         if (boxes_[k].overlaps(box)) out.push_back(order_[k]);
     } else {
-      stack.push_back(node.first);
-      stack.push_back(i + 1);
+      stack[top++] = node.first;
+      stack[top++] = i + 1;
     }
   }
   std::sort(out.begin(), out.end());

@@ -152,6 +152,8 @@ void cull_to_contact_region(const Mesh& a, const Mesh& b, const Aabb& roi, Conta
   out.median_edge = 0.0;
   if (roi.empty()) return;
   gather(a, roi, out.outcodes, out.entries_a, out.boxes_a);
+  out.entries_b.clear();  // none in the ROI when A has none (not the last call's)
+  out.boxes_b.clear();
   if (!out.entries_a.empty()) gather(b, roi, out.outcodes, out.entries_b, out.boxes_b);
   out.stats.in_roi_a = out.entries_a.size();
   out.stats.in_roi_b = out.entries_b.size();

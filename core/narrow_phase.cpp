@@ -130,9 +130,29 @@ int orientation_sign(const Vec3& p, const Vec3& q, const Vec3& r, const Vec3& s)
   return int(CGAL::orientation(to_cgal(p), to_cgal(q), to_cgal(r), to_cgal(s)));
 }
 
-// The signs of the corners of `t` against the plane of `plane` (orientation_sign()).
+// The signs of the corners of `t` against the plane of `plane` (orientation_sign()): the same
+// determinant expanded about plane[0], det(q - p, r - p, d - p) = (d - p) . ((q - p) x (r - p)),
+// whose 2x2 minors (and their magnitudes) are computed once for the three corners. It is
+// Shewchuk's orient3d with p as the common point (three rounded differences, 2x2 products, one
+// 3-term sum: his error bound applies as it stands); where it cannot certify, CGAL decides.
 void plane_sides(const TriangleCorners& plane, const TriangleCorners& t, int side[3]) {
-  for (int i = 0; i < 3; ++i) side[i] = orientation_sign(plane[0], plane[1], plane[2], t[i]);
+  const Vec3& p = plane[0];
+  const double e1x = plane[1].x() - p.x(), e1y = plane[1].y() - p.y(), e1z = plane[1].z() - p.z();
+  const double e2x = plane[2].x() - p.x(), e2y = plane[2].y() - p.y(), e2z = plane[2].z() - p.z();
+  const double cx = e1y * e2z - e1z * e2y, cy = e1z * e2x - e1x * e2z, cz = e1x * e2y - e1y * e2x;
+  const double mx = std::fabs(e1y * e2z) + std::fabs(e1z * e2y), my = std::fabs(e1z * e2x) + std::fabs(e1x * e2z),
+               mz = std::fabs(e1x * e2y) + std::fabs(e1y * e2x);
+  for (int i = 0; i < 3; ++i) {
+    const double fx = t[i].x() - p.x(), fy = t[i].y() - p.y(), fz = t[i].z() - p.z();
+    const double det = fx * cx + fy * cy + fz * cz;
+    const double bound = kOrient3dBound * (std::fabs(fx) * mx + std::fabs(fy) * my + std::fabs(fz) * mz) + kUnderflowSlack;
+    if (det > bound)
+      side[i] = 1;
+    else if (det < -bound)
+      side[i] = -1;
+    else
+      side[i] = int(CGAL::orientation(to_cgal(plane[0]), to_cgal(plane[1]), to_cgal(plane[2]), to_cgal(t[i])));
+  }
 }
 
 bool all_zero(const int s[3]) { return s[0] == 0 && s[1] == 0 && s[2] == 0; }
