@@ -94,6 +94,13 @@ std::size_t GlImageStage::Impl::peel_conservative_batch(const PeelJob* jobs, std
   std::size_t base = 0, invocations = 0;
   std::size_t shapes_before = shape_uploads;
   shape_uploads = 0;
+  // Every rigid shape of the batch resident first: adding one may move the others (compaction),
+  // so their first corners are read only after all are in.
+  for (std::size_t j = 0; j < take; ++j)
+    for (int slot = 0; slot < 2; ++slot) {
+      const Object& object = *jobs[j].objects[slot];
+      if (object.rigid && object.rigid->shape) resident_base(object.rigid->shape, jobs[j].ids);
+    }
   for (std::size_t j = 0; j < take; ++j) {
     const PeelJob& job = jobs[j];
     PeelResult& out = outs[j];

@@ -216,3 +216,54 @@ TEST_CASE("rigid triangles selected on the GPU: a superset of the host's, the sa
     CHECK(more > 0);
   }
 }
+
+TEST_CASE("GPU selection: a shape new to a frame moves the resident ones, every view still reads its own", "[conservative][batch]") {
+  // Frame 1 makes two shapes resident; frame 2 drops the first and brings a larger one, which
+  // grows the resident buffer: the second shape moves. Its views, earlier in the batch than the
+  // new shape's, must draw it from where it is now (the IDs would be another shape's otherwise).
+  const auto pair_of = [](const std::shared_ptr<const Mesh>& shape, double x, std::vector<Object>& out) {
+    for (int k = 0; k < 2; ++k) {
+      Object o;
+      o.name = "ball" + std::to_string(out.size());
+      const Eigen::Affine3d pose(Eigen::Translation3d(Vec3(x + 1.5 * k, 0.02 * k, 0.0)) *
+                                 Eigen::AngleAxisd(0.3 * k, Vec3(0.0, 0.6, 0.8)));
+      o.mesh = *shape;
+      for (Vec3& v : o.mesh.vertices) v = pose * v;
+      o.rigid = RigidMotion{shape, pose};
+      out.push_back(std::move(o));
+    }
+  };
+  DetectOptions opt;
+  opt.stage = Stage::image;
+  for (const Resolve resolve : {Resolve::host, Resolve::gpu}) {
+    INFO("resolve " << to_string(resolve));
+    // Shapes new to the stage each time round.
+    auto s1 = std::make_shared<const Mesh>(make_uv_sphere(Vec3::Zero(), 1.0, 12, 18));
+    auto s2 = std::make_shared<const Mesh>(make_uv_sphere(Vec3::Zero(), 1.0, 14, 20));
+    auto s3 = std::make_shared<const Mesh>(make_uv_sphere(Vec3::Zero(), 1.0, 40, 60));
+    std::vector<Object> first, second;
+    pair_of(s1, 0.0, first);
+    pair_of(s2, 10.0, first);
+    pair_of(s2, 10.0, second);
+    pair_of(s3, 20.0, second);
+    gl::GlOptions o;
+    o.resolve = resolve;
+    test_pipeline().set_gl_options(o);
+    test_pipeline().detect(first, opt);
+    s1.reset();
+    first.clear();  // the first shape is no longer held
+    const FrameResult got = test_pipeline().detect(second, opt);
+    o.gpu_select = false;
+    test_pipeline().set_gl_options(o);
+    const FrameResult expected = test_pipeline().detect(second, opt);
+    test_pipeline().set_gl_options(gl::GlOptions{});
+    REQUIRE(got.pairs.size() == expected.pairs.size());
+    REQUIRE(got.pairs.size() == 2);
+    for (std::size_t i = 0; i < got.pairs.size(); ++i) {
+      CHECK(!got.pairs[i].colliding.empty());
+      CHECK(got.pairs[i].colliding.size() == expected.pairs[i].colliding.size());
+      CHECK(std::includes(got.pairs[i].pcs.begin(), got.pairs[i].pcs.end(), expected.pairs[i].pcs.begin(),
+                          expected.pairs[i].pcs.end()));
+    }
+  }
+}
