@@ -23,23 +23,15 @@ void Bvh::build(const std::vector<Vec3>& vertices, const std::vector<Tri>& trian
   boxes_.resize(n);
   order_.resize(n);
   leaf_of_.resize(n);
-  slot_of_.resize(n);
   std::iota(order_.begin(), order_.end(), 0u);
   if (n == 0) return;
   std::vector<Vec3> centroids(n);
   for (std::size_t t = 0; t < n; ++t) {
-    boxes_[t] = triangle_bounds(vertices, triangles[t]);  // by triangle while building
+    boxes_[t] = triangle_bounds(vertices, triangles[t]);
     centroids[t] = boxes_[t].center();
   }
   nodes_.reserve(2 * ((n + kBvhLeafSize - 1) / kBvhLeafSize));
   build_node(0, std::uint32_t(n), 0, 1, centroids);
-  // Then by slot: a leaf's boxes lie side by side.
-  std::vector<Aabb> by_slot(n);
-  for (std::uint32_t u = 0; u < n; ++u) {
-    by_slot[u] = boxes_[order_[u]];
-    slot_of_[order_[u]] = u;
-  }
-  boxes_.swap(by_slot);
   dirty_.assign(nodes_.size(), 0);
 }
 
@@ -83,7 +75,7 @@ void Bvh::refit_node(std::uint32_t i) {
   BvhNode& node = nodes_[i];
   if (node.leaf()) {
     Aabb box;
-    for (std::uint32_t k = node.first; k < node.first + node.count; ++k) box = merged(box, boxes_[k]);
+    for (std::uint32_t k = node.first; k < node.first + node.count; ++k) box = merged(box, boxes_[order_[k]]);
     node.box = box;
   } else {
     node.box = merged(nodes_[i + 1].box, nodes_[node.first].box);
@@ -91,7 +83,7 @@ void Bvh::refit_node(std::uint32_t i) {
 }
 
 void Bvh::refit(const std::vector<Vec3>& vertices, const std::vector<Tri>& triangles) {
-  for (std::size_t u = 0; u < boxes_.size(); ++u) boxes_[u] = triangle_bounds(vertices, triangles[order_[u]]);
+  for (std::size_t t = 0; t < boxes_.size(); ++t) boxes_[t] = triangle_bounds(vertices, triangles[t]);
   // Children follow their parents: one sweep from the last node refits bottom-up.
   for (std::size_t i = nodes_.size(); i-- > 0;) refit_node(std::uint32_t(i));
 }
@@ -101,7 +93,7 @@ void Bvh::refit(const std::vector<Vec3>& vertices, const std::vector<Tri>& trian
   if (nodes_.empty()) return;
   stack_.clear();
   for (const std::uint32_t t : changed) {
-    boxes_[slot_of_[t]] = triangle_bounds(vertices, triangles[t]);
+    boxes_[t] = triangle_bounds(vertices, triangles[t]);
     // Mark the leaf and its ancestors once; collect them.
     for (std::uint32_t n = leaf_of_[t];; n = nodes_[n].parent) {
       if (dirty_[n]) break;
@@ -138,7 +130,7 @@ void Bvh::query(const Aabb& box, std::vector<std::uint32_t>& out) const {
     if (!node.box.overlaps(box)) continue;
     if (node.leaf()) {
       for (std::uint32_t k = node.first; k < node.first + node.count; ++k)
-        if (boxes_[k].overlaps(box)) out.push_back(order_[k]);
+        if (boxes_[order_[k]].overlaps(box)) out.push_back(order_[k]);
     } else {
       stack[top++] = node.first;
       stack[top++] = i + 1;

@@ -42,9 +42,7 @@ class Bvh {
   Aabb box() const { return nodes_.empty() ? Aabb{} : nodes_[0].box; }
   const std::vector<BvhNode>& nodes() const { return nodes_; }
   const std::vector<std::uint32_t>& order() const { return order_; }  // triangles, leaf by leaf
-  const Aabb& triangle_box(std::uint32_t t) const { return boxes_[slot_of_[t]]; }
-  // The box of the triangle in slot u (order()[u]): a leaf's boxes are contiguous.
-  const Aabb& slot_box(std::uint32_t u) const { return boxes_[u]; }
+  const Aabb& triangle_box(std::uint32_t t) const { return boxes_[t]; }
   std::size_t depth() const { return depth_; }
 
   // The triangles whose boxes touch `box` (closed, in the tree's frame), ascending, into `out`.
@@ -57,8 +55,7 @@ class Bvh {
   std::vector<BvhNode> nodes_;
   std::vector<std::uint32_t> order_;
   std::vector<std::uint32_t> leaf_of_;  // triangle -> its leaf node
-  std::vector<std::uint32_t> slot_of_;  // triangle -> its slot in order_
-  std::vector<Aabb> boxes_;             // slot -> its triangle's box
+  std::vector<Aabb> boxes_;             // triangle -> its box
   std::vector<std::uint8_t> dirty_;     // scratch of the partial refit, per node
   std::vector<std::uint32_t> stack_;    // scratch of the partial refit
   std::size_t depth_ = 0;
@@ -135,14 +132,16 @@ std::size_t bvh_traverse(const Bvh& a, const Bvh& b, const BvhRelation& rel, Bvh
     const BvhNode& y = nb[e.b];
     // Invariant: x.box overlaps e.b_in_a (tested before the push).
     if (x.leaf() && y.leaf()) {
-      for (std::uint32_t v = 0; v < y.count; ++v) leaf_boxes[v] = rel.to_a(b.slot_box(y.first + v));
+      for (std::uint32_t v = 0; v < y.count; ++v) leaf_boxes[v] = rel.to_a(b.triangle_box(b.order()[y.first + v]));
       for (std::uint32_t u = x.first; u < x.first + x.count; ++u) {
-        const Aabb& ba = a.slot_box(u);
-        if (!ba.overlaps(e.b_in_a)) continue;
         const std::uint32_t ta = a.order()[u];
+        const Aabb& ba = a.triangle_box(ta);
+        if (!ba.overlaps(e.b_in_a)) continue;
         const Aabb a_in_b = rel.identity ? ba : rel.to_b(ba);
-        for (std::uint32_t v = 0; v < y.count; ++v)
-          if (ba.overlaps(leaf_boxes[v]) && a_in_b.overlaps(b.slot_box(y.first + v))) fn(ta, b.order()[y.first + v]);
+        for (std::uint32_t v = 0; v < y.count; ++v) {
+          const std::uint32_t tb = b.order()[y.first + v];
+          if (ba.overlaps(leaf_boxes[v]) && a_in_b.overlaps(b.triangle_box(tb))) fn(ta, tb);
+        }
       }
     } else if (y.leaf() || (!x.leaf() && x.box.extent().maxCoeff() >= e.b_in_a.extent().maxCoeff())) {
       for (const std::uint32_t c : {e.a + 1, x.first})
@@ -169,9 +168,12 @@ std::size_t bvh_self_traverse(const Bvh& tree, std::vector<BvhNodePair>& stack, 
   stack.push_back({0u, 0u});
   const auto leaf_pairs = [&](const BvhNode& x, const BvhNode& y) {
     for (std::uint32_t i = x.first; i < x.first + x.count; ++i) {
-      const Aabb& bt = tree.slot_box(i);
-      for (std::uint32_t j = y.first; j < y.first + y.count; ++j)
-        if (bt.overlaps(tree.slot_box(j))) fn(tree.order()[i], tree.order()[j]);
+      const std::uint32_t t = tree.order()[i];
+      const Aabb& bt = tree.triangle_box(t);
+      for (std::uint32_t j = y.first; j < y.first + y.count; ++j) {
+        const std::uint32_t u = tree.order()[j];
+        if (bt.overlaps(tree.triangle_box(u))) fn(t, u);
+      }
     }
   };
   while (!stack.empty()) {
@@ -184,7 +186,8 @@ std::size_t bvh_self_traverse(const Bvh& tree, std::vector<BvhNodePair>& stack, 
       if (x.leaf()) {
         for (std::uint32_t i = x.first; i < x.first + x.count; ++i)
           for (std::uint32_t j = i + 1; j < x.first + x.count; ++j) {
-            if (tree.slot_box(i).overlaps(tree.slot_box(j))) fn(tree.order()[i], tree.order()[j]);
+            const std::uint32_t t = tree.order()[i], u = tree.order()[j];
+            if (tree.triangle_box(t).overlaps(tree.triangle_box(u))) fn(t, u);
           }
         continue;
       }
