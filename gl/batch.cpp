@@ -91,6 +91,7 @@ std::size_t GlImageStage::Impl::peel_conservative_batch(const PeelJob* jobs, std
   batch_job_data.clear();
   batch_ids.clear();
   batch_view_data.clear();
+  batch_view_data.reserve(take * kViewWords);
   std::size_t base = 0, invocations = 0;
   std::size_t shapes_before = shape_uploads;
   shape_uploads = 0;
