@@ -93,8 +93,7 @@ std::size_t GlImageStage::Impl::peel_conservative_batch(const PeelJob* jobs, std
   batch_view_data.clear();
   batch_view_data.reserve(take * kViewWords);
   std::size_t base = 0, invocations = 0;
-  std::size_t shapes_before = shape_uploads;
-  shape_uploads = 0;
+  shape_uploads = 0;  // the batch's, reported on its first view
   // Every rigid shape of the batch resident first: adding one may move the others (compaction),
   // so their first corners are read only after all are in.
   for (std::size_t j = 0; j < take; ++j)
@@ -160,7 +159,6 @@ std::size_t GlImageStage::Impl::peel_conservative_batch(const PeelJob* jobs, std
     base += std::size_t(view.resolution) * std::size_t(view.resolution);
   }
   outs[0].shape_uploads = shape_uploads;
-  shape_uploads = shapes_before;
   const std::size_t host_entries = batch_entry_data.size();
   if (std::max(host_entries + invocations, batch_corners.size()) >= 0x7fffffffu / 3)
     throw GlError("peelcd::gl::GlImageStage: a batch of " + std::to_string(host_entries + invocations) +
