@@ -215,11 +215,12 @@ void add_frame_options(CLI::App* c, DetectArgs& d) {
                                       "or multipass (one draw per layer); the same layers either way");
   c->add_option("--resolve", d.resolve, "Where the k-buffer becomes layers and PCS: auto (host on a software renderer such as "
                                         "llvmpipe, else gpu; default), gpu (a compute pass) or host (mapped, resolved on the CPU)");
-  c->add_flag("--no-batch", d.no_batch, "GL stage: draw each conservative ROI view on its own instead of packing the "
-                                        "frame's views into one k-buffer and one draw (the same results; for comparison)");
+  c->add_flag("--no-batch", d.no_batch, "GL stage: draw each ROI view on its own instead of packing the frame's views "
+                                        "(conservative, or point-sampled with the abuffer peeler) into one k-buffer and "
+                                        "one draw (the same results; for comparison)");
   c->add_flag("--cpu-select", d.cpu_select, "GL stage: in a batch, draw the rigid objects' triangles the host's culling "
                                             "kept instead of selecting them on the GPU from their resident buffers (fewer "
-                                            "triangles drawn, uploaded every frame; the same contacts)");
+                                            "triangles drawn, uploaded every frame; the same contacts when conservative)");
   c->add_flag("--paper", d.paper,
               "The paper's configuration: point sampling, alternate peeling, paper IDs, constant epsilon, one view "
               "along world x, no culling (other options given override it)");

@@ -1,18 +1,22 @@
-// Batched conservative views (GlImageStage::peel_batch): the ROI views of a frame packed into one
-// compact k-buffer and drawn through shaders/conservative.* (PEELCD_BATCH). Rigid shapes are
+// Batched views (GlImageStage::peel_batch): the ROI views of a frame packed into one compact
+// k-buffer and drawn through shaders/conservative.* (conservative views) or shaders/peel.vert and
+// abuffer.frag (point-sampled views, the single-pass peeler's), with PEELCD_BATCH. Rigid shapes are
 // resident (one buffer, each shape copied there once); per view and rigid object a job goes to
 // the selection pass (shaders/conservative_select.comp), which appends the triangles reaching the
 // ROI box to the draw's entries; deforming objects' triangles come from the host (their corners
 // uploaded per frame). A count pass and a fill pass (indirect draws over the entries) fill the
 // k-buffer; each view's part is then resolved on the host (core/kbuffer.cpp) or by one dispatch
-// (shaders/conservative_batch_resolve.comp). Per view, a buffer holds its matrix, the objects'
-// poses, its resolution, its first texel and its ROI box. The arithmetic per texel is that of the
-// one-view draw, so with the host's selection (GlOptions::gpu_select false, and views capturing
-// layers) a view gives the same layers and PCS either way.
+// (shaders/conservative_batch_resolve.comp, shaders/abuffer_resolve.comp). Per view, a buffer
+// holds its matrix, the objects' poses, its resolution, its first texel, its ROI box and, point
+// sampled, its PCS threshold, slope and peel mode (shaders/batch.inc). The arithmetic per texel is
+// that of the one-view draw, so with the host's selection (GlOptions::gpu_select false, and views
+// capturing layers) a view gives the same layers and PCS either way (a point-sampled view smaller
+// than the batch's largest is placed by one more scaling: its samples may differ in the last bit).
 #include "stage_impl.h"
 
 #include <algorithm>
 #include <cstring>
+#include <limits>
 
 namespace peelcd::gl {
 
@@ -22,16 +26,22 @@ void GlImageStage::peel_batch(const PeelJob* jobs, std::size_t count, PeelResult
   Impl& s = *impl_;
   std::size_t i = 0;
   while (i < count) {
-    // A run of conservative views; on the GPU resolve, without layer capture (dumps and
-    // goldens take every layer of a view: the one-view path).
+    // A run of conservative views (on the GPU resolve, without layer capture: dumps and goldens
+    // take every layer of a view, the one-view path), or of point-sampled views of the
+    // single-pass peeler that capture nothing (the multi-pass peeler draws per layer and view).
+    const bool conservative = jobs[i].conservative;
+    const auto batched = [&](const PeelJob& job) {
+      if (job.conservative != conservative) return false;
+      return conservative ? s.host_resolve() || !job.capture : s.options.peeler == Peeler::abuffer && !job.capture;
+    };
     std::size_t end = i;
-    while (end < count && jobs[end].conservative && (s.host_resolve() || !jobs[end].capture)) ++end;
+    while (end < count && batched(jobs[end])) ++end;
     if (end - i < 2 || !s.options.batch) {
       s.peel_one(jobs[i], outs[i], timings);
       ++i;
       continue;
     }
-    while (i < end) i += s.peel_conservative_batch(jobs + i, end - i, outs + i, timings);
+    while (i < end) i += s.peel_batched_views(jobs + i, end - i, outs + i, timings);
   }
 }
 
@@ -60,15 +70,17 @@ void GlImageStage::Impl::peel_one(const PeelJob& job, PeelResult& out, Timings& 
 
 namespace {
 
-// One view's record in the views buffer (std430: mat4 clip, mat4 poses[2], ivec4 info, vec4 half_box).
-constexpr std::size_t kViewWords = 16 + 32 + 4 + 4;
+// One view's record in the views buffer (shaders/batch.inc, std430: mat4 clip, mat4 poses[2],
+// ivec4 info, vec4 half_box, vec4 box_lo, vec4 box_hi).
+constexpr std::size_t kViewWords = 16 + 32 + 4 + 4 + 4 + 4;
 
 void put_matrix(std::vector<float>& out, const float* m) { out.insert(out.end(), m, m + 16); }
 
 }  // namespace
 
-std::size_t GlImageStage::Impl::peel_conservative_batch(const PeelJob* jobs, std::size_t count, PeelResult* outs,
-                                                        Timings& t) {
+std::size_t GlImageStage::Impl::peel_batched_views(const PeelJob* jobs, std::size_t count, PeelResult* outs,
+                                                   Timings& t) {
+  const bool point = !jobs[0].conservative;  // every job of the run is alike
   // As many views as one packed k-buffer holds at the current slots (the largest storage block).
   const std::size_t most = std::min(max_storage_block / 16, fetchable());
   std::size_t texels = 0, take = 0;
@@ -150,12 +162,19 @@ std::size_t GlImageStage::Impl::peel_conservative_batch(const PeelJob* jobs, std
       }
       out.triangles_uploaded += tris.size();
     }
-    const std::int32_t info[4] = {view.resolution, std::int32_t(base), 0, 0};
+    const std::int32_t flags = point ? std::int32_t(job.peel == PeelMode::full) << 1 | std::int32_t(job.first & 1) : 0;
+    const std::int32_t info[4] = {view.resolution, std::int32_t(base), flags, 0};
     float info_words[4];
     std::memcpy(info_words, info, sizeof info);
     batch_view_data.insert(batch_view_data.end(), info_words, info_words + 4);
     const Vec3 half = 0.5 * view.box.extent();
     batch_view_data.insert(batch_view_data.end(), {float(half.x()), float(half.y()), float(half.z()), 0.0f});
+    // The clip planes and the PCS test as the one-view point-sampled draw has them.
+    out.epsilon_window = point ? float(view.world_to_window_depth(job.epsilon)) : 0.0f;
+    out.slope = point ? float(job.slope) : 0.0f;
+    const Vec3 lo = view.box.lo - view.center, hi = view.box.hi - view.center;
+    batch_view_data.insert(batch_view_data.end(), {float(lo.x()), float(lo.y()), float(lo.z()), out.epsilon_window});
+    batch_view_data.insert(batch_view_data.end(), {float(hi.x()), float(hi.y()), float(hi.z()), out.slope});
     base += std::size_t(view.resolution) * std::size_t(view.resolution);
   }
   outs[0].shape_uploads = shape_uploads;
@@ -209,39 +228,80 @@ std::size_t GlImageStage::Impl::peel_conservative_batch(const PeelJob* jobs, std
     gl.MemoryBarrier(GL_SHADER_STORAGE_BARRIER_BIT | GL_COMMAND_BARRIER_BIT);
   }
   gl.BindBuffer(GL_DRAW_INDIRECT_BUFFER, batch_command);
-  gl.UseProgram(cons_batch_program);
-  gl.Uniform1i(u_cb_viewport, largest);
+  gl.UseProgram(point ? point_batch_program : cons_batch_program);
+  const GLint u_count_only = point ? u_pb_count_only : u_cb_count_only;
+  gl.Uniform1i(point ? u_pb_viewport : u_cb_viewport, largest);
   gl.BindFramebuffer(GL_FRAMEBUFFER, bare_fbo);
   gl.Viewport(0, 0, largest, largest);
   gl.Disable(GL_DEPTH_TEST);
   gl.Disable(GL_CULL_FACE);
-  for (int i = 0; i < 6; ++i) gl.Disable(GL_CLIP_DISTANCE0 + i);
+  gl.ProvokingVertex(GL_LAST_VERTEX_CONVENTION);
+  // Point sampling clips to the ROI box; the conservative intervals clip in depth themselves.
+  for (int i = 0; i < 6; ++i) point ? gl.Enable(GL_CLIP_DISTANCE0 + i) : gl.Disable(GL_CLIP_DISTANCE0 + i);
   gl.BindVertexArray(batch_vao);
   // 1. The count pass: each texel's fragments counted, nothing stored.
-  gl.Uniform1i(u_cb_count_only, 1);
+  gl.Uniform1i(u_count_only, 1);
   gl.DrawArraysIndirect(GL_TRIANGLES, nullptr);
   count_draw();
   gl.MemoryBarrier(GL_BUFFER_UPDATE_BARRIER_BIT);
-  // 2. The counts into offsets (a prefix sum on the host), the k-buffer sized to hold them all;
-  // the triangles drawn (the command's count).
-  const auto t_counts = Clock::now();
-  batch_counts.resize(texels);
-  gl.GetNamedBufferSubData(count_buffer, 0, GLsizeiptr(texels * 4), batch_counts.data());
-  count_read(texels * 4);
-  std::uint32_t drawn[4] = {0, 0, 0, 0};
-  gl.GetNamedBufferSubData(batch_command, 0, sizeof drawn, drawn);
-  count_read(sizeof drawn);
-  t.readback += ms_since(t_counts);
-  const std::size_t selected = drawn[0] / 3 - host_entries;  // by the selection pass
-  outs[0].triangles_indexed += selected;
-  batch_offsets.resize(texels);
+  // 2. The counts into offsets, the k-buffer sized to hold them all; the triangles drawn (the
+  // command's count). The host resolve reads the counts anyway: a prefix sum on the host, the
+  // offsets uploaded. The GPU resolve: the prefix sum on the GPU (shaders/prefix_sum.comp), only
+  // the total read back.
+  const std::size_t offset_bytes = texels * 4;
+  if (offset_bytes > batch_offsets_capacity) {
+    batch_offsets_capacity = std::max(offset_bytes, batch_offsets_capacity * 3 / 2);
+    gl.NamedBufferData(batch_offset_buffer, GLsizeiptr(batch_offsets_capacity), nullptr, GL_DYNAMIC_COPY);
+  }
+  const std::size_t blocks = (texels + 1023) / 1024;
+  const bool gpu_sum = !host_resolve() && blocks <= 65535;  // one dispatch row of blocks
   std::size_t total = 0;
   std::uint32_t deepest = 0;
-  for (std::size_t k = 0; k < texels; ++k) {
-    batch_offsets[k] = std::uint32_t(std::min<std::size_t>(total, 0xffffffffu));
-    total += batch_counts[k];
-    deepest = std::max(deepest, batch_counts[k]);
+  std::uint32_t drawn[4] = {0, 0, 0, 0};
+  if (gpu_sum) {
+    if (blocks * 4 > scan_blocks_capacity) {
+      scan_blocks_capacity = std::max(blocks * 4, scan_blocks_capacity * 3 / 2);
+      gl.NamedBufferData(scan_blocks, GLsizeiptr(scan_blocks_capacity), nullptr, GL_DYNAMIC_COPY);
+    }
+    gl.MemoryBarrier(GL_SHADER_STORAGE_BARRIER_BIT);
+    gl.BindBufferBase(GL_SHADER_STORAGE_BUFFER, 6, batch_offset_buffer);
+    gl.BindBufferBase(GL_SHADER_STORAGE_BUFFER, 11, scan_blocks);
+    gl.BindBufferBase(GL_SHADER_STORAGE_BUFFER, 12, scan_total);
+    gl.UseProgram(prefix_sum_program);
+    gl.Uniform1ui(u_ps_texels, GLuint(texels));
+    gl.Uniform1ui(u_ps_blocks, GLuint(blocks));
+    for (int pass = 0; pass < 3; ++pass) {
+      gl.Uniform1i(u_ps_pass, pass);
+      gl.DispatchCompute(pass == 1 ? 1u : GLuint(blocks), 1, 1);
+      count_dispatch();
+      gl.MemoryBarrier(GL_SHADER_STORAGE_BARRIER_BIT | GL_BUFFER_UPDATE_BARRIER_BIT);
+    }
+    const auto t_total = Clock::now();
+    std::uint32_t sum = 0;
+    gl.GetNamedBufferSubData(scan_total, 0, sizeof sum, &sum);
+    count_read(sizeof sum);
+    gl.GetNamedBufferSubData(batch_command, 0, sizeof drawn, drawn);
+    count_read(sizeof drawn);
+    t.readback += ms_since(t_total);
+    total = sum == 0xffffffffu ? std::numeric_limits<std::size_t>::max() : sum;
+    gl.UseProgram(point ? point_batch_program : cons_batch_program);
+  } else {
+    const auto t_counts = Clock::now();
+    batch_counts.resize(texels);
+    gl.GetNamedBufferSubData(count_buffer, 0, GLsizeiptr(texels * 4), batch_counts.data());
+    count_read(texels * 4);
+    gl.GetNamedBufferSubData(batch_command, 0, sizeof drawn, drawn);
+    count_read(sizeof drawn);
+    t.readback += ms_since(t_counts);
+    batch_offsets.resize(texels);
+    for (std::size_t k = 0; k < texels; ++k) {
+      batch_offsets[k] = std::uint32_t(std::min<std::size_t>(total, 0xffffffffu));
+      total += batch_counts[k];
+      deepest = std::max(deepest, batch_counts[k]);
+    }
   }
+  const std::size_t selected = drawn[0] / 3 - host_entries;  // by the selection pass
+  outs[0].triangles_indexed += selected;
   if (total > most) {  // more fragments than one buffer holds: each view on its own
     gl.BindFramebuffer(GL_FRAMEBUFFER, 0);
     gl.BindBuffer(GL_DRAW_INDIRECT_BUFFER, 0);
@@ -249,29 +309,26 @@ std::size_t GlImageStage::Impl::peel_conservative_batch(const PeelJob* jobs, std
     for (std::size_t j = 0; j < take; ++j) peel_one(jobs[j], outs[j], t);
     return take;
   }
-  const std::size_t offset_bytes = texels * 4;
-  if (offset_bytes > batch_offsets_capacity) {
-    batch_offsets_capacity = std::max(offset_bytes, batch_offsets_capacity * 3 / 2);
-    gl.NamedBufferData(batch_offset_buffer, GLsizeiptr(batch_offsets_capacity), nullptr, GL_STREAM_DRAW);
+  if (!gpu_sum) {
+    gl.NamedBufferSubData(batch_offset_buffer, 0, GLsizeiptr(offset_bytes), batch_offsets.data());
+    count_upload(offset_bytes);
   }
-  gl.NamedBufferSubData(batch_offset_buffer, 0, GLsizeiptr(offset_bytes), batch_offsets.data());
-  count_upload(offset_bytes);
   ensure_fragments(std::max<std::size_t>(total, 1));
   // 3. The fill pass: every fragment stored at its texel's offset (the counts count again).
   gl.ClearNamedBufferSubData(count_buffer, GL_R32UI, 0, GLsizeiptr(texels * 4), GL_RED_INTEGER, GL_UNSIGNED_INT, &zero);
   gl.BindBufferBase(GL_SHADER_STORAGE_BUFFER, 1, fragment_buffer);
   gl.BindBufferBase(GL_SHADER_STORAGE_BUFFER, 6, batch_offset_buffer);
-  gl.Uniform1i(u_cb_count_only, 0);
+  gl.Uniform1i(u_count_only, 0);
   gl.DrawArraysIndirect(GL_TRIANGLES, nullptr);
   count_draw();
   gl.BindBuffer(GL_DRAW_INDIRECT_BUFFER, 0);
   gl.BindVertexArray(vao);
   gl.BindFramebuffer(GL_FRAMEBUFFER, 0);
   gl.MemoryBarrier(GL_BUFFER_UPDATE_BARRIER_BIT | GL_TEXTURE_FETCH_BARRIER_BIT);
-  check("the batched conservative draws");
+  check("the batched draws");
 
   if (!host_resolve()) {
-    resolve_batch_on_gpu(take, texels, outs, t);
+    resolve_batch_on_gpu(take, texels, point, outs, t);
     t.gpu += ms_since(t_gpu);
     outs[0].gl_passes = 2;  // the count and fill draws for the batch
     return take;
@@ -307,14 +364,16 @@ std::size_t GlImageStage::Impl::peel_conservative_batch(const PeelJob* jobs, std
     kb.resolution = n;
     kb.slots = deepest;
     KResolveParams p;
-    p.conservative = true;
+    p.conservative = !point;
+    p.epsilon_window = out.epsilon_window;
+    p.slope = out.slope;
+    p.full_peel = job.peel == PeelMode::full;
+    p.first_object = std::uint32_t(job.first);
     p.ids[0] = batch_ids.data();  // keys hold the draw order of the whole batch
     p.ids[1] = batch_ids.data();
     const KResolveResult got = resolver.resolve(kb, p, out.pcs, job.capture ? &out.captured : nullptr);
     out.layers = int(got.max_layers);
     out.peel_passes = 1;
-    out.epsilon_window = 0.0f;
-    out.slope = 0.0f;
     if (!out.pcs.empty()) ++out.pcs_readbacks;
     base += std::size_t(n) * std::size_t(n);
   }
@@ -372,7 +431,8 @@ std::size_t GlImageStage::Impl::resident_base(const std::shared_ptr<const Mesh>&
   return resident.emplace(key, r).first->second.base;
 }
 
-void GlImageStage::Impl::resolve_batch_on_gpu(std::size_t take, std::size_t texels, PeelResult* outs, Timings& t) {
+void GlImageStage::Impl::resolve_batch_on_gpu(std::size_t take, std::size_t texels, bool point, PeelResult* outs,
+                                              Timings& t) {
   // Per-view depths, zeroed; the PCS header reset; one dispatch over every texel.
   const std::size_t layer_bytes = take * sizeof(std::uint32_t);
   if (layer_bytes > batch_layers_capacity) {
@@ -386,8 +446,8 @@ void GlImageStage::Impl::resolve_batch_on_gpu(std::size_t take, std::size_t texe
   gl.BindBufferBase(GL_SHADER_STORAGE_BUFFER, 5, batch_layers);
   gl.BindTextureUnit(0, count_tex);
   gl.BindTextureUnit(1, fragment_tex);
-  gl.UseProgram(cons_batch_resolve_program);
-  gl.Uniform1ui(u_cbr_texels, GLuint(texels));
+  gl.UseProgram(point ? point_batch_resolve_program : cons_batch_resolve_program);
+  gl.Uniform1ui(point ? u_pbr_texels : u_cbr_texels, GLuint(texels));
   gl.BindBufferBase(GL_SHADER_STORAGE_BUFFER, 6, batch_offset_buffer);
   PcsHeader got{};
   for (;;) {  // the list's pairs are 16 bytes here (IDs and view): half as many fit
@@ -422,8 +482,6 @@ void GlImageStage::Impl::resolve_batch_on_gpu(std::size_t take, std::size_t texe
     PeelResult& out = outs[j];
     out.layers = int(batch_view_layers[j]);
     out.peel_passes = 1;
-    out.epsilon_window = 0.0f;
-    out.slope = 0.0f;
     if (!out.pcs.empty()) ++out.pcs_readbacks;
   }
 }

@@ -28,44 +28,55 @@ GlImageStage::Impl::Impl(std::shared_ptr<Context> ctx, const GlOptions& opt)
   gl.GetInteger64v(GL_MAX_SHADER_STORAGE_BLOCK_SIZE, &block);
   max_storage_block = std::size_t(std::max<GLint64>(block, 0));
 
-  peel_program = link({compile(GL_VERTEX_SHADER, shaders::peel_vert, "peel.vert"),
-                       compile(GL_FRAGMENT_SHADER, shaders::peel_frag, "peel.frag")},
+  // Every source through shader_source(): its includes (the batched variants' sit in #ifdefs).
+  const auto stage = [&](GLenum type, const char* src, const char* name, const char* defines = "") {
+    return compile(type, shader_source(src, defines).c_str(), name);
+  };
+  peel_program = link({stage(GL_VERTEX_SHADER, shaders::peel_vert, "peel.vert"),
+                       stage(GL_FRAGMENT_SHADER, shaders::peel_frag, "peel.frag")},
                       "peel");
-  const std::string pcs_src = shader_source(shaders::pcs_comp);
-  pcs_program = link({compile(GL_COMPUTE_SHADER, pcs_src.c_str(), "pcs.comp")}, "pcs");
+  pcs_program = link({stage(GL_COMPUTE_SHADER, shaders::pcs_comp, "pcs.comp")}, "pcs");
   // The floor (benchmarks): the peel vertex shader and a fragment shader that does nothing.
-  floor_program = link({compile(GL_VERTEX_SHADER, shaders::peel_vert, "peel.vert"),
+  floor_program = link({stage(GL_VERTEX_SHADER, shaders::peel_vert, "peel.vert"),
                         compile(GL_FRAGMENT_SHADER, "#version 450 core\nvoid main() {}\n", "floor.frag")},
                        "floor");
-  abuffer_program = link({compile(GL_VERTEX_SHADER, shaders::peel_vert, "peel.vert"),
-                          compile(GL_FRAGMENT_SHADER, shaders::abuffer_frag, "abuffer.frag")},
+  abuffer_program = link({stage(GL_VERTEX_SHADER, shaders::peel_vert, "peel.vert"),
+                          stage(GL_FRAGMENT_SHADER, shaders::abuffer_frag, "abuffer.frag")},
                          "abuffer");
-  const std::string resolve_src = shader_source(shaders::abuffer_resolve_comp);
-  resolve_program = link({compile(GL_COMPUTE_SHADER, resolve_src.c_str(), "abuffer_resolve.comp")},
+  resolve_program = link({stage(GL_COMPUTE_SHADER, shaders::abuffer_resolve_comp, "abuffer_resolve.comp")},
                          "abuffer resolve");
-  cons_program = link({compile(GL_VERTEX_SHADER, shaders::conservative_vert, "conservative.vert"),
-                       compile(GL_GEOMETRY_SHADER, shaders::conservative_geom, "conservative.geom"),
-                       compile(GL_FRAGMENT_SHADER, shaders::conservative_frag, "conservative.frag")},
+  cons_program = link({stage(GL_VERTEX_SHADER, shaders::conservative_vert, "conservative.vert"),
+                       stage(GL_GEOMETRY_SHADER, shaders::conservative_geom, "conservative.geom"),
+                       stage(GL_FRAGMENT_SHADER, shaders::conservative_frag, "conservative.frag")},
                       "conservative");
   cons_resolve_program =
-      link({compile(GL_COMPUTE_SHADER, shader_source(shaders::conservative_resolve_comp).c_str(),
-                    "conservative_resolve.comp")},
+      link({stage(GL_COMPUTE_SHADER, shaders::conservative_resolve_comp, "conservative_resolve.comp")},
            "conservative resolve");
-  // The batched program: the same sources with PEELCD_BATCH defined.
-  const std::string batch_vert = shader_source(shaders::conservative_vert, "#define PEELCD_BATCH\n");
-  const std::string batch_geom = shader_source(shaders::conservative_geom, "#define PEELCD_BATCH\n");
-  const std::string batch_frag = shader_source(shaders::conservative_frag, "#define PEELCD_BATCH\n");
-  cons_batch_program = link({compile(GL_VERTEX_SHADER, batch_vert.c_str(), "conservative.vert (PEELCD_BATCH)"),
-                             compile(GL_GEOMETRY_SHADER, batch_geom.c_str(), "conservative.geom (PEELCD_BATCH)"),
-                             compile(GL_FRAGMENT_SHADER, batch_frag.c_str(), "conservative.frag (PEELCD_BATCH)")},
+  // The batched programs: the same sources with PEELCD_BATCH defined.
+  const char* batch = "#define PEELCD_BATCH\n";
+  cons_batch_program = link({stage(GL_VERTEX_SHADER, shaders::conservative_vert, "conservative.vert (PEELCD_BATCH)", batch),
+                             stage(GL_GEOMETRY_SHADER, shaders::conservative_geom, "conservative.geom (PEELCD_BATCH)", batch),
+                             stage(GL_FRAGMENT_SHADER, shaders::conservative_frag, "conservative.frag (PEELCD_BATCH)", batch)},
                             "conservative batch");
   cons_batch_resolve_program =
-      link({compile(GL_COMPUTE_SHADER, shader_source(shaders::conservative_batch_resolve_comp).c_str(),
-                    "conservative_batch_resolve.comp")},
+      link({stage(GL_COMPUTE_SHADER, shaders::conservative_batch_resolve_comp, "conservative_batch_resolve.comp")},
            "conservative batch resolve");
-  cons_select_program = link({compile(GL_COMPUTE_SHADER, shader_source(shaders::conservative_select_comp).c_str(),
-                                       "conservative_select.comp")},
-                              "conservative select");
+  point_batch_program = link({stage(GL_VERTEX_SHADER, shaders::peel_vert, "peel.vert (PEELCD_BATCH)", batch),
+                              stage(GL_FRAGMENT_SHADER, shaders::abuffer_frag, "abuffer.frag (PEELCD_BATCH)", batch)},
+                             "point-sampled batch");
+  point_batch_resolve_program = link(
+      {stage(GL_COMPUTE_SHADER, shaders::abuffer_resolve_comp, "abuffer_resolve.comp (PEELCD_BATCH)", batch)},
+      "point-sampled batch resolve");
+  cons_select_program =
+      link({stage(GL_COMPUTE_SHADER, shaders::conservative_select_comp, "conservative_select.comp")},
+           "conservative select");
+  prefix_sum_program = link({stage(GL_COMPUTE_SHADER, shaders::prefix_sum_comp, "prefix_sum.comp")}, "prefix sum");
+  u_ps_texels = gl.GetUniformLocation(prefix_sum_program, "texels");
+  u_ps_blocks = gl.GetUniformLocation(prefix_sum_program, "block_count");
+  u_ps_pass = gl.GetUniformLocation(prefix_sum_program, "pass");
+  u_pb_viewport = gl.GetUniformLocation(point_batch_program, "viewport");
+  u_pb_count_only = gl.GetUniformLocation(point_batch_program, "count_only");
+  u_pbr_texels = gl.GetUniformLocation(point_batch_resolve_program, "texels");
   u_sel_jobs = gl.GetUniformLocation(cons_select_program, "job_count");
   u_sel_invocations = gl.GetUniformLocation(cons_select_program, "invocations");
   u_sel_row = gl.GetUniformLocation(cons_select_program, "row");
@@ -137,6 +148,9 @@ GlImageStage::Impl::Impl(std::shared_ptr<Context> ctx, const GlOptions& opt)
   gl.CreateVertexArrays(1, &batch_vao);
   gl.CreateBuffers(1, &batch_layers);
   gl.CreateBuffers(1, &batch_offset_buffer);
+  gl.CreateBuffers(1, &scan_blocks);
+  gl.CreateBuffers(1, &scan_total);
+  gl.NamedBufferData(scan_total, 4, nullptr, GL_DYNAMIC_READ);
   u_model_peel = gl.GetUniformLocation(peel_program, "roi_from_object");
   gl.CreateQueries(GL_ANY_SAMPLES_PASSED, 1, &query);
   gl.CreateBuffers(1, &pcs_buffer);
@@ -161,6 +175,9 @@ GlImageStage::Impl::~Impl() {
   gl.DeleteProgram(cons_batch_program);
   gl.DeleteProgram(cons_batch_resolve_program);
   gl.DeleteProgram(cons_select_program);
+  gl.DeleteProgram(point_batch_program);
+  gl.DeleteProgram(point_batch_resolve_program);
+  gl.DeleteProgram(prefix_sum_program);
   gl.DeleteBuffers(1, &batch_frame);
   gl.DeleteBuffers(1, &batch_views);
   gl.DeleteBuffers(1, &batch_entries);
@@ -170,6 +187,8 @@ GlImageStage::Impl::~Impl() {
   gl.DeleteVertexArrays(1, &batch_vao);
   gl.DeleteBuffers(1, &batch_layers);
   gl.DeleteBuffers(1, &batch_offset_buffer);
+  gl.DeleteBuffers(1, &scan_blocks);
+  gl.DeleteBuffers(1, &scan_total);
   gl.DeleteBuffers(1, &count_buffer);
   gl.DeleteBuffers(1, &fragment_buffer);
   gl.DeleteTextures(1, &count_tex);
@@ -200,11 +219,14 @@ std::string shader_source(const char* src, const std::string& defines) {
   // `defines` right after the #version line (the first line of every source).
   const std::size_t eol = out.find('\n');
   out.insert(eol == std::string::npos ? out.size() : eol + 1, defines);
-  // The shared PCS tests where the source asks for them.
-  const std::string include = "#include \"peelcd/core/pcs_test.inc\"";
-  if (const std::size_t at = out.find(include); at != std::string::npos)
-    out.replace(at, include.size(),
-                std::string("#define PEELCD_PCS_FN\n#define PEELCD_ABS abs\n") + shaders::pcs_test_inc);
+  // The shared sources where a source asks for them (GLSL has no #include of its own): the PCS
+  // tests (shared with C++) and the batched views' records (shaders/batch.inc).
+  const std::pair<std::string, std::string> includes[] = {
+      {"#include \"peelcd/core/pcs_test.inc\"",
+       std::string("#define PEELCD_PCS_FN\n#define PEELCD_ABS abs\n") + shaders::pcs_test_inc},
+      {"#include \"batch.inc\"", shaders::batch_inc}};
+  for (const auto& [line, text] : includes)
+    if (const std::size_t at = out.find(line); at != std::string::npos) out.replace(at, line.size(), text);
   return out;
 }
 

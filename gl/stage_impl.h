@@ -35,6 +35,8 @@ extern const char* const conservative_resolve_comp;
 extern const char* const conservative_batch_resolve_comp;
 extern const char* const conservative_select_comp;
 extern const char* const pcs_test_inc;  // include/peelcd/core/pcs_test.inc
+extern const char* const batch_inc;
+extern const char* const prefix_sum_comp;
 extern const char* const shader_sources_hash;
 }  // namespace peelcd::shaders
 
@@ -105,9 +107,16 @@ struct GlImageStage::Impl {
   // in batch_layers, the PCS list (draw orders) the only thing read back beside two headers.
   GLuint cons_batch_resolve_program = 0, batch_layers = 0;
   GLint u_cbr_texels = -1, u_cb_count_only = -1;
-  // The count pass's counts and their prefix sums (the compact packed k-buffer's offsets).
-  GLuint batch_offset_buffer = 0;
-  std::size_t batch_offsets_capacity = 0;  // bytes
+  // Point-sampled views batched the same way (shaders/peel.vert and abuffer.frag with
+  // PEELCD_BATCH; the GPU resolve: shaders/abuffer_resolve.comp with PEELCD_BATCH).
+  GLuint point_batch_program = 0, point_batch_resolve_program = 0;
+  GLint u_pb_viewport = -1, u_pb_count_only = -1, u_pbr_texels = -1;
+  // The count pass's counts and their prefix sums (the compact packed k-buffer's offsets): on
+  // the host for the host resolve, else by shaders/prefix_sum.comp (per block of 1024 texels its
+  // sum in scan_blocks, the total in scan_total: only that comes back).
+  GLuint batch_offset_buffer = 0, scan_blocks = 0, scan_total = 0, prefix_sum_program = 0;
+  GLint u_ps_texels = -1, u_ps_blocks = -1, u_ps_pass = -1;
+  std::size_t batch_offsets_capacity = 0, scan_blocks_capacity = 0;  // bytes
   std::vector<std::uint32_t> batch_counts, batch_offsets;
   std::size_t batch_layers_capacity = 0;  // bytes
   std::vector<std::uint32_t> batch_view_layers;
@@ -235,14 +244,15 @@ struct GlImageStage::Impl {
   bool resolve_on_host(const PeelJob& job, std::size_t fitting, std::uint32_t view_slots, Clock::time_point t_gpu,
                        PeelResult& out, Timings& t);
 
-  // batch.cpp: conservative views jobs[0..count) packed into one k-buffer and drawn at once,
-  // resolved on the host. Returns how many of the jobs it peeled (at least one: a first job
-  // that does not fit a packed k-buffer alone is peeled by peel_conservative()).
+  // batch.cpp: views jobs[0..count) (all conservative, or all point-sampled) packed into one
+  // k-buffer and drawn at once, resolved on the host or by one dispatch. Returns how many of the
+  // jobs it peeled (at least one: a first job that does not fit a packed k-buffer alone is
+  // peeled by peel_one()).
   // One view: its geometry uploaded, then peeled by the configured peeler (GlImageStage::peel).
   void peel_one(const PeelJob& job, PeelResult& out, Timings& timings);
-  std::size_t peel_conservative_batch(const PeelJob* jobs, std::size_t count, PeelResult* outs, Timings& t);
+  std::size_t peel_batched_views(const PeelJob* jobs, std::size_t count, PeelResult* outs, Timings& t);
   // The GPU resolve of a drawn batch (batch.cpp): each job's PCS and layers.
-  void resolve_batch_on_gpu(std::size_t take, std::size_t texels, PeelResult* outs, Timings& t);
+  void resolve_batch_on_gpu(std::size_t take, std::size_t texels, bool point, PeelResult* outs, Timings& t);
   bool host_resolve() const {
     return options.resolve == Resolve::host || (options.resolve == Resolve::automatic && software_renderer);
   }

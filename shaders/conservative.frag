@@ -11,13 +11,7 @@ flat in uint g_order;
 
 #ifdef PEELCD_BATCH  // shaders/conservative.vert
 flat in uint g_view;  // view << 1 | object
-struct BatchView {
-  mat4 clip_from_local;
-  mat4 roi_from_object[2];
-  ivec4 info;  // resolution, first texel in the packed k-buffer
-  vec4 half_box;  // the ROI box's half extents (ROI-local: the box is centred), -
-};
-layout(std430, binding = 3) readonly buffer Views { BatchView views[]; };
+#include "batch.inc"  // the views
 // The packed k-buffer is compact: a count pass (count_only) counts each texel's fragments, the
 // host turns the counts into offsets, and the fill pass stores texel t's fragments from
 // offsets[t] on: it holds every fragment, with no slot limit and nothing drawn twice to regrow.

@@ -19,13 +19,7 @@ flat in uint v_order[];
 
 #ifdef PEELCD_BATCH
 flat in uint v_view[];
-struct BatchView {
-  mat4 clip_from_local;
-  mat4 roi_from_object[2];
-  ivec4 info;
-  vec4 half_box;  // the ROI box's half extents (ROI-local: the box is centred), -
-};
-layout(std430, binding = 3) readonly buffer Views { BatchView views[]; };
+#include "batch.inc"  // the views
 uniform int viewport;
 flat out uint g_view;
 #else

@@ -11,13 +11,7 @@
 // host set to the entries it wrote itself, those of deforming objects).
 layout(local_size_x = 64) in;
 
-struct BatchView {
-  mat4 clip_from_local;
-  mat4 roi_from_object[2];
-  ivec4 info;
-  vec4 half_box;  // the ROI box's half extents (ROI-local: the box is centred), -
-};
-layout(std430, binding = 3) readonly buffer Views { BatchView views[]; };
+#include "batch.inc"  // the views
 layout(std430, binding = 4) writeonly buffer Entries { uvec4 entries[]; };
 layout(std430, binding = 7) readonly buffer Resident { uvec4 resident[]; };
 // first corner in the resident buffer, triangles, view << 1 | object, first invocation

@@ -171,6 +171,80 @@ TEST_CASE("conservative views packed into one k-buffer and drawn together give e
   CHECK(contacts > 0);
 }
 
+TEST_CASE("a batch of more than 256 blocks of texels: the GPU's prefix sum gives the host's PCS", "[conservative][batch]") {
+  // The GPU resolve sums the counts on the GPU (shaders/prefix_sum.comp: blocks of 1,024 texels,
+  // their sums scanned 256 at a time); the 400-ball pile's frame packs about 330,000 texels. A
+  // wrong offset would put fragments in another texel's range: PCS and layers would differ.
+  std::vector<Object> objects;
+  make_crowd(400, 2)->frame(1, objects);
+  DetectOptions opt;
+  opt.stage = Stage::image;
+  gl::GlOptions o;
+  o.resolve = Resolve::host;
+  test_pipeline().set_gl_options(o);
+  const FrameResult host = test_pipeline().detect(objects, opt);
+  o.resolve = Resolve::gpu;
+  test_pipeline().set_gl_options(o);
+  const FrameResult gpu = test_pipeline().detect(objects, opt);
+  test_pipeline().set_gl_options(gl::GlOptions{});
+  std::size_t texels = 0;
+  for (const PairResult& p : host.pairs) texels += std::size_t(p.views_peeled) * std::size_t(p.resolution) * std::size_t(p.resolution);
+  INFO(texels << " texels in " << host.rois_peeled << " views");
+  REQUIRE(texels > 256 * 1024);
+  CHECK(gpu.gl_draws == 2);
+  REQUIRE(gpu.pairs.size() == host.pairs.size());
+  std::size_t differing = 0;
+  for (std::size_t i = 0; i < host.pairs.size(); ++i)
+    differing += gpu.pairs[i].pcs != host.pairs[i].pcs || gpu.pairs[i].layers != host.pairs[i].layers;
+  CHECK(differing == 0);
+}
+
+TEST_CASE("point-sampled views packed into one k-buffer give each pair's layers and PCS", "[batch]") {
+  // The single-pass peeler's views batched as the conservative ones are (shaders/peel.vert,
+  // abuffer.frag and abuffer_resolve.comp with PEELCD_BATCH): with the host's selection of
+  // triangles, every pair's PCS, layers and contacts are the one-view path's, on both resolves.
+  std::vector<Object> objects;
+  make_crowd(60, 2)->frame(1, objects);  // rigid balls, every fifth deforming (corners from the host)
+  DetectOptions opt;
+  opt.stage = Stage::image;
+  opt.conservative = false;
+  for (const Resolve resolve : {Resolve::host, Resolve::gpu}) {
+    INFO("resolve " << to_string(resolve));
+    gl::GlOptions o;
+    o.resolve = resolve;
+    o.gpu_select = false;
+    o.batch = false;
+    test_pipeline().set_gl_options(o);
+    test_pipeline().detect(objects, opt);  // the one-view path grows its k-buffer's slots once
+    const FrameResult single = test_pipeline().detect(objects, opt);
+    o.batch = true;
+    test_pipeline().set_gl_options(o);
+    const FrameResult batched = test_pipeline().detect(objects, opt);
+    o.gpu_select = true;
+    test_pipeline().set_gl_options(o);
+    const FrameResult selected = test_pipeline().detect(objects, opt);
+    test_pipeline().set_gl_options(gl::GlOptions{});
+    REQUIRE(single.rois_peeled > 8);
+    CHECK(single.gl_passes >= single.rois_peeled);  // at least one draw per view
+    CHECK(batched.gl_passes == 2);                  // the count and fill draws of the packed k-buffer
+    CHECK(batched.gl_draws == 2);
+    CHECK(selected.gl_draws == 2);
+    CHECK(selected.triangles_indexed > batched.triangles_indexed);  // the selection draws more
+    REQUIRE(batched.pairs.size() == single.pairs.size());
+    std::size_t contacts = 0, pcs = 0;
+    for (std::size_t i = 0; i < single.pairs.size(); ++i) {
+      INFO("pair " << i);
+      CHECK(batched.pairs[i].pcs == single.pairs[i].pcs);
+      CHECK(batched.pairs[i].layers == single.pairs[i].layers);
+      CHECK(batched.pairs[i].colliding.size() == single.pairs[i].colliding.size());
+      contacts += single.pairs[i].colliding.size();
+      pcs += single.pairs[i].pcs.size();
+    }
+    CHECK(contacts > 0);
+    CHECK(pcs > contacts);
+  }
+}
+
 TEST_CASE("rigid triangles selected on the GPU: a superset of the host's, the same contacts", "[conservative][batch]") {
   // The selection pass keeps every triangle of a rigid shape that reaches a view's volume; the
   // host keeps those its contact-region culling keeps. More triangles drawn: each pair's PCS

@@ -104,23 +104,28 @@ TEST_CASE("GL counters: the batched conservative frame is a count pass and a fil
       CHECK(r.gl_dispatches == 1);  // the selection
       CHECK(r.gl_readbacks == 4);   // the counts, the draw's command, the selected IDs, the fragments mapped
     } else {
-      CHECK(r.gl_dispatches == 2);  // the selection, the resolve
-      CHECK(r.gl_readbacks == 5);   // the counts, the command, the PCS header, the views' depths, the PCS list
+      // The selection, the prefix sum's three passes, the resolve.
+      CHECK(r.gl_dispatches == 5);
+      // The fragments' total, the command, the PCS header, the views' depths, the PCS list; nothing
+      // per texel (the counts stay on the GPU).
+      CHECK(r.gl_readbacks == 5);
     }
   }
 }
 
 TEST_CASE("GL counters: draws, dispatches and readbacks per frame do not depend on the number of ROIs", "[gl][counters]") {
-  // A pile of 4 balls (a few ROIs) and of 400 (about 1,800), conservative, the image stage
-  // forced, both resolves: after the first frame (which may grow the PCS list), the same GL calls,
-  // and no mesh data uploaded for the rigid balls.
-  const auto pile_counts = [](std::size_t balls, Resolve resolve) {
+  // A pile of 4 balls (a few ROIs) and of 400 (about 1,800), the image stage forced, both image
+  // modes (conservative, point sampling with the default single-pass peeler), both resolves:
+  // after the first frame (which may grow the PCS list), the same GL calls, and no mesh data
+  // uploaded for the rigid balls.
+  const auto pile_counts = [](std::size_t balls, Resolve resolve, bool conservative) {
     const std::unique_ptr<Sequence> pile = make_crowd(balls, 3, true);
     gl::GlOptions o;
     o.resolve = resolve;
     test_pipeline().set_gl_options(o);
     DetectOptions opt;
     opt.stage = Stage::image;
+    opt.conservative = conservative;
     std::vector<Object> objects;
     FrameResult r;
     std::array<std::size_t, 4> counts{};
@@ -136,10 +141,12 @@ TEST_CASE("GL counters: draws, dispatches and readbacks per frame do not depend 
     test_pipeline().set_gl_options(gl::GlOptions{});
     return counts;
   };
+  for (const bool conservative : {true, false})
   for (const Resolve resolve : {Resolve::host, Resolve::gpu}) {
-    const auto few = pile_counts(4, resolve);
-    const auto many = pile_counts(400, resolve);
-    INFO("resolve " << to_string(resolve) << ": 4 balls " << few[3] << " views, 400 balls " << many[3] << " views");
+    const auto few = pile_counts(4, resolve, conservative);
+    const auto many = pile_counts(400, resolve, conservative);
+    INFO((conservative ? "conservative" : "point sampling") << ", resolve " << to_string(resolve) << ": 4 balls "
+         << few[3] << " views, 400 balls " << many[3] << " views");
     REQUIRE(many[3] > 100 * few[3] / 4);  // the pile really has many more ROI views
     CHECK(few[0] == many[0]);  // draws
     CHECK(few[1] == many[1]);  // dispatches

@@ -44,15 +44,18 @@ struct GlOptions {
   Resolve resolve = Resolve::automatic;   // single-pass peeler only
   // Threads of the host resolve (Resolve::host): 0 = the hardware's threads, at most 8.
   unsigned workers = 0;
-  // Conservative views resolved on the host are packed into one k-buffer and drawn together (one
-  // draw per frame: GlImageStage::peel_batch); false draws each view on its own (the same layers
-  // and PCS; for comparison: peelcd detect/simulate --no-batch).
+  // The views of a frame are packed into one k-buffer and drawn together (a count and a fill draw
+  // per frame: GlImageStage::peel_batch): conservative views, and point-sampled views of the
+  // abuffer peeler that capture no layers; false draws each view on its own (the same layers and
+  // PCS; for comparison: peelcd detect/simulate --no-batch).
   bool batch = true;
   // In a batch, the triangles of rigid objects are selected on the GPU (a compute pass over each
   // shape's resident corners, per view: those reaching the view's volume; drawn by one indirect
   // draw) instead of by the host's culling: no per-triangle upload for rigid objects after a
-  // shape's first frame. It draws a superset of the host's selection, so a view's PCS is a
-  // superset of the host-selected one's, and the contacts are the same. Views capturing layers
+  // shape's first frame. It draws a superset of the host's selection: conservative, a view's PCS
+  // is then a superset of the host-selected one's and the contacts are the same; point sampled,
+  // the extra triangles are surfaces the host's culling had removed, so the layers (and what
+  // point sampling misses) can differ, as they do between culling modes. Views capturing layers
   // (dumps, goldens) keep the host's selection. false: the host's (peelcd detect --cpu-select).
   bool gpu_select = true;
 };
