@@ -20,6 +20,7 @@ struct BenchArgs {
   std::string backend = kDefaultBackend;
   unsigned threads = 0;  // 0: the machine's (at most 8)
   bool short_rows = false;
+  bool return_memory = false;
   std::string csv;
 };
 
@@ -80,6 +81,7 @@ int run_bench(const BenchArgs& a) {
   suite.res = a.res;
   suite.threads = threads;
   suite.short_rows = a.short_rows;
+  suite.keep_freed_memory = !a.return_memory;
   const Progress progress;
   suite.progress = [&](std::size_t done, std::size_t total) { progress(done, total); };
   std::string csv;
@@ -111,6 +113,9 @@ std::vector<Command> add_bench_commands(CLI::App& app) {
       ->check(CLI::Range(2, 2000))->capture_default_str();
   benchmark->add_flag("--short", be.short_rows, "Only the World rows, the frame API's router and image stage, the peers "
                                                  "and the floors (for the scale scenes)");
+  benchmark->add_flag("--return-memory", be.return_memory,
+                      "Leave glibc's allocator as it is (by default the bench keeps freed memory in the process, so "
+                      "that one method's frees do not slow the next method's frame; docs/performance.md)");
   benchmark->add_option("--objects", be.objects, "Balls of the crowd scene")->check(CLI::Range(2, 5000))
       ->capture_default_str();
   benchmark->add_option("--threads", be.threads, "Threads of the peers, of peelcd's host resolve and of llvmpipe "

@@ -14,6 +14,10 @@
 #include <cstdlib>
 #include <stdexcept>
 
+#if defined(__GLIBC__)
+#include <malloc.h>
+#endif
+
 namespace peelcd::bench {
 namespace {
 
@@ -87,11 +91,29 @@ double median(std::vector<double> v) {
   return v.empty() ? 0.0 : (v.size() % 2 ? v[v.size() / 2] : 0.5 * (v[v.size() / 2 - 1] + v[v.size() / 2]));
 }
 
+namespace {
+
+bool keep_freed_memory() {
+#if defined(__GLIBC__)
+  return mallopt(M_MMAP_THRESHOLD, 1 << 30) == 1 && mallopt(M_TRIM_THRESHOLD, 1 << 30) == 1;
+#else
+  return false;
+#endif
+}
+
+}  // namespace
+
 std::string run_suite(const Suite& suite) {
   auto* gl_stage = dynamic_cast<gl::GlImageStage*>(suite.stage.get());
   if (!gl_stage) throw std::invalid_argument("peelcd bench: the benchmark times GL stages (use osmesa or egl)");
   if (suite.res > 0 && suite.res > gl_stage->max_resolution())
     throw std::invalid_argument("peelcd bench: --res " + std::to_string(suite.res) + " is above GL_MAX_TEXTURE_SIZE");
+  // Freed memory stays in the process: the methods take turns on every frame, and one that frees
+  // gigabytes (the CGAL reference, FCL's cropped trees) would otherwise hand them back to the
+  // kernel and make whichever method runs next pay for it (on this project's VMs that made the
+  // next method's frame 2-3x slower: docs/performance.md, "Side by side"). Every method gets
+  // the same allocator; the library itself never changes it.
+  const bool heap_kept = suite.keep_freed_memory && keep_freed_memory();
   Detector detector(suite.stage);
   const unsigned threads = std::max(1u, suite.threads);
   const gl::GlOptions gl_base = gl_stage->options();
@@ -277,8 +299,9 @@ std::string run_suite(const Suite& suite) {
               suite.stage->backend().c_str(), suite.stage->renderer().c_str());
   const char* lp = std::getenv("LP_NUM_THREADS");
   std::printf("threads: %u for every method (CGAL, FCL: object pairs; peelcd: object pairs, the node pairs of one pair's "
-              "trees (World), host resolve lanes); llvmpipe %s\n",
-              threads, lp ? (std::string("LP_NUM_THREADS=") + lp).c_str() : "its default (one per core)");
+              "trees (World), host resolve lanes); llvmpipe %s; freed memory %s\n",
+              threads, lp ? (std::string("LP_NUM_THREADS=") + lp).c_str() : "its default (one per core)",
+              heap_kept ? "kept in the process (mallopt)" : "returned as the allocator decides");
   std::printf("World: %.0f candidate couples per frame (mean, default row); frame API router: %zu of %zu ROIs to the "
               "exact CPU path over the timed frames\n",
               suite.frames ? double(world_candidates) / double(suite.frames) : 0.0, rois_exact, rois);

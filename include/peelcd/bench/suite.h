@@ -30,6 +30,9 @@ struct Suite {
   int res = 0;            // 0: the shared 512^2 budget with tiles by need (detect's default)
   unsigned threads = 1;   // every method's threads
   bool short_rows = false;
+  // Freed memory stays in the process while the suite runs (glibc: mallopt), so that one
+  // method's frees do not slow the next method's frame; false leaves the allocator as it is.
+  bool keep_freed_memory = true;
   std::shared_ptr<ImageStage> stage;  // a GL stage (peelcd/backends.h): the floors draw on it
   std::function<void(std::size_t, std::size_t)> progress;  // (frames done, frames)
 };
