@@ -68,8 +68,8 @@ GlImageStage::Impl::Impl(std::shared_ptr<Context> ctx, const GlOptions& opt)
       {stage(GL_COMPUTE_SHADER, shaders::abuffer_resolve_comp, "abuffer_resolve.comp (PEELCD_BATCH)", batch)},
       "point-sampled batch resolve");
   cons_select_program =
-      link({stage(GL_COMPUTE_SHADER, shaders::conservative_select_comp, "conservative_select.comp")},
-           "conservative select");
+      link({stage(GL_COMPUTE_SHADER, shaders::batch_select_comp, "batch_select.comp")},
+           "batch select");
   prefix_sum_program = link({stage(GL_COMPUTE_SHADER, shaders::prefix_sum_comp, "prefix_sum.comp")}, "prefix sum");
   u_ps_texels = gl.GetUniformLocation(prefix_sum_program, "texels");
   u_ps_blocks = gl.GetUniformLocation(prefix_sum_program, "block_count");

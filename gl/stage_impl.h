@@ -33,7 +33,7 @@ extern const char* const conservative_geom;
 extern const char* const conservative_frag;
 extern const char* const conservative_resolve_comp;
 extern const char* const conservative_batch_resolve_comp;
-extern const char* const conservative_select_comp;
+extern const char* const batch_select_comp;
 extern const char* const pcs_test_inc;  // include/peelcd/core/pcs_test.inc
 extern const char* const batch_inc;
 extern const char* const prefix_sum_comp;
@@ -132,7 +132,7 @@ struct GlImageStage::Impl {
   std::vector<std::array<std::uint32_t, 4>> batch_entry_data, batch_job_data;
   std::vector<std::uint32_t> batch_ids;  // the provoking ID by draw order (the host resolve's)
   std::vector<float> batch_view_data;
-  // The selection pass (shaders/conservative_select.comp).
+  // The selection pass (shaders/batch_select.comp).
   GLuint cons_select_program = 0;
   GLint u_sel_jobs = -1, u_sel_invocations = -1, u_sel_row = -1;
   // Rigid shapes resident for the batch: one buffer holding every shape a batch drew (its

@@ -1,9 +1,9 @@
 #version 450 core
-// Conservative mode, batched (gl/batch.cpp): the GPU selects the triangles of rigid objects that
-// a frame's views draw. A rigid shape lives in the resident buffer (uploaded once); per view and
+// Batched views (gl/batch.cpp), conservative or point-sampled: the GPU selects the triangles of
+// rigid objects that a frame's views draw. A rigid shape lives in the resident buffer (uploaded once); per view and
 // rigid object, a job names the shape's corners and how many triangles it has. One invocation
 // per (job, triangle): the triangle's corners moved into ROI-local coordinates by the object's
-// matrix for the view (as shaders/conservative.vert moves them), and kept when their box
+// matrix for the view (as the batched vertex shaders move them), and kept when their box
 // overlaps the ROI box grown by 1e-3 of its largest half extent (the host's culling keeps only
 // triangles whose box overlaps the ROI box, in double: the growth covers the float rounding, so
 // the selection holds every triangle the host's would; it does not cull further). A kept triangle is
