@@ -76,6 +76,19 @@ constexpr std::size_t kViewWords = 16 + 32 + 4 + 4 + 4 + 4;
 
 void put_matrix(std::vector<float>& out, const float* m) { out.insert(out.end(), m, m + 16); }
 
+// A float as an integer of the same order (shaders/batch_select.comp's regions).
+std::uint32_t ordered(float f) {
+  std::uint32_t b;
+  std::memcpy(&b, &f, sizeof b);
+  return (b & 0x80000000u) ? ~b : b | 0x80000000u;
+}
+
+// An object's region in a view (shaders/batch_select.comp): lo x, y, z, hi x, y, z.
+void put_region(std::vector<std::uint32_t>& out, const Eigen::Vector3f& lo, const Eigen::Vector3f& hi) {
+  for (int k = 0; k < 3; ++k) out.push_back(ordered(lo[k]));
+  for (int k = 0; k < 3; ++k) out.push_back(ordered(hi[k]));
+}
+
 }  // namespace
 
 std::size_t GlImageStage::Impl::peel_batched_views(const PeelJob* jobs, std::size_t count, PeelResult* outs,
@@ -104,6 +117,7 @@ std::size_t GlImageStage::Impl::peel_batched_views(const PeelJob* jobs, std::siz
   batch_ids.clear();
   batch_view_data.clear();
   batch_view_data.reserve(take * kViewWords);
+  batch_region_data.clear();
   std::size_t base = 0, invocations = 0;
   shape_uploads = 0;  // the batch's, reported on its first view
   // Every rigid shape of the batch resident first: adding one may move the others (compaction),
@@ -134,6 +148,11 @@ std::size_t GlImageStage::Impl::peel_batched_views(const PeelJob* jobs, std::siz
       }
       put_matrix(batch_view_data, model);
       const std::vector<std::uint32_t>& tris = *job.triangles[slot];
+      // The object's region in the view (the selection's contact-region round): empty, for the
+      // selection to merge its triangles' boxes into; everything, for the host's selection of a
+      // rigid object (its ROI-local corners are the GPU's to compute); the box of the corners
+      // uploaded, for a deforming object.
+      constexpr float inf = std::numeric_limits<float>::infinity();
       if (rigid) {
         const std::size_t first = resident_base(object.rigid->shape, job.ids);
         if (options.gpu_select && !job.capture) {  // the selection pass picks its triangles
@@ -141,8 +160,10 @@ std::size_t GlImageStage::Impl::peel_batched_views(const PeelJob* jobs, std::siz
             batch_job_data.push_back({std::uint32_t(first), std::uint32_t(mesh.triangles.size()), view_object,
                                       std::uint32_t(invocations)});
           invocations += mesh.triangles.size();
+          put_region(batch_region_data, Eigen::Vector3f::Constant(inf), Eigen::Vector3f::Constant(-inf));
           continue;
         }
+        put_region(batch_region_data, Eigen::Vector3f::Constant(-inf), Eigen::Vector3f::Constant(inf));
         for (const std::uint32_t tri : tris) {  // the host's selection, from the resident corners
           batch_entry_data.push_back({std::uint32_t(first + 3 * std::size_t(tri)), view_object,
                                       corner_id(mesh, tri, 2, job.ids), 0u});
@@ -151,15 +172,20 @@ std::size_t GlImageStage::Impl::peel_batched_views(const PeelJob* jobs, std::siz
         out.triangles_indexed += tris.size();
         continue;
       }
+      Eigen::Vector3f lo = Eigen::Vector3f::Constant(inf), hi = Eigen::Vector3f::Constant(-inf);
       for (const std::uint32_t tri : tris) {
         const std::uint32_t corner = std::uint32_t(batch_corners.size());
         for (int k = 0; k < 3; ++k) {
           const Vec3 local = mesh.vertices[mesh.triangles[tri][k]] - view.center;
           batch_corners.push_back({float(local.x()), float(local.y()), float(local.z()), corner_id(mesh, tri, k, job.ids)});
+          const Eigen::Vector3f p(batch_corners.back().x, batch_corners.back().y, batch_corners.back().z);
+          lo = lo.cwiseMin(p);
+          hi = hi.cwiseMax(p);
         }
         batch_entry_data.push_back({0x80000000u | corner, view_object, batch_corners.back().id, 0u});
         batch_ids.push_back(batch_corners.back().id);
       }
+      put_region(batch_region_data, lo, hi);
       out.triangles_uploaded += tris.size();
     }
     const std::int32_t flags = point ? std::int32_t(job.peel == PeelMode::full) << 1 | std::int32_t(job.first & 1) : 0;
@@ -214,18 +240,32 @@ std::size_t GlImageStage::Impl::peel_batched_views(const PeelJob* jobs, std::siz
   gl.BindBufferBase(GL_SHADER_STORAGE_BUFFER, 4, batch_entries);
   gl.BindBufferBase(GL_SHADER_STORAGE_BUFFER, 7, resident_buffer);
   gl.BindBufferBase(GL_SHADER_STORAGE_BUFFER, 8, batch_frame);
-  if (invocations) {  // 0. The selection pass: rigid objects' triangles appended to the entries.
+  if (invocations) {
+    // 0. The selection pass: rigid objects' triangles in each view's ROI box staged, their
+    // objects' regions merged; then its contact-region round: those that reach the view's
+    // region appended to the entries (shaders/batch_select.comp).
+    upload_buffer(batch_regions, batch_regions_capacity, batch_region_data.data(),
+                  batch_region_data.size() * sizeof(std::uint32_t), 0, false);
+    upload_buffer(batch_staged, batch_staged_capacity, nullptr, 0, (invocations + 1) * kEntry, false);
+    const std::uint32_t staged_header[4] = {0, 0, 0, 0};
+    gl.NamedBufferSubData(batch_staged, 0, sizeof staged_header, staged_header);
+    count_upload(sizeof staged_header);
     gl.BindBufferBase(GL_SHADER_STORAGE_BUFFER, 9, batch_jobs);
     gl.BindBufferBase(GL_SHADER_STORAGE_BUFFER, 10, batch_command);
-    gl.UseProgram(cons_select_program);
+    gl.BindBufferBase(GL_SHADER_STORAGE_BUFFER, 13, batch_staged);
+    gl.BindBufferBase(GL_SHADER_STORAGE_BUFFER, 14, batch_regions);
+    gl.UseProgram(select_program);
     const std::size_t groups = (invocations + 63) / 64;
     const std::size_t gx = std::min<std::size_t>(groups, 65535), gy = (groups + gx - 1) / gx;
     gl.Uniform1ui(u_sel_jobs, GLuint(batch_job_data.size()));
     gl.Uniform1ui(u_sel_invocations, GLuint(invocations));
     gl.Uniform1ui(u_sel_row, GLuint(gx * 64));
-    gl.DispatchCompute(GLuint(gx), GLuint(gy), 1);
-    count_dispatch();
-    gl.MemoryBarrier(GL_SHADER_STORAGE_BARRIER_BIT | GL_COMMAND_BARRIER_BIT);
+    for (int pass = 0; pass < 2; ++pass) {
+      gl.Uniform1i(u_sel_pass, pass);
+      gl.DispatchCompute(GLuint(gx), GLuint(gy), 1);
+      count_dispatch();
+      gl.MemoryBarrier(GL_SHADER_STORAGE_BARRIER_BIT | GL_COMMAND_BARRIER_BIT);
+    }
   }
   gl.BindBuffer(GL_DRAW_INDIRECT_BUFFER, batch_command);
   gl.UseProgram(point ? point_batch_program : cons_batch_program);

@@ -67,7 +67,7 @@ GlImageStage::Impl::Impl(std::shared_ptr<Context> ctx, const GlOptions& opt)
   point_batch_resolve_program = link(
       {stage(GL_COMPUTE_SHADER, shaders::abuffer_resolve_comp, "abuffer_resolve.comp (PEELCD_BATCH)", batch)},
       "point-sampled batch resolve");
-  cons_select_program =
+  select_program =
       link({stage(GL_COMPUTE_SHADER, shaders::batch_select_comp, "batch_select.comp")},
            "batch select");
   prefix_sum_program = link({stage(GL_COMPUTE_SHADER, shaders::prefix_sum_comp, "prefix_sum.comp")}, "prefix sum");
@@ -77,9 +77,10 @@ GlImageStage::Impl::Impl(std::shared_ptr<Context> ctx, const GlOptions& opt)
   u_pb_viewport = gl.GetUniformLocation(point_batch_program, "viewport");
   u_pb_count_only = gl.GetUniformLocation(point_batch_program, "count_only");
   u_pbr_texels = gl.GetUniformLocation(point_batch_resolve_program, "texels");
-  u_sel_jobs = gl.GetUniformLocation(cons_select_program, "job_count");
-  u_sel_invocations = gl.GetUniformLocation(cons_select_program, "invocations");
-  u_sel_row = gl.GetUniformLocation(cons_select_program, "row");
+  u_sel_jobs = gl.GetUniformLocation(select_program, "job_count");
+  u_sel_invocations = gl.GetUniformLocation(select_program, "invocations");
+  u_sel_row = gl.GetUniformLocation(select_program, "row");
+  u_sel_pass = gl.GetUniformLocation(select_program, "pass");
   u_cbr_texels = gl.GetUniformLocation(cons_batch_resolve_program, "texels");
   u_cb_count_only = gl.GetUniformLocation(cons_batch_program, "count_only");
   u_cb_viewport = gl.GetUniformLocation(cons_batch_program, "viewport");
@@ -150,6 +151,8 @@ GlImageStage::Impl::Impl(std::shared_ptr<Context> ctx, const GlOptions& opt)
   gl.CreateBuffers(1, &batch_offset_buffer);
   gl.CreateBuffers(1, &scan_blocks);
   gl.CreateBuffers(1, &scan_total);
+  gl.CreateBuffers(1, &batch_staged);
+  gl.CreateBuffers(1, &batch_regions);
   gl.NamedBufferData(scan_total, 4, nullptr, GL_DYNAMIC_READ);
   u_model_peel = gl.GetUniformLocation(peel_program, "roi_from_object");
   gl.CreateQueries(GL_ANY_SAMPLES_PASSED, 1, &query);
@@ -174,7 +177,7 @@ GlImageStage::Impl::~Impl() {
   gl.DeleteProgram(cons_resolve_program);
   gl.DeleteProgram(cons_batch_program);
   gl.DeleteProgram(cons_batch_resolve_program);
-  gl.DeleteProgram(cons_select_program);
+  gl.DeleteProgram(select_program);
   gl.DeleteProgram(point_batch_program);
   gl.DeleteProgram(point_batch_resolve_program);
   gl.DeleteProgram(prefix_sum_program);
@@ -189,6 +192,8 @@ GlImageStage::Impl::~Impl() {
   gl.DeleteBuffers(1, &batch_offset_buffer);
   gl.DeleteBuffers(1, &scan_blocks);
   gl.DeleteBuffers(1, &scan_total);
+  gl.DeleteBuffers(1, &batch_staged);
+  gl.DeleteBuffers(1, &batch_regions);
   gl.DeleteBuffers(1, &count_buffer);
   gl.DeleteBuffers(1, &fragment_buffer);
   gl.DeleteTextures(1, &count_tex);

@@ -133,8 +133,13 @@ struct GlImageStage::Impl {
   std::vector<std::uint32_t> batch_ids;  // the provoking ID by draw order (the host resolve's)
   std::vector<float> batch_view_data;
   // The selection pass (shaders/batch_select.comp).
-  GLuint cons_select_program = 0;
-  GLint u_sel_jobs = -1, u_sel_invocations = -1, u_sel_row = -1;
+  GLuint select_program = 0;
+  GLint u_sel_jobs = -1, u_sel_invocations = -1, u_sel_row = -1, u_sel_pass = -1;
+  // Its staged triangles (pass 0's, before the contact-region round) and the objects' regions
+  // per view (12 words a view, uploaded per frame: what the host knows of them).
+  GLuint batch_staged = 0, batch_regions = 0;
+  std::size_t batch_staged_capacity = 0, batch_regions_capacity = 0;  // bytes
+  std::vector<std::uint32_t> batch_region_data;
   // Rigid shapes resident for the batch: one buffer holding every shape a batch drew (its
   // corners, with IDs, copied GPU to GPU from the shape's cached buffer: uploaded once), each at
   // its first corner; kept while some object holds the shape, compacted when the buffer grows.

@@ -245,10 +245,11 @@ TEST_CASE("point-sampled views packed into one k-buffer give each pair's layers 
   }
 }
 
-TEST_CASE("rigid triangles selected on the GPU: a superset of the host's, the same contacts", "[conservative][batch]") {
-  // The selection pass keeps every triangle of a rigid shape that reaches a view's volume; the
-  // host keeps those its contact-region culling keeps. More triangles drawn: each pair's PCS
-  // contains the host-selected one's, and the exact test gives the same contacts.
+TEST_CASE("rigid triangles selected on the GPU: the same contacts as the host's selection", "[conservative][batch]") {
+  // The selection pass keeps every triangle of a rigid shape that reaches a view's volume and its
+  // contact region (the boxes of both objects' triangles there); the host keeps those its
+  // grid-based contact-region culling keeps. Neither drops a triangle that touches the other
+  // object: every pair's contacts are the same, and each of them is among the GPU-selected PCS.
   std::vector<Object> objects;
   make_crowd(60, 2)->frame(1, objects);
   DetectOptions opt;
@@ -268,26 +269,26 @@ TEST_CASE("rigid triangles selected on the GPU: a superset of the host's, the sa
     REQUIRE(gpu.rois_peeled > 8);
     CHECK(gpu.gl_dispatches >= 1);  // the selection pass
     CHECK(gpu.triangles_uploaded == host.triangles_uploaded);  // a deforming object's, as before
-    CHECK(gpu.triangles_indexed > host.triangles_indexed);  // a coarser selection draws more
+    CHECK(gpu.triangles_indexed > 0);
+    INFO("rigid triangles drawn: host's selection " << host.triangles_indexed << ", GPU's " << gpu.triangles_indexed);
     CHECK(again.shape_uploads == 0);
     REQUIRE(gpu.pairs.size() == host.pairs.size());
-    std::size_t contacts = 0, more = 0;
+    std::size_t contacts = 0;
     for (std::size_t i = 0; i < host.pairs.size(); ++i) {
       const PairResult& h = host.pairs[i];
       const PairResult& g = gpu.pairs[i];
       INFO("pair " << i);
-      CHECK(std::includes(g.pcs.begin(), g.pcs.end(), h.pcs.begin(), h.pcs.end()));
-      CHECK(g.pcs == again.pairs[i].pcs);
-      more += g.pcs.size() - h.pcs.size();
+      CHECK(g.pcs == again.pairs[i].pcs);  // the same set each frame
       REQUIRE(g.colliding.size() == h.colliding.size());
       for (std::size_t c = 0; c < h.colliding.size(); ++c) {
         CHECK(g.colliding[c].tri_a == h.colliding[c].tri_a);
         CHECK(g.colliding[c].tri_b == h.colliding[c].tri_b);
+        // Unique IDs: a PCS is a couple of triangles.
+        CHECK(std::binary_search(g.pcs.begin(), g.pcs.end(), IdPair{g.colliding[c].tri_a, g.colliding[c].tri_b}));
       }
       contacts += h.colliding.size();
     }
     CHECK(contacts > 0);
-    CHECK(more > 0);
   }
 }
 
@@ -336,8 +337,8 @@ TEST_CASE("GPU selection: a shape new to a frame moves the resident ones, every 
     for (std::size_t i = 0; i < got.pairs.size(); ++i) {
       CHECK(!got.pairs[i].colliding.empty());
       CHECK(got.pairs[i].colliding.size() == expected.pairs[i].colliding.size());
-      CHECK(std::includes(got.pairs[i].pcs.begin(), got.pairs[i].pcs.end(), expected.pairs[i].pcs.begin(),
-                          expected.pairs[i].pcs.end()));
+      for (const Contact& c : got.pairs[i].colliding)
+        CHECK(std::binary_search(got.pairs[i].pcs.begin(), got.pairs[i].pcs.end(), IdPair{c.tri_a, c.tri_b}));
     }
   }
 }

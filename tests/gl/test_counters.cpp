@@ -101,11 +101,11 @@ TEST_CASE("GL counters: the batched conservative frame is a count pass and a fil
     CHECK(first.geometry_bytes > 0);
     CHECK(r.geometry_bytes == 0);
     if (resolve == Resolve::host) {
-      CHECK(r.gl_dispatches == 1);  // the selection
+      CHECK(r.gl_dispatches == 2);  // the selection and its contact-region round
       CHECK(r.gl_readbacks == 4);   // the counts, the draw's command, the selected IDs, the fragments mapped
     } else {
-      // The selection, the prefix sum's three passes, the resolve.
-      CHECK(r.gl_dispatches == 5);
+      // The selection and its contact-region round, the prefix sum's three passes, the resolve.
+      CHECK(r.gl_dispatches == 6);
       // The fragments' total, the command, the PCS header, the views' depths, the PCS list; nothing
       // per texel (the counts stay on the GPU).
       CHECK(r.gl_readbacks == 5);
