@@ -49,14 +49,15 @@ struct GlOptions {
   // abuffer peeler that capture no layers; false draws each view on its own (the same layers and
   // PCS; for comparison: peelcd detect/simulate --no-batch).
   bool batch = true;
-  // In a batch, the triangles of rigid objects are selected on the GPU (a compute pass over each
-  // shape's resident corners, per view: those reaching the view's volume; drawn by one indirect
-  // draw) instead of by the host's culling: no per-triangle upload for rigid objects after a
-  // shape's first frame. It draws a superset of the host's selection: conservative, a view's PCS
-  // is then a superset of the host-selected one's and the contacts are the same; point sampled,
-  // the extra triangles are surfaces the host's culling had removed, so the layers (and what
-  // point sampling misses) can differ, as they do between culling modes. Views capturing layers
-  // (dumps, goldens) keep the host's selection. false: the host's (peelcd detect --cpu-select).
+  // In a batch, the triangles of rigid objects are selected on the GPU (two compute passes over
+  // each shape's resident corners, per view: those reaching the view's ROI box and the contact
+  // region of both objects' triangles there; drawn by one indirect draw) instead of by the
+  // host's culling: no per-triangle upload for rigid objects after a shape's first frame. Neither
+  // drops a triangle that touches the other object: conservative, the contacts are the same
+  // (the PCS differ where the two keep different triangles near the contact); point sampled,
+  // the triangles the host's culling had removed can change the layers (and what point sampling
+  // misses), as between culling modes. Views capturing layers (dumps, goldens) keep the host's
+  // selection. false: the host's (peelcd detect --cpu-select).
   bool gpu_select = true;
 };
 
