@@ -2,9 +2,9 @@
 // k-buffer and drawn through shaders/conservative.* (conservative views) or shaders/peel.vert and
 // abuffer.frag (point-sampled views, the single-pass peeler's), with PEELCD_BATCH. Rigid shapes are
 // resident (one buffer, each shape copied there once); per view and rigid object a job goes to
-// the selection pass (shaders/batch_select.comp), which appends the triangles reaching the
-// ROI box to the draw's entries; deforming objects' triangles come from the host (their corners
-// uploaded per frame). A count pass and a fill pass (indirect draws over the entries) fill the
+// the selection passes (shaders/batch_select.comp), which append the triangles reaching the
+// ROI box and the view's contact region to the draw's entries; deforming objects' triangles
+// come from the host (their corners uploaded per frame). A count pass and a fill pass (indirect draws over the entries) fill the
 // k-buffer; each view's part is then resolved on the host (core/kbuffer.cpp) or by one dispatch
 // (shaders/conservative_batch_resolve.comp, shaders/abuffer_resolve.comp). Per view, a buffer
 // holds its matrix, the objects' poses, its resolution, its first texel, its ROI box and, point
