@@ -115,7 +115,8 @@ std::vector<Command> add_bench_commands(CLI::App& app) {
                                                  "and the floors (for the scale scenes)");
   benchmark->add_flag("--return-memory", be.return_memory,
                       "Leave glibc's allocator as it is (by default the bench keeps freed memory in the process, so "
-                      "that one method's frees do not slow the next method's frame; docs/performance.md)");
+                      "that one method's frees do not slow the next method's frame; docs/performance.md; "
+                      "cloth-self and volume never change it)");
   benchmark->add_option("--objects", be.objects, "Balls of the crowd scene")->check(CLI::Range(2, 5000))
       ->capture_default_str();
   benchmark->add_option("--threads", be.threads, "Threads of the peers, of peelcd's host resolve and of llvmpipe "
