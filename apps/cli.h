@@ -90,6 +90,7 @@ struct DetectArgs {
   bool check = false;
   bool quiet = false;
   bool list = false;    // print every colliding triangle pair (default: the summary only)
+  bool pcs = false;     // print every pair's PCS
   bool status = false;  // exit 1 when nothing collides
   int explain_misses = 0;  // detect --check: explain the first N missed pairs
   std::string backend = kDefaultBackend;

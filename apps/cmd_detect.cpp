@@ -102,6 +102,12 @@ int run_detect(const DetectArgs& a) {
     if (result.views_exhaustive > 0)
       std::fprintf(human, " (%zu views fell back to the exhaustive exact test: k-buffer too deep or too large)",
                    result.views_exhaustive);
+    if (result.gl_deep_texels > 0)
+      std::fprintf(human, " (GPU resolve: %zu texels deeper than %d fragments split over invocations)",
+                   result.gl_deep_texels, PEELCD_GPU_RESOLVE_DEPTH);
+    if (result.views_host_resolved > 0)  // a fallback is never silent
+      std::fprintf(human, " (%zu views resolved on the host: a texel deeper than the GPU resolve's %d fragments)",
+                   result.views_host_resolved, PEELCD_GPU_RESOLVE_DEPTH);
     std::fprintf(human, "\n");
     if (result.pairs.empty()) std::fprintf(human, "no overlapping bounding boxes: no GL work\n");
     std::size_t colliding = 0, colliding_objects = 0;
@@ -132,21 +138,29 @@ int run_detect(const DetectArgs& a) {
     std::fprintf(human, "%s: %zu colliding triangle pairs in %zu of %zu overlapping object pairs%s\n",
                  colliding_objects ? "collision" : "no collision", colliding, colliding_objects, result.pairs.size(),
                  colliding && !a.list ? " (--list prints them)" : "");
-    if (a.list)
-      for (const PairResult& p : result.pairs) {
-        if (p.colliding.empty()) continue;
-        std::fprintf(human, "%s x %s: triangle pairs (%s, %s)\n", objects[p.object_a].name.c_str(),
-                     objects[p.object_b].name.c_str(), objects[p.object_a].name.c_str(), objects[p.object_b].name.c_str());
-        std::string line = " ";
-        for (const Contact& c : p.colliding) {
-          line += " (" + std::to_string(c.tri_a) + "," + std::to_string(c.tri_b) + ")";
-          if (line.size() > 90) {
-            std::fprintf(human, "%s\n", line.c_str());
-            line = " ";
-          }
+    // Pairs of triangle indices, ten to a line.
+    const auto print_pairs = [&](const PairResult& p, const char* what, const auto& list, const auto& get) {
+      std::fprintf(human, "%s x %s: %s (%s, %s)\n", objects[p.object_a].name.c_str(), objects[p.object_b].name.c_str(),
+                   what, objects[p.object_a].name.c_str(), objects[p.object_b].name.c_str());
+      std::string line = " ";
+      for (const auto& c : list) {
+        const auto [ta, tb] = get(c);
+        line += " (" + std::to_string(ta) + "," + std::to_string(tb) + ")";
+        if (line.size() > 90) {
+          std::fprintf(human, "%s\n", line.c_str());
+          line = " ";
         }
-        if (line.size() > 1) std::fprintf(human, "%s\n", line.c_str());
       }
+      if (line.size() > 1) std::fprintf(human, "%s\n", line.c_str());
+    };
+    if (a.list)
+      for (const PairResult& p : result.pairs)
+        if (!p.colliding.empty())
+          print_pairs(p, "triangle pairs", p.colliding, [](const Contact& c) { return std::pair(c.tri_a, c.tri_b); });
+    if (a.pcs)
+      for (const PairResult& p : result.pairs)
+        if (!p.pcs.empty())
+          print_pairs(p, "PCS", p.pcs, [](const IdPair& c) { return std::pair(c.a, c.b); });
     const Timings& t = result.timings;
     std::fprintf(human, "timings (ms%s): aabb %.3f  upload %.3f  gpu %.3f  readback %.3f  cpu %.3f  total %.3f\n",
                 runs.size() > 1 ? (", median of " + std::to_string(runs.size())).c_str() : "",
@@ -227,6 +241,8 @@ std::vector<Command> add_detect_commands(CLI::App& app) {
   add_frame_options(detect, d);
   detect->add_option("--json", d.json_out, "Write the JSON report to FILE, or - for stdout")->check(kOutputPath);
   detect->add_flag("--list", d.list, "Print every colliding triangle pair (A's triangle, B's) after the summary");
+  detect->add_flag("--pcs", d.pcs, "Print every pair's PCS (the image stage's potentially colliding ID pairs, sorted) "
+                                   "after the summary: the image stage's output, to compare runs and backends");
   detect->add_flag("--status", d.status,
                    "Exit status for scripts, as grep's: 0 when anything collides, 1 when nothing does (2 bad input, 3 --max-miss)");
   detect->add_option("--repeat", d.repeat, "Run the frame N times and report median timings")

@@ -90,6 +90,7 @@ struct GoldenArgs {
   std::string peeler;  // empty: the case's (the default)
   std::string resolve;  // empty: the default (auto)
   std::string require_renderer;  // skip (exit 77) unless GL_RENDERER contains this
+  bool one_view_only = false;    // skip the production path
   std::string shard;             // "K/N": every N-th case from the K-th
   int repeat = 1;
 };
@@ -146,18 +147,37 @@ int run_golden_compare(const GoldenArgs& a) {
     runner.use(merged_gl_options(scene, a.peeler, a.resolve));
     const std::vector<Object> objects = load_objects(scene);
     const oracle::Dump expected = oracle::read_dump(oracle::golden_case_expected(a.dir, name));
+    bool case_ok = true;
     for (int run = 0; run < std::max(1, a.repeat); ++run) {
       const oracle::Dump actual = capture_frame(objects, scene.options, runner);
       const oracle::Comparison c = oracle::compare_dumps(expected, actual, tier);
-      const std::string label = a.repeat > 1 ? name + " (run " + std::to_string(run + 1) + ")" : name;
+      const std::string label = (a.repeat > 1 ? name + " (run " + std::to_string(run + 1) + ")" : name) + ", one-view path";
       if (c.ok()) {
         std::printf("%s", oracle::report_text(c, label, tier).c_str());
         continue;
       }
-      ++failed;
+      case_ok = false;
       std::printf("%s", oracle::write_report(expected, actual, c, label, a.report + "/" + name).c_str());
       break;
     }
+    // The production path: what a GPU runs by default (views batched, GPU selection, the GPU
+    // resolve unless --resolve host), no layer captured: its pairs against the golden's.
+    if (!a.one_view_only && runner.gl) {  // the CPU stage has one path
+      gl::GlOptions production = merged_gl_options(scene, a.peeler, a.resolve);
+      production.batch = true;
+      production.gpu_select = true;
+      if (a.resolve.empty() || a.resolve == "auto") production.resolve = Resolve::gpu;
+      runner.use(production);
+      DetectOptions opt = scene.options;
+      opt.stage = Stage::image;
+      const FrameResult frame = runner.detector->detect(objects, opt);
+      const oracle::Comparison c = oracle::compare_production(expected, frame, opt.conservative);
+      const std::string label = name + ", production path (batched, GPU selection, " +
+                                std::string(production.resolve == Resolve::gpu ? "GPU" : "host") + " resolve)";
+      std::printf("%s", oracle::report_text(c, label, tier).c_str());
+      case_ok = case_ok && c.ok();
+    }
+    failed += case_ok ? 0 : 1;
   }
   progress(cases.size(), cases.size());
   std::printf("golden compare: %d case(s) differ\n", failed);
@@ -238,6 +258,9 @@ std::vector<Command> add_golden_commands(CLI::App& app) {
   compare->add_option("--repeat", gc.repeat, "Run and compare each case N times in one process (determinism)")
       ->check(kPositive)->capture_default_str();
   compare->add_option("--shard", gc.shard, "Compare the K-th of N deterministic slices of the cases (K/N)");
+  compare->add_flag("--one-view-only", gc.one_view_only,
+                    "Compare only the one-view path (every layer); by default each case also runs the production "
+                    "path (views batched, GPU selection, GPU resolve) and compares its pairs");
   compare->add_option("--require-renderer", gc.require_renderer,
                       "Skip (exit 77, for ctest) unless GL_RENDERER contains TEXT, e.g. zink");
   auto cd_holder = std::make_shared<CompareDumpsArgs>();

@@ -602,6 +602,7 @@ void Detector::detect(const std::vector<const Object*>& object_ptrs, const Detec
   }
 
   out.gl_draws = out.gl_dispatches = out.gl_readbacks = out.bytes_uploaded = out.bytes_read = out.geometry_bytes = 0;
+  out.gl_deep_texels = out.views_host_resolved = 0;
   if (!s.jobs.empty()) {
     stage.counters = StageCounters{};
     stage.begin_frame();
@@ -614,6 +615,8 @@ void Detector::detect(const std::vector<const Object*>& object_ptrs, const Detec
     out.bytes_uploaded = stage.counters.bytes_uploaded;
     out.bytes_read = stage.counters.bytes_read;
     out.geometry_bytes = stage.counters.geometry_bytes;
+    out.gl_deep_texels = stage.counters.deep_texels;
+    out.views_host_resolved = stage.counters.views_host_resolved;
   }
 
   for (std::size_t pi = 0; pi < pairs.size(); ++pi) {

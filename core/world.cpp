@@ -407,6 +407,7 @@ void World::Impl::collide(const DetectOptions& opt, FrameResult& out) {
   out.gl_passes = out.rois_peeled = out.triangles_uploaded = out.triangles_indexed = out.shape_uploads = 0;
   out.pcs_readbacks = out.views_exhaustive = out.rois_exact = 0;
   out.gl_draws = out.gl_dispatches = out.gl_readbacks = out.bytes_uploaded = out.bytes_read = out.geometry_bytes = 0;
+  out.gl_deep_texels = out.views_host_resolved = 0;
   stats.node_pairs = stats.candidates = stats.vertices_transformed = 0;
 
   // The broad phase: each body's box (its tree's root, moved by its pose).
@@ -686,6 +687,8 @@ void World::Impl::image_pair(const Body& a, const Body& b, const std::vector<std
   out.bytes_uploaded += inner.bytes_uploaded;
   out.bytes_read += inner.bytes_read;
   out.geometry_bytes += inner.geometry_bytes;
+  out.gl_deep_texels += inner.gl_deep_texels;
+  out.views_host_resolved += inner.views_host_resolved;
   out.timings.upload += inner.timings.upload;
   out.timings.gpu += inner.timings.gpu;
   out.timings.readback += inner.timings.readback;

@@ -326,19 +326,12 @@ std::size_t GlImageStage::Impl::peel_batched_views(const PeelJob* jobs, std::siz
     total = sum == 0xffffffffu ? std::numeric_limits<std::size_t>::max() : sum;
     gl.UseProgram(point ? point_batch_program : cons_batch_program);
   } else {
+    total = read_batch_counts(texels, t);
+    deepest = batch_deepest;
     const auto t_counts = Clock::now();
-    batch_counts.resize(texels);
-    gl.GetNamedBufferSubData(count_buffer, 0, GLsizeiptr(texels * 4), batch_counts.data());
-    count_read(texels * 4);
     gl.GetNamedBufferSubData(batch_command, 0, sizeof drawn, drawn);
     count_read(sizeof drawn);
     t.readback += ms_since(t_counts);
-    batch_offsets.resize(texels);
-    for (std::size_t k = 0; k < texels; ++k) {
-      batch_offsets[k] = std::uint32_t(std::min<std::size_t>(total, 0xffffffffu));
-      total += batch_counts[k];
-      deepest = std::max(deepest, batch_counts[k]);
-    }
   }
   const std::size_t selected = drawn[0] / 3 - host_entries;  // by the selection pass
   outs[0].triangles_indexed += selected;
@@ -368,10 +361,19 @@ std::size_t GlImageStage::Impl::peel_batched_views(const PeelJob* jobs, std::siz
   check("the batched draws");
 
   if (!host_resolve()) {
-    resolve_batch_on_gpu(take, texels, point, outs, t);
-    t.gpu += ms_since(t_gpu);
-    outs[0].gl_passes = 2;  // the count and fill draws for the batch
-    return take;
+    if (resolve_batch_on_gpu(take, texels, point, outs, t)) {
+      t.gpu += ms_since(t_gpu);
+      outs[0].gl_passes = 2;  // the count and fill draws for the batch
+      return take;
+    }
+    // A texel deeper than the GPU resolve takes (point sampling: PEELCD_GPU_RESOLVE_DEPTH
+    // fragments): the batch resolved on the host instead, said in views_host_resolved.
+    counters->views_host_resolved += take;
+    for (std::size_t j = 0; j < take; ++j) outs[j].pcs.clear();
+    if (gpu_sum) {
+      read_batch_counts(texels, t);
+      deepest = batch_deepest;
+    }
   }
   if (selected) {  // the selection's entries: their IDs, by draw order
     const auto t_entries = Clock::now();
@@ -471,7 +473,41 @@ std::size_t GlImageStage::Impl::resident_base(const std::shared_ptr<const Mesh>&
   return resident.emplace(key, r).first->second.base;
 }
 
-void GlImageStage::Impl::resolve_batch_on_gpu(std::size_t take, std::size_t texels, bool point, PeelResult* outs,
+// The count pass's counts read back into batch_counts, their prefix sums into batch_offsets (the
+// host resolve's; uploaded by the caller for the fill pass), the deepest texel's count into
+// batch_deepest; returns the total.
+std::size_t GlImageStage::Impl::read_batch_counts(std::size_t texels, Timings& t) {
+  const auto t_counts = Clock::now();
+  batch_counts.resize(texels);
+  gl.GetNamedBufferSubData(count_buffer, 0, GLsizeiptr(texels * 4), batch_counts.data());
+  count_read(texels * 4);
+  t.readback += ms_since(t_counts);
+  batch_offsets.resize(texels);
+  std::size_t total = 0;
+  batch_deepest = 0;
+  for (std::size_t k = 0; k < texels; ++k) {
+    batch_offsets[k] = std::uint32_t(std::min<std::size_t>(total, 0xffffffffu));
+    total += batch_counts[k];
+    batch_deepest = std::max(batch_deepest, batch_counts[k]);
+  }
+  return total;
+}
+
+// The deep texels' rows (shaders/conservative_batch_resolve.comp with PEELCD_DEEP): a work group
+// per row and block of fragments, rows in dispatches of at most 65535 work groups wide.
+void GlImageStage::Impl::dispatch_deep_rows(const DeepHeader& deep, std::size_t texels) {
+  gl.UseProgram(cons_deep_program);
+  gl.Uniform1ui(u_cd_texels, GLuint(texels));
+  for (std::size_t base = 0; base < deep.row_count; base += 65535) {
+    gl.Uniform1ui(u_cd_row_base, GLuint(base));
+    gl.DispatchCompute(GLuint(std::min<std::size_t>(deep.row_count - base, 65535)), deep.max_blocks, 1);
+    count_dispatch();
+  }
+  gl.MemoryBarrier(GL_BUFFER_UPDATE_BARRIER_BIT | GL_SHADER_STORAGE_BARRIER_BIT);
+  gl.UseProgram(cons_batch_resolve_program);
+}
+
+bool GlImageStage::Impl::resolve_batch_on_gpu(std::size_t take, std::size_t texels, bool point, PeelResult* outs,
                                               Timings& t) {
   // Per-view depths, zeroed; the PCS header reset; one dispatch over every texel.
   const std::size_t layer_bytes = take * sizeof(std::uint32_t);
@@ -489,22 +525,55 @@ void GlImageStage::Impl::resolve_batch_on_gpu(std::size_t take, std::size_t texe
   gl.UseProgram(point ? point_batch_resolve_program : cons_batch_resolve_program);
   gl.Uniform1ui(point ? u_pbr_texels : u_cbr_texels, GLuint(texels));
   gl.BindBufferBase(GL_SHADER_STORAGE_BUFFER, 6, batch_offset_buffer);
+  if (!point && deep_rows_capacity == 0) {
+    deep_rows_capacity = 4096;
+    gl.NamedBufferData(deep_rows, GLsizeiptr(sizeof(DeepHeader) + deep_rows_capacity * 8), nullptr, GL_DYNAMIC_COPY);
+  }
+  if (!point) gl.BindBufferBase(GL_SHADER_STORAGE_BUFFER, 7, deep_rows);
   PcsHeader got{};
+  DeepHeader deep{};
   for (;;) {  // the list's pairs are 16 bytes here (IDs and view): half as many fit
     const PcsHeader header{0, pcs_capacity / 2, 0, 0};
     gl.NamedBufferSubData(pcs_buffer, 0, sizeof header, &header);
     count_upload(sizeof header);
+    if (!point) {
+      const DeepHeader empty{0, std::uint32_t(deep_rows_capacity), 0, 0};
+      gl.NamedBufferSubData(deep_rows, 0, sizeof empty, &empty);
+      count_upload(sizeof empty);
+    }
     gl.DispatchCompute(GLuint((texels + 63) / 64), 1, 1);
     count_dispatch();
-    gl.MemoryBarrier(GL_BUFFER_UPDATE_BARRIER_BIT);
+    gl.MemoryBarrier(GL_BUFFER_UPDATE_BARRIER_BIT | GL_SHADER_STORAGE_BARRIER_BIT);
     const auto t_read = Clock::now();
     gl.GetNamedBufferSubData(pcs_buffer, 0, sizeof got, &got);
     count_read(sizeof got);
     t.readback += ms_since(t_read);
+    if (got.max_fragments) return false;  // a texel deeper than this resolve takes
+    // Conservative: texels deeper than PEELCD_GPU_RESOLVE_DEPTH left rows for the second program
+    // (the deepest texel's count, max_layers, says whether any did: no read otherwise).
+    if (!point && got.max_layers > PEELCD_GPU_RESOLVE_DEPTH) {
+      const auto t_deep = Clock::now();
+      gl.GetNamedBufferSubData(deep_rows, 0, sizeof deep, &deep);
+      count_read(sizeof deep);
+      t.readback += ms_since(t_deep);
+      if (deep.row_count > deep_rows_capacity) {  // larger, and the dispatch again
+        deep_rows_capacity = std::size_t(deep.row_count) * 3 / 2;
+        gl.NamedBufferData(deep_rows, GLsizeiptr(sizeof(DeepHeader) + deep_rows_capacity * 8), nullptr,
+                           GL_DYNAMIC_COPY);
+        gl.BindBufferBase(GL_SHADER_STORAGE_BUFFER, 7, deep_rows);
+        continue;
+      }
+      dispatch_deep_rows(deep, texels);
+      const auto t_again = Clock::now();
+      gl.GetNamedBufferSubData(pcs_buffer, 0, sizeof got, &got);
+      count_read(sizeof got);
+      t.readback += ms_since(t_again);
+    }
     if (got.count <= pcs_capacity / 2) break;
     grow_pcs(2 * (got.count + got.count / 2));  // the list did not fit: larger, and the dispatch again
     gl.BindBufferBase(GL_SHADER_STORAGE_BUFFER, 0, pcs_buffer);
   }
+  counters->deep_texels += deep.deep_texels;
   const auto t_read = Clock::now();
   batch_view_layers.resize(take);
   gl.GetNamedBufferSubData(batch_layers, 0, GLsizeiptr(layer_bytes), batch_view_layers.data());
@@ -524,6 +593,7 @@ void GlImageStage::Impl::resolve_batch_on_gpu(std::size_t take, std::size_t texe
     out.peel_passes = 1;
     if (!out.pcs.empty()) ++out.pcs_readbacks;
   }
+  return true;
 }
 
 }  // namespace peelcd::gl

@@ -61,6 +61,11 @@ GlImageStage::Impl::Impl(std::shared_ptr<Context> ctx, const GlOptions& opt)
   cons_batch_resolve_program =
       link({stage(GL_COMPUTE_SHADER, shaders::conservative_batch_resolve_comp, "conservative_batch_resolve.comp")},
            "conservative batch resolve");
+  cons_deep_program = link({stage(GL_COMPUTE_SHADER, shaders::conservative_batch_resolve_comp,
+                                  "conservative_batch_resolve.comp (PEELCD_DEEP)", "#define PEELCD_DEEP\n")},
+                           "conservative batch resolve of deep texels");
+  u_cd_texels = gl.GetUniformLocation(cons_deep_program, "texels");
+  u_cd_row_base = gl.GetUniformLocation(cons_deep_program, "row_base");
   point_batch_program = link({stage(GL_VERTEX_SHADER, shaders::peel_vert, "peel.vert (PEELCD_BATCH)", batch),
                               stage(GL_FRAGMENT_SHADER, shaders::abuffer_frag, "abuffer.frag (PEELCD_BATCH)", batch)},
                              "point-sampled batch");
@@ -148,6 +153,7 @@ GlImageStage::Impl::Impl(std::shared_ptr<Context> ctx, const GlOptions& opt)
   gl.NamedBufferData(resident_buffer, 16, nullptr, GL_STATIC_DRAW);
   gl.CreateVertexArrays(1, &batch_vao);
   gl.CreateBuffers(1, &batch_layers);
+  gl.CreateBuffers(1, &deep_rows);
   gl.CreateBuffers(1, &batch_offset_buffer);
   gl.CreateBuffers(1, &scan_blocks);
   gl.CreateBuffers(1, &scan_total);
@@ -177,6 +183,7 @@ GlImageStage::Impl::~Impl() {
   gl.DeleteProgram(cons_resolve_program);
   gl.DeleteProgram(cons_batch_program);
   gl.DeleteProgram(cons_batch_resolve_program);
+  gl.DeleteProgram(cons_deep_program);
   gl.DeleteProgram(select_program);
   gl.DeleteProgram(point_batch_program);
   gl.DeleteProgram(point_batch_resolve_program);
@@ -189,6 +196,7 @@ GlImageStage::Impl::~Impl() {
   gl.DeleteBuffers(1, &resident_buffer);
   gl.DeleteVertexArrays(1, &batch_vao);
   gl.DeleteBuffers(1, &batch_layers);
+  gl.DeleteBuffers(1, &deep_rows);
   gl.DeleteBuffers(1, &batch_offset_buffer);
   gl.DeleteBuffers(1, &scan_blocks);
   gl.DeleteBuffers(1, &scan_total);

@@ -124,6 +124,10 @@ bool GlImageStage::Impl::dispatch_resolve(const PeelJob& job, std::size_t fittin
     t.gpu += ms_since(t_gpu);
     return regrow(got.max_fragments, fitting, job, out, t);
   }
+  if (got.max_fragments > 0) {  // a texel deeper than one invocation resolves: the host resolves
+    ++counters->views_host_resolved;
+    return resolve_on_host(job, fitting, view_slots, t_gpu, out, t);
+  }
   out.layers = int(got.max_layers);
   out.peel_passes = 1;
   out.captured.clear();

@@ -64,6 +64,11 @@ struct PcsHeader {
   std::uint32_t count, capacity, max_layers, max_fragments;
 };
 
+// Header of the deep texels' rows (DeepRows in shaders/conservative_batch_resolve.comp).
+struct DeepHeader {
+  std::uint32_t row_count, row_capacity, max_blocks, deep_texels;
+};
+
 // Peel passes per ROI before giving up; each pass strictly increases every live texel's depth,
 // so only a scene with more than this many surfaces along one ray reaches it.
 constexpr int kMaxPasses = 4096;
@@ -107,6 +112,11 @@ struct GlImageStage::Impl {
   // in batch_layers, the PCS list (draw orders) the only thing read back beside two headers.
   GLuint cons_batch_resolve_program = 0, batch_layers = 0;
   GLint u_cbr_texels = -1, u_cb_count_only = -1;
+  // Its second program for texels deeper than PEELCD_GPU_RESOLVE_DEPTH (the same source with
+  // PEELCD_DEEP): their rows (texel, block of fragments) in deep_rows, behind a DeepHeader.
+  GLuint cons_deep_program = 0, deep_rows = 0;
+  GLint u_cd_texels = -1, u_cd_row_base = -1;
+  std::size_t deep_rows_capacity = 0;  // rows
   // Point-sampled views batched the same way (shaders/peel.vert and abuffer.frag with
   // PEELCD_BATCH; the GPU resolve: shaders/abuffer_resolve.comp with PEELCD_BATCH).
   GLuint point_batch_program = 0, point_batch_resolve_program = 0;
@@ -118,6 +128,8 @@ struct GlImageStage::Impl {
   GLint u_ps_texels = -1, u_ps_blocks = -1, u_ps_pass = -1;
   std::size_t batch_offsets_capacity = 0, scan_blocks_capacity = 0;  // bytes
   std::vector<std::uint32_t> batch_counts, batch_offsets;
+  std::uint32_t batch_deepest = 0;
+  std::size_t read_batch_counts(std::size_t texels, Timings& t);
   std::size_t batch_layers_capacity = 0;  // bytes
   std::vector<std::uint32_t> batch_view_layers;
   std::vector<std::uint32_t> batch_pairs;
@@ -257,7 +269,9 @@ struct GlImageStage::Impl {
   void peel_one(const PeelJob& job, PeelResult& out, Timings& timings);
   std::size_t peel_batched_views(const PeelJob* jobs, std::size_t count, PeelResult* outs, Timings& t);
   // The GPU resolve of a drawn batch (batch.cpp): each job's PCS and layers.
-  void resolve_batch_on_gpu(std::size_t take, std::size_t texels, bool point, PeelResult* outs, Timings& t);
+  // False when a texel was deeper than the GPU resolve takes (the caller resolves on the host).
+  bool resolve_batch_on_gpu(std::size_t take, std::size_t texels, bool point, PeelResult* outs, Timings& t);
+  void dispatch_deep_rows(const DeepHeader& deep, std::size_t texels);
   bool host_resolve() const {
     return options.resolve == Resolve::host || (options.resolve == Resolve::automatic && software_renderer);
   }

@@ -46,7 +46,8 @@ layout(std430, binding = 0) buffer PcsBuffer {
   uint count;
   uint capacity;
   uint max_layers;     // the most layers of any texel
-  uint max_fragments;  // the most fragments of a texel that had more than `slots`; else 0
+  uint max_fragments;  // the most fragments of a texel that had more than `slots` or than
+                       // PEELCD_GPU_RESOLVE_DEPTH; else 0
   uvec2 pairs[];
 };
 
@@ -80,6 +81,11 @@ void main() {
   if (texel >= texels) return;
   uint n = texelFetch(count_tex, int(texel)).x;
   if (n == 0u) return;
+  // Deeper than one invocation resolves: the host resolves the batch (gl/batch.cpp).
+  if (n > uint(PEELCD_GPU_RESOLVE_DEPTH)) {
+    atomicMax(max_fragments, n);
+    return;
+  }
   uint begin = offsets[texel], end = begin + n, step = 1u;
   uint view = entries[texelFetch(fragment_tex, int(begin)).y & 0x7fffffffu].y >> 1;
   uint flags = uint(views[view].info.z);
@@ -92,9 +98,10 @@ void main() {
   uint texels = uint(resolution) * uint(resolution);
   uint texel = uint(p.y) * uint(resolution) + uint(p.x);
   uint n = texelFetch(count_tex, int(texel)).x;
-  if (n > slots) {
-    // Some fragments were not stored: no layers from this texel; the host grows and redraws.
-    if (n > max_fragments) atomicMax(max_fragments, n);
+  if (n > slots || n > uint(PEELCD_GPU_RESOLVE_DEPTH)) {
+    // Some fragments were not stored (n > slots: the host grows and redraws), or the texel is
+    // deeper than one invocation resolves (the host resolves the view): no layers from here.
+    atomicMax(max_fragments, n);
     return;
   }
   uint begin = texel, end = n * texels + texel, step = texels, view = 0u;

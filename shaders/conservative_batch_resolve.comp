@@ -6,9 +6,19 @@
 // intervals overlap are a PCS; here the pair is written as the two triangles' IDs and their view
 // (read from the draw's entries: only this list comes back), and each view's deepest texel is
 // kept per view.
+// A texel with more than PEELCD_GPU_RESOLVE_DEPTH (D) fragments is not resolved by its own
+// invocation: it appends one row per block of D fragments to the deep rows, and the second
+// program (this source with PEELCD_DEEP) resolves them, one work group of D invocations per
+// (row, block of D fragments): invocation i of row r tests fragment D * r.block + i against the
+// block's D fragments. No invocation loops more than D * D times in the first pass (its own
+// texel's couples, or its rows) or D times in the second, whatever a texel's depth.
 #include "peelcd/core/pcs_test.inc"  // pcs_intervals_overlap (shared with C++)
 
+#ifdef PEELCD_DEEP
+layout(local_size_x = PEELCD_GPU_RESOLVE_DEPTH) in;
+#else
 layout(local_size_x = 64) in;
+#endif
 
 layout(binding = 0) uniform usamplerBuffer count_tex;
 layout(binding = 1) uniform usamplerBuffer fragment_tex;  // shaders/conservative.frag (PEELCD_BATCH)
@@ -16,16 +26,57 @@ layout(std430, binding = 0) buffer PcsBuffer {
   uint count;
   uint capacity;
   uint max_layers;
-  uint max_fragments;
-  uvec4 pairs[];  // ID of A's triangle, ID of B's, view, 0
+  uint max_fragments;  // the most fragments of a texel too deep for the deep rows (> 65535 blocks)
+  uvec4 pairs[];       // ID of A's triangle, ID of B's, view, 0
 };
 // first corner, view << 1 | object, the provoking corner's ID, 0 (shaders/conservative.vert)
 layout(std430, binding = 4) readonly buffer Entries { uvec4 entries[]; };
 layout(std430, binding = 5) buffer ViewLayers { uint view_layers[]; };
 layout(std430, binding = 6) readonly buffer Offsets { uint offsets[]; };  // texel t's first fragment
+// The deep texels' rows: (texel, block of D fragments); row_count may exceed row_capacity (then
+// none past it is written: the host grows the buffer and resolves again); max_blocks: the most
+// blocks of a deep texel (the second dispatch's height).
+layout(std430, binding = 7) buffer DeepRows {
+  uint row_count;
+  uint row_capacity;
+  uint max_blocks;
+  uint deep_texels;
+  uvec2 rows[];
+};
 
-uniform uint texels;  // of the packed k-buffer
+uniform uint texels;    // of the packed k-buffer
+uniform uint row_base;  // PEELCD_DEEP: the first row of this dispatch
 
+// Fragments i and j of one texel (A's and B's): a PCS if their intervals overlap.
+void test_couple(uvec4 f, uvec4 g) {
+  if (!pcs_intervals_overlap(uintBitsToFloat(f.x), uintBitsToFloat(f.z), uintBitsToFloat(g.x), uintBitsToFloat(g.z)))
+    return;
+  uint slot = atomicAdd(count, 1u);
+  if (slot < capacity) {
+    uvec4 ea = entries[f.y & 0x7fffffffu], eb = entries[g.y & 0x7fffffffu];
+    pairs[slot] = uvec4(ea.z, eb.z, ea.y >> 1, 0u);
+  }
+}
+
+#ifdef PEELCD_DEEP
+void main() {
+  const uint D = uint(PEELCD_GPU_RESOLVE_DEPTH);
+  uint r = row_base + gl_WorkGroupID.x;
+  if (r >= min(row_count, row_capacity)) return;
+  uvec2 row = rows[r];
+  uint n = texelFetch(count_tex, int(row.x)).x;
+  uint i = row.y * D + gl_LocalInvocationID.x, j0 = gl_WorkGroupID.y * D;
+  if (i >= n || j0 >= n) return;
+  uint begin = offsets[row.x];
+  uvec4 f = texelFetch(fragment_tex, int(begin + i));
+  if ((f.y >> 31) != 0u) return;
+  uint j1 = min(n, j0 + D);
+  for (uint j = j0; j < j1; ++j) {
+    uvec4 g = texelFetch(fragment_tex, int(begin + j));
+    if ((g.y >> 31) == 1u) test_couple(f, g);
+  }
+}
+#else
 void main() {
   uint texel = gl_GlobalInvocationID.x;
   if (texel >= texels) return;
@@ -35,19 +86,27 @@ void main() {
   uint first = texelFetch(fragment_tex, int(begin)).y & 0x7fffffffu;
   atomicMax(view_layers[entries[first].y >> 1], n);
   if (n > max_layers) atomicMax(max_layers, n);
+  const uint D = uint(PEELCD_GPU_RESOLVE_DEPTH);
+  if (n > D) {  // a deep texel: its rows for the second program
+    uint blocks = (n + D - 1u) / D;
+    if (blocks > 16384u) {  // more rows than one invocation writes: the host resolves the batch
+      atomicMax(max_fragments, n);
+      return;
+    }
+    atomicAdd(deep_texels, 1u);
+    atomicMax(max_blocks, blocks);
+    uint at = atomicAdd(row_count, blocks);
+    if (at + blocks <= row_capacity)
+      for (uint b = 0u; b < blocks; ++b) rows[at + b] = uvec2(texel, b);
+    return;
+  }
   for (uint i = begin; i < end; ++i) {
     uvec4 f = texelFetch(fragment_tex, int(i));
     if ((f.y >> 31) != 0u) continue;
-    float lo = uintBitsToFloat(f.x), hi = uintBitsToFloat(f.z);
     for (uint j = begin; j < end; ++j) {
       uvec4 g = texelFetch(fragment_tex, int(j));
-      if ((g.y >> 31) != 1u) continue;
-      if (!pcs_intervals_overlap(lo, hi, uintBitsToFloat(g.x), uintBitsToFloat(g.z))) continue;
-      uint slot = atomicAdd(count, 1u);
-      if (slot < capacity) {
-        uvec4 ea = entries[f.y & 0x7fffffffu], eb = entries[g.y & 0x7fffffffu];
-        pairs[slot] = uvec4(ea.z, eb.z, ea.y >> 1, 0u);
-      }
+      if ((g.y >> 31) == 1u) test_couple(f, g);
     }
   }
 }
+#endif

@@ -35,8 +35,10 @@ void main() {
   uint texels = uint(resolution) * uint(resolution);
   uint texel = uint(p.y) * uint(resolution) + uint(p.x);
   uint n = texelFetch(count_tex, int(texel)).x;
-  if (n > slots) {
-    if (n > max_fragments) atomicMax(max_fragments, n);
+  // Some fragments not stored (n > slots: the host grows the k-buffer and draws again), or a
+  // texel deeper than one invocation resolves (the host resolves the view): no PCS from here.
+  if (n > slots || n > uint(PEELCD_GPU_RESOLVE_DEPTH)) {
+    atomicMax(max_fragments, n);
     return;
   }
   uint end = n * texels + texel;

@@ -208,6 +208,10 @@ struct FrameResult {
   std::size_t gl_draws = 0, gl_dispatches = 0, gl_readbacks = 0, bytes_uploaded = 0, bytes_read = 0;
   // Of bytes_uploaded, mesh data (corners, indices, draw entries: StageCounters::geometry_bytes).
   std::size_t geometry_bytes = 0;
+  // The GPU resolve's texels deeper than one invocation resolves (PEELCD_GPU_RESOLVE_DEPTH
+  // fragments): split over invocations (batched conservative views: gl_deep_texels), or their
+  // views resolved on the host instead (views_host_resolved). Both 0 on the host resolve.
+  std::size_t gl_deep_texels = 0, views_host_resolved = 0;
   std::string renderer;           // GL_RENDERER of the context that ran it
 };
 

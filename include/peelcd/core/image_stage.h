@@ -92,6 +92,11 @@ struct StageCounters {
   // view or per texel (matrices, selection jobs, commands, offsets, headers).
   std::size_t geometry_bytes = 0;
   std::size_t bytes_read = 0;      // bytes the host read back
+  // The GPU resolve's deep texels (more fragments than PEELCD_GPU_RESOLVE_DEPTH,
+  // peelcd/core/pcs_test.inc): split over invocations (batched conservative views), or their
+  // views resolved on the host instead (every other GPU resolve; never silent).
+  std::size_t deep_texels = 0;
+  std::size_t views_host_resolved = 0;
 };
 
 class ImageStage {
