@@ -35,12 +35,11 @@ int GlImageStage::max_resolution() const { return impl_->max_texture; }
 StageCost GlImageStage::cost() const {
   // llvmpipe: fitted by `peelcd calibrate --backend osmesa` on 2 cores (2026-11-25, after the
   // batched views got their count pass: the texel term fell from 19.5 to about 1 ns; triangles
-  // counted after one culling round, as the router sees them). A GPU: not
-  // calibrated yet (no GPU lent since the router exists); estimated from the H100 run of
-  // docs/backends.md (0.58 ms of GPU for 3 views of the default scene, ~1,500 triangles at 256^2,
-  // with upload and narrow phase of its PCS). See docs/performance.md, "The stage router".
+  // counted after one culling round, as the router sees them). A GPU: fitted by
+  // `peelcd calibrate --backend egl` on an NVIDIA H200 (2026-11-25, docs/backends.md).
+  // See docs/performance.md, "The stage router".
   if (impl_->software_renderer) return StageCost{0.195, 1.44, 0.98};
-  return StageCost{0.2, 0.05, 0.5};
+  return StageCost{0.16, 0.72, 0.0};
 }
 Context& GlImageStage::context() { return *impl_->context; }
 
