@@ -43,6 +43,7 @@ Runner make_runner(const std::string& backend, const gl::GlOptions& options) {
   Runner r;
   r.stage = make_image_stage(backend, options);  // peelcd/backends.h
   r.gl = dynamic_cast<gl::GlImageStage*>(r.stage.get());
+  r.gl_options = options;
   r.detector = std::make_unique<Detector>(r.stage);
   return r;
 }
@@ -144,7 +145,7 @@ oracle::Dump capture_frame(const std::vector<Object>& objects, const DetectOptio
   }
   runner.detector->capture_layers(nullptr);
   return oracle::make_dump(result, captured, objects, opt, runner.stage->renderer(), runner.stage->version(),
-                           runner.backend());
+                           runner.backend(), runner.gl_settings());
 }
 
 // The broad phase's overlapping object pairs: the ROIs of a frame (before culling).

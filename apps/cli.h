@@ -67,9 +67,12 @@ struct Runner {
   const std::string& backend() const { return stage->backend(); }
   const std::string& renderer() const { return stage->renderer(); }
   // GL stage options of one configuration (ignored by the CPU stage).
+  gl::GlOptions gl_options;  // the GL stage's settings in use
   void use(const gl::GlOptions& options) {
+    gl_options = options;
     if (gl) gl->set_options(options);
   }
+  const gl::GlOptions* gl_settings() const { return gl ? &gl_options : nullptr; }
 };
 
 Runner make_runner(const std::string& backend, const gl::GlOptions& options = {});

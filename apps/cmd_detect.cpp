@@ -166,7 +166,8 @@ int run_detect(const DetectArgs& a) {
                 runs.size() > 1 ? (", median of " + std::to_string(runs.size())).c_str() : "",
                 t.aabb, t.upload, t.gpu, t.readback, t.cpu, t.total);
   }
-  if (!a.json_out.empty()) write_output(a.json_out, to_json(result, objects, opt, a.check ? &scores : nullptr).dump(2));
+  if (!a.json_out.empty())
+    write_output(a.json_out, to_json(result, objects, opt, a.check ? &scores : nullptr, runner.gl_settings()).dump(2));
   if (a.check && !a.quiet)
     std::fprintf(human, "check: %zu exact pairs, %zu missed (miss ratio %.4f%%)\n", total.exact, total.missed,
                 100.0 * total.miss_ratio());

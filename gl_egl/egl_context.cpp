@@ -87,6 +87,7 @@ EglContext::EglContext(Platform platform) : impl_(std::make_unique<Impl>()) {
 }
 
 EglContext::~EglContext() {
+  if (bound_context.context == this) bound_context = {};
   if (impl_->context != EGL_NO_CONTEXT) {
     if (eglGetCurrentContext() == impl_->context)
       eglMakeCurrent(impl_->display, EGL_NO_SURFACE, EGL_NO_SURFACE, EGL_NO_CONTEXT);
@@ -99,8 +100,12 @@ EglContext::~EglContext() {
 void EglContext::make_current() {
   const EGLContext current = eglGetCurrentContext();
   impl_->prev_context = EGL_NO_CONTEXT;
-  if (current == impl_->context) return;  // already current: nothing to switch or give back
-  if (current != EGL_NO_CONTEXT) {
+  if (current == impl_->context) {
+    if (bound_context.context == this) return;  // already current: nothing to switch or give back
+    // Current for EGL, but another platform's context was made current since (one GL dispatch
+    // in Mesa): released, then bound again, so that GL calls reach this one.
+    eglMakeCurrent(impl_->display, EGL_NO_SURFACE, EGL_NO_SURFACE, EGL_NO_CONTEXT);
+  } else if (current != EGL_NO_CONTEXT) {
     impl_->prev_context = current;
     impl_->prev_display = eglGetCurrentDisplay();
     impl_->prev_draw = eglGetCurrentSurface(EGL_DRAW);
@@ -110,12 +115,14 @@ void EglContext::make_current() {
     impl_->prev_context = EGL_NO_CONTEXT;
     throw GlError("peelcd::gl::EglContext: eglMakeCurrent failed");
   }
+  bound_context = {this, ContextPlatform::egl};
 }
 
 void EglContext::restore_previous() noexcept {
   if (impl_->prev_context == EGL_NO_CONTEXT) return;
   eglMakeCurrent(impl_->prev_display, impl_->prev_draw, impl_->prev_read, impl_->prev_context);
   impl_->prev_context = EGL_NO_CONTEXT;
+  bound_context = {};
 }
 
 ProcAddress EglContext::proc_address(const char* name) { return reinterpret_cast<ProcAddress>(eglGetProcAddress(name)); }

@@ -30,13 +30,20 @@ OsmesaContext::OsmesaContext() : impl_(std::make_unique<Impl>()) {
 }
 
 OsmesaContext::~OsmesaContext() {
+  if (bound_context.context == this) bound_context = {};
   if (impl_->ctx) OSMesaDestroyContext(impl_->ctx);
 }
 
 void OsmesaContext::make_current() {
-  const OSMesaContext current = OSMesaGetCurrentContext();
+  // Another platform's peelcd context bound since: OSMesaGetCurrentContext() would read that
+  // one (Mesa's one GL dispatch) as an OSMesa context; there is no OSMesa context to give back.
+  const bool foreign = bound_context.platform == ContextPlatform::egl;
+  const OSMesaContext current = foreign ? nullptr : OSMesaGetCurrentContext();
   impl_->prev = nullptr;
-  if (current == impl_->ctx) return;  // already current: nothing to switch or give back
+  if (current == impl_->ctx) {  // already current: nothing to switch or give back
+    bound_context = {this, ContextPlatform::osmesa};
+    return;
+  }
   if (current && OSMesaGetColorBuffer(current, &impl_->prev_width, &impl_->prev_height, &impl_->prev_format,
                                       &impl_->prev_buffer))
     impl_->prev = current;
@@ -44,6 +51,7 @@ void OsmesaContext::make_current() {
     impl_->prev = nullptr;
     throw GlError("peelcd::gl::OsmesaContext: OSMesaMakeCurrent failed");
   }
+  bound_context = {this, ContextPlatform::osmesa};
 }
 
 // The caller's buffer is given back as GL_UNSIGNED_BYTE (the common case; OSMesa does not tell
@@ -52,6 +60,7 @@ void OsmesaContext::restore_previous() noexcept {
   if (!impl_->prev) return;
   OSMesaMakeCurrent(impl_->prev, impl_->prev_buffer, GL_UNSIGNED_BYTE, impl_->prev_width, impl_->prev_height);
   impl_->prev = nullptr;
+  bound_context = {};
 }
 
 ProcAddress OsmesaContext::proc_address(const char* name) {

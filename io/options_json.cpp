@@ -46,7 +46,27 @@ DetectOptions options_from_json(const nlohmann::json& j) {
 }
 
 nlohmann::json gl_options_to_json(const gl::GlOptions& o) {
-  return {{"peeler", to_string(o.peeler)}, {"resolve", to_string(o.resolve)}};
+  nlohmann::json out = nlohmann::json::object();
+  for (const gl::GlOptionSpec& spec : gl::gl_option_table()) {
+    const std::string v = spec.get(o);
+    if (*spec.choices) out[spec.key] = v;
+    else out[spec.key] = v == "true";
+  }
+  return out;
+}
+
+gl::GlOptions gl_options_from_json(const nlohmann::json& j) {
+  if (!j.is_object()) throw std::invalid_argument("gl_options: must be an object");
+  gl::GlOptions o;
+  for (const auto& [key, value] : j.items()) {
+    std::string words;
+    if (value.is_boolean()) words = value.get<bool>() ? "true" : "false";
+    else if (value.is_string()) words = value.get<std::string>();
+    else throw std::invalid_argument("gl_options." + key + ": must be a string or a boolean");
+    const std::string problem = gl::set_gl_option(o, key, words);
+    if (!problem.empty()) throw std::invalid_argument("gl_options: " + problem);
+  }
+  return o;
 }
 
 }  // namespace peelcd

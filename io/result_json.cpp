@@ -15,7 +15,7 @@ nlohmann::json score_json(const Score& s) {
 }  // namespace
 
 nlohmann::json to_json(const FrameResult& r, const std::vector<Object>& objects, const DetectOptions& o,
-                       const std::vector<Score>* check) {
+                       const std::vector<Score>* check, const gl::GlOptions* gl) {
   using nlohmann::json;
   json pairs = json::array();
   std::size_t total = 0, colliding_objects = 0;
@@ -87,6 +87,7 @@ nlohmann::json to_json(const FrameResult& r, const std::vector<Object>& objects,
             {"cpu", r.timings.cpu},
             {"total", r.timings.total}}}};
   if (check) out["check"] = score_json(sum);
+  if (gl) out["gl_options"] = gl_options_to_json(*gl);
   return out;
 }
 

@@ -56,7 +56,8 @@ Scene parse_scene(const std::string& text, const std::string& path, const std::s
     throw InputError("peelcd::load_scene(): '" + path + "': malformed JSON: " + e.what());
   }
   {
-    std::set<std::string> keys = {"objects", "view", "peeler", "resolve"};  // and every top-level option
+    std::set<std::string> keys = {"objects", "view"};  // and every top-level option, every GL setting
+    for (const gl::GlOptionSpec& spec : gl::gl_option_table()) keys.insert(spec.key);
     for (const OptionSpec& spec : option_table())
       if (*spec.group == 0) keys.insert(spec.key);
     c.only_keys(root, "the scene", keys);
@@ -141,17 +142,16 @@ Scene parse_scene(const std::string& text, const std::string& path, const std::s
     if (holder && holder->contains(spec.key))
       read(spec, (*holder)[spec.key], group.empty() ? std::string(spec.key) : group + "." + spec.key);
   }
-  if (root.contains("peeler")) {
-    const std::string peeler = c.string(root["peeler"], "peeler");
-    const auto p = parse_peeler(peeler);
-    if (!p) c.fail("peeler", "unknown peeler \"" + peeler + "\" (expected abuffer or multipass)");
-    scene.gl.peeler = *p;
-  }
-  if (root.contains("resolve")) {
-    const std::string resolve = c.string(root["resolve"], "resolve");
-    const auto r = parse_resolve(resolve);
-    if (!r) c.fail("resolve", "unknown resolve \"" + resolve + "\" (expected auto, gpu or host)");
-    scene.gl.resolve = *r;
+  // The GL stage's settings (gl_option_table()): a choice's word, or a boolean.
+  for (const gl::GlOptionSpec& spec : gl::gl_option_table()) {
+    if (!root.contains(spec.key)) continue;
+    const json& v = root[spec.key];
+    std::string words;
+    if (*spec.choices) words = c.string(v, spec.key);
+    else if (v.is_boolean()) words = v.get<bool>() ? "true" : "false";
+    else c.fail(spec.key, "must be true or false");
+    const std::string problem = gl::set_gl_option(scene.gl, spec.key, words);
+    if (!problem.empty()) c.fail(spec.key, problem.substr(problem.find(": ") + 2));
   }
   return scene;
 }

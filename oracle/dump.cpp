@@ -183,8 +183,9 @@ std::size_t hardware_miss_slack(std::size_t reference_pairs) {
 
 Dump make_dump(const FrameResult& frame, const std::vector<CapturedView>& captured,
                const std::vector<Object>& objects, const DetectOptions& o, const std::string& renderer,
-               const std::string& gl_version, const std::string& backend) {
+               const std::string& gl_version, const std::string& backend, const gl::GlOptions* gl) {
   Dump d;
+  if (gl) d.gl_options = gl_options_to_json(*gl);
   d.renderer = renderer;
   d.gl_version = gl_version;
   d.backend = backend;
@@ -275,6 +276,7 @@ void write_dump(const Dump& d, const std::string& dir, bool previews) {
     nlohmann::json meta = {{"format", d.format}, {"peelcd_version", PEELCD_VERSION_STRING}, {"renderer", d.renderer},
                            {"gl_version", d.gl_version}, {"backend", d.backend},
                            {"shader_hash", d.shader_hash}, {"options", d.options}};
+    if (!d.gl_options.is_null()) meta["gl_options"] = d.gl_options;
     nlohmann::json pairs = nlohmann::json::array();
     for (const DumpPair& p : d.pairs) {
       fs::create_directories(tmp / p.dir);
@@ -409,6 +411,7 @@ Dump read_dump(const std::string& dir) {
     d.shader_hash = meta.at("shader_hash").get<std::string>();
     d.options = meta.at("options");
     if (!d.options.is_object()) throw InputError("peelcd: '" + meta_path.string() + "': \"options\" is not an object");
+    if (meta.contains("gl_options")) d.gl_options = meta.at("gl_options");
     for (const auto& jp : meta.at("pairs")) {
       DumpPair p;
       p.dir = jp.at("dir").get<std::string>();

@@ -116,9 +116,29 @@ DetectOptions options_from(const py::kwargs& kwargs) {
   return o;
 }
 
-std::shared_ptr<ImageStage> stage_for(const std::string& backend) {
+// The GL stage's settings from keywords (gl_option_table(): peeler, resolve, batch, gpu_select);
+// refused on the CPU stage, which has none.
+gl::GlOptions gl_options_from(const std::string& backend, const py::kwargs& kwargs) {
+  gl::GlOptions o;
+  for (const auto& [k, v] : kwargs) {
+    const std::string key = py::str(k);
+    if (backend == "cpu")
+      throw py::value_error("GL option '" + key + "': the cpu backend has no GL stage (use osmesa or egl)");
+    std::string words;
+    if (py::isinstance<py::bool_>(v)) words = v.cast<bool>() ? "true" : "false";
+    else if (py::isinstance<py::str>(v)) words = v.cast<std::string>();
+    else throw py::type_error("GL option '" + key + "': expected a bool or a string");
+    const std::string problem = gl::set_gl_option(o, key, words);
+    if (problem.rfind("unknown GL option", 0) == 0)
+      throw py::type_error(problem + " (GL options: peeler, resolve, batch, gpu_select)");
+    if (!problem.empty()) throw py::value_error("GL option " + problem);
+  }
+  return o;
+}
+
+std::shared_ptr<ImageStage> stage_for(const std::string& backend, const gl::GlOptions& gl = {}) {
   try {
-    return make_image_stage(backend);
+    return make_image_stage(backend, gl);
   } catch (const std::invalid_argument& e) {
     throw py::value_error(e.what());
   } catch (const std::exception& e) {
@@ -166,7 +186,7 @@ py::dict pair_dict(const PairResult& p) {
   return d;
 }
 
-py::dict result_dict(const FrameResult& r) {
+py::dict result_dict(const FrameResult& r, const std::optional<gl::GlOptions>& gl = std::nullopt) {
   py::list pairs;
   bool any = false;
   for (const PairResult& p : r.pairs) {
@@ -177,6 +197,15 @@ py::dict result_dict(const FrameResult& r) {
   d["pairs"] = pairs;
   d["is_collision"] = any;
   d["total_ms"] = r.timings.total;
+  if (gl) {  // the GL stage's settings of the run
+    py::dict g;
+    for (const gl::GlOptionSpec& spec : gl::gl_option_table()) {
+      const std::string v = spec.get(*gl);
+      if (*spec.choices) g[spec.key] = v;
+      else g[spec.key] = v == "true";
+    }
+    d["gl_options"] = g;
+  }
   return d;
 }
 
@@ -193,15 +222,22 @@ auto translate_errors(Fn&& fn) -> decltype(fn()) {
 
 // A persistent world (peelcd::World) with its own image stage.
 struct PyWorld {
-  explicit PyWorld(const std::string& backend) : world(backend == "cpu" ? nullptr : stage_for(backend)) {}
+  PyWorld(const std::string& backend, const gl::GlOptions& o)
+      : world(backend == "cpu" ? nullptr : stage_for(backend, o)) {
+    if (backend != "cpu") gl = o;
+  }
   World world;
+  std::optional<gl::GlOptions> gl;  // the GL stage's settings (none on the CPU stage)
 };
 
 // The frame API on meshes given each call (peelcd::Detector).
 struct PyDetector {
-  explicit PyDetector(const std::string& backend) : detector(stage_for(backend)) {}
+  PyDetector(const std::string& backend, const gl::GlOptions& o) : detector(stage_for(backend, o)) {
+    if (backend != "cpu") gl = o;
+  }
   Detector detector;
   FrameResult result;
+  std::optional<gl::GlOptions> gl;
 };
 
 struct PyMesh {
@@ -257,7 +293,11 @@ PYBIND11_MODULE(_peelcd, m) {
 
   py::class_<PyWorld>(m, "World", "Persistent bodies kept across frames (peelcd::World): rigid ones move by their pose, "
                                   "deforming ones by their vertices")
-      .def(py::init<const std::string&>(), py::arg("backend") = "cpu")
+      .def(py::init([](const std::string& backend, const py::kwargs& kwargs) {
+             return std::make_unique<PyWorld>(backend, gl_options_from(backend, kwargs));
+           }),
+           py::arg("backend") = "cpu",
+           "backend: cpu, osmesa or egl; GL backends take the GL options as keywords (peeler, resolve, batch, gpu_select)")
       .def("add_rigid", [](PyWorld& w, const PyMesh& mesh, const py::object& pose, const std::string& name, bool self) {
         return translate_errors([&] {
           const BodyId id = w.world.add_rigid(mesh.mesh, pose_from(pose), name);
@@ -293,11 +333,15 @@ PYBIND11_MODULE(_peelcd, m) {
           py::gil_scoped_release release;
           r = &translate_errors([&]() -> const FrameResult& { return w.world.collide(opt); });
         }
-        return result_dict(*r);
+        return result_dict(*r, w.gl);
       }, "One frame: every pair of bodies whose boxes overlap. Keyword options as in scene files");
 
   py::class_<PyDetector>(m, "Detector", "The frame API (peelcd::Detector): the objects given whole each frame")
-      .def(py::init<const std::string&>(), py::arg("backend") = "cpu")
+      .def(py::init([](const std::string& backend, const py::kwargs& kwargs) {
+             return std::make_unique<PyDetector>(backend, gl_options_from(backend, kwargs));
+           }),
+           py::arg("backend") = "cpu",
+           "backend: cpu, osmesa or egl; GL backends take the GL options as keywords (peeler, resolve, batch, gpu_select)")
       .def("detect", [](PyDetector& d, const py::list& objects, const py::kwargs& kwargs) {
         const DetectOptions opt = options_from(kwargs);
         std::vector<Object> objs;
@@ -317,7 +361,7 @@ PYBIND11_MODULE(_peelcd, m) {
           py::gil_scoped_release release;
           translate_errors([&] { d.detector.detect(objs, opt, d.result); });
         }
-        return result_dict(d.result);
+        return result_dict(d.result, d.gl);
       }, py::arg("objects"), "One frame of the objects (Mesh, or dicts with mesh, name, self). Keyword options as in scene files");
 
   m.def("exact_pairs", [](const PyMesh& a, const PyMesh& b) {
@@ -367,4 +411,14 @@ PYBIND11_MODULE(_peelcd, m) {
     }
     return d;
   }, "Every option (the scene files' keys) with its default");
+  m.def("gl_options", []() {
+    py::dict d;
+    const gl::GlOptions defaults;
+    for (const gl::GlOptionSpec& spec : gl::gl_option_table()) {
+      const std::string v = spec.get(defaults);
+      if (*spec.choices) d[spec.key] = v;
+      else d[spec.key] = v == "true";
+    }
+    return d;
+  }, "Every GL stage setting (World, Detector and collide keywords on the osmesa and egl backends) with its default");
 }

@@ -140,3 +140,54 @@ def test_no_leak_over_ten_thousand_frames_of_a_deforming_loop():
     grown = rss_kb() - before
     print("RSS grew by %d KB over 9,000 frames" % grown)
     assert grown < 2048
+
+
+def uv_sphere(center, radius, n=24):
+    """A closed UV sphere of 2 n^2 triangles."""
+    th = np.linspace(0, np.pi, n + 1)[:, None]
+    ph = np.linspace(0, 2 * np.pi, n, endpoint=False)[None, :]
+    V = np.stack([np.sin(th) * np.cos(ph), np.sin(th) * np.sin(ph), np.cos(th) + 0 * ph], -1).reshape(-1, 3)
+    F = []
+    for i in range(n):
+        for j in range(n):
+            a, b, c, d = i * n + j, i * n + (j + 1) % n, (i + 1) * n + j, (i + 1) * n + (j + 1) % n
+            F += [[a, c, b], [b, c, d]]
+    return peelcd.Mesh(V * radius + np.asarray(center, float), np.array(F, np.int64))
+
+
+def test_gl_options_as_keywords_recorded_in_the_result():
+    a, b = uv_sphere((0, 0, 0), 1.0), uv_sphere((1.2, 0.1, 0.05), 1.0)
+    assert peelcd.gl_options() == {"peeler": "abuffer", "resolve": "auto", "batch": True, "gpu_select": True}
+    world = peelcd.World(BACKEND, peeler="multipass", resolve="host", batch=False, gpu_select=False)
+    world.add_rigid(a)
+    world.add_rigid(b)
+    r = world.collide(stage="image")
+    assert r["gl_options"] == {"peeler": "multipass", "resolve": "host", "batch": False, "gpu_select": False}
+    exact = peelcd.exact_pairs(a, b).tolist()
+    assert r["pairs"][0]["triangles"].tolist() == exact
+    d = peelcd.Detector(BACKEND, resolve="gpu").detect([a, b], stage="image")
+    assert d["gl_options"]["resolve"] == "gpu" and d["pairs"][0]["triangles"].tolist() == exact
+    assert peelcd.collide(a, b, backend=BACKEND, batch=False, stage="image")["triangles"].tolist() == exact
+    assert "gl_options" not in peelcd.World().collide()
+    with pytest.raises(ValueError, match="peeler"):
+        peelcd.World(BACKEND, peeler="fast")
+    with pytest.raises(TypeError, match="unknown GL option"):
+        peelcd.World(BACKEND, colour=True)
+    with pytest.raises(ValueError, match="no GL stage"):
+        peelcd.World("cpu", batch=False)
+
+
+def test_osmesa_and_egl_worlds_in_turn_give_each_ones_pairs():
+    """Mesa's OSMesa and EGL share one GL dispatch: each World must reach its own context."""
+    a, b = uv_sphere((0, 0, 0), 1.0), uv_sphere((1.2, 0.1, 0.05), 1.0)
+    exact = peelcd.exact_pairs(a, b).tolist()
+    for views in ((3, 1), (1, 3)):
+        worlds = []
+        for backend in ("egl", "osmesa"):
+            w = peelcd.World(backend)
+            w.add_rigid(a)
+            w.add_rigid(b)
+            worlds.append(w)
+        for frame in range(4):
+            for w, v in zip(worlds, views):
+                assert w.collide(stage="image", views=v)["pairs"][0]["triangles"].tolist() == exact

@@ -166,3 +166,41 @@ TEST_CASE("the JSON Schemas list exactly the option table's recorded keys", "[sc
     }
   }
 }
+
+TEST_CASE("every GL setting round-trips scene -> options -> JSON -> options", "[scene][options][gl]") {
+  // Each row of gl_option_table() set to a value that is not its default.
+  nlohmann::json scene = {{"objects", {{{"mesh", "a.obj"}}}}};
+  const gl::GlOptions defaults;
+  for (const gl::GlOptionSpec& spec : gl::gl_option_table()) {
+    const std::string now = spec.get(defaults);
+    if (!*spec.choices) {
+      scene[spec.key] = now != "true";
+      continue;
+    }
+    const std::string all = spec.choices;
+    std::string other;
+    for (std::size_t at = 0; at <= all.size();) {
+      const std::size_t end = std::min(all.find(',', at), all.size());
+      if (all.substr(at, end - at) != now) {
+        other = all.substr(at, end - at);
+        break;
+      }
+      at = end + 1;
+    }
+    scene[spec.key] = other;
+  }
+  const Scene s = parse_scene(scene.dump(), "gl.json", ".");
+  const nlohmann::json written = gl_options_to_json(s.gl);
+  const gl::GlOptions back = gl_options_from_json(written);
+  for (const gl::GlOptionSpec& spec : gl::gl_option_table()) {
+    INFO(spec.key);
+    CHECK(spec.get(s.gl) != spec.get(defaults));  // scene -> options
+    CHECK(written.at(spec.key) == scene.at(spec.key));  // -> JSON
+    CHECK(spec.get(back) == spec.get(s.gl));      // -> options
+  }
+  CHECK(gl_options_to_json(back) == written);
+  CHECK_THAT(error_of(R"({"objects":[{"mesh":"a.obj"}],"batch":"no"})"), Catch::Contains("batch: must be true or false"));
+  CHECK_THAT(error_of(R"({"objects":[{"mesh":"a.obj"}],"resolve":"fast"})"),
+             Catch::Contains("resolve: unknown value \"fast\" (expected auto/gpu/host)"));
+  CHECK_THROWS_WITH(gl_options_from_json({{"colour", true}}), Catch::Contains("unknown GL option \"colour\""));
+}

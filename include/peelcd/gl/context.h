@@ -27,6 +27,19 @@ class Context {
   virtual std::string backend() const = 0;  // "osmesa", "egl-device", "egl-surfaceless", ...
 };
 
+// The peelcd context this thread last made current, of any platform (null after one gave the
+// caller's context back). Mesa's OSMesa and its EGL drivers share one GL dispatch (libglapi):
+// after another platform's context was made current, a context its own platform still reports
+// current is not the one GL calls reach, and OSMesaGetCurrentContext() reads the other
+// platform's context as if it were OSMesa's. Each make_current() checks this record first (the
+// pointer is compared, never followed: the context may be gone; a context clears it when it goes).
+enum class ContextPlatform { none, osmesa, egl };
+struct BoundContext {
+  const Context* context = nullptr;
+  ContextPlatform platform = ContextPlatform::none;
+};
+inline thread_local BoundContext bound_context;
+
 // A context could not be created or made current, or a GL call failed.
 struct GlError : std::runtime_error {
   using std::runtime_error::runtime_error;

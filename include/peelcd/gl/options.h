@@ -3,6 +3,7 @@
 // not know about. No GL here: scene files and the command line parse them too.
 #include <optional>
 #include <string>
+#include <vector>
 
 namespace peelcd {
 
@@ -60,6 +61,71 @@ struct GlOptions {
   // selection. false: the host's (peelcd detect --cpu-select).
   bool gpu_select = true;
 };
+
+// The GL stage's settings, one row each, as the frame's option table (peelcd/core/options.h)
+// holds the frame's: the key is the scene file's (top level), the JSON's ("gl_options" of a
+// result and of a dump's meta.json) and the Python keyword; `flag` the command line's. Values
+// are words: a choice's, or "true" / "false" for a boolean (JSON writes booleans as such).
+struct GlOptionSpec {
+  const char* key;      // "peeler"
+  const char* flag;     // "--peeler"; a boolean's flag turns it off ("--no-batch")
+  const char* help;     // one sentence
+  const char* choices;  // "abuffer,multipass"; "" for a boolean
+  std::string (*get)(const GlOptions&);
+  bool (*set)(GlOptions&, const std::string&);  // false: not a value of the row
+};
+
+inline const std::vector<GlOptionSpec>& gl_option_table() {
+  static const std::vector<GlOptionSpec> table = {
+      {"peeler", "--peeler",
+       "How layers are made: abuffer (one draw into a per-texel k-buffer) or multipass (one draw per layer, the paper's)",
+       "abuffer,multipass", [](const GlOptions& o) { return std::string(to_string(o.peeler)); },
+       [](GlOptions& o, const std::string& v) {
+         const auto p = parse_peeler(v);
+         if (p) o.peeler = *p;
+         return bool(p);
+       }},
+      {"resolve", "--resolve",
+       "Where the k-buffer becomes layers and PCS: auto (host on a software renderer, else gpu), gpu or host",
+       "auto,gpu,host", [](const GlOptions& o) { return std::string(to_string(o.resolve)); },
+       [](GlOptions& o, const std::string& v) {
+         const auto r = parse_resolve(v);
+         if (r) o.resolve = *r;
+         return bool(r);
+       }},
+      {"batch", "--no-batch",
+       "Pack a frame's views into one k-buffer drawn together (false: each view on its own)", "",
+       [](const GlOptions& o) { return std::string(o.batch ? "true" : "false"); },
+       [](GlOptions& o, const std::string& v) {
+         if (v != "true" && v != "false") return false;
+         o.batch = v == "true";
+         return true;
+       }},
+      {"gpu_select", "--cpu-select",
+       "In a batch, select rigid objects' triangles on the GPU (false: the host's culling selects them)", "",
+       [](const GlOptions& o) { return std::string(o.gpu_select ? "true" : "false"); },
+       [](GlOptions& o, const std::string& v) {
+         if (v != "true" && v != "false") return false;
+         o.gpu_select = v == "true";
+         return true;
+       }},
+  };
+  return table;
+}
+
+// Sets row `key` of `options` to `value` (words); returns the problem in words, empty if none
+// ("unknown GL option \"x\"", "resolve: unknown value \"fast\" (expected auto, gpu or host)").
+inline std::string set_gl_option(GlOptions& options, const std::string& key, const std::string& value) {
+  for (const GlOptionSpec& spec : gl_option_table()) {
+    if (key != spec.key) continue;
+    if (spec.set(options, value)) return {};
+    std::string expected = *spec.choices ? spec.choices : "true,false";
+    for (char& c : expected)
+      if (c == ',') c = '/';
+    return key + ": unknown value \"" + value + "\" (expected " + expected + ")";
+  }
+  return "unknown GL option \"" + key + "\"";
+}
 
 }  // namespace gl
 }  // namespace peelcd

@@ -3,6 +3,7 @@
 #include "peelcd/core/frame.h"
 #include "peelcd/core/mesh.h"
 #include "peelcd/core/reference.h"
+#include "peelcd/gl/options.h"
 
 #include <nlohmann/json.hpp>
 
@@ -13,7 +14,9 @@ inline constexpr const char* kResultSchema = "peelcd.result/2";
 
 // The report of one frame. With `check` (one Score per pair, `detect --check`), each pair and
 // the frame also carry the comparison with the exact reference.
+// `gl`: the GL stage's settings of the run (recorded as "gl_options"; null on the CPU stage).
 nlohmann::json to_json(const FrameResult& result, const std::vector<Object>& objects,
-                       const DetectOptions& options, const std::vector<Score>* check = nullptr);
+                       const DetectOptions& options, const std::vector<Score>* check = nullptr,
+                       const gl::GlOptions* gl = nullptr);
 
 }  // namespace peelcd

@@ -67,6 +67,7 @@ struct Dump {
   std::string format = kDumpFormat;
   std::string renderer, gl_version, backend, shader_hash;
   nlohmann::json options;  // the DetectOptions of the frame
+  nlohmann::json gl_options;  // the GL stage's settings (gl_options_to_json()); null: not recorded
   std::vector<DumpPair> pairs;
 };
 
@@ -74,7 +75,7 @@ struct Dump {
 // with each pair's exact reference (exact_pair_reference(): a self pair's is exact_self_pairs()).
 Dump make_dump(const FrameResult& frame, const std::vector<CapturedView>& captured,
                const std::vector<Object>& objects, const DetectOptions& options, const std::string& renderer,
-               const std::string& gl_version, const std::string& backend);
+               const std::string& gl_version, const std::string& backend, const gl::GlOptions* gl = nullptr);
 
 // Writes `dump` to `dir` (created; must not exist or be empty). `previews` adds the PNG layer
 // previews and index.html. Everything is written into a temporary sibling folder that is
