@@ -39,9 +39,11 @@ const CLI::Validator kPositive = finite_number([](double v) { return v > 0.0; },
 const CLI::Validator kNonNegative = finite_number([](double v) { return v >= 0.0; }, "is negative", "NONNEGATIVE");
 
 
-Runner make_runner(const std::string& backend, const gl::GlOptions& options) {
+Runner make_runner(const std::string& backend, const gl::GlOptions& options, const std::string& costs) {
   Runner r;
   r.stage = make_image_stage(backend, options);  // peelcd/backends.h
+  if (!costs.empty()) apply_cost_models(*r.stage, costs);  // peelcd/io/costs.h
+  else apply_cost_models_from_env(*r.stage);
   r.gl = dynamic_cast<gl::GlImageStage*>(r.stage.get());
   r.gl_options = options;
   r.detector = std::make_unique<Detector>(r.stage);
@@ -222,6 +224,9 @@ void add_frame_options(CLI::App* c, DetectArgs& d) {
   c->add_flag("--cpu-select", d.cpu_select, "GL stage: in a batch, draw the rigid objects' triangles the host's culling "
                                             "kept instead of selecting them on the GPU from their resident buffers (fewer "
                                             "triangles drawn, uploaded every frame; the same contacts when conservative)");
+  c->add_option("--costs", d.costs, "The stage router's cost models from FILE (written by peelcd calibrate "
+                                    "--write-costs on this backend and renderer; default: $PEELCD_COSTS, else the "
+                                    "built-in models)")->check(CLI::ExistingFile);
   c->add_flag("--paper", d.paper,
               "The paper's configuration: point sampling, alternate peeling, paper IDs, constant epsilon, one view "
               "along world x, no culling (other options given override it)");

@@ -8,6 +8,7 @@
 #include "peelcd/bench/suite.h"
 #include "peelcd/core/detector.h"
 #include "peelcd/core/reference.h"
+#include "peelcd/io/costs.h"
 #include "peelcd/io/mesh_io.h"
 #include "peelcd/core/options.h"
 #include "peelcd/eval/scenes.h"
@@ -75,7 +76,8 @@ struct Runner {
   const gl::GlOptions* gl_settings() const { return gl ? &gl_options : nullptr; }
 };
 
-Runner make_runner(const std::string& backend, const gl::GlOptions& options = {});
+// `costs`: the router's cost models from that file; empty: $PEELCD_COSTS's, else the built-in.
+Runner make_runner(const std::string& backend, const gl::GlOptions& options = {}, const std::string& costs = {});
 
 struct DetectArgs {
   std::string scene;
@@ -94,6 +96,7 @@ struct DetectArgs {
   bool quiet = false;
   bool list = false;    // print every colliding triangle pair (default: the summary only)
   bool pcs = false;     // print every pair's PCS
+  std::string costs;    // --costs: the router's cost models
   bool status = false;  // exit 1 when nothing collides
   int explain_misses = 0;  // detect --check: explain the first N missed pairs
   std::string backend = kDefaultBackend;

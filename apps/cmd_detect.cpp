@@ -47,7 +47,7 @@ int run_detect(const DetectArgs& a) {
   const std::vector<Object> objects = load_objects(scene);
   progress.phase("peelcd detect: running the frame...");
 
-  Runner runner = make_runner(a.backend, merged_gl_options(scene, a.peeler, a.resolve, a.no_batch, a.cpu_select));
+  Runner runner = make_runner(a.backend, merged_gl_options(scene, a.peeler, a.resolve, a.no_batch, a.cpu_select), a.costs);
   FrameResult result;
   std::vector<Timings> runs;
   for (int i = 0; i < std::max(1, a.repeat); ++i) {
@@ -99,6 +99,8 @@ int run_detect(const DetectArgs& a) {
                   opt.phi, opt.roll, opt.views, to_string(opt.ids), to_string(opt.peel), opt.slope, to_string(opt.cull));
     std::fprintf(human, "stage %s: %zu of %zu ROIs by the exact CPU path, %zu peeled", to_string(opt.stage), result.rois_exact,
                 result.pairs.size(), result.pairs.size() - result.rois_exact);
+    if (opt.stage == Stage::automatic && !runner.stage->cost_models().source.empty())
+      std::fprintf(human, " (router models from %s)", runner.stage->cost_models().source.c_str());
     if (result.views_exhaustive > 0)
       std::fprintf(human, " (%zu views fell back to the exhaustive exact test: k-buffer too deep or too large)",
                    result.views_exhaustive);
@@ -215,7 +217,7 @@ int run_explain(const DetectArgs& a, const ExplainArgs& x) {
   const std::vector<Object> objects = load_objects(scene);
   const oracle::PairQuery query = oracle::parse_pair_query(x.pair, objects);
   progress.phase("peelcd explain: running the frame...");
-  Runner runner = make_runner(a.backend, merged_gl_options(scene, a.peeler, a.resolve, a.no_batch, a.cpu_select));
+  Runner runner = make_runner(a.backend, merged_gl_options(scene, a.peeler, a.resolve, a.no_batch, a.cpu_select), a.costs);
   const oracle::FrameTrace trace(*runner.detector, objects, opt);
   const oracle::Explanation e = trace.explain(query);
   progress.clear();

@@ -50,7 +50,7 @@ int run_dump(const DetectArgs& a, const DumpArgs& d) {
     two.push_back(objects[original[1]]);
     objects = std::move(two);
   }
-  Runner runner = make_runner(a.backend, merged_gl_options(scene, a.peeler, a.resolve, a.no_batch, a.cpu_select));
+  Runner runner = make_runner(a.backend, merged_gl_options(scene, a.peeler, a.resolve, a.no_batch, a.cpu_select), a.costs);
   // The cap is checked on the broad phase's ROIs before any layer is captured.
   {
     const std::size_t rois = count_overlapping_pairs(objects);

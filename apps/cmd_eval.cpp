@@ -4,6 +4,8 @@
 #include "peelcd/core/world.h"
 #include "peelcd/eval/classes.h"
 
+#include <ctime>
+
 namespace peelcd::cli {
 
 struct ClassesArgs {
@@ -82,6 +84,7 @@ struct CalibrateArgs {
   int repeat = 5;
   std::vector<int> budgets = {128, 512};
   std::vector<int> large = {72, 144, 288};  // crossing spheres' stacks (20k, 82k, 330k triangles each)
+  std::string write_costs;  // the fitted models into this file (peelcd/io/costs.h)
 };
 
 int run_calibrate(const CalibrateArgs& a) {
@@ -94,7 +97,7 @@ int run_calibrate(const CalibrateArgs& a) {
   for (const CalibrationRow& r : cal.rows)
     std::printf("%-28s %9zu %6d %10.3f %10.3f %9zu %9zu %7s\n", r.scene.c_str(), r.triangles, r.tile, r.image_ms, r.exact_ms,
                 r.image_candidates, r.exact_candidates, r.image_ms < r.exact_ms ? "image" : "exact");
-  const StageCost in_image = runner.stage->cost(), in_exact = exact_path_cost();
+  const StageCost in_image = runner.stage->router_image_cost(), in_exact = runner.stage->router_exact_cost();
   std::printf("\nfitted  image: view_ms %.4f  triangle_us %.4f  texel_ns %.4f\n", cal.image.view_ms, cal.image.triangle_us,
               cal.image.texel_ns);
   std::printf("fitted  exact: view_ms %.4f  triangle_us %.4f\n", cal.exact.view_ms, cal.exact.triangle_us);
@@ -105,10 +108,29 @@ int run_calibrate(const CalibrateArgs& a) {
               cal.wrong_fitted, cal.rows.size(), cal.lost_ms_fitted, cal.best_ms);
   std::printf("router with the models in use: %zu of %zu ROIs on the slower stage, %.3f ms lost of %.3f ms best\n",
               cal.wrong_in_use, cal.rows.size(), cal.lost_ms_in_use, cal.best_ms);
+  // The fitted models into a file the router loads (--costs, $PEELCD_COSTS, Python's costs=).
+  CostModels fitted;
+  fitted.image = cal.image;
+  fitted.exact = cal.exact;
+  fitted.exact.scan_us = in_exact.scan_us;  // the scan's term: refined below from the large meshes
+  fitted.backend = runner.backend();
+  fitted.renderer = runner.renderer();
+  const auto write_costs = [&] {
+    if (a.write_costs.empty()) return;
+    char date[16];
+    const std::time_t now = std::time(nullptr);
+    std::strftime(date, sizeof date, "%Y-%m-%d", std::gmtime(&now));
+    write_cost_models(a.write_costs, fitted, date);
+    std::printf("cost models written to %s (peelcd detect --costs %s, or PEELCD_COSTS=%s)\n", a.write_costs.c_str(),
+                a.write_costs.c_str(), a.write_costs.c_str());
+  };
   std::vector<int> large_stacks;
   for (const int n : a.large)
     if (n >= 3) large_stacks.push_back(n);
-  if (large_stacks.empty()) return 0;
+  if (large_stacks.empty()) {
+    write_costs();
+    return 0;
+  }
   // Large meshes: the predictions against the frames, both APIs (two crossing rigid spheres).
   const std::vector<LargeMeshRow> large = calibrate_large_meshes(*runner.detector, large_stacks, a.repeat);
   std::printf("\nlarge meshes (two crossing rigid spheres; stage auto; median of %d frames after an untimed one):\n", a.repeat);
@@ -128,6 +150,8 @@ int run_calibrate(const CalibrateArgs& a) {
   std::printf("(ratio: measured / predicted. frame pred: the route's prediction, scan included (scan_us %.4f in use, "
               "%.4f fitted here); World pred: its exact path's candidates x %.3f us, against its narrow phase)\n",
               in_exact.scan_us, scan_den > 0 ? scan_num / scan_den : 0.0, kWorldCandidateUs);
+  if (scan_den > 0 && scan_num > 0) fitted.exact.scan_us = scan_num / scan_den;
+  write_costs();
   return 0;
 }
 
@@ -159,6 +183,10 @@ std::vector<Command> add_eval_commands(CLI::App& app) {
   calibrate_cmd->add_option("--large", cal.large, "Large meshes: crossing spheres of these latitude bands (4 s (s - 1) "
                                                   "triangles a sphere), predictions against frames; 0: skip")
       ->check(CLI::Range(0, 2000))->capture_default_str();
+  calibrate_cmd->add_option("--write-costs", cal.write_costs,
+                            "Write the fitted models to FILE (JSON: backend, renderer, models), for detect --costs, "
+                            "$PEELCD_COSTS and Python's costs=")
+      ->check(kOutputPath);
 
   return {{classes, [ca_holder] { return run_classes(*ca_holder); }},
           {calibrate_cmd, [cal_holder] { return run_calibrate(*cal_holder); }}};

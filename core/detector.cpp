@@ -260,7 +260,7 @@ struct Detector::Impl {
   std::vector<std::uint64_t> candidates, candidate_scratch, pcs_keys;
   IdMap map_a, map_b;
   std::vector<CapturedView>* capture = nullptr;
-  StageCost image_cost;
+  StageCost image_cost, exact_cost;  // the router's models this frame (ImageStage::router_*_cost())
   BoxScratch box_scratch;
 
   // body(i, lane) for every i in [0, n): on the calling thread, or spread over the pool's lanes
@@ -415,7 +415,7 @@ struct Detector::Impl {
   // the tile's texels and per view). Deterministic: the models are constants, not timings.
   void route(const DetectOptions& opt) {
     if (opt.stage == Stage::image) return;
-    const StageCost exact = exact_path_cost();
+    const StageCost exact = exact_cost;
     const StageCost image = image_cost;
     const double views = double(opt.views);
     for (std::size_t i = 0; i < object_pairs.size(); ++i) {
@@ -436,7 +436,6 @@ struct Detector::Impl {
 
 Detector::Detector(std::shared_ptr<ImageStage> stage) : stage_(std::move(stage)), impl_(std::make_unique<Impl>()) {
   if (!stage_) throw std::invalid_argument("peelcd::Detector: no image stage");
-  impl_->image_cost = stage_->cost();
 }
 Detector::~Detector() = default;
 
@@ -462,6 +461,8 @@ void Detector::detect(const std::vector<const Object*>& object_ptrs, const Detec
   const ObjectRefs objects{object_ptrs};
   ImageStage& stage = *stage_;
   validate_options(opt, stage.max_resolution());
+  s.image_cost = stage.router_image_cost();
+  s.exact_cost = stage.router_exact_cost();
   for (const Object* o : object_ptrs)
     if (!o) throw std::invalid_argument("peelcd::Detector::detect(): a null object");
   // The image stage works in float: a coordinate beyond float's range is refused unless the

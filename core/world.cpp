@@ -507,7 +507,7 @@ void World::Impl::collide(const DetectOptions& opt, FrameResult& out) {
   for (std::size_t k = used; k-- > 0;) first_task[tasks[k].pair] = k;
   for (std::size_t p = pairs.size(); p-- > 0;)
     if (first_task[p] > first_task[p + 1]) first_task[p] = first_task[p + 1];
-  const StageCost image_cost = stage->cost();
+  const StageCost image_cost = stage->router_image_cost();
   to_image.assign(pairs.size(), 0);
   for (std::size_t p = 0; p < pairs.size(); ++p) {
     PairResult& r = out.pairs[p];

@@ -145,7 +145,8 @@ Calibration calibrate(Detector& detector, const std::string& meshes_dir, const s
     cal.image = StageCost{ci[0], ci[1], ci[2]};
     cal.exact = StageCost{ce[0], ce[1], 0.0};
   }
-  const StageCost in_use_image = detector.stage().cost(), in_use_exact = exact_path_cost();
+  const StageCost in_use_image = detector.stage().router_image_cost(),
+                  in_use_exact = detector.stage().router_exact_cost();
   for (const CalibrationRow& row : cal.rows) {
     const double n = double(row.triangles), texels = double(row.tile) * double(row.tile);
     const double best = std::min(row.image_ms, row.exact_ms);

@@ -9,6 +9,7 @@
 #include "peelcd/core/reference.h"
 #include "peelcd/core/world.h"
 #include "peelcd/eval/classes.h"
+#include "peelcd/io/costs.h"
 #include "peelcd/io/error.h"
 #include "peelcd/io/mesh_io.h"
 #include "peelcd/io/scene.h"
@@ -122,6 +123,7 @@ gl::GlOptions gl_options_from(const std::string& backend, const py::kwargs& kwar
   gl::GlOptions o;
   for (const auto& [k, v] : kwargs) {
     const std::string key = py::str(k);
+    if (key == "costs") continue;  // the router's models (costs_from())
     if (backend == "cpu")
       throw py::value_error("GL option '" + key + "': the cpu backend has no GL stage (use osmesa or egl)");
     std::string words;
@@ -136,9 +138,23 @@ gl::GlOptions gl_options_from(const std::string& backend, const py::kwargs& kwar
   return o;
 }
 
-std::shared_ptr<ImageStage> stage_for(const std::string& backend, const gl::GlOptions& gl = {}) {
+// The stage of `backend` with the GL settings `gl` and the router's models from `costs` (a file
+// written by peelcd calibrate --write-costs), else $PEELCD_COSTS's, else the built-in ones.
+// `costs=FILE` among a constructor's keywords, as a path (str or os.PathLike), or empty.
+std::string costs_from(const py::kwargs& kwargs) {
+  if (!kwargs.contains("costs") || kwargs["costs"].is_none()) return {};
+  return py::str(py::module_::import("os").attr("fspath")(kwargs["costs"]));
+}
+
+std::shared_ptr<ImageStage> stage_for(const std::string& backend, const gl::GlOptions& gl = {},
+                                      const std::string& costs = {}) {
   try {
-    return make_image_stage(backend, gl);
+    std::shared_ptr<ImageStage> stage = make_image_stage(backend, gl);
+    if (!costs.empty()) apply_cost_models(*stage, costs);
+    else apply_cost_models_from_env(*stage);
+    return stage;
+  } catch (const InputError& e) {
+    throw py::value_error(e.what());
   } catch (const std::invalid_argument& e) {
     throw py::value_error(e.what());
   } catch (const std::exception& e) {
@@ -222,8 +238,8 @@ auto translate_errors(Fn&& fn) -> decltype(fn()) {
 
 // A persistent world (peelcd::World) with its own image stage.
 struct PyWorld {
-  PyWorld(const std::string& backend, const gl::GlOptions& o)
-      : world(backend == "cpu" ? nullptr : stage_for(backend, o)) {
+  PyWorld(const std::string& backend, const gl::GlOptions& o, const std::string& costs)
+      : world(backend == "cpu" && costs.empty() && !std::getenv("PEELCD_COSTS") ? nullptr : stage_for(backend, o, costs)) {
     if (backend != "cpu") gl = o;
   }
   World world;
@@ -232,7 +248,8 @@ struct PyWorld {
 
 // The frame API on meshes given each call (peelcd::Detector).
 struct PyDetector {
-  PyDetector(const std::string& backend, const gl::GlOptions& o) : detector(stage_for(backend, o)) {
+  PyDetector(const std::string& backend, const gl::GlOptions& o, const std::string& costs)
+      : detector(stage_for(backend, o, costs)) {
     if (backend != "cpu") gl = o;
   }
   Detector detector;
@@ -294,10 +311,11 @@ PYBIND11_MODULE(_peelcd, m) {
   py::class_<PyWorld>(m, "World", "Persistent bodies kept across frames (peelcd::World): rigid ones move by their pose, "
                                   "deforming ones by their vertices")
       .def(py::init([](const std::string& backend, const py::kwargs& kwargs) {
-             return std::make_unique<PyWorld>(backend, gl_options_from(backend, kwargs));
+             return std::make_unique<PyWorld>(backend, gl_options_from(backend, kwargs), costs_from(kwargs));
            }),
            py::arg("backend") = "cpu",
-           "backend: cpu, osmesa or egl; GL backends take the GL options as keywords (peeler, resolve, batch, gpu_select)")
+           "backend: cpu, osmesa or egl; GL backends take the GL options as keywords (peeler, resolve, batch, gpu_select); "
+           "costs=FILE: the router's cost models (peelcd calibrate --write-costs; default $PEELCD_COSTS)")
       .def("add_rigid", [](PyWorld& w, const PyMesh& mesh, const py::object& pose, const std::string& name, bool self) {
         return translate_errors([&] {
           const BodyId id = w.world.add_rigid(mesh.mesh, pose_from(pose), name);
@@ -338,10 +356,11 @@ PYBIND11_MODULE(_peelcd, m) {
 
   py::class_<PyDetector>(m, "Detector", "The frame API (peelcd::Detector): the objects given whole each frame")
       .def(py::init([](const std::string& backend, const py::kwargs& kwargs) {
-             return std::make_unique<PyDetector>(backend, gl_options_from(backend, kwargs));
+             return std::make_unique<PyDetector>(backend, gl_options_from(backend, kwargs), costs_from(kwargs));
            }),
            py::arg("backend") = "cpu",
-           "backend: cpu, osmesa or egl; GL backends take the GL options as keywords (peeler, resolve, batch, gpu_select)")
+           "backend: cpu, osmesa or egl; GL backends take the GL options as keywords (peeler, resolve, batch, gpu_select); "
+           "costs=FILE: the router's cost models (peelcd calibrate --write-costs; default $PEELCD_COSTS)")
       .def("detect", [](PyDetector& d, const py::list& objects, const py::kwargs& kwargs) {
         const DetectOptions opt = options_from(kwargs);
         std::vector<Object> objs;

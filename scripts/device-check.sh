@@ -9,7 +9,8 @@
 #   4. peelcd bench on the default scene, the 400-ball pile and the 1.3M-triangle rigid spheres
 #      (--quick: the default scene only), one thread per method: the router's default rows and
 #      the image stage forced side by side with the CPU peers;
-#   5. peelcd calibrate --backend egl (the router's cost model of this device).
+#   5. peelcd calibrate --backend egl --write-costs (the router's cost models of this device, in
+#      the record as costs.json), then detect routing by them.
 # Each step is stopped after STEP_TIMEOUT seconds (default 600), and counted as failed.
 # It writes a dated record (device, driver, renderer, every command and its output) into
 # docs/backends/<device>-<date>/ (or --out DIR) and prints a summary. Exit 1 if a check fails.
@@ -136,12 +137,16 @@ else
   step "bench, rigid spheres 1.3M" "bench_spheres_1m.txt" "$bin" bench spheres --stacks 570 --backend egl --frames 4 --threads 1 --short
 fi
 
-# 5. The router's cost model of this device.
+# 5. The router's cost models of this device, written where detect --costs, $PEELCD_COSTS and
+# Python's costs= load them, and loaded once.
 if [ "$quick" = 1 ]; then
-  step "calibrate" "calibrate_egl.txt" "$bin" calibrate --backend egl --repeat 3 --budgets 256 --large 0
+  step "calibrate" "calibrate_egl.txt" "$bin" calibrate --backend egl --repeat 3 --budgets 256 --large 0 \
+    --write-costs "$out/costs.json"
 else
-  step "calibrate" "calibrate_egl.txt" "$bin" calibrate --backend egl
+  step "calibrate" "calibrate_egl.txt" "$bin" calibrate --backend egl --write-costs "$out/costs.json"
 fi
+step "detect with the fitted models (--costs)" "detect_costs.txt" \
+  "$bin" detect fixtures/scenes/bunny_dragon.json --backend egl --costs "$out/costs.json" --check --max-miss 0
 
 {
   echo "# Device check, $date"

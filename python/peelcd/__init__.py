@@ -13,7 +13,7 @@ def collide(a, b, pose_a=None, pose_b=None, backend="cpu", **options):
     """One pair: two meshes, each at its pose (4x4, default identity). Returns the pair's dict
     (triangles, kinds, segments, relation, is_collision), or None when their boxes do not overlap.
     Options are the scene files' keys; on a GL backend also the GL options (gl_options())."""
-    gl = {k: options.pop(k) for k in list(options) if k in gl_options()}
+    gl = {k: options.pop(k) for k in list(options) if k in gl_options() or k == "costs"}
     world = World(backend, **gl)
     world.add_rigid(a, pose_a)
     world.add_rigid(b, pose_b)

@@ -176,3 +176,34 @@ TEST_CASE("a mixed frame of the ball pile routes some ROIs each way", "[router][
   CHECK(r.rois_exact > 0);
   CHECK(r.rois_peeled > 0);
 }
+
+TEST_CASE("cost models set on a stage (a calibration file's) drive the router, the built-in ones otherwise", "[router][costs]") {
+  const GeometryClass g = geometry_classes(6).back();  // the crowded grid: many ROIs
+  auto stage = std::make_shared<CpuImageStage>();
+  Detector detector(stage);
+  const auto routed_to_image = [&] {
+    std::size_t image = 0, pairs = 0;
+    for (const PairResult& p : detector.detect(g.objects, DetectOptions{}).pairs) {
+      if (p.candidates == 0 && p.colliding.empty() && p.predicted_exact_ms == 0.0) continue;  // culled out
+      ++pairs;
+      image += p.exact_stage ? 0 : 1;
+    }
+    return std::make_pair(image, pairs);
+  };
+  CostModels free_image;  // the image stage free, the exact path dear: every ROI to the image stage
+  free_image.source = "test: image free";
+  free_image.image = StageCost{0, 0, 0, 0};
+  free_image.exact = StageCost{1000, 1000, 0, 0};
+  stage->set_cost_models(free_image);
+  const auto [image_all, pairs_all] = routed_to_image();
+  REQUIRE(pairs_all > 0);
+  CHECK(image_all == pairs_all);
+  CostModels free_exact = free_image;  // and the other way round
+  free_exact.image = StageCost{1000, 1000, 1000, 0};
+  free_exact.exact = StageCost{0, 0, 0, 0};
+  stage->set_cost_models(free_exact);
+  CHECK(routed_to_image().first == 0);
+  stage->clear_cost_models();  // the built-in models again
+  CHECK(stage->router_exact_cost().triangle_us == exact_path_cost().triangle_us);
+  CHECK(stage->router_image_cost().triangle_us == stage->cost().triangle_us);
+}

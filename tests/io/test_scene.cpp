@@ -95,6 +95,10 @@ TEST_CASE("a scene whose mesh file is missing fails on loading, naming the mesh"
 
 #include "peelcd/core/options.h"
 #include "peelcd/io/options_json.h"
+#include "peelcd/io/costs.h"
+
+#include <filesystem>
+#include <unistd.h>
 
 #include <fstream>
 #include <nlohmann/json.hpp>
@@ -203,4 +207,37 @@ TEST_CASE("every GL setting round-trips scene -> options -> JSON -> options", "[
   CHECK_THAT(error_of(R"({"objects":[{"mesh":"a.obj"}],"resolve":"fast"})"),
              Catch::Contains("resolve: unknown value \"fast\" (expected auto/gpu/host)"));
   CHECK_THROWS_WITH(gl_options_from_json({{"colour", true}}), Catch::Contains("unknown GL option \"colour\""));
+}
+
+TEST_CASE("cost models round-trip through a calibration file; a bad or foreign one is refused", "[costs]") {
+  const std::string dir = std::filesystem::temp_directory_path() / ("peelcd_costs_" + std::to_string(::getpid()));
+  std::filesystem::create_directories(dir);
+  CostModels m;
+  m.backend = "cpu";
+  m.renderer = "peelcd CPU rasterizer";
+  m.image = StageCost{0.25, 0.5, 0.75, 0.01};
+  m.exact = StageCost{0.0, 0.125, 0.0, 0.0625};
+  const std::string path = dir + "/costs.json";
+  write_cost_models(path, m, "2026-11-25");
+  const CostModels back = read_cost_models(path);
+  CHECK(back.source == path);
+  CHECK(back.backend == m.backend);
+  CHECK(back.renderer == m.renderer);
+  CHECK(back.image.view_ms == m.image.view_ms);
+  CHECK(back.image.triangle_us == m.image.triangle_us);
+  CHECK(back.image.texel_ns == m.image.texel_ns);
+  CHECK(back.exact.triangle_us == m.exact.triangle_us);
+  CHECK(back.exact.scan_us == m.exact.scan_us);
+  // Refused: a missing file, not JSON, another format, a negative coefficient.
+  CHECK_THROWS_WITH(read_cost_models(dir + "/none.json"), Catch::Contains("none.json': cannot open"));
+  const auto write = [&](const std::string& text) {
+    std::ofstream(dir + "/bad.json") << text;
+    return dir + "/bad.json";
+  };
+  CHECK_THROWS_WITH(read_cost_models(write("{")), Catch::Contains("malformed JSON"));
+  CHECK_THROWS_WITH(read_cost_models(write(R"({"format":"x"})")), Catch::Contains("not a peelcd.costs/1 file"));
+  CHECK_THROWS_WITH(read_cost_models(write(R"({"format":"peelcd.costs/1","backend":"cpu","renderer":"r",)"
+                                           R"("image":{"view_ms":-1},"exact":{}})")),
+                    Catch::Contains("image.view_ms: must be a finite number >= 0"));
+  std::filesystem::remove_all(dir);
 }

@@ -60,10 +60,6 @@ void validate_options(const DetectOptions& options, int max_resolution);
 double triangles_in_view(const Mesh& mesh, const RoiView& view, const std::vector<std::uint32_t>* only,
                          std::vector<std::uint32_t>& out);
 
-// The exact CPU path's cost model for the stage router (view_ms + triangle_us per kept
-// triangle), fitted by `peelcd calibrate` on the machine docs/performance.md names.
-StageCost exact_path_cost();
-
 // Triangle t's box touches `box` (closed): the test of triangles_touching() and culling's ROI.
 bool triangle_touches(const Mesh& mesh, std::uint32_t t, const Aabb& box);
 

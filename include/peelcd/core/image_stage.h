@@ -99,9 +99,29 @@ struct StageCounters {
   std::size_t views_host_resolved = 0;
 };
 
+// The stage router's two models and where they came from: a file written by `peelcd calibrate
+// --write-costs` (peelcd/io/costs.h reads it; fitted on one backend and renderer), or, with
+// `source` empty, the stage's built-in models (ImageStage::cost(), exact_path_cost()).
+struct CostModels {
+  StageCost image, exact;
+  std::string source;             // the file; empty: built in
+  std::string backend, renderer;  // what the file's models were fitted on
+};
+
+// The exact CPU path's built-in cost model (view_ms + triangle_us per kept triangle, scan_us per
+// scanned triangle), fitted by `peelcd calibrate` on the machine docs/performance.md names.
+StageCost exact_path_cost();
+
 class ImageStage {
  public:
   virtual ~ImageStage() = default;
+  // The models the stage router uses for this stage: set_cost_models()' (a calibration file),
+  // else the built-in ones. The Detector and the World read them every frame.
+  void set_cost_models(const CostModels& models) { models_ = models; }
+  void clear_cost_models() { models_ = CostModels{}; }
+  StageCost router_image_cost() const { return models_.source.empty() ? cost() : models_.image; }
+  StageCost router_exact_cost() const { return models_.source.empty() ? exact_path_cost() : models_.exact; }
+  const CostModels& cost_models() const { return models_; }  // source empty: built in
   // Counted by the stage as it works; the Detector zeroes them when a frame begins.
   StageCounters counters;
   virtual const std::string& backend() const = 0;   // "osmesa", "egl-device", "egl-surfaceless", "cpu"
@@ -124,6 +144,9 @@ class ImageStage {
   virtual void peel_batch(const PeelJob* jobs, std::size_t count, PeelResult* outs, Timings& timings) {
     for (std::size_t i = 0; i < count; ++i) peel(jobs[i], outs[i], timings);
   }
+
+ private:
+  CostModels models_;
 };
 
 }  // namespace peelcd
