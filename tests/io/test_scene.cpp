@@ -209,7 +209,7 @@ TEST_CASE("every GL setting round-trips scene -> options -> JSON -> options", "[
   CHECK_THROWS_WITH(gl_options_from_json({{"colour", true}}), Catch::Contains("unknown GL option \"colour\""));
 }
 
-TEST_CASE("cost models round-trip through a calibration file; a bad or foreign one is refused", "[costs]") {
+TEST_CASE("cost models round-trip through a calibration file, and a bad or foreign one is refused", "[costs]") {
   const std::string dir = std::filesystem::temp_directory_path() / ("peelcd_costs_" + std::to_string(::getpid()));
   std::filesystem::create_directories(dir);
   CostModels m;
