@@ -5,6 +5,7 @@
 #include "peelcd/core/options.h"
 #include "peelcd/core/reference.h"
 #include "peelcd/core/worker_pool.h"
+#include "exclusive_use.h"
 
 #include <algorithm>
 #include <atomic>
@@ -27,33 +28,6 @@ double ms_since(Clock::time_point t0) {
 std::string object_label(const Object& o, std::size_t i) {
   return "object " + std::to_string(i) + (o.name.empty() ? "" : " '" + o.name + "'");
 }
-
-// One thread at a time per detector: a second thread entering while a frame runs gets a clear
-// error instead of racing on the frame's scratch. Re-entry from the owning thread (the public
-// overloads call one another) passes.
-class ExclusiveUse {
- public:
-  explicit ExclusiveUse(std::atomic<std::thread::id>& owner) : owner_(owner) {
-    const std::thread::id me = std::this_thread::get_id();
-    std::thread::id none{};
-    if (owner_.compare_exchange_strong(none, me)) {
-      held_ = true;
-    } else if (none != me) {
-      throw std::logic_error(
-          "peelcd::Detector: called from a second thread while a frame runs; a detector serves one thread at a time "
-          "(make one detector per thread)");
-    }
-  }
-  ~ExclusiveUse() {
-    if (held_) owner_.store(std::thread::id{});
-  }
-  ExclusiveUse(const ExclusiveUse&) = delete;
-  ExclusiveUse& operator=(const ExclusiveUse&) = delete;
-
- private:
-  std::atomic<std::thread::id>& owner_;
-  bool held_ = false;
-};
 
 // Gives the caller's context back when the frame ends, also on an exception.
 struct FrameScope {
@@ -448,7 +422,7 @@ FrameResult Detector::detect(const std::vector<Object>& objects, const DetectOpt
 }
 
 void Detector::detect(const std::vector<Object>& objects, const DetectOptions& opt, FrameResult& out) {
-  const ExclusiveUse exclusive(impl_->owner);
+  const ExclusiveUse exclusive(impl_->owner, "peelcd::Detector");
   std::vector<const Object*>& ptrs = impl_->pointers;
   ptrs.clear();
   for (const Object& o : objects) ptrs.push_back(&o);
@@ -456,7 +430,7 @@ void Detector::detect(const std::vector<Object>& objects, const DetectOptions& o
 }
 
 void Detector::detect(const std::vector<const Object*>& object_ptrs, const DetectOptions& opt, FrameResult& out) {
-  const ExclusiveUse exclusive(impl_->owner);
+  const ExclusiveUse exclusive(impl_->owner, "peelcd::Detector");
   Impl& s = *impl_;
   const ObjectRefs objects{object_ptrs};
   ImageStage& stage = *stage_;
@@ -700,7 +674,7 @@ void Detector::detect(const std::vector<const Object*>& object_ptrs, const Detec
 
 void Detector::for_each_view(const std::vector<Object>& objects_in, const DetectOptions& opt,
                              const std::function<void(const PeelJob&)>& fn) {
-  const ExclusiveUse exclusive(impl_->owner);
+  const ExclusiveUse exclusive(impl_->owner, "peelcd::Detector");
   Impl& s = *impl_;
   validate_options(opt, stage_->max_resolution());
   validate_objects(objects_in, true);

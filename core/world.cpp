@@ -8,6 +8,7 @@
 #include "peelcd/core/narrow_phase.h"
 #include "peelcd/core/self.h"
 #include "peelcd/core/worker_pool.h"
+#include "exclusive_use.h"
 
 #include <algorithm>
 #include <map>
@@ -149,6 +150,7 @@ struct Task {
 }  // namespace
 
 struct World::Impl {
+  std::atomic<std::thread::id> owner{};  // the thread inside a frame or a change (ExclusiveUse)
   std::shared_ptr<ImageStage> stage;
   std::unique_ptr<Detector> detector;  // made on the first pair routed to the image stage
   std::vector<Body> bodies;
@@ -254,6 +256,7 @@ World::World(std::shared_ptr<ImageStage> stage) : impl_(std::make_unique<Impl>()
 World::~World() = default;
 
 BodyId World::add_rigid(std::shared_ptr<const Mesh> shape, const Eigen::Affine3d& pose, std::string name) {
+  const ExclusiveUse exclusive(impl_->owner, "peelcd::World");
   const std::string label = label_of(name, BodyId(impl_->bodies.size()));
   if (!shape) throw std::invalid_argument("peelcd::World: " + label + ": no shape");
   check_mesh(*shape, label);
@@ -267,6 +270,7 @@ BodyId World::add_rigid(std::shared_ptr<const Mesh> shape, const Eigen::Affine3d
 }
 
 BodyId World::add_deforming(Mesh mesh, std::string name) {
+  const ExclusiveUse exclusive(impl_->owner, "peelcd::World");
   check_mesh(mesh, label_of(name, BodyId(impl_->bodies.size())));
   Body b;
   b.name = std::move(name);
@@ -275,12 +279,14 @@ BodyId World::add_deforming(Mesh mesh, std::string name) {
 }
 
 void World::remove(BodyId id) {
+  const ExclusiveUse exclusive(impl_->owner, "peelcd::World");
   Body& b = impl_->body(id, "remove");
   b = Body{};
   --impl_->alive;
 }
 
 void World::set_pose(BodyId id, const Eigen::Affine3d& pose) {
+  const ExclusiveUse exclusive(impl_->owner, "peelcd::World");
   Body& b = impl_->body(id, "set_pose");
   if (!b.is_rigid) throw std::invalid_argument("peelcd::World::set_pose(): " + label_of(b.name, id) + " is deforming");
   check_pose(pose, label_of(b.name, id));
@@ -288,6 +294,7 @@ void World::set_pose(BodyId id, const Eigen::Affine3d& pose) {
 }
 
 void World::set_vertices(BodyId id, std::vector<Vec3> vertices) {
+  const ExclusiveUse exclusive(impl_->owner, "peelcd::World");
   Body& b = impl_->body(id, "set_vertices");
   const std::string label = label_of(b.name, id);
   if (b.is_rigid) throw std::invalid_argument("peelcd::World::set_vertices(): " + label + " is rigid (use set_pose)");
@@ -304,6 +311,7 @@ void World::set_vertices(BodyId id, std::vector<Vec3> vertices) {
 }
 
 void World::move_vertices(BodyId id, const std::vector<std::uint32_t>& indices, const std::vector<Vec3>& positions) {
+  const ExclusiveUse exclusive(impl_->owner, "peelcd::World");
   Body& b = impl_->body(id, "move_vertices");
   const std::string label = label_of(b.name, id);
   if (b.is_rigid) throw std::invalid_argument("peelcd::World::move_vertices(): " + label + " is rigid (use set_pose)");
@@ -344,6 +352,7 @@ void World::move_vertices(BodyId id, const std::vector<std::uint32_t>& indices, 
 }
 
 void World::set_mesh(BodyId id, Mesh mesh) {
+  const ExclusiveUse exclusive(impl_->owner, "peelcd::World");
   Body& b = impl_->body(id, "set_mesh");
   check_mesh(mesh, label_of(b.name, id));
   if (b.is_rigid)
@@ -360,6 +369,7 @@ void World::set_mesh(BodyId id, Mesh mesh) {
 }
 
 void World::set_shape(BodyId id, std::shared_ptr<const Mesh> shape) {
+  const ExclusiveUse exclusive(impl_->owner, "peelcd::World");
   Body& b = impl_->body(id, "set_shape");
   const std::string label = label_of(b.name, id);
   if (!b.is_rigid) throw std::invalid_argument("peelcd::World::set_shape(): " + label + " is deforming (use set_mesh)");
@@ -373,7 +383,10 @@ void World::set_shape(BodyId id, std::shared_ptr<const Mesh> shape) {
   ++impl_->stats.builds;
 }
 
-void World::set_self(BodyId id, bool self) { impl_->body(id, "set_self").self = self; }
+void World::set_self(BodyId id, bool self) {
+  const ExclusiveUse exclusive(impl_->owner, "peelcd::World");
+  impl_->body(id, "set_self").self = self;
+}
 bool World::self(BodyId id) const { return impl_->body(id).self; }
 
 bool World::contains(BodyId id) const { return id < impl_->bodies.size() && impl_->bodies[id].alive; }
@@ -398,7 +411,10 @@ const FrameResult& World::collide(const DetectOptions& options) {
   return impl_->result;
 }
 
-void World::collide(const DetectOptions& options, FrameResult& out) { impl_->collide(options, out); }
+void World::collide(const DetectOptions& options, FrameResult& out) {
+  const ExclusiveUse exclusive(impl_->owner, "peelcd::World");
+  impl_->collide(options, out);
+}
 
 void World::Impl::collide(const DetectOptions& opt, FrameResult& out) {
   validate_options(opt, stage->max_resolution());

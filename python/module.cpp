@@ -266,6 +266,12 @@ struct PyMesh {
 PYBIND11_MODULE(_peelcd, m) {
   m.doc() = "peelcd: image-space collision detection between triangle meshes";
   m.attr("__version__") = PEELCD_VERSION_STRING;
+  // NumPy's C API looked up now, while the import holds the GIL. Looked up lazily (a function-
+  // local static of pybind11's), two threads' first results deadlocked: one held the static's
+  // guard while importing NumPy (which lets the GIL go), the other waited on the guard holding
+  // the GIL.
+  py::module_::import("numpy");
+  (void)py::detail::npy_api::get();
 
   py::class_<PyMesh>(m, "Mesh", "A triangle mesh: vertices V (n, 3) float64, triangles F (m, 3) integers")
       .def(py::init([](const py::handle& V, const py::handle& F) { return PyMesh{mesh_from_arrays(V, F)}; }), py::arg("V"),

@@ -191,3 +191,78 @@ def test_osmesa_and_egl_worlds_in_turn_give_each_ones_pairs():
         for frame in range(4):
             for w, v in zip(worlds, views):
                 assert w.collide(stage="image", views=v)["pairs"][0]["triangles"].tolist() == exact
+
+
+def test_threads_each_with_its_own_world_and_detector_finish_with_the_right_pairs():
+    """Several threads' first frames at once (each its own World, Detector or collide): no hang."""
+    import threading
+    a, b = uv_sphere((0, 0, 0), 1.0, 16), uv_sphere((1.2, 0.1, 0.05), 1.0, 16)
+    exact = peelcd.exact_pairs(a, b).tolist()
+    results, errors = {}, []
+
+    def run(k):
+        try:
+            if k % 3 == 0:
+                w = peelcd.World()
+                w.add_rigid(a)
+                w.add_rigid(b)
+                got = [w.collide()["pairs"][0]["triangles"].tolist() for _ in range(3)]
+            elif k % 3 == 1:
+                d = peelcd.Detector("cpu")
+                got = [d.detect([a, b])["pairs"][0]["triangles"].tolist() for _ in range(3)]
+            else:
+                got = [peelcd.collide(a, b)["triangles"].tolist() for _ in range(3)]
+            results[k] = got
+        except Exception as e:  # noqa: BLE001 - reported below
+            errors.append(repr(e))
+
+    threads = [threading.Thread(target=run, args=(k,)) for k in range(6)]
+    for t in threads:
+        t.start()
+    for t in threads:
+        t.join(timeout=120)
+    assert not any(t.is_alive() for t in threads), "a thread hung"
+    assert errors == []
+    assert all(got == [exact] * 3 for got in results.values()) and len(results) == 6
+
+
+def test_one_world_shared_by_threads_raises_a_clear_error_never_corrupts():
+    """A World used from two threads at once: RuntimeError for the second, the frames stay right."""
+    import threading
+    a, b = uv_sphere((0, 0, 0), 1.0, 40), uv_sphere((1.2, 0.1, 0.05), 1.0, 40)
+    exact = peelcd.exact_pairs(a, b).tolist()
+    w = peelcd.World()
+    ia = w.add_rigid(a)
+    w.add_rigid(b)
+    stop = threading.Event()
+    wrong, refused, crashed = [], [], []
+
+    def frames():
+        while not stop.is_set():
+            try:
+                got = w.collide()["pairs"]
+                if got and got[0]["triangles"].tolist() not in (exact, []):
+                    wrong.append(len(got[0]["triangles"]))
+            except RuntimeError as e:
+                refused.append(str(e))
+
+    def changes():
+        for k in range(300):
+            try:
+                w.set_pose(ia, np.eye(4))  # the same pose: every frame's pairs stay the exact ones
+                w.set_self(ia, False)
+            except RuntimeError as e:
+                refused.append(str(e))
+            except Exception as e:  # noqa: BLE001
+                crashed.append(repr(e))
+
+    t1, t2 = threading.Thread(target=frames), threading.Thread(target=changes)
+    t1.start()
+    t2.start()
+    t2.join(timeout=120)
+    stop.set()
+    t1.join(timeout=120)
+    assert not t1.is_alive() and not t2.is_alive()
+    assert wrong == [] and crashed == []
+    assert all("peelcd::World: called from a second thread" in r for r in refused)
+    assert w.collide()["pairs"][0]["triangles"].tolist() == exact

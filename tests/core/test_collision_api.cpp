@@ -4,6 +4,7 @@
 #include "peelcd/core/cpu_stage.h"
 #include "peelcd/core/primitives.h"
 #include "peelcd/core/reference.h"
+#include "peelcd/core/world.h"
 
 #include <catch2/catch.hpp>
 
@@ -170,13 +171,43 @@ TEST_CASE("one detector called from a second thread during a frame throws a clea
   stage->wait_entered();
   FrameResult second;
   CHECK_THROWS_WITH(detector.detect(objects, opt, second),
-                    Catch::Contains("second thread") && Catch::Contains("one detector per thread"));
+                    Catch::Contains("peelcd::Detector: called from a second thread") && Catch::Contains("one per thread"));
   stage->release();
   owner.join();
   // The first frame completed untouched, and the detector is free again.
   CHECK(first.pairs.size() == 1);
   CHECK(!first.pairs[0].colliding.empty());
   detector.detect(objects, opt, second);
+  CHECK(second.pairs[0].colliding.size() == first.pairs[0].colliding.size());
+}
+
+TEST_CASE("one World changed or run from a second thread during a frame throws a clear error, no crash", "[api]") {
+  auto stage = std::make_shared<GatedStage>();
+  World world(stage);
+  const auto a = std::make_shared<const Mesh>(make_uv_sphere(Vec3(0, 0, 0), 1.0, 10, 20));
+  const auto b = std::make_shared<const Mesh>(make_uv_sphere(Vec3(1.2, 0.3, 0.1), 0.8, 10, 20));
+  const BodyId ia = world.add_rigid(a, Eigen::Affine3d::Identity(), "a");
+  world.add_rigid(b, Eigen::Affine3d::Identity(), "b");
+  DetectOptions opt;
+  opt.stage = Stage::image;  // the frame reaches the stage (and waits there)
+  FrameResult first;
+  std::thread owner([&] { world.collide(opt, first); });
+  stage->wait_entered();
+  FrameResult second;
+  // (Catch's combined matchers hold their parts by reference: one built per check.)
+#define PEELCD_WORLD_REFUSED Catch::Contains("peelcd::World: called from a second thread") && Catch::Contains("one per thread")
+  CHECK_THROWS_WITH(world.collide(opt, second), PEELCD_WORLD_REFUSED);
+  CHECK_THROWS_WITH(world.set_pose(ia, Eigen::Affine3d(Eigen::Translation3d(5, 0, 0))), PEELCD_WORLD_REFUSED);
+  CHECK_THROWS_WITH(world.remove(ia), PEELCD_WORLD_REFUSED);
+  CHECK_THROWS_WITH(world.add_rigid(a, Eigen::Affine3d::Identity()), PEELCD_WORLD_REFUSED);
+#undef PEELCD_WORLD_REFUSED
+  stage->release();
+  owner.join();
+  // The first frame completed untouched (nothing was moved or removed), and the World is free again.
+  CHECK(first.pairs.size() == 1);
+  CHECK(!first.pairs[0].colliding.empty());
+  CHECK(world.size() == 2);
+  world.collide(opt, second);
   CHECK(second.pairs[0].colliding.size() == first.pairs[0].colliding.size());
 }
 
