@@ -559,14 +559,14 @@ void Detector::detect(const std::vector<const Object*>& object_ptrs, const Detec
       const Mesh& mb = objects[plan.b].mesh;
       if (plan.a == plan.b) {  // self: the candidates planning found
         r.candidates = plan.self_candidates.size();
-        self_narrow_phase(ma, plan.self_candidates, r.colliding);
+        self_narrow_phase(ma, plan.self_candidates, r.colliding, opt.max_contacts);
         return;
       }
       lane.candidates.clear();
       box_overlap_pairs(ma, plan.kept_a, mb, plan.kept_b, lane.candidates, &lane.boxes);
       sort_unique_pairs(lane.candidates, lane.candidate_scratch);
       r.candidates = lane.candidates.size();
-      narrow_phase(ma, mb, lane.candidates, r.colliding, /*boxes_overlap=*/true);
+      narrow_phase(ma, mb, lane.candidates, r.colliding, /*boxes_overlap=*/true, opt.max_contacts);
     });
     out.rois_exact = s.exact_pairs.size();
     out.timings.cpu += ms_since(t0);
@@ -659,9 +659,9 @@ void Detector::detect(const std::vector<const Object*>& object_ptrs, const Detec
     if (plan.a == plan.b) self_candidates(ma, plan.rep, s.candidates);  // one object peeled as both
     r.candidates = s.candidates.size();
     if (plan.a == plan.b)
-      self_narrow_phase(ma, s.candidates, r.colliding);
+      self_narrow_phase(ma, s.candidates, r.colliding, opt.max_contacts);
     else
-      narrow_phase(ma, mb, s.candidates, r.colliding);
+      narrow_phase(ma, mb, s.candidates, r.colliding, false, opt.max_contacts);
     out.timings.cpu += ms_since(t0);
   }
   out.pairs.resize(used);

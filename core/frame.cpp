@@ -148,8 +148,17 @@ void relate_pairs(std::vector<PairResult>& pairs, const std::function<const Mesh
   for (PairResult& p : pairs) {
     p.relation_note.clear();
     p.volume = VolumeEstimate{};
+    // max_contacts: a pair's lanes may each have stopped at N; the first N, sorted, are kept.
+    const bool capped = options.max_contacts && p.colliding.size() >= options.max_contacts;
+    if (capped) p.colliding.resize(options.max_contacts);
+    const auto note_cap = [&] {
+      if (capped)
+        p.relation_note = "max_contacts " + std::to_string(options.max_contacts) +
+                          ": the relation is from the contacts found before the tests stopped";
+    };
     if (p.object_a == p.object_b) {  // self: from the contacts alone
       p.relation = contact_relation(p.colliding);
+      note_cap();
       continue;
     }
     const Aabb& ba = boxes[p.object_a];
@@ -159,6 +168,7 @@ void relate_pairs(std::vector<PairResult>& pairs, const std::function<const Mesh
                          ((bb.lo.array() >= ba.lo.array()).all() && (bb.hi.array() <= ba.hi.array()).all()));
     if (!p.colliding.empty() || !within) {  // from the contacts: no mesh read
       p.relation = contact_relation(p.colliding);
+      note_cap();
     } else {
       p.relation = relate(mesh_of(p.object_a), mesh_of(p.object_b), ba, bb, p.colliding, p.relation_note);
     }

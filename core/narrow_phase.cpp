@@ -352,7 +352,8 @@ bool test_triangle_pair(const TriangleCorners& ca, const TriangleCorners& cb, Co
 }
 
 void narrow_phase(const Mesh& a, const Mesh& b, const std::vector<std::uint64_t>& candidates,
-                  std::vector<Contact>& out, bool boxes_overlap) {
+                  std::vector<Contact>& out, bool boxes_overlap, std::size_t max_contacts) {
+  const std::size_t limit = max_contacts ? out.size() + max_contacts : std::size_t(-1);
   for (std::uint64_t c : candidates) {
     const std::uint32_t ta = pair_a(c), tb = pair_b(c);
     // A triangle lies in the box of its corners: disjoint boxes, no contact (exact: comparisons
@@ -362,7 +363,10 @@ void narrow_phase(const Mesh& a, const Mesh& b, const std::vector<std::uint64_t>
     Contact contact;
     contact.tri_a = ta;
     contact.tri_b = tb;
-    if (test_triangle_pair(corners(a, ta), corners(b, tb), contact)) out.push_back(contact);
+    if (test_triangle_pair(corners(a, ta), corners(b, tb), contact)) {
+      out.push_back(contact);
+      if (out.size() >= limit) return;
+    }
   }
 }
 

@@ -131,6 +131,12 @@ const std::vector<OptionSpec> kTable = {
      K::choice, 0, 0, "", "index,position", "adjacency", kRecordedWhenSet,
      [](const DetectOptions& o) { return OptionValue(std::string(to_string(o.self_adjacency))); },
      [](DetectOptions& o, const OptionValue& v) { o.self_adjacency = *parse_self_adjacency(word(v)); }},
+    {"max_contacts", "", "--max-contacts",
+     "At most N contacts per object pair (0: every one; 1: a first-contact query): the pair's exact tests stop at "
+     "the N-th colliding triangle pair",
+     K::integer, 0, 1e9, "must be within 0..1000000000 (0 = every contact)", "", "", kRecordedWhenSet,
+     [](const DetectOptions& o) { return OptionValue(double(o.max_contacts)); },
+     [](DetectOptions& o, const OptionValue& v) { o.max_contacts = std::size_t(num(v)); }},
     {"volume", "", "--volume",
      "The intersection volume of every pair of closed objects whose boxes overlap, with its error estimate and "
      "the direction that reduces it (rays over the overlap box; an open or inside-out object gets none, and why)",

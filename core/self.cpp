@@ -86,12 +86,17 @@ bool test_self_couple(const TriangleCorners& a, const TriangleCorners& b, Contac
   return triangles_intersect(a, b) && test_triangle_pair(a, b, contact);
 }
 
-void self_narrow_phase(const Mesh& mesh, const std::vector<std::uint64_t>& candidates, std::vector<Contact>& out) {
+void self_narrow_phase(const Mesh& mesh, const std::vector<std::uint64_t>& candidates, std::vector<Contact>& out,
+                       std::size_t max_contacts) {
+  const std::size_t limit = max_contacts ? out.size() + max_contacts : std::size_t(-1);
   for (const std::uint64_t c : candidates) {
     Contact contact;
     contact.tri_a = pair_a(c);
     contact.tri_b = pair_b(c);
-    if (test_self_couple(corners(mesh, contact.tri_a), corners(mesh, contact.tri_b), contact)) out.push_back(contact);
+    if (test_self_couple(corners(mesh, contact.tri_a), corners(mesh, contact.tri_b), contact)) {
+      out.push_back(contact);
+      if (out.size() >= limit) return;
+    }
   }
 }
 

@@ -568,7 +568,8 @@ void World::Impl::collide(const DetectOptions& opt, FrameResult& out) {
     if (t.start.first == kSelfPair) return;  // tested during the traversal
     if (t.start.first == kSmallPair) {  // the sweep's pairs: distinct, boxes overlapping, world meshes at hand
       sort_unique_pairs(t.candidates, lane_scratch[lane]->sorted);
-      narrow_phase(*a.world_mesh(), *b.world_mesh(), t.candidates, t.contacts, /*boxes_overlap=*/true);
+      narrow_phase(*a.world_mesh(), *b.world_mesh(), t.candidates, t.contacts, /*boxes_overlap=*/true,
+                   opt.max_contacts);
       return;
     }
     const Mesh& ma = a.local();
@@ -588,7 +589,10 @@ void World::Impl::collide(const DetectOptions& opt, FrameResult& out) {
       Contact contact;
       contact.tri_a = ta;
       contact.tri_b = tb;
-      if (test_triangle_pair(ca, cb, contact)) t.contacts.push_back(contact);
+      if (test_triangle_pair(ca, cb, contact)) {
+        t.contacts.push_back(contact);
+        if (opt.max_contacts && t.contacts.size() >= opt.max_contacts) return;  // enough for this task
+      }
     }
   });
   for (std::size_t p = 0; p < pairs.size(); ++p) {

@@ -32,7 +32,8 @@ namespace {
 std::vector<Vec3> vertices_from(const py::handle& obj, const char* what) {
   if (!py::isinstance<py::array>(obj)) throw py::type_error(std::string(what) + ": expected a numpy array of shape (n, 3)");
   const py::array arr = py::reinterpret_borrow<py::array>(obj);
-  if (!arr.dtype().is(py::dtype::of<double>()))
+  // Equal, not identical: an unpickled array's dtype is another object of the same type.
+  if (!py::dtype::of<double>().attr("__eq__")(arr.dtype()).cast<bool>())
     throw py::type_error(std::string(what) + ": dtype must be float64, got " + std::string(py::str(arr.dtype())) +
                          " (use V.astype(np.float64))");
   if (arr.ndim() != 2 || arr.shape(1) != 3) {
@@ -286,6 +287,18 @@ PYBIND11_MODULE(_peelcd, m) {
         if (!self.mesh->triangles.empty()) std::memcpy(a.mutable_data(), self.mesh->triangles.data(), a.nbytes());
         return a;
       })
+      .def(py::pickle(  // pickle, copy.deepcopy, multiprocessing: the arrays V and F
+          [](const PyMesh& self) {
+            py::array_t<double> V({py::ssize_t(self.mesh->vertices.size()), py::ssize_t(3)});
+            if (!self.mesh->vertices.empty()) std::memcpy(V.mutable_data(), self.mesh->vertices.data(), V.nbytes());
+            py::array_t<std::uint32_t> F({py::ssize_t(self.mesh->triangles.size()), py::ssize_t(3)});
+            if (!self.mesh->triangles.empty()) std::memcpy(F.mutable_data(), self.mesh->triangles.data(), F.nbytes());
+            return py::make_tuple(V, F);
+          },
+          [](const py::tuple& t) {
+            if (t.size() != 2) throw std::runtime_error("peelcd.Mesh: a pickled mesh is (V, F)");
+            return PyMesh{mesh_from_arrays(t[0], t[1])};
+          }))
       .def("__repr__", [](const PyMesh& self) {
         return "<peelcd.Mesh " + std::to_string(self.mesh->vertices.size()) + " vertices, " +
                std::to_string(self.mesh->triangles.size()) + " triangles>";

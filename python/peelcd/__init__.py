@@ -4,15 +4,72 @@
     world = peelcd.World()                     # backend "cpu", "osmesa" or "egl"
     a = world.add_rigid(peelcd.Mesh(V, F), pose=np.eye(4))
     r = world.collide()                        # options as in scene files: world.collide(stage="exact")
-    for p in r["pairs"]: print(p["a"], p["b"], p["triangles"])
+    if r:                                      # true when anything collides
+        for p in r["pairs"]: print(p["a"], p["b"], p["triangles"])
 """
-from ._peelcd import Detector, Mesh, World, __version__, classes, exact_pairs, gl_options, load_mesh, load_scene, options
+import os as _os
+
+from ._peelcd import Detector as _Detector
+from ._peelcd import Mesh, __version__, classes, exact_pairs, gl_options, options
+from ._peelcd import World as _World
+from ._peelcd import load_mesh as _load_mesh
+from ._peelcd import load_scene as _load_scene
+
+
+class Result(dict):
+    """A frame's result: a dict ({"pairs": [...], "is_collision": bool, "total_ms": float, ...})
+    whose truth value is whether anything collides (a contact, or one object inside another)."""
+
+    def __bool__(self):
+        return bool(self.get("is_collision"))
+
+
+class PairResult(dict):
+    """One pair's result: a dict (triangles, kinds, segments, relation, is_collision, ...) whose
+    truth value is whether the pair collides (a contact, or one object inside the other)."""
+
+    def __bool__(self):
+        return bool(self.get("is_collision"))
+
+
+def _result(r):
+    r["pairs"] = [PairResult(p) for p in r["pairs"]]
+    return Result(r)
+
+
+class World(_World):
+    __doc__ = _World.__doc__
+
+    def collide(self, **options):
+        """One frame: every pair of bodies whose boxes overlap (a Result). Keyword options as in
+        scene files; max_contacts=1 asks for a first contact per pair."""
+        return _result(super().collide(**options))
+
+
+class Detector(_Detector):
+    __doc__ = _Detector.__doc__
+
+    def detect(self, objects, **options):
+        """One frame of the objects (Mesh, or dicts with mesh, name, self): a Result."""
+        return _result(super().detect(objects, **options))
+
+
+def load_mesh(path):
+    """Loads a mesh file (OBJ, PLY, STL, OFF, glTF, ...) as the command line does; path: str or os.PathLike."""
+    return _load_mesh(_os.fspath(path))
+
+
+def load_scene(path):
+    """A scene file's objects in world space: a list of dicts with name, mesh and self."""
+    return _load_scene(_os.fspath(path))
 
 
 def collide(a, b, pose_a=None, pose_b=None, backend="cpu", **options):
-    """One pair: two meshes, each at its pose (4x4, default identity). Returns the pair's dict
-    (triangles, kinds, segments, relation, is_collision), or None when their boxes do not overlap.
-    Options are the scene files' keys; on a GL backend also the GL options (gl_options())."""
+    """One pair: two meshes, each at its pose (4x4, default identity). Returns the pair's
+    PairResult (a dict: triangles, kinds, segments, relation, is_collision; true when the pair
+    collides), or None when their boxes do not overlap. Options are the scene files' keys
+    (max_contacts=1: stop at the first contact); on a GL backend also the GL options
+    (gl_options()) and costs=FILE."""
     gl = {k: options.pop(k) for k in list(options) if k in gl_options() or k == "costs"}
     world = World(backend, **gl)
     world.add_rigid(a, pose_a)
@@ -21,4 +78,5 @@ def collide(a, b, pose_a=None, pose_b=None, backend="cpu", **options):
     return pairs[0] if pairs else None
 
 
-__all__ = ["Detector", "Mesh", "World", "classes", "collide", "exact_pairs", "gl_options", "load_mesh", "load_scene", "options", "__version__"]
+__all__ = ["Detector", "Mesh", "PairResult", "Result", "World", "classes", "collide", "exact_pairs", "gl_options",
+           "load_mesh", "load_scene", "options", "__version__"]

@@ -266,3 +266,52 @@ def test_one_world_shared_by_threads_raises_a_clear_error_never_corrupts():
     assert wrong == [] and crashed == []
     assert all("peelcd::World: called from a second thread" in r for r in refused)
     assert w.collide()["pairs"][0]["triangles"].tolist() == exact
+
+
+def box(lo, hi):
+    """A closed axis-aligned box of 12 triangles, outward normals."""
+    (x0, y0, z0), (x1, y1, z1) = lo, hi
+    V = np.array([[x0, y0, z0], [x1, y0, z0], [x1, y1, z0], [x0, y1, z0],
+                  [x0, y0, z1], [x1, y0, z1], [x1, y1, z1], [x0, y1, z1]], float)
+    F = np.array([[0, 2, 1], [0, 3, 2], [4, 5, 6], [4, 6, 7], [0, 1, 5], [0, 5, 4],
+                  [1, 2, 6], [1, 6, 5], [2, 3, 7], [2, 7, 6], [3, 0, 4], [3, 4, 7]], np.int64)
+    return peelcd.Mesh(V, F)
+
+
+def test_results_are_true_exactly_when_something_collides():
+    a, b, far = uv_sphere((0, 0, 0), 1.0, 16), uv_sphere((1.2, 0.1, 0.05), 1.0, 16), uv_sphere((1.0, 1.0, 0), 0.35, 16)
+    assert peelcd.collide(a, b)                      # crossing
+    assert peelcd.collide(a, uv_sphere((9, 0, 0), 1.0)) is None  # boxes apart
+    near = peelcd.collide(a, far)                    # boxes overlap, surfaces apart: a result that is false
+    assert near is not None and not near and near["relation"] == "disjoint"
+    inside = peelcd.collide(box((-0.2,) * 3, (0.2,) * 3), box((-1,) * 3, (1,) * 3))
+    assert inside and len(inside["triangles"]) == 0 and inside["relation"] == "a_inside_b"
+    w = peelcd.World()
+    w.add_rigid(a)
+    w.add_rigid(far)
+    r = w.collide()
+    assert isinstance(r, peelcd.Result) and not r and len(r["pairs"]) == 1
+    assert peelcd.Detector().detect([a, b])
+
+
+def test_max_contacts_one_is_a_first_contact_query():
+    a, b = uv_sphere((0, 0, 0), 1.0, 24), uv_sphere((1.2, 0.1, 0.05), 1.0, 24)
+    exact = {tuple(p) for p in peelcd.exact_pairs(a, b).tolist()}
+    for stage in ("exact", "image"):
+        first = peelcd.collide(a, b, stage=stage, max_contacts=1)
+        assert first and len(first["triangles"]) == 1 and tuple(first["triangles"][0]) in exact
+    assert len(peelcd.collide(a, b, max_contacts=0)["triangles"]) == len(exact)
+    with pytest.raises(ValueError, match="max_contacts"):
+        peelcd.collide(a, b, max_contacts=-1)
+
+
+def test_meshes_pickle_and_paths_may_be_pathlib():
+    import copy
+    import pathlib
+    import pickle
+    m = uv_sphere((0, 0, 0), 1.0, 8)
+    for back in (pickle.loads(pickle.dumps(m)), copy.deepcopy(m)):
+        assert np.array_equal(back.V, m.V) and np.array_equal(back.F, m.F)
+    path = pathlib.Path(FIXTURES) / "meshes" / "torus.obj"
+    assert np.array_equal(peelcd.load_mesh(path).F, peelcd.load_mesh(str(path)).F)
+    assert len(peelcd.load_scene(pathlib.Path(FIXTURES) / "scenes" / "bunny_dragon.json")) == 2

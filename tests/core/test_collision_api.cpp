@@ -274,3 +274,50 @@ TEST_CASE("coordinates beyond float range: refused by any frame that may use the
     CHECK(score_contacts(exact_colliding_pairs(a, other), result.contacts).missed == 0);
   }
 }
+
+TEST_CASE("is_collision() is true for a closed object inside another, with no contact", "[api]") {
+  auto detector = cpu_detector();
+  const Mesh outer = make_box(Vec3(-1, -1, -1), Vec3(1, 1, 1)), inner = make_box(Vec3(-0.2, -0.2, -0.2), Vec3(0.2, 0.2, 0.2));
+  CollisionRequest request;
+  CollisionResult result;
+  CHECK(collide(*detector, inner, Eigen::Affine3d::Identity(), outer, Eigen::Affine3d::Identity(), request, result) == 0);
+  CHECK(result.contacts.empty());
+  CHECK(result.pair.relation == Relation::a_inside_b);
+  CHECK(result.is_collision());
+  // Moved out of the box, apart: no collision.
+  collide(*detector, inner, Eigen::Affine3d(Eigen::Translation3d(5, 0, 0)), outer, Eigen::Affine3d::Identity(), request,
+          result);
+  CHECK_FALSE(result.is_collision());
+}
+
+TEST_CASE("max_contacts: a first-contact query stops at N contacts, on both paths and in the World", "[api]") {
+  const Mesh a = make_uv_sphere(Vec3(0, 0, 0), 1.0, 16, 32), b = make_uv_sphere(Vec3(1.2, 0.3, 0.1), 0.8, 16, 32);
+  std::vector<Object> objects(2);
+  objects[0].mesh = a;
+  objects[1].mesh = b;
+  const std::vector<std::uint64_t> exact = exact_colliding_pairs(a, b);
+  REQUIRE(exact.size() > 10);
+  Detector detector(std::make_shared<CpuImageStage>());
+  for (const Stage stage : {Stage::exact, Stage::image})
+    for (const std::size_t n : {std::size_t(1), std::size_t(5)}) {
+      DetectOptions opt;
+      opt.stage = stage;
+      opt.max_contacts = n;
+      const FrameResult f = detector.detect(objects, opt);
+      INFO(to_string(stage) << ", max_contacts " << n);
+      REQUIRE(f.pairs.size() == 1);
+      CHECK(f.pairs[0].colliding.size() == n);
+      CHECK(f.pairs[0].is_collision());
+      CHECK(f.pairs[0].relation_note.find("max_contacts") != std::string::npos);
+      for (const Contact& c : f.pairs[0].colliding)  // each one a true contact
+        CHECK(std::binary_search(exact.begin(), exact.end(), pack_pair(c.tri_a, c.tri_b)));
+    }
+  World world;
+  world.add_rigid(std::make_shared<const Mesh>(a), Eigen::Affine3d::Identity());
+  world.add_rigid(std::make_shared<const Mesh>(b), Eigen::Affine3d::Identity());
+  DetectOptions opt;
+  opt.max_contacts = 1;
+  CHECK(world.collide(opt).pairs.at(0).colliding.size() == 1);
+  opt.max_contacts = 0;  // every contact again
+  CHECK(world.collide(opt).pairs.at(0).colliding.size() == exact.size());
+}

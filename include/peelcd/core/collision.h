@@ -81,7 +81,8 @@ struct CollisionResult {
   PairResult pair;                // the pair's details (ROI, PCS, candidates, ...); empty if the
                                   // boxes do not overlap
   Timings timings;
-  bool is_collision() const { return !contacts.empty(); }
+  // A collision: a contact, or one closed object inside the other (pair.relation, no contact).
+  bool is_collision() const { return !contacts.empty() || pair.is_collision(); }
   void clear() {
     contacts.clear();
     pair = PairResult{};

@@ -100,6 +100,11 @@ struct DetectOptions {
   // (PairResult::volume; peelcd/core/relation.h), with resolution x resolution rays per axis
   // (kVolumeResolution when resolution is 0). Off by default.
   bool volume = false;
+  // At most this many contacts per object pair (0: every one). The exact tests of a pair stop at
+  // the N-th colliding triangle pair found (a first-contact query: 1), in candidate order; the
+  // pair still collides (is_collision()), its relation is decided from the contacts found
+  // (relation_note says so) and the candidates are found whole.
+  std::size_t max_contacts = 0;
 };
 
 constexpr int kVolumeResolution = 256;

@@ -50,7 +50,8 @@ bool test_triangle_pair(const TriangleCorners& a, const TriangleCorners& b, Cont
 // the colliding ones to `out` in candidate order. boxes_overlap: every candidate is known to be
 // a pair of overlapping triangle boxes (box_overlap_pairs()'s output), so that first test is
 // skipped; the answer is the same either way.
+// max_contacts > 0: stops once `out` has gained that many (DetectOptions::max_contacts).
 void narrow_phase(const Mesh& a, const Mesh& b, const std::vector<std::uint64_t>& candidates,
-                  std::vector<Contact>& out, bool boxes_overlap = false);
+                  std::vector<Contact>& out, bool boxes_overlap = false, std::size_t max_contacts = 0);
 
 }  // namespace peelcd
