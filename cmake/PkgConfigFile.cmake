@@ -16,8 +16,12 @@ endif()
 if(TARGET peelcd_gl_egl)
   string(APPEND _pc_requires " egl")
 endif()
+# peelcd/backends.h offers "osmesa" where PEELCD_HAVE_OSMESA is defined (as peelcd::gl_osmesa's
+# CMake users get it). No -std: peelcd needs C++17 or later, and a consumer's own choice stands.
+set(_pc_defines "")
 if(TARGET peelcd_gl_osmesa)
   string(APPEND _pc_requires " osmesa")
+  string(APPEND _pc_defines " -DPEELCD_HAVE_OSMESA=1")
 endif()
 # The prefix is found from where the .pc file lies (pkg-config's ${pcfiledir}), so the file is
 # right wherever the build is installed (cmake --install build --prefix P), not only at
@@ -45,7 +49,7 @@ Name: peelcd
 Description: @PROJECT_DESCRIPTION@
 Version: @PROJECT_VERSION@
 Requires: ${_pc_requires}
-Cflags: -I\${includedir} -std=c++17
+Cflags: -I\${includedir}${_pc_defines}
 Libs: -L\${libdir}${_pc_libs} -pthread
 ")
 configure_file(${PROJECT_BINARY_DIR}/peelcd.pc.in ${PROJECT_BINARY_DIR}/peelcd.pc @ONLY)

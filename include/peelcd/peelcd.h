@@ -12,7 +12,9 @@
 #include "peelcd/core/image_stage.h"
 #include "peelcd/core/mesh.h"
 #include "peelcd/core/narrow_phase.h"
+#include "peelcd/core/primitives.h"
 #include "peelcd/core/reference.h"
+#include "peelcd/core/world.h"
 
 #if __has_include("peelcd/io/mesh_io.h")
 #include "peelcd/io/mesh_io.h"
@@ -26,6 +28,11 @@
 #if __has_include("peelcd/gl_egl/egl_context.h")
 #include "peelcd/gl_egl/egl_context.h"
 #endif
-#if __has_include("peelcd/gl_osmesa/osmesa_context.h")
+#if __has_include("peelcd/gl_osmesa/osmesa_context.h") && PEELCD_HAVE_OSMESA
 #include "peelcd/gl_osmesa/osmesa_context.h"
+#endif
+// The image stage by backend name (make_image_stage("osmesa" | "egl" | "cpu")): where the EGL
+// context is installed (backends.h needs it; "osmesa" where PEELCD_HAVE_OSMESA is defined).
+#if __has_include("peelcd/gl_egl/egl_context.h")
+#include "peelcd/backends.h"
 #endif

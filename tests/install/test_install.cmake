@@ -51,6 +51,34 @@ endforeach()
 if(at EQUAL -1)
   message(FATAL_ERROR "pkg-config --cflags peelcd lacks -I${includedir}: ${last_output}")
 endif()
+# pkg-config: a consumer that includes only peelcd/peelcd.h, built with the .pc's flags and a
+# newer standard than the library's (-std=c++20 must not be overridden), runs a World on OSMesa
+# (the .pc's Cflags define PEELCD_HAVE_OSMESA when the OSMesa component is installed).
+run(${PKG_CONFIG} --cflags --libs peelcd)
+string(STRIP "${last_output}" pc_flags)
+separate_arguments(pc_flags UNIX_COMMAND "${pc_flags}")
+if(pc_flags MATCHES "-std=")
+  message(FATAL_ERROR "pkg-config --cflags peelcd forces a language standard: ${pc_flags}")
+endif()
+run(c++ -std=c++20 -O1 ${SOURCE}/tests/install/consumer/main.cpp -o ${WORK}/consumer_pc ${pc_flags})
+if(EXISTS ${prefix}/include/peelcd/gl_osmesa/osmesa_context.h)
+  run(${WORK}/consumer_pc osmesa)
+else()
+  run(${WORK}/consumer_pc cpu)
+endif()
+message(STATUS "${last_output}")
+# find_package(peelcd COMPONENTS ...) with any subset: the contexts are not needed by the others.
+# (Components comma-separated: a list would be split by run()'s ARGN.)
+foreach(components core core,io core,io,eval,bench gl,gl_egl oracle)
+  string(REPLACE "," "_" tag "${components}")
+  run(${CMAKE_COMMAND} -S ${SOURCE}/tests/install/consumer -B ${WORK}/consumer_${tag} -DCMAKE_PREFIX_PATH=${prefix}
+      -DPEELCD_COMPONENTS=${components} -DCMAKE_BUILD_TYPE=Release)
+endforeach()
+run(${CMAKE_COMMAND} -S ${SOURCE}/tests/install/consumer -B ${WORK}/consumer_all -DCMAKE_PREFIX_PATH=${prefix}
+    -DPEELCD_COMPONENTS=core,io,gl,gl_egl,gl_osmesa -DCMAKE_BUILD_TYPE=Release)
+run(${CMAKE_COMMAND} --build ${WORK}/consumer_all -j 2)
+run(${WORK}/consumer_all/consumer cpu)
+message(STATUS "${last_output}")
 # find_package(peelcd) without COMPONENTS needs neither FCL nor OpenEXR.
 run(${CMAKE_COMMAND} -S ${SOURCE}/tests/install/no_components -B ${WORK}/no_components -DCMAKE_PREFIX_PATH=${prefix})
 
