@@ -18,6 +18,7 @@ packages=(
   python3 python3-jsonschema                       # tests: dump meta.json against its JSON Schema
   python3-matplotlib                               # sweep --plot, scripts/plot_*.py
   python3-dev pybind11-dev python3-numpy python3-pytest   # the Python module (import peelcd) and its tests
+  python3-pip python3-venv python3-setuptools python3-wheel  # pip install . (pyproject.toml) and its test
 )
 missing=()
 for p in "${packages[@]}"; do
