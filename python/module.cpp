@@ -16,6 +16,7 @@
 #include "peelcd/version.h"
 
 #include <pybind11/numpy.h>
+#include <functional>
 #include <pybind11/pybind11.h>
 #include <pybind11/stl.h>
 
@@ -163,8 +164,17 @@ std::shared_ptr<ImageStage> stage_for(const std::string& backend, const gl::GlOp
   }
 }
 
+// A body id from Python: what add_rigid / add_deforming returned (a negative or too large one is
+// named; an unknown one the World names).
+BodyId body_id(long long id) {
+  if (id < 0 || id > 0xffffffffLL)
+    throw py::value_error("body " + std::to_string(id) + ": no such body (a body is what add_rigid or add_deforming returned)");
+  return BodyId(id);
+}
+
 // One pair of a result, as NumPy arrays.
-py::dict pair_dict(const PairResult& p) {
+// `name_of(i)`: object or body i's name, as given ("" when none was).
+py::dict pair_dict(const PairResult& p, const std::function<std::string(std::size_t)>& name_of) {
   const std::size_t k = p.colliding.size();
   py::array_t<std::uint32_t> tris({py::ssize_t(k), py::ssize_t(2)});
   py::array_t<double> seg({py::ssize_t(k), py::ssize_t(2), py::ssize_t(3)});
@@ -184,6 +194,8 @@ py::dict pair_dict(const PairResult& p) {
   py::dict d;
   d["a"] = p.object_a;
   d["b"] = p.object_b;
+  d["name_a"] = name_of(p.object_a);
+  d["name_b"] = name_of(p.object_b);
   d["triangles"] = tris;
   d["kinds"] = kinds;
   d["segments"] = seg;
@@ -203,11 +215,12 @@ py::dict pair_dict(const PairResult& p) {
   return d;
 }
 
-py::dict result_dict(const FrameResult& r, const std::optional<gl::GlOptions>& gl = std::nullopt) {
+py::dict result_dict(const FrameResult& r, const std::function<std::string(std::size_t)>& name_of,
+                     const std::optional<gl::GlOptions>& gl = std::nullopt) {
   py::list pairs;
   bool any = false;
   for (const PairResult& p : r.pairs) {
-    pairs.append(pair_dict(p));
+    pairs.append(pair_dict(p, name_of));
     any = any || p.is_collision();
   }
   py::dict d;
@@ -261,6 +274,18 @@ struct PyDetector {
 struct PyMesh {
   std::shared_ptr<const Mesh> mesh;
 };
+
+// A peelcd.Mesh, or any object with .vertices (n, 3) and .faces (m, 3) arrays (a trimesh.Trimesh,
+// an Open3D-like mesh through NumPy): the arrays are read as Mesh(V, F) reads them.
+PyMesh as_mesh(const py::handle& obj, const std::string& where) {
+  if (py::isinstance<PyMesh>(obj)) return obj.cast<PyMesh>();
+  if (py::hasattr(obj, "vertices") && py::hasattr(obj, "faces")) {
+    const py::module_ np = py::module_::import("numpy");
+    return PyMesh{mesh_from_arrays(np.attr("asarray")(obj.attr("vertices")), np.attr("asarray")(obj.attr("faces")))};
+  }
+  throw py::type_error(where + ": expected a peelcd.Mesh or an object with .vertices and .faces arrays (e.g. a "
+                       "trimesh.Trimesh), got " + std::string(py::str(py::type::of(obj).attr("__name__"))));
+}
 
 }  // namespace
 
@@ -335,33 +360,39 @@ PYBIND11_MODULE(_peelcd, m) {
            py::arg("backend") = "cpu",
            "backend: cpu, osmesa or egl; GL backends take the GL options as keywords (peeler, resolve, batch, gpu_select); "
            "costs=FILE: the router's cost models (peelcd calibrate --write-costs; default $PEELCD_COSTS)")
-      .def("add_rigid", [](PyWorld& w, const PyMesh& mesh, const py::object& pose, const std::string& name, bool self) {
+      .def("add_rigid", [](PyWorld& w, const py::handle& m, const py::object& pose, const std::string& name, bool self) {
+        const PyMesh mesh = as_mesh(m, "mesh");
         return translate_errors([&] {
           const BodyId id = w.world.add_rigid(mesh.mesh, pose_from(pose), name);
           w.world.set_self(id, self);
           return id;
         });
       }, py::arg("mesh"), py::arg("pose") = py::none(), py::arg("name") = "", py::arg("self_collision") = false)
-      .def("add_deforming", [](PyWorld& w, const PyMesh& mesh, const std::string& name, bool self) {
+      .def("add_deforming", [](PyWorld& w, const py::handle& m, const std::string& name, bool self) {
+        const PyMesh mesh = as_mesh(m, "mesh");
         return translate_errors([&] {
           const BodyId id = w.world.add_deforming(*mesh.mesh, name);
           w.world.set_self(id, self);
           return id;
         });
       }, py::arg("mesh"), py::arg("name") = "", py::arg("self_collision") = false)
-      .def("set_pose", [](PyWorld& w, BodyId id, const py::object& pose) {
+      .def("set_pose", [](PyWorld& w, long long body, const py::object& pose) {
+        const BodyId id = body_id(body);
         translate_errors([&] { w.world.set_pose(id, pose_from(pose)); });
       }, py::arg("body"), py::arg("pose"))
-      .def("set_vertices", [](PyWorld& w, BodyId id, const py::handle& V) {
+      .def("set_vertices", [](PyWorld& w, long long body, const py::handle& V) {
+        const BodyId id = body_id(body);
         std::vector<Vec3> v = vertices_from(V, "V");
         translate_errors([&] { w.world.set_vertices(id, std::move(v)); });
       }, py::arg("body"), py::arg("V"))
-      .def("set_mesh", [](PyWorld& w, BodyId id, const PyMesh& mesh) {
+      .def("set_mesh", [](PyWorld& w, long long body, const py::handle& m) {
+        const PyMesh mesh = as_mesh(m, "mesh");
+        const BodyId id = body_id(body);
         translate_errors([&] { w.world.set_mesh(id, *mesh.mesh); });
       }, py::arg("body"), py::arg("mesh"), "A new mesh (topology) for the body: fracture, remeshing")
-      .def("set_self", [](PyWorld& w, BodyId id, bool self) { translate_errors([&] { w.world.set_self(id, self); }); },
+      .def("set_self", [](PyWorld& w, long long body, bool self) { translate_errors([&] { w.world.set_self(body_id(body), self); }); },
            py::arg("body"), py::arg("on"))
-      .def("remove", [](PyWorld& w, BodyId id) { translate_errors([&] { w.world.remove(id); }); }, py::arg("body"))
+      .def("remove", [](PyWorld& w, long long body) { translate_errors([&] { w.world.remove(body_id(body)); }); }, py::arg("body"))
       .def("__len__", [](const PyWorld& w) { return w.world.size(); })
       .def("collide", [](PyWorld& w, const py::kwargs& kwargs) {
         const DetectOptions opt = options_from(kwargs);
@@ -370,7 +401,7 @@ PYBIND11_MODULE(_peelcd, m) {
           py::gil_scoped_release release;
           r = &translate_errors([&]() -> const FrameResult& { return w.world.collide(opt); });
         }
-        return result_dict(*r, w.gl);
+        return result_dict(*r, [&](std::size_t i) { return w.world.name(BodyId(i)); }, w.gl);
       }, "One frame: every pair of bodies whose boxes overlap. Keyword options as in scene files");
 
   py::class_<PyDetector>(m, "Detector", "The frame API (peelcd::Detector): the objects given whole each frame")
@@ -385,28 +416,39 @@ PYBIND11_MODULE(_peelcd, m) {
         std::vector<Object> objs;
         for (const py::handle& h : objects) {
           Object o;
-          if (py::isinstance<py::dict>(h)) {
+          const std::string where = "objects[" + std::to_string(objs.size()) + "]";
+          if (py::isinstance<py::dict>(h)) {  // the scene files' object keys, nothing else
             const py::dict dd = py::reinterpret_borrow<py::dict>(h);
-            o.mesh = *dd["mesh"].cast<PyMesh>().mesh;
+            for (const auto& [k, v] : dd) {
+              const std::string key = py::str(k);
+              if (key != "mesh" && key != "name" && key != "self")
+                throw py::type_error(where + ": unknown key '" + key + "' (expected mesh, name, self)");
+            }
+            if (!dd.contains("mesh")) throw py::type_error(where + ": missing key 'mesh'");
+            o.mesh = *as_mesh(dd["mesh"], where + ".mesh").mesh;
             if (dd.contains("name")) o.name = dd["name"].cast<std::string>();
             if (dd.contains("self")) o.self = dd["self"].cast<bool>();
           } else {
-            o.mesh = *h.cast<PyMesh>().mesh;
+            o.mesh = *as_mesh(h, where).mesh;
           }
+          if (!o.name.empty())
+            for (const Object& other : objs)
+              if (other.name == o.name) throw py::value_error(where + ": the name '" + o.name + "' is taken by another object");
           objs.push_back(std::move(o));
         }
         {
           py::gil_scoped_release release;
           translate_errors([&] { d.detector.detect(objs, opt, d.result); });
         }
-        return result_dict(d.result, d.gl);
+        return result_dict(d.result, [&](std::size_t i) { return objs[i].name; }, d.gl);
       }, py::arg("objects"), "One frame of the objects (Mesh, or dicts with mesh, name, self). Keyword options as in scene files");
 
-  m.def("exact_pairs", [](const PyMesh& a, const PyMesh& b) {
+  m.def("exact_self_pairs", [](const py::handle& ma) {
+    const PyMesh a = as_mesh(ma, "mesh");
     std::vector<std::uint64_t> k;
     {
       py::gil_scoped_release release;
-      k = &a == &b ? exact_self_pairs(*a.mesh) : exact_colliding_pairs(*a.mesh, *b.mesh);
+      k = exact_self_pairs(*a.mesh);
     }
     py::array_t<std::uint32_t> out({py::ssize_t(k.size()), py::ssize_t(2)});
     auto o = out.mutable_unchecked<2>();
@@ -415,7 +457,24 @@ PYBIND11_MODULE(_peelcd, m) {
       o(i, 1) = std::uint32_t(k[i] & 0xffffffffu);
     }
     return out;
-  }, py::arg("a"), py::arg("b"), "The exact reference: every colliding triangle pair of two meshes, (k, 2)");
+  }, py::arg("mesh"), "The exact self reference: every pair of one mesh's triangles that meet and share no vertex, (k, 2)");
+  m.def("exact_pairs", [](const py::handle& ma, const py::handle& mb) {
+    const PyMesh a = as_mesh(ma, "a"), b = as_mesh(mb, "b");
+    std::vector<std::uint64_t> k;
+    {
+      py::gil_scoped_release release;
+      k = exact_colliding_pairs(*a.mesh, *b.mesh);  // one mesh twice: the mesh against a copy of itself
+    }
+    py::array_t<std::uint32_t> out({py::ssize_t(k.size()), py::ssize_t(2)});
+    auto o = out.mutable_unchecked<2>();
+    for (std::size_t i = 0; i < k.size(); ++i) {
+      o(i, 0) = std::uint32_t(k[i] >> 32);
+      o(i, 1) = std::uint32_t(k[i] & 0xffffffffu);
+    }
+    return out;
+  }, py::arg("a"), py::arg("b"),
+        "The exact reference: every colliding triangle pair of two meshes, (k, 2); one mesh given twice is tested "
+        "against a copy of itself (exact_self_pairs(mesh): its self pairs)");
 
   m.def("classes", []() {
     // The built-in classes of `peelcd classes` (geometry and self-collision, then containment):
@@ -444,7 +503,10 @@ PYBIND11_MODULE(_peelcd, m) {
     for (const OptionSpec& s : option_table()) {
       const OptionValue v = s.get(defaults);
       if (const bool* b = std::get_if<bool>(&v)) d[s.key] = *b;
-      else if (const double* x = std::get_if<double>(&v)) d[s.key] = *x;
+      else if (const double* x = std::get_if<double>(&v)) {
+        if (s.kind == OptionSpec::Kind::integer) d[s.key] = static_cast<long long>(*x);
+        else d[s.key] = *x;
+      }
       else d[s.key] = std::get<std::string>(v);
     }
     return d;

@@ -10,7 +10,7 @@
 import os as _os
 
 from ._peelcd import Detector as _Detector
-from ._peelcd import Mesh, __version__, classes, exact_pairs, gl_options, options
+from ._peelcd import Mesh, __version__, classes, exact_pairs, exact_self_pairs, gl_options, options
 from ._peelcd import World as _World
 from ._peelcd import load_mesh as _load_mesh
 from ._peelcd import load_scene as _load_scene
@@ -78,5 +78,5 @@ def collide(a, b, pose_a=None, pose_b=None, backend="cpu", **options):
     return pairs[0] if pairs else None
 
 
-__all__ = ["Detector", "Mesh", "PairResult", "Result", "World", "classes", "collide", "exact_pairs", "gl_options",
+__all__ = ["Detector", "Mesh", "PairResult", "Result", "World", "classes", "collide", "exact_pairs", "exact_self_pairs", "gl_options",
            "load_mesh", "load_scene", "options", "__version__"]

@@ -315,3 +315,34 @@ def test_meshes_pickle_and_paths_may_be_pathlib():
     path = pathlib.Path(FIXTURES) / "meshes" / "torus.obj"
     assert np.array_equal(peelcd.load_mesh(path).F, peelcd.load_mesh(str(path)).F)
     assert len(peelcd.load_scene(pathlib.Path(FIXTURES) / "scenes" / "bunny_dragon.json")) == 2
+
+
+def test_rough_edges_names_ids_duck_typed_meshes_and_strict_objects():
+    a, b = uv_sphere((0, 0, 0), 1.0, 16), uv_sphere((1.2, 0.1, 0.05), 1.0, 16)
+    assert isinstance(peelcd.options()["threads"], int) and isinstance(peelcd.options()["slope"], float)
+    w = peelcd.World()
+    w.add_rigid(a, name="ball")
+    w.add_rigid(b, name="other")
+    p = w.collide()["pairs"][0]
+    assert (p["name_a"], p["name_b"]) == ("ball", "other")
+    with pytest.raises(ValueError, match="body -1: no such body"):
+        w.set_pose(-1, np.eye(4))
+
+    class Duck:  # what a trimesh.Trimesh offers
+        vertices = a.V
+        faces = a.F.astype(np.int64)
+    exact = peelcd.exact_pairs(a, b).tolist()
+    assert peelcd.collide(Duck(), b)["triangles"].tolist() == exact
+    assert peelcd.exact_pairs(Duck(), b).tolist() == exact
+    with pytest.raises(TypeError, match="expected a peelcd.Mesh or an object with .vertices and .faces"):
+        peelcd.collide(42, b)
+    # One mesh twice: against a copy of itself (every triangle meets its own copy); its self
+    # pairs are exact_self_pairs.
+    twice = peelcd.exact_pairs(a, a)
+    assert len(twice) >= a.F.shape[0] and len(peelcd.exact_self_pairs(a)) != len(twice)
+    d = peelcd.Detector()
+    with pytest.raises(TypeError, match="objects\\[0\\]: unknown key 'colour'"):
+        d.detect([{"mesh": a, "colour": 1}, b])
+    with pytest.raises(ValueError, match="objects\\[1\\]: the name 'x' is taken"):
+        d.detect([{"mesh": a, "name": "x"}, {"mesh": b, "name": "x"}])
+    assert d.detect([{"mesh": a, "name": "p"}, {"mesh": b, "name": "q"}])["pairs"][0]["name_b"] == "q"
