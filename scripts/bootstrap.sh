@@ -1,8 +1,17 @@
 #!/usr/bin/env bash
-# Installs peelcd's build dependencies (Debian 12 packages; idempotent), then configures and
-# builds it in ./build (Release). Run as root, or with sudo available.
+# Installs peelcd's build dependencies (Debian 12 packages; idempotent), then configures ./build
+# (Release) and builds the command line (`peelcd`): what the README's first command needs.
+# --all builds everything (the tests, the Python module, which it then installs for Debian's
+# interpreter): the README's second command. Run as root, or with sudo available.
 set -euo pipefail
 cd "$(dirname "$0")/.."
+all=0
+for arg in "$@"; do
+  case "$arg" in
+    --all) all=1 ;;
+    *) echo "bootstrap: unknown argument '$arg' (expected --all)" >&2; exit 2 ;;
+  esac
+done
 
 packages=(
   build-essential cmake pkg-config python3-glad   # toolchain, glad 2 (GL loader generator)
@@ -33,6 +42,10 @@ if [ ${#missing[@]} -gt 0 ]; then
 fi
 
 cmake -S . -B build -DCMAKE_BUILD_TYPE=Release
+if [ "$all" = 0 ]; then
+  cmake --build build -j "$(nproc)" --target peelcd
+  exit 0
+fi
 cmake --build build -j "$(nproc)"
 # The Python module into Debian's interpreter's path (/usr/local/lib/python3.X/dist-packages):
 # /usr/bin/python3 -c "import peelcd" works from anywhere (docs/python.md).
