@@ -331,6 +331,12 @@ PYBIND11_MODULE(_peelcd, m) {
 
   m.def("load_mesh", [](const std::string& path) {
     return translate_errors([&] {
+      if (is_node_scene(path)) {  // several nodes would be merged into one mesh: said, not done
+        const std::size_t nodes = load_objects(scene_from_meshes({path})).size();
+        if (nodes > 1)
+          throw InputError("'" + path + "' is a glTF scene of " + std::to_string(nodes) +
+                           " mesh nodes: peelcd.load_scene(path) gives one object per node");
+      }
       Mesh mesh = load_mesh(path);
       validate_mesh(mesh, "'" + path + "'");
       return PyMesh{std::make_shared<const Mesh>(std::move(mesh))};
@@ -339,7 +345,8 @@ PYBIND11_MODULE(_peelcd, m) {
 
   m.def("load_scene", [](const std::string& path) {
     return translate_errors([&] {
-      const Scene scene = load_scene(path);
+      // A glTF / GLB file is a scene of nodes, one object each (as the command line takes it).
+      const Scene scene = is_node_scene(path) ? scene_from_meshes({path}) : load_scene(path);
       py::list out;
       for (Object& o : load_objects(scene)) {
         py::dict d;
@@ -350,7 +357,9 @@ PYBIND11_MODULE(_peelcd, m) {
       }
       return out;
     });
-  }, py::arg("path"), "A scene file's objects in world space: a list of dicts with name, mesh and self");
+  }, py::arg("path"),
+        "A scene file's (or a glTF / GLB file's: one per mesh node) objects in world space: a list of dicts with "
+        "name, mesh and self");
 
   py::class_<PyWorld>(m, "World", "Persistent bodies kept across frames (peelcd::World): rigid ones move by their pose, "
                                   "deforming ones by their vertices")

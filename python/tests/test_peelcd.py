@@ -346,3 +346,11 @@ def test_rough_edges_names_ids_duck_typed_meshes_and_strict_objects():
     with pytest.raises(ValueError, match="objects\\[1\\]: the name 'x' is taken"):
         d.detect([{"mesh": a, "name": "x"}, {"mesh": b, "name": "x"}])
     assert d.detect([{"mesh": a, "name": "p"}, {"mesh": b, "name": "q"}])["pairs"][0]["name_b"] == "q"
+
+
+def test_gltf_scenes_load_as_the_command_line_takes_them():
+    path = os.path.join(FIXTURES, "meshes", "three_box_nodes.gltf")
+    objects = peelcd.load_scene(path)
+    assert [o["name"] for o in objects] == ["left", "right", "far"]
+    with pytest.raises(ValueError, match="glTF scene of 3 mesh nodes: peelcd.load_scene"):
+        peelcd.load_mesh(path)
