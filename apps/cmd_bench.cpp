@@ -25,7 +25,13 @@ struct BenchArgs {
 };
 
 int run_bench(const BenchArgs& a) {
-  if (!a.csv.empty()) check_output_path(a.csv, "peelcd bench: --csv");
+  if (!a.csv.empty()) {
+    check_output_path(a.csv, "peelcd bench: --csv");
+    refuse_overwriting_data(a.csv, "peelcd bench: --csv");  // the built-in scenes' meshes
+    const bool builtin = a.scene == "volume" || a.scene == "cloth-self" || a.scene == "spheres" ||
+                         a.scene == "spheres-wave" || a.scene == "test1" || a.scene == "test2" || a.scene == "crowd";
+    if (!builtin) refuse_overwriting_input(a.csv, scene_inputs(load_scene(a.scene)), "peelcd bench: --csv");
+  }
   if (a.scene == "volume") {  // intersection volume: its own table (peelcd/bench/volume_bench.h)
     bench::VolumeSuite v;
     v.frames = a.frames;

@@ -27,7 +27,10 @@ struct SimArgs {
 };
 
 int run_simulate(const SimArgs& a) {
-  if (!a.csv.empty()) check_output_path(a.csv, "peelcd simulate: --csv");
+  if (!a.csv.empty()) {
+    check_output_path(a.csv, "peelcd simulate: --csv");
+    refuse_overwriting_data(a.csv, "peelcd simulate: --csv");  // the built-in scenes' meshes
+  }
   const auto seq = make_sequence(a.test, a.frames, !a.no_rigid, a.objects);
   Scene defaults;
   const DetectOptions opt = merged_options(defaults, a.detect);

@@ -7,6 +7,7 @@
 // A command that needs a data folder and finds none says which places it tried.
 #include "peelcd/io/error.h"
 
+#include <algorithm>
 #include <cstdlib>
 #include <filesystem>
 #include <string>
@@ -36,6 +37,27 @@ inline std::string data_dir(const std::string& relative) {
     return (exe_dir.parent_path() / "share" / "peelcd" / relative).string();
   throw InputError("peelcd: cannot find its data folder '" + relative + "' (tried " + tried +
                    "); set PEELCD_DATA_DIR to a folder holding fixtures/ and scripts/");
+}
+
+// Throws InputError ("<what> 'out': it is inside peelcd's own data ...") when the output `out`
+// would land in the data folder's fixtures (the built-in scenes' meshes, the goldens): an output
+// never overwrites the data a command reads. Checked before any work.
+inline void refuse_overwriting_data(const std::string& out, const std::string& what) {
+  namespace fs = std::filesystem;
+  if (out.empty() || out == "-") return;
+  std::string fixtures;
+  try {
+    fixtures = data_dir("fixtures");
+  } catch (const InputError&) {
+    return;  // no data folder: nothing of it to overwrite
+  }
+  std::error_code ec;
+  const fs::path data = fs::weakly_canonical(fixtures, ec), target = fs::weakly_canonical(out, ec);
+  if (ec) return;
+  const auto [d, t] = std::mismatch(data.begin(), data.end(), target.begin(), target.end());
+  if (d == data.end())
+    throw InputError(what + " '" + out + "': it is inside peelcd's own data ('" + data.string() +
+                     "', which the built-in scenes read): write it elsewhere");
 }
 
 }  // namespace peelcd::cli

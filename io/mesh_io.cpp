@@ -245,6 +245,9 @@ const aiScene* import_checked(const std::string& path, Assimp::Importer& importe
   std::error_code ec;
   if (!fs::exists(path, ec)) throw InputError("peelcd::load_mesh(): '" + path + "': no such file");
   if (fs::is_directory(path, ec)) throw InputError("peelcd::load_mesh(): '" + path + "': is a directory, not a mesh file");
+  // A device (/dev/zero: endless), a FIFO (blocks until written) or a socket is no mesh file.
+  if (!fs::is_regular_file(path, ec))
+    throw InputError("peelcd::load_mesh(): '" + path + "': not a regular file (a device, a FIFO or a socket)");
   if (fs::file_size(path, ec) == 0) throw InputError("peelcd::load_mesh(): '" + path + "': the file is empty");
   std::string ext = std::filesystem::path(path).extension().string();
   for (char& c : ext) c = char(std::tolower(static_cast<unsigned char>(c)));

@@ -161,6 +161,8 @@ Scene load_scene(const std::string& path) {
   std::error_code ec;
   if (!fs::exists(path, ec)) throw InputError("peelcd::load_scene(): '" + path + "': no such file");
   if (fs::is_directory(path, ec)) throw InputError("peelcd::load_scene(): '" + path + "': is a directory");
+  if (!fs::is_regular_file(path, ec))
+    throw InputError("peelcd::load_scene(): '" + path + "': not a regular file (a device, a FIFO or a socket)");
   std::ifstream in(path);
   if (!in) throw InputError("peelcd::load_scene(): '" + path + "': cannot open it");
   std::stringstream ss;

@@ -431,3 +431,31 @@ expect("explain: page folder not empty" 2 "not an empty folder"
 expect("detect --explain-misses" 3 "explain: the first 3 missed pair.*bunny:[0-9]+,dragon:[0-9]+: missed: "
        detect ${scene} --paper --check --max-miss 1 --explain-misses 3)
 expect("explain-misses needs check" 2 "requires --check" detect ${scene} --explain-misses 3)
+# Outputs never overwrite inputs or peelcd's own data (bench and simulate like detect and sweep),
+# and a device or a FIFO is no mesh: each refused before any work, the files untouched.
+file(MAKE_DIRECTORY ${WORK}/own/meshes ${WORK}/own/scenes)
+file(COPY ${FIXTURES}/meshes/bunny_3k.obj ${FIXTURES}/meshes/dragon_3k.obj DESTINATION ${WORK}/own/meshes)
+file(COPY ${scene} DESTINATION ${WORK}/own/scenes)
+file(SHA256 ${WORK}/own/scenes/bunny_dragon.json scene_sum)
+file(SHA256 ${WORK}/own/meshes/bunny_3k.obj mesh_sum)
+expect("bench --csv onto its scene" 2 "it is the input" bench ${WORK}/own/scenes/bunny_dragon.json --frames 1
+       --csv ${WORK}/own/scenes/bunny_dragon.json)
+expect("bench --csv onto a mesh it uses" 2 "it is the input" bench ${WORK}/own/scenes/bunny_dragon.json --frames 1
+       --csv ${WORK}/own/meshes/bunny_3k.obj)
+file(SHA256 ${WORK}/own/scenes/bunny_dragon.json scene_after)
+file(SHA256 ${WORK}/own/meshes/bunny_3k.obj mesh_after)
+if(NOT scene_after STREQUAL scene_sum OR NOT mesh_after STREQUAL mesh_sum)
+  message(SEND_ERROR "bench --csv changed its input")
+endif()
+file(SHA256 ${FIXTURES}/meshes/velociraptor.obj raptor_sum)
+expect("simulate --csv onto the built-in fixture" 2 "inside peelcd's own data" simulate test1 --frames 1
+       --csv ${FIXTURES}/meshes/velociraptor.obj)
+expect("bench --csv onto the built-in fixture" 2 "inside peelcd's own data" bench test1 --frames 1
+       --csv ${FIXTURES}/meshes/velociraptor.obj)
+file(SHA256 ${FIXTURES}/meshes/velociraptor.obj raptor_after)
+if(NOT raptor_after STREQUAL raptor_sum)
+  message(SEND_ERROR "simulate/bench --csv changed the built-in fixture")
+endif()
+expect("a device as a mesh" 2 "'/dev/zero': not a regular file" detect ${FIXTURES}/meshes/torus.obj /dev/zero)
+execute_process(COMMAND mkfifo ${WORK}/pipe.obj)
+expect("a FIFO as a mesh" 2 "pipe.obj': not a regular file" detect ${FIXTURES}/meshes/torus.obj ${WORK}/pipe.obj)

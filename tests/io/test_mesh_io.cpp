@@ -1,7 +1,10 @@
 #include "peelcd/io/error.h"
 #include "peelcd/io/mesh_io.h"
+#include "peelcd/io/scene.h"
 
 #include <catch2/catch.hpp>
+
+#include <sys/stat.h>
 
 #include <filesystem>
 #include <fstream>
@@ -98,6 +101,14 @@ TEST_CASE("bad mesh files give an error that names the file and the problem", "[
   fs::create_directories(dir / "a_folder.obj");
   require_input_error((dir / "missing.obj").string(), "no such file");
   require_input_error((dir / "a_folder.obj").string(), "is a directory");
+  // A device (endless) and a FIFO (blocks until written): refused before any read.
+  require_input_error("/dev/zero", "not a regular file");
+  const fs::path fifo = dir / "pipe.obj";
+  fs::remove(fifo);
+  REQUIRE(::mkfifo(fifo.c_str(), 0600) == 0);
+  require_input_error(fifo.string(), "not a regular file");
+  CHECK_THROWS_WITH(load_scene(fifo.string()), Catch::Contains("not a regular file"));
+  fs::remove(fifo);
   require_input_error(write_temp("empty.obj", ""), "the file is empty");
   require_input_error(write_temp("garbled.ply", "ply\nformat ascii 1.0\nelement vertex 3\nend_header\n0 0\n"), "cannot read");
   require_input_error(write_temp("unknown.xyz123", "hello"), "cannot read");
