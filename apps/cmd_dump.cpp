@@ -98,6 +98,33 @@ struct GoldenArgs {
 // ctest's SKIP_RETURN_CODE for a run that cannot take place here (the reason on stderr).
 constexpr int kExitSkipped = 77;
 
+// A report folder checked before any work: a folder (or nothing yet) that is not a dump and not
+// inside one of `inputs` (the goldens, the dumps under test). Throws InputError naming it.
+void check_report_dir(const std::string& report, const std::vector<std::string>& inputs, const std::string& what) {
+  namespace fs = std::filesystem;
+  check_output_dir(report, what);
+  std::error_code ec;
+  if (fs::exists(fs::path(report) / "meta.json", ec))
+    throw InputError(what + " '" + report + "': it holds a dump (meta.json): a report goes elsewhere");
+  const fs::path target = fs::weakly_canonical(report, ec);
+  for (const std::string& in : inputs) {
+    const fs::path dir = fs::weakly_canonical(in, ec);
+    if (ec) continue;
+    const auto [d, t] = std::mismatch(dir.begin(), dir.end(), target.begin(), target.end());
+    if (d == dir.end())
+      throw InputError(what + " '" + report + "': it is inside '" + in + "', which is under test: a report goes elsewhere");
+  }
+}
+
+// A case's report folder made fresh: an earlier run's pictures there are removed first (the
+// folder holds a report, never a dump: check_report_dir()).
+void fresh_report(const std::string& dir) {
+  namespace fs = std::filesystem;
+  std::error_code ec;
+  if (fs::exists(fs::path(dir) / "meta.json", ec)) throw InputError("peelcd: '" + dir + "' holds a dump, not a report");
+  fs::remove_all(dir, ec);
+}
+
 std::vector<std::string> golden_cases(const GoldenArgs& a) {
   return a.cases.empty() ? oracle::golden_case_names(a.dir) : a.cases;
 }
@@ -121,6 +148,7 @@ int run_golden_record(const GoldenArgs& a) {
 }
 
 int run_golden_compare(const GoldenArgs& a) {
+  check_report_dir(a.report, {a.dir}, "peelcd golden compare: --report");
   Runner runner = make_runner(a.backend);
   const std::string renderer = runner.renderer();
   if (!a.require_renderer.empty() && renderer.find(a.require_renderer) == std::string::npos) {
@@ -157,6 +185,7 @@ int run_golden_compare(const GoldenArgs& a) {
         continue;
       }
       case_ok = false;
+      fresh_report(a.report + "/" + name);
       std::printf("%s", oracle::write_report(expected, actual, c, label, a.report + "/" + name).c_str());
       break;
     }
@@ -194,6 +223,7 @@ int run_compare_dumps(const CompareDumpsArgs& a) {
   if (a.tier == "hardware") tier = oracle::Tier::hardware;
   else if (a.tier != "exact")
     throw InputError("peelcd golden compare-dumps: --tier: unknown tier \"" + a.tier + "\" (expected exact or hardware)");
+  check_report_dir(a.report, {a.expected, a.actual}, "peelcd golden compare-dumps: --report");
   const oracle::Dump expected = oracle::read_dump(a.expected);
   const oracle::Dump actual = oracle::read_dump(a.actual);
   const oracle::Comparison c = oracle::compare_dumps(expected, actual, tier);
@@ -202,6 +232,7 @@ int run_compare_dumps(const CompareDumpsArgs& a) {
     std::printf("%s", oracle::report_text(c, label, tier).c_str());
     return 0;
   }
+  fresh_report(a.report);
   std::printf("%s", oracle::write_report(expected, actual, c, label, a.report).c_str());
   return 1;
 }

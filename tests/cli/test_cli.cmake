@@ -459,3 +459,20 @@ endif()
 expect("a device as a mesh" 2 "'/dev/zero': not a regular file" detect ${FIXTURES}/meshes/torus.obj /dev/zero)
 execute_process(COMMAND mkfifo ${WORK}/pipe.obj)
 expect("a FIFO as a mesh" 2 "pipe.obj': not a regular file" detect ${FIXTURES}/meshes/torus.obj ${WORK}/pipe.obj)
+# Report folders: refused before any work when they are a file, hold a dump, or lie inside what
+# is under test; a reused one holds only the new report.
+file(WRITE ${WORK}/report_is_a_file "x")
+set(g ${FIXTURES}/golden)
+expect("golden compare --report onto a file" 2 "exists and is not a folder"
+       golden compare boxes_crossing --backend cpu --report ${WORK}/report_is_a_file)
+expect("golden compare --report inside the goldens" 2 "which is under test"
+       golden compare boxes_crossing --backend cpu --report ${g}/boxes_crossing/report)
+expect("compare-dumps --report onto a dump" 2 "holds a dump"
+       golden compare-dumps ${g}/boxes_crossing/expected ${g}/boxes_touching_ties/expected --report ${g}/boxes_crossing/expected)
+file(MAKE_DIRECTORY ${WORK}/reused)
+file(WRITE ${WORK}/reused/stale_layer00_error.png "an earlier run's picture")
+expect("compare-dumps into a reused report folder" 1 "DIFFERENT"
+       golden compare-dumps ${g}/boxes_crossing/expected ${g}/boxes_touching_ties/expected --report ${WORK}/reused)
+if(EXISTS ${WORK}/reused/stale_layer00_error.png OR NOT EXISTS ${WORK}/reused/report.txt)
+  message(SEND_ERROR "a reused report folder kept an earlier run's files, or lacks the new report")
+endif()
