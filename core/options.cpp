@@ -1,6 +1,7 @@
 #include "peelcd/core/options.h"
 
 #include <cmath>
+#include <cstdio>
 #include <cstdlib>
 #include <limits>
 #include <stdexcept>
@@ -66,7 +67,7 @@ const std::vector<OptionSpec> kTable = {
      K::number, -kInf, kInf, "must be finite", "", "", true, [](const DetectOptions& o) { return OptionValue(o.roll); },
      [](DetectOptions& o, const OptionValue& v) { o.roll = num(v); }},
     {"resolution", "", "--res", "Forced N x N texture per ROI (default 0: tiles by need within the budget)",
-     K::integer, 0, 1 << 20, "must be >= 0 (0 = from the budget)", "", "", true,
+     K::integer, 0, 32768, "must be within 0..32768 (0 = from the budget; a stage may allow less: its largest texture, 16384 on llvmpipe)", "", "", true,
      [](const DetectOptions& o) { return OptionValue(double(o.resolution)); },
      [](DetectOptions& o, const OptionValue& v) { o.resolution = int(num(v)); }},
     {"budget", "", "--budget", "The frame's texture budget: N x N texels shared by the ROIs (default 512)",
@@ -169,8 +170,11 @@ std::string check_option(const OptionSpec& spec, const OptionValue& value) {
     case K::number: {
       if (!std::holds_alternative<double>(value)) return "must be a number";
       const double x = num(value);
-      if (!std::isfinite(x)) return spec.kind == K::integer ? spec.range : "must be finite";
-      if (x < spec.min || x > spec.max || (spec.kind == K::integer && x != std::floor(x))) return spec.range;
+      char got[48];
+      std::snprintf(got, sizeof got, ", got %.17g", x);
+      if (!std::isfinite(x)) return std::string("must be finite") + got;
+      if (spec.kind == K::integer && x != std::floor(x)) return std::string("must be a whole number") + got;
+      if (x < spec.min || x > spec.max) return spec.range + std::string(got);
       return {};
     }
   }

@@ -120,7 +120,8 @@ Scene parse_scene(const std::string& text, const std::string& path, const std::s
         value = c.string(j, where);
         break;
       default:
-        if (!j.is_number()) c.fail(where, spec.kind == OptionSpec::Kind::integer ? spec.range : "must be a number");
+        if (!j.is_number())
+          c.fail(where, std::string("must be a number, got ") + (j.is_string() ? "the string " + j.dump() : std::string("a ") + j.type_name()));
         value = j.get<double>();
     }
     if (const std::string problem = check_option(spec, value); !problem.empty()) c.fail(where, problem);

@@ -76,11 +76,16 @@ TEST_CASE("bad scenes name the file, the key and the problem", "[scene]") {
   CHECK_THAT(error_of(R"({"objects":[{"mesh":"a.obj"}],"budget":0})"), Catch::Contains("budget: must be positive"));
   CHECK_THAT(error_of(R"({"objects":[{"mesh":"a.obj"}],"epsilon":-1})"), Catch::Contains("epsilon"));
   CHECK_THAT(error_of(R"({"objects":[{"mesh":"a.obj"}],"view":{"phi":100}})"), Catch::Contains("view.phi"));
-  CHECK_THAT(error_of(R"({"objects":[{"mesh":"a.obj"}],"views":4})"), Catch::Contains("views: must be 1, 2 or 3"));
+  CHECK_THAT(error_of(R"({"objects":[{"mesh":"a.obj"}],"views":4})"), Catch::Contains("views: must be 1, 2 or 3, got 4"));
   CHECK_THAT(error_of(R"({"objects":[{"mesh":"a.obj"}],"edge_texels":-1})"), Catch::Contains("edge_texels: must be >= 0"));
   CHECK_THAT(error_of(R"({"objects":[{"mesh":"a.obj"}],"edge_texels":"many"})"), Catch::Contains("edge_texels: must be a number"));
   CHECK_THAT(error_of(R"({"objects":[{"mesh":"a.obj"}],"views":0})"), Catch::Contains("views: must be 1, 2 or 3"));
-  CHECK_THAT(error_of(R"({"objects":[{"mesh":"a.obj"}],"views":2.5})"), Catch::Contains("views: must be 1, 2 or 3"));
+  CHECK_THAT(error_of(R"({"objects":[{"mesh":"a.obj"}],"resolution":"64"})"),
+             Catch::Contains("resolution: must be a number, got the string \"64\""));
+  CHECK_THAT(error_of(R"({"objects":[{"mesh":"a.obj"}],"resolution":64.5})"), Catch::Contains("must be a whole number, got 64.5"));
+  CHECK_THAT(error_of(R"({"objects":[{"mesh":"a.obj"}],"resolution":1e20})"),
+             Catch::Contains("resolution: must be within 0..32768") && Catch::Contains("got 1e+20"));
+  CHECK_THAT(error_of(R"({"objects":[{"mesh":"a.obj"}],"views":2.5})"), Catch::Contains("views: must be a whole number, got 2.5"));
   CHECK_THAT(error_of(R"({"objects":[{"mesh":"a.obj","transform":{"translate":[1,2]}}]})"),
              Catch::Contains("translate: must be an array of 3 numbers"));
   CHECK_THAT(error_of(R"({"objects":[{"mesh":"a.obj","transform":{"scale":0}}]})"), Catch::Contains("scale: must be positive"));
