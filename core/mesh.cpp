@@ -9,10 +9,12 @@ namespace peelcd {
 Vec3 Transform::apply(const Vec3& p) const {
   Vec3 q = p * scale;
   if (degrees != 0.0) {
-    const double n = axis.norm();
-    if (!(n > 0.0)) throw std::invalid_argument("peelcd::Transform: rotation axis is zero");
+    // Normalized through its largest component: an axis like (1e300, 1e300, 0), whose norm
+    // overflows, still gives its direction.
+    const double m = axis.cwiseAbs().maxCoeff();
+    if (!(m > 0.0) || !std::isfinite(m)) throw std::invalid_argument("peelcd::Transform: rotation axis is zero or not finite");
     const double rad = degrees * M_PI / 180.0;
-    q = Eigen::AngleAxisd(rad, axis / n) * q;
+    q = Eigen::AngleAxisd(rad, (axis / m).normalized()) * q;
   }
   return q + translate;
 }

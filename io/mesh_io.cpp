@@ -33,6 +33,11 @@ void append_node(const aiScene* scene, const aiNode* node, const aiMatrix4x4& pa
                  std::unordered_map<Vec3, std::uint32_t, PositionHash>& weld, const std::string& path,
                  bool recurse = true) {
   const aiMatrix4x4 xf = parent * node->mTransformation;
+  // A singular node transform (a scale of 0) flattens or collapses its meshes: refused, as a
+  // scene file's scale 0 is.
+  if (node->mNumMeshes > 0 && !(std::abs(xf.Determinant()) > 0.0f))
+    throw InputError("peelcd::load_mesh(): '" + path + "': node '" + std::string(node->mName.C_Str()) +
+                     "': its transform is singular (a scale of 0): it would collapse its meshes");
   for (unsigned i = 0; i < node->mNumMeshes; ++i) {
     const aiMesh* m = scene->mMeshes[node->mMeshes[i]];
     std::vector<std::uint32_t> remap(m->mNumVertices);

@@ -83,13 +83,18 @@ Scene parse_scene(const std::string& text, const std::string& path, const std::s
       if (t.contains("scale")) {
         so.transform.scale = c.number(t["scale"], tw + ".scale");
         if (!(so.transform.scale > 0)) c.fail(tw + ".scale", "must be positive");
+        // The image stage works in float: a scale below float's smallest normal number shrinks
+        // any mesh to a point there.
+        if (so.transform.scale < 1.1754943508222875e-38)
+          c.fail(tw + ".scale", "must be at least 1.2e-38 (float's smallest normal number: a smaller one shrinks the mesh to a point)");
       }
       if (t.contains("rotate")) {
         const json& r = t["rotate"];
         c.only_keys(r, tw + ".rotate", {"axis", "degrees"});
         if (r.contains("axis")) so.transform.axis = c.vec3(r["axis"], tw + ".rotate.axis");
         if (r.contains("degrees")) so.transform.degrees = c.number(r["degrees"], tw + ".rotate.degrees");
-        if (so.transform.degrees != 0 && !(so.transform.axis.norm() > 0)) c.fail(tw + ".rotate.axis", "must not be zero");
+        if (so.transform.degrees != 0 && !(so.transform.axis.cwiseAbs().maxCoeff() > 0))
+          c.fail(tw + ".rotate.axis", "must not be zero");
       }
       if (t.contains("translate")) so.transform.translate = c.vec3(t["translate"], tw + ".translate");
     }
@@ -229,6 +234,19 @@ std::vector<Object> load_objects(const Scene& scene) {
       } catch (const std::invalid_argument& e) {
         throw InputError(std::string("peelcd::load_objects(): ") + e.what());
       }
+      // A mesh with extent that the transform shrinks to a point in float (the image stage's
+      // precision) is refused: it would be reported as inside whatever holds that point.
+      const auto float_extent = [](const Mesh& m) {
+        Eigen::Vector3f lo = Eigen::Vector3f::Constant(INFINITY), hi = -lo;
+        for (const Vec3& v : m.vertices) {
+          lo = lo.cwiseMin(v.cast<float>());
+          hi = hi.cwiseMax(v.cast<float>());
+        }
+        return (hi - lo).maxCoeff();
+      };
+      if (float_extent(raw) > 0.0f && !(float_extent(o.mesh) > 0.0f))
+        throw InputError("peelcd::load_objects(): " + where + ": the transform shrinks the mesh to a point (in float, the "
+                         "image stage's precision)");
       out.push_back(std::move(o));
     }
   }

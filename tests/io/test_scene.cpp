@@ -1,4 +1,5 @@
 #include "peelcd/io/error.h"
+#include "peelcd/io/mesh_io.h"
 #include "peelcd/io/scene.h"
 
 #include <catch2/catch.hpp>
@@ -244,5 +245,28 @@ TEST_CASE("cost models round-trip through a calibration file, and a bad or forei
   CHECK_THROWS_WITH(read_cost_models(write(R"({"format":"peelcd.costs/1","backend":"cpu","renderer":"r",)"
                                            R"("image":{"view_ms":-1},"exact":{}})")),
                     Catch::Contains("image.view_ms: must be a finite number >= 0"));
+  std::filesystem::remove_all(dir);
+}
+
+TEST_CASE("transforms that collapse geometry are refused: a tiny scale, a glTF node of scale 0", "[scene]") {
+  const std::string dir = std::filesystem::temp_directory_path() / ("peelcd_collapse_" + std::to_string(::getpid()));
+  std::filesystem::create_directories(dir);
+  const std::string fixtures = PEELCD_FIXTURES;
+  const auto scene_with = [&](const std::string& transform) {
+    return R"({"objects":[{"mesh":")" + fixtures + R"(/meshes/torus.obj","transform":)" + transform + R"(}]})";
+  };
+  CHECK_THAT(error_of(scene_with(R"({"scale":1e-320})")), Catch::Contains("scale: must be at least 1.2e-38"));
+  // A rotation axis whose norm overflows still has a direction: the torus is turned, not lost.
+  const Scene s = parse_scene(scene_with(R"({"rotate":{"axis":[1e300,1e300,0],"degrees":90}})"), "t.json", ".");
+  const Mesh turned = load_objects(s).at(0).mesh;
+  const Scene plain = parse_scene(scene_with(R"({"rotate":{"axis":[1,1,0],"degrees":90}})"), "t.json", ".");
+  const Mesh expected = load_objects(plain).at(0).mesh;
+  REQUIRE(turned.vertices.size() == expected.vertices.size());
+  for (std::size_t i = 0; i < turned.vertices.size(); ++i) CHECK((turned.vertices[i] - expected.vertices[i]).norm() < 1e-12);
+  // A glTF node of scale 0.
+  nlohmann::json gltf = nlohmann::json::parse(std::ifstream(fixtures + "/meshes/three_box_nodes.gltf"));
+  gltf["nodes"][1]["scale"] = {0, 0, 0};
+  std::ofstream(dir + "/flat.gltf") << gltf.dump();
+  CHECK_THROWS_WITH(load_mesh_nodes(dir + "/flat.gltf"), Catch::Contains("node 'right': its transform is singular"));
   std::filesystem::remove_all(dir);
 }
