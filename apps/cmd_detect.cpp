@@ -3,6 +3,8 @@
 #include "peelcd/io/result_json.h"
 #include "peelcd/oracle/explain.h"
 
+#include <cstring>
+
 namespace peelcd::cli {
 
 // A pair's relation when the contacts do not say it all (containment, unknown), and its volume
@@ -97,8 +99,11 @@ int run_detect(const DetectArgs& a) {
     else
       std::fprintf(human, "point sampling  view theta=%g phi=%g roll=%g  views=%d  ids=%s  peel=%s  slope=%g  cull=%s\n", opt.theta,
                   opt.phi, opt.roll, opt.views, to_string(opt.ids), to_string(opt.peel), opt.slope, to_string(opt.cull));
+    std::size_t culled_out = 0;  // pairs with no triangle of one object near the other: no path ran
+    for (const PairResult& p : result.pairs) culled_out += std::strcmp(pair_path(p), "none") == 0 ? 1 : 0;
     std::fprintf(human, "stage %s: %zu of %zu ROIs by the exact CPU path, %zu peeled", to_string(opt.stage), result.rois_exact,
-                result.pairs.size(), result.pairs.size() - result.rois_exact);
+                result.pairs.size(), result.pairs.size() - result.rois_exact - culled_out);
+    if (culled_out) std::fprintf(human, ", %zu with nothing to test (culled)", culled_out);
     if (opt.stage == Stage::automatic && !runner.stage->cost_models().source.empty())
       std::fprintf(human, " (router models from %s)", runner.stage->cost_models().source.c_str());
     if (result.views_exhaustive > 0)
@@ -111,20 +116,30 @@ int run_detect(const DetectArgs& a) {
       std::fprintf(human, " (%zu views resolved on the host: a texel deeper than the GPU resolve's %d fragments)",
                    result.views_host_resolved, PEELCD_GPU_RESOLVE_DEPTH);
     std::fprintf(human, "\n");
-    if (result.pairs.empty()) std::fprintf(human, "no overlapping bounding boxes: no GL work\n");
+    if (result.pairs.empty())
+      std::fprintf(human, objects.size() == 1 && !opt.self && !objects[0].self
+                              ? "one object, no pair: --self tests it against itself\n"
+                              : "no overlapping bounding boxes: no GL work\n");
     std::size_t colliding = 0, colliding_objects = 0;
     for (const PairResult& p : result.pairs) {
       colliding += p.colliding.size();
       colliding_objects += p.is_collision() ? 1 : 0;
-      if (p.exact_stage) {
+      if (std::strcmp(pair_path(p), "none") == 0) {
+        std::fprintf(human, "%s x %s: no triangle of one near the other (culled: %zu+%zu tris in the ROI), nothing drawn "
+                    "or tested\n",
+                    objects[p.object_a].name.c_str(), objects[p.object_b].name.c_str(), p.triangles_in_roi_a,
+                    p.triangles_in_roi_b);
+      } else if (p.exact_stage) {
         std::fprintf(human, "%s x %s: exact CPU path (predicted %.3f ms; image stage %.3f ms), %zu+%zu tris in the ROI, "
                     "%zu candidates, %zu colliding\n",
                     objects[p.object_a].name.c_str(), objects[p.object_b].name.c_str(), p.predicted_exact_ms,
                     p.predicted_image_ms, p.triangles_in_roi_a, p.triangles_in_roi_b, p.candidates, p.colliding.size());
       } else {
-        std::fprintf(human, "%s x %s: ROI %dx%d, eps %.3g, drawn %zu+%zu of %zu+%zu tris, %d layers, %zu PCS, %zu candidates, %zu colliding\n",
+        char eps[48] = "";  // point sampling's threshold; the conservative stage has none
+        if (!opt.conservative) std::snprintf(eps, sizeof eps, ", eps %.3g", p.epsilon);
+        std::fprintf(human, "%s x %s: ROI %dx%d%s, drawn %zu+%zu of %zu+%zu tris, %d layers, %zu PCS, %zu candidates, %zu colliding\n",
                     objects[p.object_a].name.c_str(), objects[p.object_b].name.c_str(), p.resolution,
-                    p.resolution, p.epsilon, p.triangles_drawn_a, p.triangles_drawn_b, p.triangles_in_roi_a,
+                    p.resolution, eps, p.triangles_drawn_a, p.triangles_drawn_b, p.triangles_in_roi_a,
                     p.triangles_in_roi_b, p.layers,
                     p.pcs_count, p.candidates, p.colliding.size());
         if (p.views_exhaustive > 0)  // a fallback is never silent

@@ -45,13 +45,18 @@ std::vector<std::pair<std::string, DetectOptions>> class_configs() {
 }
 
 int run_classes(const ClassesArgs& a) {
+  std::vector<GeometryClass> classes = geometry_classes(a.grid);
+  for (GeometryClass& g : self_classes()) classes.push_back(std::move(g));  // Object::self set
+  if (!a.only.empty() && std::none_of(classes.begin(), classes.end(), [&](const GeometryClass& g) { return g.name == a.only; })) {
+    std::string names;
+    for (const GeometryClass& g : classes) names += (names.empty() ? "" : ", ") + g.name;
+    throw InputError("peelcd classes: --class: no class named \"" + a.only + "\" (the classes: " + names + ")");
+  }
   Runner runner = make_runner(a.backend, gl::GlOptions{});
   std::printf("peelcd classes: %s (%s); median of %d frames; grid %dx%d\n", runner.backend().c_str(),
               runner.renderer().c_str(), a.repeat, a.grid, a.grid);
   std::printf("%-28s %-32s %7s %7s %7s %9s %9s %11s %9s\n", "class", "configuration", "exact", "found", "missed",
               "miss %", "len miss%", "candidates", "ms");
-  std::vector<GeometryClass> classes = geometry_classes(a.grid);
-  for (GeometryClass& g : self_classes()) classes.push_back(std::move(g));  // Object::self set
   for (const GeometryClass& g : classes) {
     if (!a.only.empty() && g.name != a.only) continue;
     for (const auto& [name, opt] : class_configs()) {

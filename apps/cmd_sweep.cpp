@@ -1,5 +1,8 @@
 // peelcd sweep (the command line; shared parts in cli.h).
 #include "cli.h"
+
+#include <algorithm>
+#include <cstring>
 #include "peelcd/eval/sweep.h"
 
 namespace peelcd::cli {
@@ -154,11 +157,13 @@ int run_sweep_command(const SweepArgs& a) {
 
   std::printf("sweep: %s, %zu views per configuration (theta step %g, phi step %g), %s\n", a.scene.c_str(),
               directions.size(), a.theta_step, a.phi_step, runner.renderer().c_str());
-  std::printf("%-46s %9s %9s %9s %6s %11s %6s %11s %11s\n", "configuration", "avg miss", "max miss", "min miss",
+  int width = int(std::strlen("configuration"));  // the labels' column as wide as the longest
+  for (const SweepConfig& c : configs) width = std::max(width, int(c.label().size()));
+  std::printf("%-*s %9s %9s %9s %6s %11s %6s %11s %11s\n", width, "configuration", "avg miss", "max miss", "min miss",
               "false", "candidates", "eff", "median ms", "mean ms");
   for (std::size_t c = 0; c < configs.size(); ++c) {
     const SweepSummary s = summarize(rows, c);
-    std::printf("%-46s %8.2f%% %8.2f%% %8.2f%% %6zu %11.0f %5.1f%% %11.2f %11.2f\n", configs[c].label().c_str(),
+    std::printf("%-*s %8.2f%% %8.2f%% %8.2f%% %6zu %11.0f %5.1f%% %11.2f %11.2f\n", width, configs[c].label().c_str(),
                 100 * s.avg_miss, 100 * s.max_miss, 100 * s.min_miss, s.false_contacts, s.mean_candidates,
                 100 * s.mean_efficiency, s.median_total_ms, s.mean_total_ms);
   }

@@ -4,6 +4,10 @@
 #include "peelcd/gl/context.h"
 #include "peelcd/version.h"
 
+#include <cerrno>
+#include <cstdio>
+#include <cstring>
+
 namespace peelcd::cli {
 namespace {
 
@@ -64,9 +68,18 @@ int main(int argc, char** argv) {
     app.exit(e);
     return kExitBadInput;
   }
+  // What a command printed must have reached its destination (`> /dev/full`, a closed pipe):
+  // a failed write is an error, not a success.
+  const auto flushed = [](int rc) {
+    if (std::fflush(stdout) != 0 || std::ferror(stdout)) {
+      std::fprintf(stderr, "error: peelcd: writing the standard output failed: %s\n", std::strerror(errno));
+      return rc ? rc : kExitBadInput;
+    }
+    return rc;
+  };
   try {
     for (const Command& c : commands)  // in registration order: a sub-subcommand before its parent
-      if (*c.app) return c.run();
+      if (*c.app) return flushed(c.run());
   } catch (const InputError& e) {
     std::fprintf(stderr, "error: %s\n", e.what());
     return kExitBadInput;

@@ -11,7 +11,9 @@ namespace peelcd {
 
 std::string SweepConfig::label() const {
   std::ostringstream s;
-  s << resolution << " " << to_string(ids) << " " << mode() << " slope=" << slope << " views=" << views << " cull=" << to_string(cull);
+  s << resolution << " " << to_string(ids) << " " << mode();
+  if (mode() != "conservative") s << " slope=" << slope;  // point sampling's; the conservative stage has none
+  s << " views=" << views << " cull=" << to_string(cull);
   return s.str();
 }
 

@@ -256,6 +256,17 @@ const aiScene* import_checked(const std::string& path, Assimp::Importer& importe
   if (fs::file_size(path, ec) == 0) throw InputError("peelcd::load_mesh(): '" + path + "': the file is empty");
   std::string ext = std::filesystem::path(path).extension().string();
   for (char& c : ext) c = char(std::tolower(static_cast<unsigned char>(c)));
+  if (ext == ".obj") {  // a text format: binary data is said as such (assimp would find "no triangles")
+    std::ifstream in(path, std::ios::binary);
+    char buf[65536];
+    in.read(buf, sizeof buf);
+    for (std::streamsize i = 0; i < in.gcount(); ++i) {
+      const unsigned char ch = static_cast<unsigned char>(buf[i]);
+      if (ch == 0 || (ch < 0x20 && ch != '\t' && ch != '\n' && ch != '\r' && ch != '\f' && ch != '\v'))
+        throw InputError("peelcd::load_mesh(): '" + path + "': cannot read: binary data at byte " + std::to_string(i) +
+                         " (an OBJ file is text)");
+    }
+  }
   if (ext == ".off") return nullptr;
   if (const std::string problem = ply_header_problem(path); !problem.empty())
     throw InputError("peelcd::load_mesh(): '" + path + "': " + problem);

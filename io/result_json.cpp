@@ -3,6 +3,8 @@
 #include "peelcd/io/options_json.h"
 #include "peelcd/version.h"
 
+#include <cstring>
+
 namespace peelcd {
 
 namespace {
@@ -36,7 +38,7 @@ nlohmann::json to_json(const FrameResult& r, const std::vector<Object>& objects,
                      {"region", p.region.empty() ? nlohmann::json(nullptr)
                                                  : nlohmann::json{{"min", vec(p.region.lo)}, {"max", vec(p.region.hi)}}},
                      {"triangles_in_roi", {p.triangles_in_roi_a, p.triangles_in_roi_b}},
-                     {"stage", p.exact_stage ? "exact" : "image"},
+                     {"stage", p.exact_stage ? "exact" : std::strcmp(pair_path(p), "none") == 0 ? "none" : "image"},
                      {"path", pair_path(p)},
                      {"path_reason", pair_path_reason(p, o)},
                      {"views_exhaustive", p.views_exhaustive},

@@ -476,3 +476,20 @@ expect("compare-dumps into a reused report folder" 1 "DIFFERENT"
 if(EXISTS ${WORK}/reused/stale_layer00_error.png OR NOT EXISTS ${WORK}/reused/report.txt)
   message(SEND_ERROR "a reused report folder kept an earlier run's files, or lacks the new report")
 endif()
+# Output that says what happened: a write that fails is an error; an unknown class is refused;
+# a random binary .obj is said to be binary; one object alone points at --self; the conservative
+# mode prints no epsilon.
+execute_process(COMMAND sh -c "'${PEELCD}' detect '${scene}' --list > /dev/full" RESULT_VARIABLE rc ERROR_VARIABLE err)
+if(NOT rc EQUAL 2 OR NOT err MATCHES "writing the standard output failed")
+  message(SEND_ERROR "detect --list > /dev/full: exit ${rc}, expected 2 and a message: ${err}")
+endif()
+expect("classes --class unknown" 2 "no class named \"bogus\"" classes --class bogus)
+string(ASCII 1 2 3 binary_bytes)
+file(WRITE ${WORK}/binary.obj "v 0 0 0\n${binary_bytes}garbage")
+expect("binary obj" 2 "binary.obj': cannot read: binary data at byte" detect ${WORK}/binary.obj ${FIXTURES}/meshes/torus.obj)
+file(WRITE ${WORK}/one.json "{\"objects\": [{\"mesh\": \"${FIXTURES}/meshes/torus.obj\"}]}")
+expect("one object" 0 "one object, no pair: --self tests it against itself" detect ${WORK}/one.json)
+execute_process(COMMAND ${PEELCD} detect ${scene} --stage image OUTPUT_VARIABLE out)
+if(out MATCHES "eps ")
+  message(SEND_ERROR "conservative detect printed an epsilon: ${out}")
+endif()
