@@ -2,6 +2,10 @@
 #include "cli.h"
 
 #include <algorithm>
+#include <cstdio>
+#include <fstream>
+#include <sstream>
+#include <map>
 #include <cstring>
 #include "peelcd/eval/sweep.h"
 
@@ -51,12 +55,19 @@ int run_sweep_merge(const SweepMergeArgs& a) {
   std::string header;
   std::vector<std::string> labels;
   std::vector<Row> rows;
+  std::string sweep, sweep_file;                           // the sweep every row must belong to
+  std::map<std::size_t, std::string> shard_files;          // shard K -> its file
+  std::size_t shard_count = 0;                             // N of "K/N"
+  std::string shard_count_file;
   for (const std::string& path : a.inputs) {
     std::ifstream in(path);
     if (!in) throw InputError("peelcd sweep merge: '" + path + "': cannot read it");
     std::string first, line;
     if (!std::getline(in, first) || first.rfind("config,", 0) != 0)
       throw InputError("peelcd sweep merge: '" + path + "': not a sweep CSV (no \"config,...\" header)");
+    if (first.size() < 12 || first.compare(first.size() - 12, 12, ",sweep,shard") != 0)
+      throw InputError("peelcd sweep merge: '" + path + "': no sweep and shard columns (written by an older peelcd): "
+                       "run the sweep again");
     if (header.empty()) header = first;
     else if (first != header)
       throw InputError("peelcd sweep merge: '" + path + "': its columns differ from '" + a.inputs[0] + "'");
@@ -81,6 +92,28 @@ int run_sweep_merge(const SweepMergeArgs& a) {
       } catch (const std::exception&) {
         throw InputError(where + ": malformed theta or phi");
       }
+      // The last two columns: the sweep's identity and the shard.
+      const std::string shard_text = cols.back(), this_sweep = cols[cols.size() - 2];
+      if (sweep.empty()) {
+        sweep = this_sweep;
+        sweep_file = path;
+      } else if (this_sweep != sweep) {
+        throw InputError("peelcd sweep merge: '" + path + "' is of the sweep " + this_sweep + ", '" + sweep_file +
+                         "' of " + sweep + ": CSVs of different sweeps (scene, meshes, view steps or configurations)");
+      }
+      std::size_t k = 0, n = 0;
+      if (std::sscanf(shard_text.c_str(), "%zu/%zu", &k, &n) != 2 || k < 1 || k > n)
+        throw InputError(where + ": malformed shard \"" + shard_text + "\"");
+      if (shard_count == 0) {
+        shard_count = n;
+        shard_count_file = path;
+      } else if (n != shard_count) {
+        throw InputError("peelcd sweep merge: '" + path + "' is a shard of " + std::to_string(n) + ", '" +
+                         shard_count_file + "' of " + std::to_string(shard_count));
+      }
+      if (const auto [it, fresh] = shard_files.emplace(k, path); !fresh && it->second != path)
+        throw InputError("peelcd sweep merge: shard " + std::to_string(k) + "/" + std::to_string(n) + " is in both '" +
+                         it->second + "' and '" + path + "'");
       const std::string label = line.substr(1, close - 1);
       const auto it = std::find(labels.begin(), labels.end(), label);
       const std::size_t config = std::size_t(it - labels.begin());
@@ -88,6 +121,13 @@ int run_sweep_merge(const SweepMergeArgs& a) {
       rows.push_back({config, theta, phi, line, path});
     }
   }
+  // Every shard of the sweep, or the merge would be partial.
+  std::string missing;
+  for (std::size_t k = 1; k <= shard_count; ++k)
+    if (!shard_files.count(k)) missing += (missing.empty() ? "" : ", ") + std::to_string(k);
+  if (!missing.empty())
+    throw InputError("peelcd sweep merge: shard(s) " + missing + " of " + std::to_string(shard_count) +
+                     " missing: the merged sweep would be incomplete");
   std::stable_sort(rows.begin(), rows.end(), [](const Row& x, const Row& y) {
     return std::tie(x.config, x.theta, x.phi) < std::tie(y.config, y.theta, y.phi);
   });
@@ -108,6 +148,29 @@ int run_sweep_merge(const SweepMergeArgs& a) {
   if (!csv_path.empty()) write_output(csv_path, out);
   if (!a.plot.empty()) plot_sweep(csv_path, a.plot);
   return 0;
+}
+
+// A sweep's identity: the scene file's name and a 64-bit FNV-1a hash of what decides its rows
+// (the scene file's and its meshes' bytes, the view steps, the configurations), so that shards
+// run apart (other machines, other paths) are known to belong together.
+std::string sweep_identity(const SweepArgs& a, const Scene& scene, const std::vector<SweepConfig>& configs) {
+  std::uint64_t h = 1469598103934665603ull;
+  const auto mix = [&](const std::string& bytes) {
+    for (const unsigned char ch : bytes) h = (h ^ ch) * 1099511628211ull;
+  };
+  for (const std::string& path : scene_inputs(scene)) {
+    std::ifstream in(path, std::ios::binary);
+    std::stringstream ss;
+    ss << in.rdbuf();
+    mix(ss.str());
+  }
+  char steps[64];
+  std::snprintf(steps, sizeof steps, "%.17g/%.17g", a.theta_step, a.phi_step);
+  mix(steps);
+  for (const SweepConfig& c : configs) mix(c.label());
+  char id[32];
+  std::snprintf(id, sizeof id, "%016llx", static_cast<unsigned long long>(h));
+  return std::filesystem::path(a.scene).filename().string() + ":" + id;
 }
 
 int run_sweep_command(const SweepArgs& a) {
@@ -172,7 +235,9 @@ int run_sweep_command(const SweepArgs& a) {
     std::filesystem::create_directories(a.plot);
     csv_path = a.plot + "/sweep.csv";
   }
-  if (!csv_path.empty()) write_output(csv_path, sweep_csv(rows, configs));
+  if (!csv_path.empty())
+    write_output(csv_path, sweep_csv(rows, configs, sweep_identity(a, scene, configs),
+                                     std::to_string(shard + 1) + "/" + std::to_string(shards)));
   if (!a.plot.empty()) plot_sweep(csv_path, a.plot);
   return 0;
 }

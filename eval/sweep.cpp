@@ -110,10 +110,11 @@ SweepSummary summarize(const std::vector<SweepRow>& rows, std::size_t config) {
   return s;
 }
 
-std::string sweep_csv(const std::vector<SweepRow>& rows, const std::vector<SweepConfig>& configs) {
+std::string sweep_csv(const std::vector<SweepRow>& rows, const std::vector<SweepConfig>& configs,
+                      const std::string& sweep, const std::string& shard) {
   std::ostringstream out;
   out << "config,resolution,ids,mode,slope,views,theta,phi,exact,found,missed,miss_ratio,false_contacts,pcs,"
-         "candidates,efficiency,layers,passes,aabb_ms,upload_ms,gpu_ms,readback_ms,cpu_ms,total_ms,cull\n";
+         "candidates,efficiency,layers,passes,aabb_ms,upload_ms,gpu_ms,readback_ms,cpu_ms,total_ms,cull,sweep,shard\n";
   for (const SweepRow& r : rows) {
     const SweepConfig& c = configs[r.config];
     out << '"' << c.label() << "\"," << c.resolution << ',' << to_string(c.ids) << ','
@@ -122,7 +123,7 @@ std::string sweep_csv(const std::vector<SweepRow>& rows, const std::vector<Sweep
         << r.miss_ratio() << ',' << r.false_contacts << ',' << r.pcs << ',' << r.candidates << ','
         << r.efficiency() << ',' << r.layers << ',' << r.passes << ',' << r.timings.aabb << ','
         << r.timings.upload << ',' << r.timings.gpu << ',' << r.timings.readback << ',' << r.timings.cpu << ','
-        << r.timings.total << ',' << to_string(c.cull) << '\n';
+        << r.timings.total << ',' << to_string(c.cull) << ',' << sweep << ',' << shard << '\n';
   }
   return out.str();
 }

@@ -342,7 +342,20 @@ sys.exit(0 if rows(sys.argv[1]) == rows(sys.argv[2]) else 1)"
 if(NOT rc EQUAL 0 OR NOT rc2 EQUAL 0)
   message(SEND_ERROR "sweep merge: the merged shards differ from the full sweep (3 shards: ${rc}, 2 shards: ${rc2})")
 endif()
-expect("sweep merge: overlapping shards" 2 "is in both" sweep merge ${WORK}/sweep_s1.csv ${WORK}/sweep_s1.csv --csv ${WORK}/sweep_bad.csv)
+expect("sweep merge: overlapping shards" 2 "is in both" sweep merge ${WORK}/sweep_s1.csv ${WORK}/sweep_s1.csv
+       ${WORK}/sweep_s2.csv ${WORK}/sweep_s3.csv --csv ${WORK}/sweep_bad.csv)
+# A merge that would be partial, or of different sweeps (scene, view steps, configurations), is refused.
+expect("sweep merge: a shard missing" 2 "shard\\(s\\) 2 of 3 missing" sweep merge ${WORK}/sweep_s1.csv ${WORK}/sweep_s3.csv
+       --csv ${WORK}/sweep_bad.csv)
+expect("sweep merge: shards of 2 and of 3" 2 "is a shard of 2" sweep merge ${WORK}/sweep_s1.csv ${WORK}/sweep_h2.csv
+       ${WORK}/sweep_s3.csv --csv ${WORK}/sweep_bad.csv)
+expect("sweep: another scene's shard" 0 "" sweep ${FIXTURES}/golden/boxes_touching_ties/case.json --res 32 --ids unique
+       --mode full,paper --theta-step 90 --phi-step 45 --shard 2/3 --csv ${WORK}/sweep_other2.csv)
+expect("sweep merge: different sweeps" 2 "CSVs of different sweeps" sweep merge ${WORK}/sweep_s1.csv ${WORK}/sweep_other2.csv
+       ${WORK}/sweep_s3.csv --csv ${WORK}/sweep_bad.csv)
+if(EXISTS ${WORK}/sweep_bad.csv)
+  message(SEND_ERROR "a refused sweep merge wrote its --csv")
+endif()
 expect("sweep: bad shard" 2 "expected K/N with 1 <= K <= N" sweep ${sweep_args} --shard 4/3)
 expect("golden compare: a shard" 0 "shard 2/5: 4 of 21 cases" golden compare --shard 2/5)
 # Progress is for terminals only: with stderr a pipe (as here), nothing but messages.

@@ -52,6 +52,9 @@ std::vector<SweepRow> run_sweep(Detector& detector, const std::vector<Object>& o
 SweepSummary summarize(const std::vector<SweepRow>& rows, std::size_t config);
 
 // CSV with a header line; one row per (configuration, direction).
-std::string sweep_csv(const std::vector<SweepRow>& rows, const std::vector<SweepConfig>& configs);
+// `sweep`: the sweep's identity (its scene, meshes, view steps and configurations; sweep merge
+// joins only CSVs of one sweep), `shard`: "K/N" ("1/1" unsharded); both a column of every row.
+std::string sweep_csv(const std::vector<SweepRow>& rows, const std::vector<SweepConfig>& configs,
+                      const std::string& sweep = "", const std::string& shard = "1/1");
 
 }  // namespace peelcd
