@@ -206,8 +206,12 @@ std::vector<Object> load_objects(const Scene& scene) {
     // A glTF / GLB file with several mesh nodes becomes one object per node: named by the node
     // ("object/node" when the scene has other objects too).
     std::vector<NamedMesh> parts;
-    if (is_node_scene(so.mesh_path)) parts = load_mesh_nodes(so.mesh_path);
-    else parts.push_back({so.name, load_mesh(so.mesh_path)});
+    try {  // a mesh's problem names the scene and the object that referenced it
+      if (is_node_scene(so.mesh_path)) parts = load_mesh_nodes(so.mesh_path);
+      else parts.push_back({so.name, load_mesh(so.mesh_path)});
+    } catch (const InputError& e) {
+      throw InputError(std::string(e.what()) + " (referenced by " + where + ")");
+    }
     for (NamedMesh& part : parts) {
       Object o;
       o.name = parts.size() == 1 ? so.name : scene.objects.size() == 1 ? part.name : so.name + "/" + part.name;

@@ -506,3 +506,14 @@ execute_process(COMMAND ${PEELCD} detect ${scene} --stage image OUTPUT_VARIABLE 
 if(out MATCHES "eps ")
   message(SEND_ERROR "conservative detect printed an epsilon: ${out}")
 endif()
+# A golden folder copied elsewhere still compares (its meshes read from peelcd's own data, said);
+# a mesh that is nowhere names the case's scene and object.
+file(REMOVE_RECURSE ${WORK}/copied_golden)
+file(COPY ${FIXTURES}/golden/boxes_crossing DESTINATION ${WORK}/copied_golden)
+expect("golden compare: a copied golden folder" 0 "not beside the goldens: read from.*boxes_crossing, production path.*match"
+       golden compare boxes_crossing --golden-dir ${WORK}/copied_golden)
+file(READ ${WORK}/copied_golden/boxes_crossing/case.json case_json)
+string(REPLACE "box_unit.obj" "nowhere.obj" case_json "${case_json}")
+file(WRITE ${WORK}/copied_golden/boxes_crossing/case.json "${case_json}")
+expect("golden compare: a mesh that is nowhere" 2 "nowhere.obj': no such file \\\\(referenced by '.*boxes_crossing/case.json': objects\\\\[0\\\\]"
+       golden compare boxes_crossing --golden-dir ${WORK}/copied_golden)
