@@ -102,8 +102,10 @@ constexpr int kExitSkipped = 77;
 // inside one of `inputs` (the goldens, the dumps under test). Throws InputError naming it.
 void check_report_dir(const std::string& report, const std::vector<std::string>& inputs, const std::string& what) {
   namespace fs = std::filesystem;
-  check_output_dir(report, what);
   std::error_code ec;
+  if (report.empty()) throw InputError(what + ": an empty folder name");
+  if (fs::exists(report, ec) && !fs::is_directory(report, ec))
+    throw InputError(what + " '" + report + "': exists and is not a folder");
   if (fs::exists(fs::path(report) / "meta.json", ec))
     throw InputError(what + " '" + report + "': it holds a dump (meta.json): a report goes elsewhere");
   const fs::path target = fs::weakly_canonical(report, ec);

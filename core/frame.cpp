@@ -169,6 +169,9 @@ void relate_pairs(std::vector<PairResult>& pairs, const std::function<const Mesh
     if (!p.colliding.empty() || !within) {  // from the contacts: no mesh read
       p.relation = contact_relation(p.colliding);
       note_cap();
+      // Touching only, one box within the other: touching from inside is containment.
+      if (p.relation == Relation::touching && within && !capped)
+        p.relation = touching_relation(mesh_of(p.object_a), mesh_of(p.object_b), ba, bb, p.colliding, p.relation_note);
     } else {
       p.relation = relate(mesh_of(p.object_a), mesh_of(p.object_b), ba, bb, p.colliding, p.relation_note);
     }

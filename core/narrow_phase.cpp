@@ -245,6 +245,41 @@ bool crossing_intersect(const TriangleCorners& a, const TriangleCorners& b, cons
          orientation_sign(a[c1.s_max], a[c1.t_max], b[c2.t_max], b[c2.s_max]) <= 0;
 }
 
+// Two proper triangles in two planes, each with corners strictly on both sides of the other's
+// plane, meet in a piece of the planes' line: where it lies in both. That piece is one point when
+// the line leaves one triangle exactly where it enters the other (two side faces of offset boxes
+// meeting at a corner of each): the surfaces touch there, they do not cross. Decided exactly:
+// each triangle's piece of the line from its edges' exact crossings of the other's plane (and
+// its corners on it), ordered along the line lexicographically (as simplex() orders collinear
+// points), then the two pieces' overlap.
+bool meet_in_one_point(const TriangleCorners& a, const TriangleCorners& b, const int sa[3], const int sb[3]) {
+  const CGAL::Cartesian_converter<K, EK> to_exact;
+  const auto piece = [&](const TriangleCorners& t, const int s[3], const TriangleCorners& other) {
+    const EK::Plane_3 plane(to_exact(to_cgal(other[0])), to_exact(to_cgal(other[1])), to_exact(to_cgal(other[2])));
+    std::vector<EK::Point_3> pts;
+    for (int i = 0; i < 3; ++i) {
+      const int j = (i + 1) % 3;
+      if (s[i] == 0) pts.push_back(to_exact(to_cgal(t[i])));
+      if (s[i] * s[j] < 0) {
+        const EK::Line_3 line(to_exact(to_cgal(t[i])), to_exact(to_cgal(t[j])));
+        if (auto r = CGAL::intersection(line, plane))
+          if (const auto* p = boost::get<EK::Point_3>(&*r)) pts.push_back(*p);
+      }
+    }
+    EK::Point_3 lo = pts.front(), hi = pts.front();
+    for (const EK::Point_3& p : pts) {
+      if (CGAL::compare_xyz(p, lo) == CGAL::SMALLER) lo = p;
+      if (CGAL::compare_xyz(p, hi) == CGAL::LARGER) hi = p;
+    }
+    return std::make_pair(lo, hi);
+  };
+  const auto [lo_a, hi_a] = piece(a, sa, b);
+  const auto [lo_b, hi_b] = piece(b, sb, a);
+  const EK::Point_3& lo = CGAL::compare_xyz(lo_a, lo_b) == CGAL::LARGER ? lo_a : lo_b;
+  const EK::Point_3& hi = CGAL::compare_xyz(hi_a, hi_b) == CGAL::SMALLER ? hi_a : hi_b;
+  return lo == hi;
+}
+
 // The exact construction of the intersection of two simplices: its extreme points.
 std::pair<Vec3, Vec3> exact_segment(const TriangleCorners& a, const TriangleCorners& b, const Simplex& sa,
                                     const Simplex& sb) {
@@ -301,7 +336,14 @@ ContactKind classify_contact(const TriangleCorners& a, const TriangleCorners& b)
   };
   const int sb = sides(pa, pb), sa = sides(pb, pa);
   if (sb == 0) return ContactKind::coplanar;  // every corner of B on A's plane
-  return sa == 3 && sb == 3 ? ContactKind::crossing : ContactKind::touching;
+  if (sa != 3 || sb != 3) return ContactKind::touching;
+  // Each straddles the other's plane: crossing, unless they meet in one point only.
+  int side_a[3], side_b[3];
+  for (int i = 0; i < 3; ++i) {
+    side_a[i] = int(CGAL::orientation(pb[0], pb[1], pb[2], pa[i]));
+    side_b[i] = int(CGAL::orientation(pa[0], pa[1], pa[2], pb[i]));
+  }
+  return meet_in_one_point(a, b, side_a, side_b) ? ContactKind::touching : ContactKind::crossing;
 }
 
 bool triangles_intersect(const TriangleCorners& a, const TriangleCorners& b) {
@@ -348,6 +390,15 @@ bool test_triangle_pair(const TriangleCorners& ca, const TriangleCorners& cb, Co
   contact.kind = both(side_a) && both(side_b) ? ContactKind::crossing : ContactKind::touching;
   if (!crossing_segment(ca, cb, side_a, side_b, contact.p, contact.q))
     std::tie(contact.p, contact.q) = exact_segment(ca, cb, simplex(ca), simplex(cb));
+  // A crossing whose segment is (near) a point may be two triangles meeting at one point of
+  // their boundaries: decided exactly (meet_in_one_point()) only then, so crossings pay nothing.
+  if (contact.kind == ContactKind::crossing) {
+    const double scale = std::max({ca[0].cwiseAbs().maxCoeff(), ca[1].cwiseAbs().maxCoeff(), ca[2].cwiseAbs().maxCoeff(),
+                                   cb[0].cwiseAbs().maxCoeff(), cb[1].cwiseAbs().maxCoeff(), cb[2].cwiseAbs().maxCoeff()});
+    if ((contact.p - contact.q).cwiseAbs().maxCoeff() <= 1e-9 * scale + 1e-300 &&
+        meet_in_one_point(ca, cb, side_a, side_b))
+      contact.kind = ContactKind::touching;
+  }
   return true;
 }
 

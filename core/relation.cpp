@@ -167,6 +167,33 @@ bool point_inside(const Mesh& container, const Vec3& q) {
   return crossings % 2 == 1;
 }
 
+Relation touching_relation(const Mesh& a, const Mesh& b, const Aabb& ba, const Aabb& bb,
+                           const std::vector<Contact>& contacts, std::string& note) {
+  const auto within = [](const Aabb& x, const Aabb& y) {
+    return !x.empty() && !y.empty() && (x.lo.array() >= y.lo.array()).all() && (x.hi.array() <= y.hi.array()).all();
+  };
+  for (int side = 0; side < 2; ++side) {
+    const Mesh& inner = side == 0 ? a : b;
+    const Mesh& outer = side == 0 ? b : a;
+    if (!within(side == 0 ? ba : bb, side == 0 ? bb : ba)) continue;
+    if (!analyse_shape(outer).closed) continue;
+    // A triangle of the inner mesh in no contact is off the outer surface (a positive distance
+    // away): its centroid, tested exactly, says on which side all of it lies.
+    std::vector<char> touched(inner.triangles.size(), 0);
+    for (const Contact& c : contacts) touched[side == 0 ? c.tri_a : c.tri_b] = 1;
+    for (std::size_t t = 0; t < inner.triangles.size(); ++t) {
+      if (touched[t]) continue;
+      const Tri& f = inner.triangles[t];
+      const Vec3 centroid = (inner.vertices[f[0]] + inner.vertices[f[1]] + inner.vertices[f[2]]) / 3.0;
+      if (!point_inside(outer, centroid)) goto next_side;  // outside: only touching
+      note = std::string(side == 0 ? "A" : "B") + " touches " + (side == 0 ? "B" : "A") + "'s surface from inside";
+      return side == 0 ? Relation::a_inside_b : Relation::b_inside_a;
+    }
+  next_side:;
+  }
+  return Relation::touching;
+}
+
 Relation contact_relation(const std::vector<Contact>& contacts) {
   if (contacts.empty()) return Relation::disjoint;
   for (const Contact& c : contacts)

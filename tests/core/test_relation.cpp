@@ -3,6 +3,8 @@
 // image-space volume against CGAL's exact corefinement.
 #include "peelcd/core/primitives.h"
 #include "peelcd/core/relation.h"
+#include "peelcd/core/cpu_stage.h"
+#include "peelcd/core/detector.h"
 
 #include <catch2/catch.hpp>
 
@@ -108,4 +110,43 @@ TEST_CASE("volume: boxes exact, spheres within the stated error of CGAL's exact 
   const VolumeEstimate bad = overlap_volume(inverted(s1), s2, intersection(bounds(s1), bounds(s2)), 64);
   CHECK_FALSE(bad.known);
   CHECK_THAT(bad.reason, Catch::Contains("A is inside out"));
+}
+
+TEST_CASE("face, edge and corner contact of boxes is touching, and a box touching a box from inside is inside: CGAL's volumes agree",
+          "[relation]") {
+  // Every contact kind and the relation decided exactly, on the exact CPU path, against CGAL's
+  // exact overlap volume: 0 for touching boxes, the inner box's for one inside.
+  Detector detector(std::make_shared<CpuImageStage>());
+  DetectOptions opt;
+  opt.stage = Stage::exact;
+  const Mesh unit = make_box(Vec3(0, 0, 0), Vec3(1, 1, 1));
+  const auto frame = [&](const Mesh& a, const Mesh& b) {
+    std::vector<Object> objects(2);
+    objects[0].mesh = a;
+    objects[1].mesh = b;
+    const FrameResult f = detector.detect(objects, opt);
+    REQUIRE(f.pairs.size() == 1);
+    return f.pairs[0];
+  };
+  // Face to face with offset faces, along an edge, at a corner: touching, no crossing contact.
+  for (const Vec3& offset : {Vec3(1, 0.5, 0.25), Vec3(1, 0.3, 0.7), Vec3(1, -0.25, 0.5), Vec3(1, 1, 0), Vec3(1, 1, 1),
+                             Vec3(1, 0.5, 1)}) {
+    const Mesh moved = make_box(offset, offset + Vec3(1, 1, 1));
+    const PairResult p = frame(unit, moved);
+    INFO("offset " << offset.transpose());
+    CHECK(exact_overlap_volume(unit, moved) == 0.0);
+    CHECK_FALSE(p.colliding.empty());
+    for (const Contact& c : p.colliding) CHECK(c.kind != ContactKind::crossing);
+    CHECK(p.relation == Relation::touching);
+  }
+  // A unit box inside a box of side 2, sharing one face: inside (volume 1), not touching.
+  const Mesh big = make_box(Vec3(0, 0, 0), Vec3(2, 2, 2));
+  const Mesh inner = make_box(Vec3(1, 0.5, 0.5), Vec3(2, 1.5, 1.5));
+  CHECK(exact_overlap_volume(big, inner) == Approx(1.0));
+  const PairResult in = frame(big, inner);
+  CHECK(in.relation == Relation::b_inside_a);
+  CHECK(in.relation_note.find("from inside") != std::string::npos);
+  CHECK(frame(inner, big).relation == Relation::a_inside_b);
+  // Moved out through that face by half: crossing, as before.
+  CHECK(frame(big, make_box(Vec3(1.5, 0.5, 0.5), Vec3(2.5, 1.5, 1.5))).relation == Relation::crossing);
 }

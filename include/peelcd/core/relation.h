@@ -53,6 +53,14 @@ Relation relate(const Mesh& a, const Mesh& b, const std::vector<Contact>& contac
 // The relation the contacts alone give: crossing when one penetrates, touching when all merely
 // touch, disjoint when there is none (a self pair's relation; the first step of relate()).
 Relation contact_relation(const std::vector<Contact>& contacts);
+// Touching contacts only (no crossing) may still hide a shared interior: a closed mesh inside
+// another that touches its surface from inside (a box in a box sharing a face). Where one box
+// lies within the other and the outer mesh is closed, the centroid of a triangle of the inner
+// mesh in no contact (so off the outer surface) is tested exactly: inside, the relation is
+// containment (note: "touches ... from inside");
+// otherwise `touching` stays. The contacts must be complete (not cut by max_contacts).
+Relation touching_relation(const Mesh& a, const Mesh& b, const Aabb& box_a, const Aabb& box_b,
+                           const std::vector<Contact>& contacts, std::string& note);
 // The same with the meshes' boxes known (nothing read when no box lies within the other).
 Relation relate(const Mesh& a, const Mesh& b, const Aabb& box_a, const Aabb& box_b, const std::vector<Contact>& contacts,
                 std::string& note);
