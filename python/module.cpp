@@ -452,35 +452,33 @@ PYBIND11_MODULE(_peelcd, m) {
         return result_dict(d.result, [&](std::size_t i) { return objs[i].name; }, d.gl);
       }, py::arg("objects"), "One frame of the objects (Mesh, or dicts with mesh, name, self). Keyword options as in scene files");
 
-  m.def("exact_self_pairs", [](const py::handle& ma) {
+  // Packed pairs (pack_pair()) as a (k, 2) array of triangle indices.
+  const auto pairs_array = [](const std::vector<std::uint64_t>& k) {
+    py::array_t<std::uint32_t> out({py::ssize_t(k.size()), py::ssize_t(2)});
+    auto o = out.mutable_unchecked<2>();
+    for (std::size_t i = 0; i < k.size(); ++i) {
+      o(i, 0) = std::uint32_t(k[i] >> 32);
+      o(i, 1) = std::uint32_t(k[i] & 0xffffffffu);
+    }
+    return out;
+  };
+  m.def("exact_self_pairs", [pairs_array](const py::handle& ma) {
     const PyMesh a = as_mesh(ma, "mesh");
     std::vector<std::uint64_t> k;
     {
       py::gil_scoped_release release;
       k = exact_self_pairs(*a.mesh);
     }
-    py::array_t<std::uint32_t> out({py::ssize_t(k.size()), py::ssize_t(2)});
-    auto o = out.mutable_unchecked<2>();
-    for (std::size_t i = 0; i < k.size(); ++i) {
-      o(i, 0) = std::uint32_t(k[i] >> 32);
-      o(i, 1) = std::uint32_t(k[i] & 0xffffffffu);
-    }
-    return out;
+    return pairs_array(k);
   }, py::arg("mesh"), "The exact self reference: every pair of one mesh's triangles that meet and share no vertex, (k, 2)");
-  m.def("exact_pairs", [](const py::handle& ma, const py::handle& mb) {
+  m.def("exact_pairs", [pairs_array](const py::handle& ma, const py::handle& mb) {
     const PyMesh a = as_mesh(ma, "a"), b = as_mesh(mb, "b");
     std::vector<std::uint64_t> k;
     {
       py::gil_scoped_release release;
       k = exact_colliding_pairs(*a.mesh, *b.mesh);  // one mesh twice: the mesh against a copy of itself
     }
-    py::array_t<std::uint32_t> out({py::ssize_t(k.size()), py::ssize_t(2)});
-    auto o = out.mutable_unchecked<2>();
-    for (std::size_t i = 0; i < k.size(); ++i) {
-      o(i, 0) = std::uint32_t(k[i] >> 32);
-      o(i, 1) = std::uint32_t(k[i] & 0xffffffffu);
-    }
-    return out;
+    return pairs_array(k);
   }, py::arg("a"), py::arg("b"),
         "The exact reference: every colliding triangle pair of two meshes, (k, 2); one mesh given twice is tested "
         "against a copy of itself (exact_self_pairs(mesh): its self pairs)");

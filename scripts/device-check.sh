@@ -87,6 +87,17 @@ step() {
   return 0
 }
 : >"$summary.steps"
+# A check that two outputs agree but for their timing and stage lines (the PCS, the pairs).
+same() {
+  local name="$1" x="$2" y="$3"
+  if diff <(grep -v '^timings\|^stage' "$x") <(grep -v '^timings\|^stage' "$y") >>"$log"; then
+    printf '| %s | ok |  |\n' "$name" >>"$summary.steps"
+  else
+    say "$name: FAILED (the outputs differ: log.txt)"
+    printf '| %s | FAILED |  |\n' "$name" >>"$summary.steps"
+    fails=$((fails + 1))
+  fi
+}
 
 say "peelcd device check, $date (UTC)$([ $quick = 1 ] && echo ', --quick (llvmpipe)')"
 say "renderer: $renderer"
@@ -107,26 +118,14 @@ for resolve in gpu host; do
     "$bin" detect fixtures/scenes/bunny_dragon.json --backend egl --stage image --res 1 --views 3 --resolve "$resolve" \
     --check --max-miss 0 --pcs --list
 done
-if ! diff <(grep -v '^timings\|^stage' "$out/deep_gpu.txt") <(grep -v '^timings\|^stage' "$out/deep_host.txt") >>"$log"; then
-  say "deep texels: the GPU resolve's PCS or pairs differ from the host's"
-  printf '| deep texels: GPU resolve = host resolve | FAILED |  |\n' >>"$summary.steps"
-  fails=$((fails + 1))
-else
-  printf '| deep texels: GPU resolve = host resolve | ok |  |\n' >>"$summary.steps"
-fi
+same "deep texels: GPU resolve = host resolve" "$out/deep_gpu.txt" "$out/deep_host.txt"
 
 # 3. Determinism: the production path (batched views, GPU selection, GPU resolve) twice.
 for run in 1 2; do
   step "determinism, run $run (3 views, image stage, GPU resolve)" "determinism_$run.txt" \
     "$bin" detect fixtures/scenes/bunny_dragon.json --backend egl --stage image --views 3 --resolve gpu --pcs --list
 done
-if ! diff <(grep -v '^timings' "$out/determinism_1.txt") <(grep -v '^timings' "$out/determinism_2.txt") >>"$log"; then
-  say "determinism: two runs gave different PCS or pairs"
-  printf '| determinism: two runs, the same PCS and pairs | FAILED |  |\n' >>"$summary.steps"
-  fails=$((fails + 1))
-else
-  printf '| determinism: two runs, the same PCS and pairs | ok |  |\n' >>"$summary.steps"
-fi
+same "determinism: two runs, the same PCS and pairs" "$out/determinism_1.txt" "$out/determinism_2.txt"
 
 # 4. Timings against the CPU peers, one thread per method.
 if [ "$quick" = 1 ]; then
