@@ -35,6 +35,76 @@ std::string escape(const std::string& s) {
   return out;
 }
 
+// The page's script: the status self-check (every layer image decoded, no script error, a texel
+// read back), the per-texel readout on hover and click, the search of a triangle or an ID pair,
+// the colliding-only filter. Texel words come from `peelcdViews` (base64 of each layer's
+// little-endian 32-bit words, GL rows bottom first), where the dump was small enough to embed.
+const char* const kViewerScript = R"JS(
+window.peelcdErrors=[];
+window.addEventListener('error',function(e){window.peelcdErrors.push(String(e.message||e.type));},true);
+(function(){var ce=console.error;console.error=function(){window.peelcdErrors.push(Array.prototype.join.call(arguments,' '));ce.apply(console,arguments);};})();
+var peelcdWords={};
+function words(v,k){var key=v+'/'+k;if(peelcdWords[key])return peelcdWords[key];var V=peelcdViews[v];if(!V||!V.layers)return null;
+  var bin=atob(V.layers[k]),u8=new Uint8Array(bin.length);for(var i=0;i<bin.length;++i)u8[i]=bin.charCodeAt(i);
+  return peelcdWords[key]=new Uint32Array(u8.buffer);}
+function f32(w){var b=new ArrayBuffer(4);new Uint32Array(b)[0]=w;return new Float32Array(b)[0];}
+// The texel (x, y from the top) of layer k of view v, in words.
+function texelText(v,k,x,y){var V=peelcdViews[v],n=V.n,W=words(v,k);
+  if(!W)return V.dir+' layer '+k+' texel ('+x+', '+y+'): texel data not embedded (a large dump): peelcd explain reads any pair';
+  var t=((n-1-y)*n+x)*4,id1=W[t+1]&0x7fffffff,obj=W[t+1]>>>31;
+  var s=V.dir+' layer '+k+' texel ('+x+', '+y+'): ';
+  if(id1===0)return s+'empty';
+  s+=(obj?'B':'A')+' ID '+(id1-1)+', depth '+f32(W[t]).toPrecision(9);
+  if(V.conservative)s+=' .. '+f32(W[t+2]).toPrecision(9);
+  else s+=', dz/dx '+f32(W[t+2]).toPrecision(4)+', dz/dy '+f32(W[t+3]).toPrecision(4);
+  return s;}
+function readout(img,e,pin){var v=+img.dataset.view,k=+img.dataset.layer,n=peelcdViews[v].n;
+  // The preview is depth | IDs side by side (2n x n): either half reads the same texel.
+  var x=Math.min(2*n-1,Math.floor(e.offsetX*2*n/img.clientWidth))%n,y=Math.min(n-1,Math.floor(e.offsetY*n/img.clientHeight));
+  var r=document.getElementById('readout');r.textContent=texelText(v,k,x,y)+(pin?' (pinned)':'');r.dataset.pinned=pin?'1':'';}
+// Search: a triangle index ("12", "a:12", "b:34") or an ID pair ("12,34"): the colliding pairs
+// that hold it are marked, the others hidden; texels of that ID are outlined on the layers.
+function search(q){q=q.trim().toLowerCase();var side=null,m;
+  if((m=/^([ab]):(\d+)$/.exec(q))){side=m[1];q=m[2];}
+  var pair=/^(\d+)\s*,\s*(\d+)$/.exec(q),hits=0;
+  document.querySelectorAll('tr.pair').forEach(function(tr){var a=tr.dataset.a,b=tr.dataset.b;
+    var hit=q===''||(pair?(a===pair[1]&&b===pair[2]):((side!=='b'&&a===q)||(side!=='a'&&b===q)));
+    tr.style.display=hit?'':'none';if(hit&&q!=='')hits++;});
+  document.querySelectorAll('canvas.mark').forEach(function(c){var g=c.getContext('2d');g.clearRect(0,0,c.width,c.height);
+    if(q===''||pair)return;var v=+c.dataset.view,k=+c.dataset.layer,n=peelcdViews[v].n,W=words(v,k);if(!W)return;
+    g.fillStyle='rgba(0,255,0,0.8)';for(var t=0;t<n*n;++t){var id1=W[4*t+1]&0x7fffffff,obj=W[4*t+1]>>>31;
+      if(id1===0||String(id1-1)!==q||(side==='a'&&obj)||(side==='b'&&!obj))continue;
+      var x=t%n,y=n-1-Math.floor(t/n),w=Math.max(1,c.width/(2*n)),hh=Math.max(1,c.height/n);
+      g.fillRect(x*c.width/(2*n),y*hh,w,hh);g.fillRect((x+n)*c.width/(2*n),y*hh,w,hh);}});
+  document.getElementById('hits').textContent=q===''?'':hits+' colliding pairs hold it';
+  document.querySelectorAll('details.pairs').forEach(function(d){if(q!=='')d.open=true;});}
+function collidingOnly(on){document.querySelectorAll('section.roi').forEach(function(s){s.style.display=on&&s.dataset.colliding==='0'?'none':'';});}
+window.addEventListener('load',function(){
+  var imgs=document.querySelectorAll('img.layer'),bad=[];
+  imgs.forEach(function(i){if(!i.complete||i.naturalWidth===0)bad.push(i.alt);
+    i.addEventListener('mousemove',function(e){if(!document.getElementById('readout').dataset.pinned)readout(i,e,false);});
+    i.addEventListener('click',function(e){readout(i,e,true);});});
+  // Self-check: the first layer's first non-empty texel read back through the readout.
+  var check='no layer';
+  if(imgs.length){var v=+imgs[0].dataset.view,n=peelcdViews[v].n,W=words(v,0);check='readout: texel data not embedded';
+    if(W)for(var t=0;t<n*n;++t)if((W[4*t+1]&0x7fffffff)!==0){var txt=texelText(v,0,t%n,n-1-Math.floor(t/n));
+      check=/ ID \d+, depth /.test(txt)?'readout ok':'readout wrong: '+txt;break;}}
+  // #search=Q in the address: the search run on load, its hits in the status (and a test's).
+  var m=/search=([^&]+)/.exec(location.hash),searched='';
+  if(m){var q=decodeURIComponent(m[1]);document.getElementById('q').value=q;search(q);
+    searched=', search "'+q+'": '+document.getElementById('hits').textContent;}
+  var s=document.getElementById('status');
+  var ok=imgs.length>0&&bad.length===0&&window.peelcdErrors.length===0&&(check==='readout ok'||check==='readout: texel data not embedded');
+  s.setAttribute('data-status',ok?'ok':'error');
+  s.textContent=(ok?'viewer ok: ':'viewer error: ')+imgs.length+' layer images loaded, '+check+
+    searched+(bad.length?', not loaded: '+bad.join(', '):'')+(window.peelcdErrors.length?', errors: '+window.peelcdErrors.join('; '):'');
+});
+)JS";
+
+// Texel words embedded up to this many bytes per dump (base64 adds a third): beyond, the
+// readout says so and `peelcd explain` reads any pair.
+constexpr std::size_t kEmbedBytes = 24u << 20;
+
 }  // namespace
 
 std::string viewer_html(const Dump& d) {
@@ -42,34 +112,71 @@ std::string viewer_html(const Dump& d) {
   h << "<!DOCTYPE html>\n<html lang=\"en\"><head><meta charset=\"utf-8\"><title>peelcd layer dump</title>\n"
     << "<style>body{font-family:sans-serif;background:#15151c;color:#ddd;margin:1em}"
        "h2{margin-top:1.5em}table{border-collapse:collapse}td,th{border:1px solid #444;padding:2px 6px;"
-       "font-size:12px}.layers{display:flex;flex-wrap:wrap;gap:10px}figure{margin:0}"
-       "figcaption{font-size:12px}img{image-rendering:pixelated;width:512px;border:1px solid #333}"
-       ".pcs{color:#f0f}.meta{font-size:13px;color:#aaa}</style>\n"
-    << "<script>\nwindow.peelcdErrors=[];\n"
-       "window.addEventListener('error',function(e){window.peelcdErrors.push(String(e.message||e.type));},true);\n"
-       "(function(){var ce=console.error;console.error=function(){window.peelcdErrors.push("
-       "Array.prototype.join.call(arguments,' '));ce.apply(console,arguments);};})();\n"
-       "window.addEventListener('load',function(){\n"
-       "  var imgs=document.querySelectorAll('img.layer'),bad=[];\n"
-       "  imgs.forEach(function(i){if(!i.complete||i.naturalWidth===0)bad.push(i.alt);});\n"
-       "  var s=document.getElementById('status');\n"
-       "  var ok=bad.length===0&&window.peelcdErrors.length===0;\n"
-       "  s.setAttribute('data-status',ok?'ok':'error');\n"
-       "  s.textContent=(ok?'viewer ok: ':'viewer error: ')+imgs.length+' layer images loaded'+"
-       "(bad.length?', not loaded: '+bad.join(', '):'')+(window.peelcdErrors.length?', errors: '+"
-       "window.peelcdErrors.join('; '):'');\n"
-       "});\n</script></head><body>\n";
+       "font-size:12px}.layers{display:flex;flex-wrap:wrap;gap:10px}figure{margin:0;position:relative}"
+       "figcaption{font-size:12px}img{image-rendering:pixelated;width:512px;border:1px solid #333;cursor:crosshair}"
+       "canvas.mark{position:absolute;left:1px;top:1px;pointer-events:none}"
+       ".pcs{color:#f0f}.meta{font-size:13px;color:#aaa}#tools{position:sticky;top:0;background:#15151c;"
+       "padding:6px 0;border-bottom:1px solid #444;z-index:2}#readout{font-family:monospace;color:#9f9}"
+       "code{color:#fc6}a{color:#8cf}</style>\n";
+  // The views' texel words, for the readout and the search.
+  std::size_t embedded = 0;
+  for (const DumpPair& p : d.pairs)
+    for (const DumpView& v : p.views)
+      for (const auto& layer : v.layers) embedded += layer.size() * 4;
+  const bool embed = embedded <= kEmbedBytes;
+  h << "<script>\nvar peelcdViews=[";
+  std::size_t view_index = 0;
+  for (const DumpPair& p : d.pairs)
+    for (const DumpView& v : p.views) {
+      h << (view_index++ ? ",\n" : "\n") << "{dir:\"" << escape(v.dir) << "\",n:" << v.resolution
+        << ",conservative:" << (v.conservative ? "true" : "false");
+      if (embed) {
+        h << ",layers:[";
+        for (std::size_t k = 0; k < v.layers.size(); ++k) {
+          std::vector<std::uint8_t> bytes(v.layers[k].size() * 4);
+          for (std::size_t i = 0; i < v.layers[k].size(); ++i)
+            for (int b = 0; b < 4; ++b) bytes[4 * i + std::size_t(b)] = std::uint8_t(v.layers[k][i] >> (8 * b));
+          h << (k ? "," : "") << "\"" << base64(bytes) << "\"";
+        }
+        h << "]";
+      }
+      h << "}";
+    }
+  h << "];\n" << kViewerScript << "</script></head><body>\n";
   h << "<h1>peelcd layer dump</h1>\n<p class=\"meta\">" << escape(d.renderer) << " &middot; "
     << escape(d.gl_version) << " &middot; backend " << escape(d.backend) << " &middot; shaders "
-    << escape(d.shader_hash) << "<br>options " << escape(d.options.dump()) << "</p>\n";
+    << escape(d.shader_hash) << "<br>options " << escape(d.options.dump());
+  if (!d.gl_options.is_null()) h << "<br>GL stage " << escape(d.gl_options.dump());
+  h << "</p>\n";
   h << "<p id=\"status\" data-status=\"pending\">viewer: loading</p>\n";
+  // The tools: readout, search, filter.
+  h << "<div id=\"tools\">Search <input id=\"q\" size=\"14\" placeholder=\"12, a:12, b:34, 12,34\" "
+       "oninput=\"search(this.value)\"> <span id=\"hits\"></span> &middot; <label><input type=\"checkbox\" "
+       "onchange=\"collidingOnly(this.checked)\"> colliding pairs only</label><br>"
+       "<span id=\"readout\">hover a layer for its texel; click to pin</span></div>\n";
   h << "<p>Each layer: depth (grey, near = bright) | triangle IDs (object A warm, B cool). "
        "<span class=\"pcs\">Magenta</span> texels: this layer took part in a PCS by the test the stage used, "
        "recomputed from the layers: point sampling, this layer and the one before are of different objects and "
        "within epsilon; conservative, this layer's depth interval overlaps one of the other object's at the "
-       "texel.</p>\n";
+       "texel. The search outlines the texels of a triangle's ID in green (with unique IDs, the triangle).";
+  if (!embed) h << " Texel data is not embedded (a dump over " << (kEmbedBytes >> 20) << " MB): no readout or outline.";
+  h << "</p>\n";
   if (d.pairs.empty()) h << "<p>No overlapping bounding boxes: nothing was peeled.</p>\n";
+  // The index: every ROI pair, its views and counts, linked.
+  if (!d.pairs.empty()) {
+    h << "<h2>Index</h2>\n<table><tr><th>pair</th><th>views</th><th>layers</th><th>PCS</th><th>colliding</th></tr>\n";
+    for (const DumpPair& p : d.pairs) {
+      std::size_t layers = 0;
+      for (const DumpView& v : p.views) layers += v.layers.size();
+      h << "<tr><td><a href=\"#" << escape(p.dir) << "\">" << escape(p.name_a) << " &times; " << escape(p.name_b)
+        << "</a></td><td>" << p.views.size() << "</td><td>" << layers << "</td><td>" << p.pcs.size() << "</td><td>"
+        << p.colliding.size() << "</td></tr>\n";
+    }
+    h << "</table>\n";
+  }
+  view_index = 0;
   for (const DumpPair& p : d.pairs) {
+    h << "<section class=\"roi\" data-colliding=\"" << p.colliding.size() << "\" id=\"" << escape(p.dir) << "\">\n";
     h << "<h2>" << escape(p.name_a) << " (A) &times; " << escape(p.name_b) << " (B)</h2>\n";
     h << "<p>epsilon " << p.epsilon << " &middot; PCS " << p.pcs.size() << " ID pairs &middot; "
       << p.colliding.size() << " colliding triangle pairs</p>\n";
@@ -87,19 +194,27 @@ std::string viewer_html(const Dump& d) {
           marked += marks[t];
         }
         const std::string alt = v.dir + " layer " + std::to_string(k);
-        h << "<figure><img class=\"layer\" alt=\"" << escape(alt) << "\" src=\"data:image/png;base64,"
+        // The preview is depth | IDs side by side (2n x n texels on 512 x 256 pixels); the canvas
+        // over it takes the search's outlines.
+        h << "<figure><img class=\"layer\" data-view=\"" << view_index << "\" data-layer=\"" << k << "\" alt=\""
+          << escape(alt) << "\" src=\"data:image/png;base64,"
           << base64(encode_png(layer_preview(v.layers[k], v.resolution, marks))) << "\">"
+          << "<canvas class=\"mark\" data-view=\"" << view_index << "\" data-layer=\"" << k
+          << "\" width=\"512\" height=\"256\"></canvas>"
           << "<figcaption>layer " << k << ": " << filled << " texels (" << a << " A, " << filled - a
           << " B), <span class=\"pcs\">" << marked << " PCS texels</span></figcaption></figure>\n";
       }
       h << "</div>\n";
+      ++view_index;
     }
-    h << "<details><summary>colliding pairs (" << p.colliding.size()
-      << ")</summary><table><tr><th>triangle of A</th><th>triangle of B</th><th>kind</th></tr>\n";
+    h << "<details class=\"pairs\"><summary>colliding pairs (" << p.colliding.size()
+      << ")</summary><table><tr><th>triangle of A</th><th>triangle of B</th><th>kind</th><th>explain</th></tr>\n";
     for (std::size_t i = 0; i < p.colliding.size(); ++i)
-      h << "<tr><td>" << p.colliding[i][0] << "</td><td>" << p.colliding[i][1] << "</td><td>"
-        << escape(p.kinds[i]) << "</td></tr>\n";
-    h << "</table></details>\n";
+      h << "<tr class=\"pair\" data-a=\"" << p.colliding[i][0] << "\" data-b=\"" << p.colliding[i][1] << "\"><td>"
+        << p.colliding[i][0] << "</td><td>" << p.colliding[i][1] << "</td><td>" << escape(p.kinds[i])
+        << "</td><td><code>peelcd explain SCENE --pair " << escape(p.name_a) << ":" << p.colliding[i][0] << ","
+        << escape(p.name_b) << ":" << p.colliding[i][1] << "</code></td></tr>\n";
+    h << "</table></details>\n</section>\n";
   }
   h << "</body></html>\n";
   return h.str();

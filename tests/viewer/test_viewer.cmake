@@ -31,6 +31,22 @@ endif()
 if(NOT text MATCHES "${npngs} layer images loaded")
   message(FATAL_ERROR "viewer: '${text}', but the dump has ${npngs} layer previews")
 endif()
+# The per-texel readout: the page reads its first layer's first texel back through it.
+if(NOT text MATCHES "readout ok")
+  message(FATAL_ERROR "viewer: no per-texel readout: '${text}'")
+endif()
+# The search: a triangle of the first colliding pair (the dump's colliding.txt), run on load
+# through the address (#search=a:T), must find its colliding pairs.
+file(GLOB colliding_files ${WORK}/dump/*/colliding.txt)
+list(GET colliding_files 0 colliding_file)
+file(STRINGS ${colliding_file} first_pair LIMIT_COUNT 1)
+string(REGEX MATCH "^([0-9]+)" tri "${first_pair}")
+execute_process(COMMAND ${CHROMIUM} ${flags} --dump-dom "file://${WORK}/dump/index.html#search=a:${tri}"
+                RESULT_VARIABLE rc OUTPUT_VARIABLE dom2 ERROR_VARIABLE log2 TIMEOUT 120)
+string(REGEX MATCH "data-status=\"([a-z]+)\"[^>]*>([^<]*)" status2 "${dom2}")
+if(NOT CMAKE_MATCH_1 STREQUAL "ok" OR NOT CMAKE_MATCH_2 MATCHES "search \"a:${tri}\": [1-9][0-9]* colliding pairs hold it")
+  message(FATAL_ERROR "viewer: the search of A's triangle ${tri} found nothing: '${CMAKE_MATCH_2}'")
+endif()
 # Chromium prints uncaught page errors as console messages on stderr.
 if(log MATCHES "Uncaught|CONSOLE\\([0-9]+\\).*[Ee]rror")
   message(FATAL_ERROR "viewer: page errors in the console:\n${log}")
