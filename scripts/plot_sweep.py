@@ -24,6 +24,11 @@ def main(path, out_dir):
         by_config[r["config"]].append(r)
     os.makedirs(out_dir, exist_ok=True)
 
+    # One colour scale for every heat map (0 to the worst miss of the whole sweep), so that maps of
+    # different configurations compare by colour; cells centred on the sampled directions, the
+    # ticks at those directions.
+    worst_all = max((100 * float(r["miss_ratio"]) for r in rows), default=0.0)
+    vmax = worst_all if worst_all > 0 else 1.0
     for config, rs in by_config.items():
         thetas = sorted({float(r["theta"]) for r in rs})
         phis = sorted({float(r["phi"]) for r in rs})
@@ -36,16 +41,21 @@ def main(path, out_dir):
             else:
                 grid[i][thetas.index(float(r["theta"]))] = miss
         avg = sum(100 * float(r["miss_ratio"]) for r in rs) / len(rs)
+        dt = thetas[1] - thetas[0] if len(thetas) > 1 else 30.0
+        dp = phis[1] - phis[0] if len(phis) > 1 else 30.0
         fig, ax = plt.subplots(figsize=(7, 4.2))
-        worst = max((v for row in grid for v in row if v == v), default=0.0)
-        # A miss ratio cannot be negative: the scale starts at 0 (and spans 1% when all are 0).
-        im = ax.imshow(grid, origin="lower", aspect="auto", cmap="viridis", vmin=0, vmax=worst if worst > 0 else 1.0,
-                       extent=[thetas[0], thetas[-1] + (thetas[1] - thetas[0] if len(thetas) > 1 else 30),
-                               phis[0] - 5, phis[-1] + 5])
-        fig.colorbar(im, ax=ax, label="miss ratio (%)")
+        im = ax.imshow(grid, origin="lower", aspect="auto", cmap="viridis", vmin=0, vmax=vmax,
+                       extent=[thetas[0] - dt / 2, thetas[-1] + dt / 2, phis[0] - dp / 2, phis[-1] + dp / 2])
+        fig.colorbar(im, ax=ax, label="miss ratio (%), one scale for the whole sweep")
+        step_t = max(1, len(thetas) // 12)
+        step_p = max(1, len(phis) // 10)
+        ax.set_xticks(thetas[::step_t])
+        ax.set_yticks(phis[::step_p])
+        ax.xaxis.set_major_formatter(matplotlib.ticker.FuncFormatter(lambda v, _: f"{v:g}"))
+        ax.yaxis.set_major_formatter(matplotlib.ticker.FuncFormatter(lambda v, _: f"{v:g}"))
         ax.set_xlabel("theta (degrees)")
         ax.set_ylabel("phi (degrees)")
-        ax.set_title(f"{config}: average {avg:.2f}%")
+        ax.set_title(f"{config}: average {avg:.2f}%", fontsize=10)
         fig.tight_layout()
         name = re.sub(r"[^A-Za-z0-9]+", "_", config).strip("_")
         fig.savefig(os.path.join(out_dir, f"heatmap_{name}.png"), dpi=110)
@@ -60,21 +70,29 @@ def main(path, out_dir):
         points.append((times[len(times) // 2], avg, config))
     points.sort(key=lambda p: (p[1], p[0]))
     fig = plt.figure(figsize=(13, max(5.5, 0.19 * len(points) + 1.5)))
-    ax = fig.add_axes([0.07, 0.1, 0.47, 0.8])
+    ax = fig.add_axes([0.07, 0.16, 0.47, 0.74])
     cmap = plt.get_cmap("tab20")
     markers = "osD^vP*X"
     for k, (t, m, config) in enumerate(points, 1):
         ax.scatter([t], [m], s=36, color=cmap((k - 1) % 20), marker=markers[(k - 1) // 20 % len(markers)],
-                   label=f"{k}: {config}  ({t:.2f} ms, {m:.2f}%)")
+                   label=f"{k}: {config}  ({t:.3g} ms, {m:.2f}%)")
         ax.annotate(str(k), (t, m), fontsize=6, xytext=(3, 2), textcoords="offset points")
     ax.set_xlabel("median run time per frame (ms)")
     ax.set_ylabel("average miss ratio (%)")
     ax.set_xscale("log")
     ax.set_yscale("symlog", linthresh=0.1)  # the interesting configurations are below 1%
     ax.set_ylim(bottom=0, top=max(1.0, max(m for _, m, _ in points) * 1.5))
-    ax.xaxis.set_major_locator(matplotlib.ticker.LogLocator(subs=(1.0, 2.0, 3.0, 5.0)))
-    ax.xaxis.set_major_formatter(matplotlib.ticker.FuncFormatter(lambda v, _: f"{v:g}"))
+    times = sorted({t for t, _, _ in points})
+    if len(times) <= 8:  # few configurations: the ticks at their times
+        ax.xaxis.set_major_locator(matplotlib.ticker.FixedLocator(times))
+        ax.xaxis.set_minor_locator(matplotlib.ticker.NullLocator())
+    else:
+        ax.xaxis.set_major_locator(matplotlib.ticker.LogLocator(subs=(1.0, 2.0, 3.0, 5.0)))
+    ax.xaxis.set_major_formatter(matplotlib.ticker.FuncFormatter(lambda v, _: f"{v:.3g}"))
     ax.xaxis.set_minor_formatter(matplotlib.ticker.NullFormatter())
+    lo, hi = min(times), max(times)
+    ax.set_xlim(lo / 1.15, hi * 1.15)  # the points off the frame's edges
+    plt.setp(ax.get_xticklabels(), rotation=30, ha="right")
     ax.set_title(f"run time against miss ratio ({len(points)} configurations; lower left is better)")
     ax.grid(True, which="both", alpha=0.3)
     ax.legend(loc="upper left", bbox_to_anchor=(1.02, 1.0), fontsize=6.5, frameon=False,
