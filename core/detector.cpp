@@ -215,6 +215,7 @@ struct Detector::Impl {
   std::vector<std::uint64_t> direct;  // views resolved exhaustively: triangle pairs, not IDs
   std::vector<Aabb> boxes;
   std::vector<std::pair<std::size_t, std::size_t>> object_pairs;
+  const std::vector<std::pair<std::size_t, std::size_t>>* only = nullptr;  // Detector::only_pairs()
   std::vector<std::size_t> order;
   // Per lane of the object-pair loops (lane 0: the calling thread): culling and exact-path scratch.
   struct Lane {
@@ -414,6 +415,7 @@ Detector::Detector(std::shared_ptr<ImageStage> stage) : stage_(std::move(stage))
 Detector::~Detector() = default;
 
 void Detector::capture_layers(std::vector<CapturedView>* sink) { impl_->capture = sink; }
+void Detector::only_pairs(const std::vector<std::pair<std::size_t, std::size_t>>* pairs) { impl_->only = pairs; }
 
 FrameResult Detector::detect(const std::vector<Object>& objects, const DetectOptions& opt) {
   FrameResult out;
@@ -453,6 +455,12 @@ void Detector::detect(const std::vector<const Object*>& object_ptrs, const Detec
   s.boxes.clear();
   for (std::size_t i = 0; i < objects.size(); ++i) s.boxes.push_back(bounds(objects[i].mesh));
   overlapping_pairs(s.boxes, s.object_pairs, s.order);
+  if (s.only)  // the caller's pairs alone (sorted, as overlapping_pairs() gives them)
+    s.object_pairs.erase(std::remove_if(s.object_pairs.begin(), s.object_pairs.end(),
+                                        [&](const std::pair<std::size_t, std::size_t>& p) {
+                                          return !std::binary_search(s.only->begin(), s.only->end(), p);
+                                        }),
+                         s.object_pairs.end());
   add_self_pairs(objects, opt, s.object_pairs);
   const auto& pairs = s.object_pairs;
   out.timings.aabb = ms_since(t0);

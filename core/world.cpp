@@ -246,8 +246,23 @@ struct World::Impl {
         c.q = a.pose * c.q;
       }
   }
-  void image_pair(const Body& a, const Body& b, const std::vector<std::uint64_t>& candidates, const DetectOptions& opt,
-                  PairResult& r, FrameResult& out);
+  // The image-routed pairs (or pair `only` alone) through the Detector in one frame.
+  static constexpr std::size_t kAllPairs = std::size_t(-1);
+  void image_pairs(const DetectOptions& opt, FrameResult& out, std::size_t only = kAllPairs);
+  std::optional<bool> batch_pairs;  // World::batch_image_pairs()
+  bool batched_image() const {
+    if (batch_pairs) return *batch_pairs;
+    const std::string& r = stage->renderer();
+    for (const char* soft : {"llvmpipe", "softpipe", "swrast"})
+      if (r.find(soft) != std::string::npos) return false;
+    return stage->backend() != "cpu";
+  }
+  // The image-routed pairs' objects (two a pair), their triangles' indices in the bodies, the
+  // pair each came from, and the object pairs the Detector is asked for.
+  std::vector<Object> image_objects;
+  std::vector<std::vector<std::uint32_t>> image_kept;
+  std::vector<std::size_t> image_of;
+  std::vector<std::pair<std::size_t, std::size_t>> image_only;
 };
 
 World::World(std::shared_ptr<ImageStage> stage) : impl_(std::make_unique<Impl>()) {
@@ -397,6 +412,7 @@ const Mesh& World::mesh(BodyId id) const { return impl_->body(id).local(); }
 const Bvh& World::tree(BodyId id) const { return impl_->body(id).tree; }
 const WorldStats& World::stats() const { return impl_->stats; }
 ImageStage& World::stage() { return *impl_->stage; }
+void World::batch_image_pairs(std::optional<bool> together) { impl_->batch_pairs = together; }
 
 Mesh World::world_mesh(BodyId id) const {
   const Body& b = impl_->body(id);
@@ -614,12 +630,13 @@ void World::Impl::collide(const DetectOptions& opt, FrameResult& out) {
   }
   out.timings.cpu = ms_since(t0);
 
-  for (std::size_t p = 0; p < pairs.size(); ++p) {
-    if (!to_image[p]) continue;
-    candidates.clear();
-    for (std::size_t k = first_task[p]; k < first_task[p + 1]; ++k)
-      candidates.insert(candidates.end(), tasks[k].candidates.begin(), tasks[k].candidates.end());
-    image_pair(bodies[ids[pairs[p].first]], bodies[ids[pairs[p].second]], candidates, opt, out.pairs[p], out);
+  if (batched_image()) {
+    image_pairs(opt, out);
+  } else {
+    for (std::size_t p = 0; p < pairs.size(); ++p) {
+      if (!to_image[p]) continue;
+      image_pairs(opt, out, p);
+    }
   }
   // Relations (containment where no contact) and, asked for, volumes: world meshes made only
   // for the pairs that need them.
@@ -646,56 +663,78 @@ void World::Impl::collide(const DetectOptions& opt, FrameResult& out) {
   out.timings.total = ms_since(t_total);
 }
 
-// The image stage on one pair: the candidates' triangles of each body, in world space, as two
-// objects (triangle k of each is the k-th of its ascending list), through the Detector; its
-// contacts mapped back to the bodies' triangles.
-void World::Impl::image_pair(const Body& a, const Body& b, const std::vector<std::uint64_t>& cands,
-                             const DetectOptions& opt, PairResult& r, FrameResult& out) {
-  std::vector<std::uint32_t> kept[2];
-  for (const std::uint64_t c : cands) {
-    kept[0].push_back(pair_a(c));
-    kept[1].push_back(pair_b(c));
-  }
-  std::vector<Object> objects(2);
-  const Body* body[2] = {&a, &b};
-  for (int s = 0; s < 2; ++s) {
-    std::sort(kept[s].begin(), kept[s].end());
-    kept[s].erase(std::unique(kept[s].begin(), kept[s].end()), kept[s].end());
-    Mesh& m = objects[s].mesh;
-    const Mesh& local = body[s]->local();
-    for (const std::uint32_t t : kept[s]) {
-      const std::uint32_t base = std::uint32_t(m.vertices.size());
-      for (const std::uint32_t v : local.triangles[t]) m.vertices.push_back(body[s]->world(v));
-      m.triangles.push_back(Tri{base, base + 1, base + 2});
+// The image stage on every pair routed there, in one frame of the Detector (one batch of views
+// for all of them): per pair, the candidates' triangles of each body, in world space, as two
+// objects (triangle k of each is the k-th of its ascending list), the Detector asked for those
+// pairs alone (Detector::only_pairs()); the contacts mapped back to the bodies' triangles.
+void World::Impl::image_pairs(const DetectOptions& opt, FrameResult& out, std::size_t only) {
+  image_objects.clear();
+  image_kept.clear();
+  image_of.clear();
+  image_only.clear();
+  for (std::size_t p = 0; p < pairs.size(); ++p) {
+    if (!to_image[p] || (only != kAllPairs && p != only)) continue;
+    const Body* body[2] = {&bodies[ids[pairs[p].first]], &bodies[ids[pairs[p].second]]};
+    std::vector<std::uint32_t> kept[2];
+    for (std::size_t k = first_task[p]; k < first_task[p + 1]; ++k)
+      for (const std::uint64_t c : tasks[k].candidates) {
+        kept[0].push_back(pair_a(c));
+        kept[1].push_back(pair_b(c));
+      }
+    const std::size_t first = image_objects.size();
+    for (int s = 0; s < 2; ++s) {
+      std::sort(kept[s].begin(), kept[s].end());
+      kept[s].erase(std::unique(kept[s].begin(), kept[s].end()), kept[s].end());
+      Object o;
+      const Mesh& local = body[s]->local();
+      for (const std::uint32_t t : kept[s]) {
+        const std::uint32_t base = std::uint32_t(o.mesh.vertices.size());
+        for (const std::uint32_t v : local.triangles[t]) o.mesh.vertices.push_back(body[s]->world(v));
+        o.mesh.triangles.push_back(Tri{base, base + 1, base + 2});
+      }
+      o.name = body[s]->name;
+      image_objects.push_back(std::move(o));
+      image_kept.push_back(std::move(kept[s]));
     }
-    objects[s].name = body[s]->name;
+    image_only.emplace_back(first, first + 1);
+    image_of.push_back(p);
   }
+  if (image_of.empty()) return;
   if (!detector) detector = std::make_unique<Detector>(stage);
   DetectOptions image = opt;
   image.stage = Stage::image;
   FrameResult inner;
-  detector->detect(objects, image, inner);
-  if (inner.pairs.empty()) return;
-  const PairResult& ir = inner.pairs.front();
-  const double pe = r.predicted_exact_ms, pi = r.predicted_image_ms;
-  const std::size_t oa = r.object_a, ob = r.object_b;
-  const Aabb roi = r.roi;
-  r = ir;
-  r.object_a = oa;
-  r.object_b = ob;
-  r.roi = roi;
-  r.predicted_exact_ms = pe;
-  r.predicted_image_ms = pi;
-  r.triangles_in_roi_a = kept[0].size();
-  r.triangles_in_roi_b = kept[1].size();
-  r.pcs.clear();  // IDs of the peeled copies, not of the bodies: the count (pcs_count) stays
-  for (Contact& c : r.colliding) {
-    c.tri_a = kept[0][c.tri_a];
-    c.tri_b = kept[1][c.tri_b];
+  struct Only {  // the Detector back to every pair, also on an exception
+    Detector& d;
+    ~Only() { d.only_pairs(nullptr); }
+  } reset_pairs{*detector};
+  detector->only_pairs(&image_only);
+  detector->detect(image_objects, image, inner);
+  for (const PairResult& ir : inner.pairs) {
+    const std::size_t i = ir.object_a / 2;
+    const std::vector<std::uint32_t>& ka = image_kept[2 * i];
+    const std::vector<std::uint32_t>& kb = image_kept[2 * i + 1];
+    PairResult& r = out.pairs[image_of[i]];
+    const double pe = r.predicted_exact_ms, pi = r.predicted_image_ms;
+    const std::size_t oa = r.object_a, ob = r.object_b;
+    const Aabb roi = r.roi;
+    r = ir;
+    r.object_a = oa;
+    r.object_b = ob;
+    r.roi = roi;
+    r.predicted_exact_ms = pe;
+    r.predicted_image_ms = pi;
+    r.triangles_in_roi_a = ka.size();
+    r.triangles_in_roi_b = kb.size();
+    r.pcs.clear();  // IDs of the peeled copies, not of the bodies: the count (pcs_count) stays
+    for (Contact& c : r.colliding) {
+      c.tri_a = ka[c.tri_a];
+      c.tri_b = kb[c.tri_b];
+    }
+    std::sort(r.colliding.begin(), r.colliding.end(), [](const Contact& x, const Contact& y) {
+      return x.tri_a < y.tri_a || (x.tri_a == y.tri_a && x.tri_b < y.tri_b);
+    });
   }
-  std::sort(r.colliding.begin(), r.colliding.end(), [](const Contact& x, const Contact& y) {
-    return x.tri_a < y.tri_a || (x.tri_a == y.tri_a && x.tri_b < y.tri_b);
-  });
   out.gl_passes += inner.gl_passes;
   out.rois_peeled += inner.rois_peeled;
   out.triangles_uploaded += inner.triangles_uploaded;

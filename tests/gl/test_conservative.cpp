@@ -6,6 +6,7 @@
 #include "peelcd/core/primitives.h"
 #include "peelcd/eval/classes.h"
 #include "peelcd/eval/scenes.h"
+#include "peelcd/core/world.h"
 
 #include <catch2/catch.hpp>
 
@@ -376,4 +377,33 @@ TEST_CASE("GPU selection: a shape new to a frame moves the resident ones, every 
         CHECK(std::binary_search(got.pairs[i].pcs.begin(), got.pairs[i].pcs.end(), IdPair{c.tri_a, c.tri_b}));
     }
   }
+}
+
+TEST_CASE("the World's image-routed pairs together in one batch or one at a time: the same contacts", "[conservative][batch][world]") {
+  // A row of rigid balls, each overlapping the next: many pairs routed to the image stage.
+  std::vector<std::shared_ptr<const Mesh>> balls;
+  for (int i = 0; i < 12; ++i)
+    balls.push_back(std::make_shared<const Mesh>(make_uv_sphere(Vec3(1.5 * i, 0.1 * (i % 3), 0.05 * i), 1.0, 12, 24)));
+  std::vector<std::vector<std::pair<std::uint32_t, std::uint32_t>>> runs;
+  for (const bool together : {true, false}) {
+    World world(make_image_stage(test_backend()));
+    world.batch_image_pairs(together);
+    for (const auto& b : balls) world.add_rigid(b, Eigen::Affine3d::Identity());
+    DetectOptions opt;
+    opt.stage = Stage::image;
+    const FrameResult& f = world.collide(opt);
+    REQUIRE(f.pairs.size() == 11);
+    std::vector<std::pair<std::uint32_t, std::uint32_t>> all;
+    for (const PairResult& p : f.pairs) {
+      INFO((together ? "together" : "one at a time") << ", pair " << p.object_a << "-" << p.object_b);
+      CHECK_FALSE(p.exact_stage);
+      const std::vector<std::uint64_t> exact = exact_colliding_pairs(*balls[p.object_a], *balls[p.object_b]);
+      CHECK(p.colliding.size() == exact.size());  // conservative: every contact, each exact
+      for (const Contact& c : p.colliding) all.emplace_back(c.tri_a + 10000u * p.object_a, c.tri_b + 10000u * p.object_b);
+    }
+    if (together) CHECK(f.gl_draws == 2u);  // one batch: its count and fill draws
+    else CHECK(f.gl_draws >= 22u);          // each pair's own frame
+    runs.push_back(all);
+  }
+  CHECK(runs[0] == runs[1]);
 }

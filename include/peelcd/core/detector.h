@@ -85,6 +85,12 @@ class Detector {
   // The same over objects held elsewhere (no copy of any mesh; none may be null).
   void detect(const std::vector<const Object*>& objects, const DetectOptions& options, FrameResult& out);
 
+  // While `pairs` is set (sorted (a, b) object pairs, a < b), detect() takes only those of the
+  // pairs whose boxes overlap, not every one: a caller that gathers many pairs' objects into one
+  // frame (the World's image-routed pairs: one batch for all of them) asks for its own pairs
+  // alone. nullptr (the default): every overlapping pair.
+  void only_pairs(const std::vector<std::pair<std::size_t, std::size_t>>* pairs);
+
   // While `sink` is set, detect() appends one CapturedView per ROI view it peels (the stage
   // reads every layer back). nullptr (the default) turns capture off.
   void capture_layers(std::vector<CapturedView>* sink);

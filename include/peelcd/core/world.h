@@ -38,6 +38,7 @@
 #include "peelcd/core/detector.h"
 
 #include <memory>
+#include <optional>
 #include <string>
 #include <vector>
 
@@ -112,6 +113,13 @@ class World {
 
   const WorldStats& stats() const;
   ImageStage& stage();
+
+  // The pairs routed to the image stage go to it together, in one frame of the stage (one batch
+  // of views: on an NVIDIA H200, the 400-ball pile's image stage 84 ms a frame instead of 734),
+  // or one at a time (each pair's views alone: faster where GL runs on the CPU, llvmpipe 122 ms
+  // against 211). Unset: together on a GPU, one at a time on a software renderer (its
+  // GL_RENDERER names llvmpipe, softpipe or swrast) and on the CPU stage.
+  void batch_image_pairs(std::optional<bool> together);
 
  private:
   struct Impl;
