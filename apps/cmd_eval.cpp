@@ -93,6 +93,10 @@ struct CalibrateArgs {
 };
 
 int run_calibrate(const CalibrateArgs& a) {
+  if (!a.write_costs.empty()) {  // before any work: never onto the meshes calibrate reads
+    check_output_path(a.write_costs, "peelcd calibrate: --write-costs");
+    refuse_overwriting_data(a.write_costs, "peelcd calibrate: --write-costs");
+  }
   Runner runner = make_runner(a.backend, gl::GlOptions{});
   std::printf("peelcd calibrate: %s (%s); median of %d frames per stage\n", runner.backend().c_str(),
               runner.renderer().c_str(), a.repeat);

@@ -517,3 +517,5 @@ string(REPLACE "box_unit.obj" "nowhere.obj" case_json "${case_json}")
 file(WRITE ${WORK}/copied_golden/boxes_crossing/case.json "${case_json}")
 expect("golden compare: a mesh that is nowhere" 2 "nowhere.obj': no such file \\(referenced by '.*boxes_crossing/case.json': objects\\[0\\]"
        golden compare boxes_crossing --golden-dir ${WORK}/copied_golden)
+expect("calibrate --write-costs onto a fixture mesh" 2 "inside peelcd's own data" calibrate --backend cpu
+       --write-costs ${FIXTURES}/meshes/bunny_3k.obj)
