@@ -72,7 +72,8 @@ say() { echo "$*" | tee -a "$log"; }
 # Runs a command, its output into the log (and FILE when given), and says how it ended.
 step() {
   local name="$1" file="$2"; shift 2
-  say "+ $*"
+  local shown="$*"
+  say "+ ${shown//$bin/peelcd}"  # the record names the command, not this machine's path to it
   local t0=$(date +%s%N) rc
   if [ -n "$file" ]; then
     timeout "${STEP_TIMEOUT:-600}" "$@" >"$out/$file" 2>&1; rc=$?; cat "$out/$file" >>"$log"
@@ -103,7 +104,7 @@ say "peelcd device check, $date (UTC)$([ $quick = 1 ] && echo ', --quick (llvmpi
 say "renderer: $renderer"
 [ -n "$driver" ] && say "device, driver: $driver"
 say "host: $(uname -srm), $(nproc) cores"
-say "binary: $bin"
+say "binary: $(basename "$bin"), peelcd $("$bin" --version 2>/dev/null | cut -d' ' -f2)"
 
 # 1. The goldens, both resolves (the GPU resolve is what a GPU runs by default).
 for resolve in gpu host; do
