@@ -167,11 +167,13 @@ bool point_inside(const Mesh& container, const Vec3& q) {
   return crossings % 2 == 1;
 }
 
+// Box x lies within box y (closed; both non-empty): only then can x's mesh be inside y's.
+static bool within(const Aabb& x, const Aabb& y) {
+  return !x.empty() && !y.empty() && (x.lo.array() >= y.lo.array()).all() && (x.hi.array() <= y.hi.array()).all();
+}
+
 Relation touching_relation(const Mesh& a, const Mesh& b, const Aabb& ba, const Aabb& bb,
                            const std::vector<Contact>& contacts, std::string& note) {
-  const auto within = [](const Aabb& x, const Aabb& y) {
-    return !x.empty() && !y.empty() && (x.lo.array() >= y.lo.array()).all() && (x.hi.array() <= y.hi.array()).all();
-  };
   for (int side = 0; side < 2; ++side) {
     const Mesh& inner = side == 0 ? a : b;
     const Mesh& outer = side == 0 ? b : a;
@@ -209,9 +211,6 @@ Relation relate(const Mesh& a, const Mesh& b, const Aabb& ba, const Aabb& bb, co
                 std::string& note) {
   note.clear();
   if (!contacts.empty()) return contact_relation(contacts);
-  const auto within = [](const Aabb& x, const Aabb& y) {
-    return !x.empty() && !y.empty() && (x.lo.array() >= y.lo.array()).all() && (x.hi.array() <= y.hi.array()).all();
-  };
   // No contact: one is inside the other, or they are disjoint. Only a mesh whose box lies within
   // the other's can be inside it.
   for (int side = 0; side < 2; ++side) {
