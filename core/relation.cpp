@@ -319,7 +319,7 @@ VolumeEstimate overlap_volume(const Mesh& a, const Mesh& b, const Aabb& roi, int
   VolumeEstimate e;
   e.resolution = resolution;
   e.method = "rays through texel centres along x, y and z over the overlap box (CPU), the volume from z, "
-             "the error from the three axes and half the resolution";
+             "the error from the three axes and half the resolution (3x their largest difference, at least one texel column)";
   for (int side = 0; side < 2; ++side) {
     const std::string problem = analyse_shape(side == 0 ? a : b).problem();
     if (!problem.empty()) {
@@ -335,7 +335,12 @@ VolumeEstimate overlap_volume(const Mesh& a, const Mesh& b, const Aabb& roi, int
   cast_axis(a, b, roi, 2, resolution / 2, half_v, half_g, xs);
   e.volume = v[2];
   e.gradient = Vec3(g[0], g[1], g[2]);
-  e.error = std::max({std::abs(v[0] - v[2]), std::abs(v[1] - v[2]), std::abs(half_v - v[2])});
+  // The estimate: kVolumeErrorFactor times the largest difference to the other three casts, and
+  // never less than one texel column of the z cast (a sliver between the rays of every cast).
+  const double spread = std::max({std::abs(v[0] - v[2]), std::abs(v[1] - v[2]), std::abs(half_v - v[2])});
+  const Vec3 ext = roi.hi - roi.lo;
+  const double column = ext.x() * ext.y() * ext.z() / (double(resolution) * double(resolution));
+  e.error = std::max(kVolumeErrorFactor * spread, column);
   return e;
 }
 
