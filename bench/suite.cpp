@@ -1,5 +1,6 @@
 #include "peelcd/bench/suite.h"
 
+#include "peelcd/bench/float_peers.h"
 #include "peelcd/bench/floor.h"
 #include "peelcd/bench/peers.h"
 #include "peelcd/core/id_map.h"
@@ -55,7 +56,7 @@ Score score_peer(const PeerFrame& exact, const PeerFrame& peer) {
   return total;
 }
 
-enum class Kind { world, frame, cgal, fcl_refit, fcl_rebuild, floor_box, floor_culled };
+enum class Kind { world, frame, cgal, fcl_refit, fcl_rebuild, embree_refit, embree_rebuild, bullet, floor_box, floor_culled };
 
 struct Row {
   std::string name, column;
@@ -189,6 +190,9 @@ std::string run_suite(const Suite& suite) {
   row("CGAL, cropped to the overlap box", "CGAL", Kind::cgal);
   row("FCL 0.7, deforming refit", "FCL refit", Kind::fcl_refit);
   row("FCL 0.7, deforming rebuilt cropped", "FCL build", Kind::fcl_rebuild);
+  row("Embree 3 rtcCollide, refit", "Embree rf", Kind::embree_refit);
+  row("Embree 3 rtcCollide, rebuilt low", "Embree lo", Kind::embree_rebuild);
+  row("Bullet 3 GImpact, refit", "Bullet", Kind::bullet);
   // The floors: one bare draw of every triangle touching the overlap box (the paper's ROI), and
   // of the triangles contact culling keeps (what the image-stage configurations draw).
   DetectOptions floor1 = point, cfloor1 = point;
@@ -198,13 +202,16 @@ std::string run_suite(const Suite& suite) {
   cfloor1.edge_texels = edge_texels_of(image);  // the conservative image stage's tiles
   row("floor: 1 bare draw, overlap box", "floor", Kind::floor_box, floor1, gl_base);
   row("floor: 1 bare draw, culled", "cfloor", Kind::floor_culled, cfloor1, gl_base);
-  const std::size_t cg = first_peer, fr = first_peer + 1, fb = first_peer + 2, fl = first_peer + 3, cfl = first_peer + 4;
+  const std::size_t cg = first_peer, fr = first_peer + 1, fb = first_peer + 2, fl = first_peer + 6, cfl = first_peer + 7;
   for (Row& r : rows) {
     r.phase_ms.assign(std::size_t(std::max(1, suite.phases)), {});
     if (r.kind == Kind::world) r.world = std::make_unique<World>(suite.stage);
   }
   FclPeer fcl_refit(FclPeer::Deforming::refit, threads);
   FclPeer fcl_rebuild(FclPeer::Deforming::rebuild, threads);
+  EmbreePeer embree_refit(EmbreePeer::Update::refit, threads);
+  EmbreePeer embree_rebuild(EmbreePeer::Update::rebuild_low, threads);
+  BulletPeer bullet(threads);
 
   // One frame of one peelcd row: a World brought to the frame (timed with it: the update is
   // part of its frame, as FCL's refits are of FCL's), or the frame API.
@@ -233,6 +240,9 @@ std::string run_suite(const Suite& suite) {
       if (r.peelcd()) run_peelcd(r, objects);
     fcl_refit.frame(objects);
     fcl_rebuild.frame(objects);
+    embree_refit.frame(objects);
+    embree_rebuild.frame(objects);
+    bullet.frame(objects);
   }
   std::size_t rois = 0, rois_exact = 0, world_candidates = 0, triangles = 0;
   for (std::size_t f = 0; f < suite.frames; ++f) {
@@ -257,8 +267,15 @@ std::string run_suite(const Suite& suite) {
           s = Score{ref.pairs, ref.pairs, 0, 0};
           break;
         case Kind::fcl_refit:
-        case Kind::fcl_rebuild: {
-          const PeerFrame p = (r.kind == Kind::fcl_refit ? fcl_refit : fcl_rebuild).frame(objects);
+        case Kind::fcl_rebuild:
+        case Kind::embree_refit:
+        case Kind::embree_rebuild:
+        case Kind::bullet: {
+          const PeerFrame p = r.kind == Kind::fcl_refit        ? fcl_refit.frame(objects)
+                              : r.kind == Kind::fcl_rebuild    ? fcl_rebuild.frame(objects)
+                              : r.kind == Kind::embree_refit   ? embree_refit.frame(objects)
+                              : r.kind == Kind::embree_rebuild ? embree_rebuild.frame(objects)
+                                                               : bullet.frame(objects);
           ms = p.ms;
           s = score_peer(ref, p);
           break;
@@ -291,6 +308,10 @@ std::string run_suite(const Suite& suite) {
   for (std::size_t m = 0; m < rows.size(); ++m) med[m] = median(rows[m].ms);
   // The FCL ratio is against the faster of its two ways with deforming objects.
   const std::size_t fc = med[fr] <= med[fb] ? fr : fb;
+  // The best peer: the fastest of CGAL, FCL, Embree and Bullet rows.
+  std::size_t best = cg;
+  for (std::size_t m = cg; m < fl; ++m)
+    if (med[m] < med[best]) best = m;
   const int tile = suite.res ? suite.res : base.budget;
   std::printf("peelcd bench: %s, %zu frames, %zu objects, %zu triangles, %s, %s (%s), medians per frame after an untimed pass\n",
               suite.scene.c_str(), suite.frames, objects.size(), triangles,
@@ -305,8 +326,8 @@ std::string run_suite(const Suite& suite) {
   std::printf("World: %.0f candidate couples per frame (mean, default row); frame API router: %zu of %zu ROIs to the "
               "exact CPU path over the timed frames\n",
               suite.frames ? double(world_candidates) / double(suite.frames) : 0.0, rois_exact, rois);
-  std::printf("%-38s %10s %9s %8s %7s %8s %8s %8s\n", "method", "median ms", "stage ms", "miss", "false", "x CGAL", "x FCL",
-              "x floor");
+  std::printf("%-38s %10s %9s %8s %7s %8s %8s %8s %8s\n", "method", "median ms", "stage ms", "miss", "false", "x CGAL",
+              "x FCL", "x best", "x floor");
   for (std::size_t m = 0; m < rows.size(); ++m) {
     const Row& r = rows[m];
     std::printf("%-38s %10.2f", r.name.c_str(), med[m]);
@@ -320,23 +341,26 @@ std::string run_suite(const Suite& suite) {
       std::printf(" %7.2f%% %7zu", 100.0 * r.score.miss_ratio(), r.score.false_contacts);
     if (m < cg) {
       const std::size_t floor = r.opt.cull == Cull::box ? fl : cfl;
-      std::printf(" %8.2f %8.2f %8.2f\n", med[m] / med[cg], med[m] / med[fc], med[floor] > 0 ? med[m] / med[floor] : 0.0);
+      std::printf(" %8.2f %8.2f %8.2f %8.2f\n", med[m] / med[cg], med[m] / med[fc], med[m] / med[best],
+                  med[floor] > 0 ? med[m] / med[floor] : 0.0);
     } else {
       std::printf("\n");
     }
   }
-  std::printf("(miss / false: over all frames against the exact pairs; FCL's triangle test is not exact; the floor finds nothing.\n"
+  std::printf("(miss / false: over all frames against the exact pairs; FCL's, Embree's and Bullet's triangle tests are not exact\n"
+              " (Embree, Bullet: Moller's test in float); the floor finds nothing.\n"
               " stage ms: the image stage's GPU work, timed on the host to its end (0 on the exact path); the rest is host work.\n"
-              " x CGAL: against the cropped CGAL peer; x FCL: against the faster FCL row (%s); x floor: against one bare\n"
+              " x CGAL: against the cropped CGAL peer; x FCL: against the faster FCL row (%s); x best: against the fastest\n"
+              " peer row (%s); x floor: against one bare\n"
               " draw of the triangles the configuration would draw, one view. FCL trees kept: %zu (refit row), %zu (rebuilt\n"
               " row); refits %zu; cropped per-pair trees %zu and %zu, all frames. World rows: their bodies brought to each\n"
               " frame (poses; a deforming body's vertices and refit) inside the time.)\n",
-              fc == fr ? "refit" : "rebuilt", fcl_refit.builds(), fcl_rebuild.builds(), fcl_refit.refits(),
+              fc == fr ? "refit" : "rebuilt", rows[best].name.c_str(), fcl_refit.builds(), fcl_rebuild.builds(), fcl_refit.refits(),
               fcl_refit.pair_builds(), fcl_rebuild.pair_builds());
   if (suite.phases > 1) {
     std::printf("\nper phase, median ms:\n%-7s", "phase");
     for (const Row& r : rows) std::printf(" %9s", r.column.c_str());
-    std::printf(" %9s %9s\n", "dflt/CGAL", "dflt/FCL");
+    std::printf(" %9s %9s %9s\n", "dflt/CGAL", "dflt/FCL", "dflt/best");
     for (int p = 0; p < suite.phases; ++p) {
       std::printf("(%c)    ", char('a' + p));
       if (rows[0].phase_ms[std::size_t(p)].empty()) {  // fewer frames than phases
@@ -345,7 +369,8 @@ std::string run_suite(const Suite& suite) {
       }
       std::vector<double> pm(rows.size());
       for (std::size_t m = 0; m < rows.size(); ++m) std::printf(" %9.2f", pm[m] = median(rows[m].phase_ms[std::size_t(p)]));
-      std::printf(" %9.2f %9.2f\n", pm[0] / pm[cg], pm[0] / std::min(pm[fr], pm[fb]));
+      const double best_peer = *std::min_element(pm.begin() + std::ptrdiff_t(cg), pm.begin() + std::ptrdiff_t(fl));
+      std::printf(" %9.2f %9.2f %9.2f\n", pm[0] / pm[cg], pm[0] / std::min(pm[fr], pm[fb]), pm[0] / best_peer);
     }
   }
   return csv;

@@ -23,6 +23,7 @@ packages=(
   libopenexr-dev libpng-dev                        # layer dumps and goldens (EXR), previews (PNG)
   chromium                                         # the viewer test (headless)
   libfcl-dev                                       # benchmark peer: FCL 0.7
+  libembree-dev libbullet-dev                      # benchmark peers: Embree 3 rtcCollide, Bullet 3 GImpact
   catch2                                           # tests (Catch2 v2)
   python3 python3-jsonschema                       # tests: dump meta.json against its JSON Schema
   python3-matplotlib                               # sweep --plot, scripts/plot_*.py

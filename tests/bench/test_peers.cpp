@@ -3,8 +3,11 @@
 // frames of the crowd (rigid, deforming and mixed pairs). FCL keeps a rigid shape's tree: its
 // builds do not grow with the frames. (FCL's triangle test is not exact: its contacts are
 // checked on scenes far from the degenerate cases where double rounding decides.)
+#include "peelcd/bench/float_peers.h"
 #include "peelcd/bench/peers.h"
 #include "peelcd/core/broad_phase.h"
+#include "peelcd/core/primitives.h"
+#include "peelcd/core/self.h"
 #include "peelcd/core/reference.h"
 #include "peelcd/eval/classes.h"
 #include "peelcd/eval/scenes.h"
@@ -93,4 +96,87 @@ TEST_CASE("FCL keeps a rigid shape's tree across frames", "[peers]") {
   CHECK(fcl.builds() == 1);  // one shape, one tree shared by both objects, five frames
   CHECK(fcl.refits() == 0);
   CHECK(fcl.pair_builds() == 0);
+}
+
+// Embree's and Bullet's float test agrees with the exact one away from rounding: the crowd
+// (rigid, deforming and mixed pairs over frames), two rigid spheres (A's frame kept, B mapped)
+// and a self pair (a folded sheet), with threads.
+TEST_CASE("the Embree and Bullet peers find the exact pairs on the crowd, a rigid pair and a self pair", "[peers]") {
+  const auto crowd = make_crowd(30, 4);
+  bench::EmbreePeer embree_refit(bench::EmbreePeer::Update::refit, 2), embree_low(bench::EmbreePeer::Update::rebuild_low, 1);
+  bench::BulletPeer bullet(2);
+  std::vector<Object> objects;
+  for (std::size_t f = 0; f < crowd->frames(); ++f) {
+    crowd->frame(f, objects);
+    INFO("crowd frame " << f);
+    const bench::PeerFrame want = exact(objects);
+    require_same(want, embree_refit.frame(objects));
+    require_same(want, embree_low.frame(objects));
+    require_same(want, bullet.frame(objects));
+  }
+  CHECK(bullet.builds() == 7);  // one shared rigid shape, 6 breathing balls built once, then refitted
+  CHECK(bullet.refits() == 6 * (crowd->frames() - 1));
+
+  auto shape = std::make_shared<const Mesh>(uv_sphere(Vec3::Zero(), 1.0, 16, 8));
+  bench::EmbreePeer e2(bench::EmbreePeer::Update::refit, 1);
+  bench::BulletPeer b2(1);
+  std::vector<Object> pair(2);
+  for (int f = 0; f < 4; ++f) {
+    for (int i = 0; i < 2; ++i) {
+      const Eigen::Affine3d pose = Eigen::Translation3d(Vec3(1.5 * i + 0.01 * f + 0.1, 0.1 * i, 0)) *
+                                   Eigen::AngleAxisd(0.3 * f + i, Vec3(0, 0, 1));
+      pair[std::size_t(i)].mesh = transformed(*shape, Transform{});
+      for (Vec3& v : pair[std::size_t(i)].mesh.vertices) v = pose * v;
+      pair[std::size_t(i)].rigid = RigidMotion{shape, pose};
+    }
+    INFO("rigid pair frame " << f);
+    const bench::PeerFrame want = exact(pair);
+    REQUIRE_FALSE(want.per_pair.empty());
+    require_same(want, e2.frame(pair));
+    require_same(want, b2.frame(pair));
+  }
+  CHECK(e2.builds() == 2);  // A in its frame, B once; then B refitted as it moves
+  CHECK(b2.builds() == 1);  // one shape for both
+
+  // A self pair: one object made of two crossing spheres (a folded sheet's coplanar neighbours
+  // are where float rounding decides, so not here).
+  std::vector<Object> sheet(1);
+  sheet[0].mesh = uv_sphere(Vec3::Zero(), 1.0, 16, 8);
+  const Mesh other = uv_sphere(Vec3(1.2, 0.3, 0.1), 0.8, 16, 8);
+  const auto base = std::uint32_t(sheet[0].mesh.vertices.size());
+  sheet[0].mesh.vertices.insert(sheet[0].mesh.vertices.end(), other.vertices.begin(), other.vertices.end());
+  for (const Tri& t : other.triangles) sheet[0].mesh.triangles.push_back({t[0] + base, t[1] + base, t[2] + base});
+  sheet[0].self = true;
+  bench::PeerFrame want;
+  want.objects = {{0, 0}};
+  want.per_pair = {exact_self_pairs(sheet[0].mesh)};
+  REQUIRE_FALSE(want.per_pair[0].empty());
+  require_same(want, bench::EmbreePeer(bench::EmbreePeer::Update::refit, 1).frame(sheet));
+  require_same(want, bench::BulletPeer(1).frame(sheet));
+}
+
+TEST_CASE("the float triangle test: crossing, touching at a vertex, coplanar overlapping, disjoint", "[peers]") {
+  const std::array<float, 9> t = {0, 0, 0, 1, 0, 0, 0, 1, 0};
+  CHECK(bench::tri_tri_float(t, {0.2f, 0.2f, -1, 0.2f, 0.2f, 1, 0.9f, 0.9f, 1}));   // pierces
+  CHECK_FALSE(bench::tri_tri_float(t, {0.2f, 0.2f, 0.1f, 0.3f, 0.2f, 1, 0.2f, 0.3f, 1}));  // above
+  CHECK(bench::tri_tri_float(t, {0.5f, 0.5f, 0, 2, 2, 0, 0.5f, 2, 0}));  // coplanar, overlapping
+  CHECK_FALSE(bench::tri_tri_float(t, {2, 2, 0, 3, 2, 0, 2, 3, 0}));     // coplanar, apart
+}
+
+// A deforming object that travels: Bullet's quantized box set is refitted while its vertices stay
+// within the range fixed at its build, built again when they leave it; every frame exact.
+TEST_CASE("the Bullet peer follows a deforming object beyond its first bounds", "[peers]") {
+  bench::BulletPeer bullet(1);
+  bench::EmbreePeer embree(bench::EmbreePeer::Update::refit, 1);
+  std::vector<Object> objects(2);
+  objects[0].mesh = uv_sphere(Vec3::Zero(), 1.0, 24, 12);
+  for (int f = 0; f < 10; ++f) {
+    objects[1].mesh = uv_sphere(Vec3(-3.0 + 0.6 * f, 0.2, 0.1), 0.7, 24, 12);
+    INFO("frame " << f);
+    const bench::PeerFrame want = exact(objects);
+    require_same(want, bullet.frame(objects));
+    require_same(want, embree.frame(objects));
+  }
+  CHECK(bullet.builds() > 2);   // built again once it left the first range
+  CHECK(bullet.refits() > 0);   // refitted while inside it
 }

@@ -1,0 +1,573 @@
+#include "peelcd/bench/float_peers.h"
+
+#include "peelcd/core/broad_phase.h"
+#include "peelcd/core/id_map.h"
+#include "peelcd/core/self.h"
+#include "peelcd/core/worker_pool.h"
+
+#include <embree3/rtcore.h>
+
+#include <BulletCollision/CollisionShapes/btTriangleIndexVertexArray.h>
+#include <BulletCollision/Gimpact/btGImpactQuantizedBvh.h>
+#include <BulletCollision/Gimpact/btGImpactShape.h>
+
+#include <algorithm>
+#include <atomic>
+#include <chrono>
+#include <cmath>
+#include <limits>
+#include <map>
+#include <mutex>
+#include <stdexcept>
+#include <string>
+
+namespace peelcd::bench {
+namespace {
+
+using Clock = std::chrono::steady_clock;
+double ms_since(Clock::time_point t0) { return std::chrono::duration<double, std::milli>(Clock::now() - t0).count(); }
+
+template <class Body>
+void parallel_for(WorkerPool* pool, std::size_t n, Body body) {
+  if (!pool || n < 2) {
+    for (std::size_t i = 0; i < n; ++i) body(i);
+    return;
+  }
+  std::atomic<std::size_t> next{0};
+  auto lane = [&](unsigned) {
+    for (std::size_t i; (i = next.fetch_add(1)) < n;) body(i);
+  };
+  pool->run(lane);
+}
+
+// --- Moller's test, float ------------------------------------------------------------------
+
+using F3 = std::array<float, 3>;
+inline F3 sub(const float* a, const float* b) { return {a[0] - b[0], a[1] - b[1], a[2] - b[2]}; }
+inline F3 cross(const F3& a, const F3& b) {
+  return {a[1] * b[2] - a[2] * b[1], a[2] * b[0] - a[0] * b[2], a[0] * b[1] - a[1] * b[0]};
+}
+inline float dot(const F3& a, const float* b) { return a[0] * b[0] + a[1] * b[1] + a[2] * b[2]; }
+
+// 2D: segments p0p1 and q0q1 meet (closed).
+bool segments_meet_2d(const float* p0, const float* p1, const float* q0, const float* q1) {
+  const auto orient = [](const float* a, const float* b, const float* c) {
+    return (b[0] - a[0]) * (c[1] - a[1]) - (b[1] - a[1]) * (c[0] - a[0]);
+  };
+  const float d1 = orient(q0, q1, p0), d2 = orient(q0, q1, p1), d3 = orient(p0, p1, q0), d4 = orient(p0, p1, q1);
+  if (((d1 > 0 && d2 < 0) || (d1 < 0 && d2 > 0)) && ((d3 > 0 && d4 < 0) || (d3 < 0 && d4 > 0))) return true;
+  const auto on = [](const float* a, const float* b, const float* c) {
+    return std::min(a[0], b[0]) <= c[0] && c[0] <= std::max(a[0], b[0]) && std::min(a[1], b[1]) <= c[1] &&
+           c[1] <= std::max(a[1], b[1]);
+  };
+  return (d1 == 0 && on(q0, q1, p0)) || (d2 == 0 && on(q0, q1, p1)) || (d3 == 0 && on(p0, p1, q0)) ||
+         (d4 == 0 && on(p0, p1, q1));
+}
+
+bool point_in_tri_2d(const float* p, const float* a, const float* b, const float* c) {
+  const auto orient = [](const float* u, const float* v, const float* w) {
+    return (v[0] - u[0]) * (w[1] - u[1]) - (v[1] - u[1]) * (w[0] - u[0]);
+  };
+  const float d0 = orient(a, b, p), d1 = orient(b, c, p), d2 = orient(c, a, p);
+  return (d0 >= 0 && d1 >= 0 && d2 >= 0) || (d0 <= 0 && d1 <= 0 && d2 <= 0);
+}
+
+bool coplanar_tri_tri(const F3& n, const float* v0, const float* v1, const float* v2, const float* u0, const float* u1,
+                      const float* u2) {
+  // Project onto the plane of the two largest components of the normal.
+  const float a0 = std::abs(n[0]), a1 = std::abs(n[1]), a2 = std::abs(n[2]);
+  int i0, i1;
+  if (a0 > a1) {
+    if (a0 > a2) i0 = 1, i1 = 2;
+    else i0 = 0, i1 = 1;
+  } else {
+    if (a2 > a1) i0 = 0, i1 = 1;
+    else i0 = 0, i1 = 2;
+  }
+  const float v[3][2] = {{v0[i0], v0[i1]}, {v1[i0], v1[i1]}, {v2[i0], v2[i1]}};
+  const float u[3][2] = {{u0[i0], u0[i1]}, {u1[i0], u1[i1]}, {u2[i0], u2[i1]}};
+  for (int i = 0; i < 3; ++i)
+    for (int j = 0; j < 3; ++j)
+      if (segments_meet_2d(v[i], v[(i + 1) % 3], u[j], u[(j + 1) % 3])) return true;
+  return point_in_tri_2d(v[0], u[0], u[1], u[2]) || point_in_tri_2d(u[0], v[0], v[1], v[2]);
+}
+
+// The interval of one triangle on the line of the two planes (Moller's NEWCOMPUTE_INTERVALS);
+// false: the triangles are coplanar.
+bool intervals(float vv0, float vv1, float vv2, float d0, float d1, float d2, float d0d1, float d0d2, float& a,
+               float& b, float& c, float& x0, float& x1) {
+  if (d0d1 > 0.0f) {
+    a = vv2, b = (vv0 - vv2) * d2, c = (vv1 - vv2) * d2, x0 = d2 - d0, x1 = d2 - d1;
+  } else if (d0d2 > 0.0f) {
+    a = vv1, b = (vv0 - vv1) * d1, c = (vv2 - vv1) * d1, x0 = d1 - d0, x1 = d1 - d2;
+  } else if (d1 * d2 > 0.0f || d0 != 0.0f) {
+    a = vv0, b = (vv1 - vv0) * d0, c = (vv2 - vv0) * d0, x0 = d0 - d1, x1 = d0 - d2;
+  } else if (d1 != 0.0f) {
+    a = vv1, b = (vv0 - vv1) * d1, c = (vv2 - vv1) * d1, x0 = d1 - d0, x1 = d1 - d2;
+  } else if (d2 != 0.0f) {
+    a = vv2, b = (vv0 - vv2) * d2, c = (vv1 - vv2) * d2, x0 = d2 - d0, x1 = d2 - d1;
+  } else {
+    return false;
+  }
+  return true;
+}
+
+}  // namespace
+
+bool tri_tri_float(const std::array<float, 9>& t, const std::array<float, 9>& u) {
+  // Moller's optional snap of plane distances below an absolute epsilon is off: on unnormalized
+  // normals it is scale dependent (1e-6 on a millimetre triangle's normal snaps a millimetre).
+  constexpr float kEps = 0.0f;
+  const float *v0 = &t[0], *v1 = &t[3], *v2 = &t[6], *u0 = &u[0], *u1 = &u[3], *u2 = &u[6];
+  const F3 n1 = cross(sub(v1, v0), sub(v2, v0));
+  const float d1 = -dot(n1, v0);
+  float du0 = dot(n1, u0) + d1, du1 = dot(n1, u1) + d1, du2 = dot(n1, u2) + d1;
+  if (std::abs(du0) < kEps) du0 = 0.0f;
+  if (std::abs(du1) < kEps) du1 = 0.0f;
+  if (std::abs(du2) < kEps) du2 = 0.0f;
+  const float du0du1 = du0 * du1, du0du2 = du0 * du2;
+  if (du0du1 > 0.0f && du0du2 > 0.0f) return false;
+  const F3 n2 = cross(sub(u1, u0), sub(u2, u0));
+  const float d2 = -dot(n2, u0);
+  float dv0 = dot(n2, v0) + d2, dv1 = dot(n2, v1) + d2, dv2 = dot(n2, v2) + d2;
+  if (std::abs(dv0) < kEps) dv0 = 0.0f;
+  if (std::abs(dv1) < kEps) dv1 = 0.0f;
+  if (std::abs(dv2) < kEps) dv2 = 0.0f;
+  const float dv0dv1 = dv0 * dv1, dv0dv2 = dv0 * dv2;
+  if (dv0dv1 > 0.0f && dv0dv2 > 0.0f) return false;
+  const F3 d = cross(n1, n2);
+  int index = 0;
+  float max = std::abs(d[0]);
+  if (std::abs(d[1]) > max) max = std::abs(d[1]), index = 1;
+  if (std::abs(d[2]) > max) index = 2;
+  float a, b, c, x0, x1, e, f, g, y0, y1;
+  if (!intervals(v0[index], v1[index], v2[index], dv0, dv1, dv2, dv0dv1, dv0dv2, a, b, c, x0, x1))
+    return coplanar_tri_tri(n1, v0, v1, v2, u0, u1, u2);
+  if (!intervals(u0[index], u1[index], u2[index], du0, du1, du2, du0du1, du0du2, e, f, g, y0, y1))
+    return coplanar_tri_tri(n1, v0, v1, v2, u0, u1, u2);
+  const float xx = x0 * x1, yy = y0 * y1, xxyy = xx * yy;
+  float tmp = a * xxyy;
+  float i1a = tmp + b * x1 * yy, i1b = tmp + c * x0 * yy;
+  tmp = e * xxyy;
+  float i2a = tmp + f * xx * y1, i2b = tmp + g * xx * y0;
+  if (i1a > i1b) std::swap(i1a, i1b);
+  if (i2a > i2b) std::swap(i2a, i2b);
+  return !(i1b < i2a || i2b < i1a);
+}
+
+namespace {
+
+// A body's float geometry: vertices (x, y, z), triangles (3 indices), self adjacency.
+struct FloatMesh {
+  std::vector<float> v;
+  std::vector<std::uint32_t> t;
+  void corners(std::uint32_t f, std::array<float, 9>& out) const {
+    for (int k = 0; k < 3; ++k)
+      for (int c = 0; c < 3; ++c) out[std::size_t(3 * k + c)] = v[3 * std::size_t(t[3 * std::size_t(f) + std::size_t(k)]) + std::size_t(c)];
+  }
+  void set_vertices(const std::vector<Vec3>& vs, const Eigen::Affine3d* pose = nullptr) {
+    v.resize(3 * vs.size());
+    for (std::size_t i = 0; i < vs.size(); ++i) {
+      const Vec3 p = pose ? Vec3(*pose * vs[i]) : vs[i];
+      v[3 * i] = float(p.x()), v[3 * i + 1] = float(p.y()), v[3 * i + 2] = float(p.z());
+    }
+  }
+  void set_triangles(const std::vector<Tri>& ts) {
+    t.resize(3 * ts.size());
+    for (std::size_t i = 0; i < ts.size(); ++i)
+      for (int k = 0; k < 3; ++k) t[3 * i + std::size_t(k)] = ts[i][std::size_t(k)];
+  }
+};
+
+// The triangle pairs of one object pair, collected from a traversal's candidate batches (the
+// float test; self: no triangle with itself, none sharing a vertex, each couple once).
+struct Collector {
+  const FloatMesh* a = nullptr;
+  const FloatMesh* b = nullptr;
+  const Mesh* self_mesh = nullptr;  // non-null: a self pair
+  const std::vector<std::uint32_t>* rep = nullptr;
+  bool move_b = false;  // B's corners mapped by `rel` (row-major 3 x 4) before the test
+  float rel[12] = {};
+  std::vector<std::uint64_t> hits;
+  std::mutex mutex;
+  template <class Pairs>
+  void test(const Pairs& pairs, std::size_t n) {
+    std::vector<std::uint64_t> local;
+    std::array<float, 9> ta, tb;
+    for (std::size_t i = 0; i < n; ++i) {
+      std::uint32_t x = pairs(i).first, y = pairs(i).second;
+      if (self_mesh) {
+        if (x == y) continue;
+        if (x > y) std::swap(x, y);
+        if (triangles_adjacent(*self_mesh, *rep, x, y)) continue;
+      }
+      a->corners(x, ta);
+      b->corners(y, tb);
+      if (move_b)
+        for (int k = 0; k < 9; k += 3) {
+          const float x0 = tb[std::size_t(k)], x1 = tb[std::size_t(k + 1)], x2 = tb[std::size_t(k + 2)];
+          for (int r = 0; r < 3; ++r)
+            tb[std::size_t(k + r)] = rel[4 * r] * x0 + rel[4 * r + 1] * x1 + rel[4 * r + 2] * x2 + rel[4 * r + 3];
+        }
+      if (tri_tri_float(ta, tb)) local.push_back(pack_pair(x, y));
+    }
+    if (local.empty()) return;
+    std::lock_guard<std::mutex> lock(mutex);
+    hits.insert(hits.end(), local.begin(), local.end());
+  }
+  std::vector<std::uint64_t> take() {
+    std::sort(hits.begin(), hits.end());
+    hits.erase(std::unique(hits.begin(), hits.end()), hits.end());
+    return std::move(hits);
+  }
+};
+
+bool same_pose(const Eigen::Affine3d& a, const Eigen::Affine3d& b) { return a.matrix() == b.matrix(); }
+
+}  // namespace
+
+// --- Embree --------------------------------------------------------------------------------
+
+struct EmbreePeer::Impl {
+  struct Body {
+    RTCScene scene = nullptr;
+    RTCGeometry geometry = nullptr;
+    FloatMesh mesh;
+    std::shared_ptr<const Mesh> shape;  // the rigid shape its vertices came from (or null)
+    Eigen::Affine3d placed = Eigen::Affine3d::Identity();  // the pose its vertices were mapped by
+    bool in_a_frame = false;            // two rigid objects: B's vertices in A's frame
+    std::vector<std::uint32_t> rep;     // self adjacency (Object::self)
+    std::size_t triangles = 0;
+    ~Body() {
+      if (scene) rtcReleaseScene(scene);
+    }
+  };
+  Update update;
+  unsigned threads;
+  RTCDevice device = nullptr;
+  std::unique_ptr<WorkerPool> pool;
+  std::vector<std::unique_ptr<Body>> bodies;
+  std::size_t builds = 0, refits = 0;
+
+  static void bounds(const RTCBoundsFunctionArguments* args) {
+    const auto* m = static_cast<const FloatMesh*>(args->geometryUserPtr);
+    const std::uint32_t* t = &m->t[3 * std::size_t(args->primID)];
+    const float* p0 = &m->v[3 * std::size_t(t[0])];
+    const float* p1 = &m->v[3 * std::size_t(t[1])];
+    const float* p2 = &m->v[3 * std::size_t(t[2])];
+    RTCBounds* o = args->bounds_o;
+    o->lower_x = std::min({p0[0], p1[0], p2[0]});
+    o->lower_y = std::min({p0[1], p1[1], p2[1]});
+    o->lower_z = std::min({p0[2], p1[2], p2[2]});
+    o->upper_x = std::max({p0[0], p1[0], p2[0]});
+    o->upper_y = std::max({p0[1], p1[1], p2[1]});
+    o->upper_z = std::max({p0[2], p1[2], p2[2]});
+  }
+
+  static void collide(void* user, RTCCollision* c, unsigned n) {
+    static_cast<Collector*>(user)->test(
+        [c](std::size_t i) { return std::pair<std::uint32_t, std::uint32_t>(c[i].primID0, c[i].primID1); }, n);
+  }
+
+  // A new scene over `b.mesh` (already filled).
+  void build(Body& b) {
+    if (b.scene) rtcReleaseScene(b.scene);
+    b.scene = rtcNewScene(device);
+    rtcSetSceneFlags(b.scene, RTC_SCENE_FLAG_DYNAMIC);
+    rtcSetSceneBuildQuality(b.scene, update == Update::refit ? RTC_BUILD_QUALITY_MEDIUM : RTC_BUILD_QUALITY_LOW);
+    RTCGeometry g = rtcNewGeometry(device, RTC_GEOMETRY_TYPE_USER);
+    rtcSetGeometryUserPrimitiveCount(g, unsigned(b.mesh.t.size() / 3));
+    rtcSetGeometryUserData(g, &b.mesh);
+    rtcSetGeometryBoundsFunction(g, &Impl::bounds, nullptr);
+    if (update == Update::refit) rtcSetGeometryBuildQuality(g, RTC_BUILD_QUALITY_REFIT);
+    rtcCommitGeometry(g);
+    rtcAttachGeometry(b.scene, g);
+    rtcReleaseGeometry(g);
+    b.geometry = g;
+    rtcCommitScene(b.scene);
+    ++builds;
+  }
+  void commit_moved(Body& b) {
+    rtcCommitGeometry(b.geometry);
+    rtcCommitScene(b.scene);
+    ++refits;
+  }
+
+  // Brings body i to object o; `frame_of_a`: the pose of A in a two-rigid-object scene (B's
+  // vertices mapped into A's frame), else null (world space).
+  void sync(std::size_t i, const Object& o, const Eigen::Affine3d* frame_of_a, bool a_frame_root) {
+    if (!bodies[i]) bodies[i] = std::make_unique<Body>();
+    Body& b = *bodies[i];
+    const bool topology = !b.scene || b.triangles != o.mesh.triangles.size();
+    if (a_frame_root) {  // A in its own frame: its shape's vertices, built once
+      if (topology || b.shape != o.rigid->shape || !b.in_a_frame) {
+        b.mesh.set_vertices(o.rigid->shape->vertices);
+        b.mesh.set_triangles(o.rigid->shape->triangles);
+        b.shape = o.rigid->shape, b.in_a_frame = true, b.triangles = o.mesh.triangles.size();
+        build(b);
+      }
+    } else if (frame_of_a) {  // B mapped into A's frame every frame its relative pose changes
+      const Eigen::Affine3d rel = frame_of_a->inverse() * o.rigid->pose;
+      const bool moved = !b.in_a_frame || b.shape != o.rigid->shape || !same_pose(rel, b.placed);
+      if (topology || moved) {
+        b.mesh.set_vertices(o.rigid->shape->vertices, &rel);
+        b.placed = rel, b.shape = o.rigid->shape, b.in_a_frame = true;
+        if (topology) {
+          b.mesh.set_triangles(o.mesh.triangles);
+          b.triangles = o.mesh.triangles.size();
+          build(b);
+        } else {
+          commit_moved(b);
+        }
+      }
+    } else {  // world space: untouched while a rigid object keeps its pose
+      const bool rigid_still = o.rigid && o.rigid->shape && b.shape == o.rigid->shape && !b.in_a_frame &&
+                               same_pose(o.rigid->pose, b.placed);
+      if (topology || !rigid_still) {
+        b.mesh.set_vertices(o.mesh.vertices);
+        b.shape = o.rigid ? o.rigid->shape : nullptr;
+        b.placed = o.rigid ? o.rigid->pose : Eigen::Affine3d::Identity();
+        b.in_a_frame = false;
+        if (topology) {
+          b.mesh.set_triangles(o.mesh.triangles);
+          b.triangles = o.mesh.triangles.size();
+          build(b);
+        } else {
+          commit_moved(b);  // refitted, or rebuilt at the scene's low quality (Update)
+        }
+      }
+    }
+    if (o.self && b.rep.size() != o.mesh.vertices.size()) vertex_representatives(o.mesh, SelfAdjacency::index, b.rep);
+  }
+};
+
+EmbreePeer::EmbreePeer(Update update, unsigned threads) : impl_(std::make_unique<Impl>()) {
+  impl_->update = update;
+  impl_->threads = std::max(1u, threads);
+  const std::string config = "threads=" + std::to_string(impl_->threads);
+  impl_->device = rtcNewDevice(config.c_str());
+  if (!impl_->device) throw std::runtime_error("Embree: rtcNewDevice failed");
+  if (impl_->threads > 1) impl_->pool = std::make_unique<WorkerPool>(impl_->threads);
+}
+EmbreePeer::~EmbreePeer() {
+  impl_->bodies.clear();
+  if (impl_->device) rtcReleaseDevice(impl_->device);
+}
+std::size_t EmbreePeer::builds() const { return impl_->builds; }
+std::size_t EmbreePeer::refits() const { return impl_->refits; }
+
+PeerFrame EmbreePeer::frame(const std::vector<Object>& objects) {
+  Impl& m = *impl_;
+  PeerFrame f;
+  const auto t0 = Clock::now();
+  m.bodies.resize(objects.size());
+  const bool rigid_pair = objects.size() == 2 && objects[0].rigid && objects[0].rigid->shape && objects[1].rigid &&
+                          objects[1].rigid->shape;
+  for (std::size_t i = 0; i < objects.size(); ++i) {
+    if (rigid_pair)
+      m.sync(i, objects[i], i == 1 ? &objects[0].rigid->pose : nullptr, i == 0);
+    else
+      m.sync(i, objects[i], nullptr, false);
+  }
+  // Object pairs: the scenes' own bounds (in one frame: world, or A's for a rigid pair).
+  std::vector<Aabb> boxes(objects.size());
+  for (std::size_t i = 0; i < objects.size(); ++i) {
+    RTCBounds bb;
+    rtcGetSceneBounds(m.bodies[i]->scene, &bb);
+    boxes[i].lo = Vec3(bb.lower_x, bb.lower_y, bb.lower_z);
+    boxes[i].hi = Vec3(bb.upper_x, bb.upper_y, bb.upper_z);
+  }
+  f.objects = overlapping_pairs(boxes);
+  for (std::size_t i = 0; i < objects.size(); ++i)
+    if (objects[i].self && objects[i].mesh.triangles.size() >= 2) f.objects.emplace_back(i, i);
+  std::sort(f.objects.begin(), f.objects.end());
+  f.per_pair.resize(f.objects.size());
+  parallel_for(m.pool.get(), f.objects.size(), [&](std::size_t k) {
+    const auto [a, b] = f.objects[k];
+    Collector c;
+    c.a = &m.bodies[a]->mesh;
+    c.b = &m.bodies[b]->mesh;
+    if (a == b) c.self_mesh = &objects[a].mesh, c.rep = &m.bodies[a]->rep;
+    rtcCollide(m.bodies[a]->scene, m.bodies[b]->scene, &Impl::collide, &c);
+    f.per_pair[k] = c.take();
+  });
+  for (const auto& p : f.per_pair) f.pairs += p.size();
+  f.ms = ms_since(t0);
+  return f;
+}
+
+// --- Bullet --------------------------------------------------------------------------------
+
+struct BulletPeer::Impl {
+  struct Shape {
+    FloatMesh mesh;                     // btScalar is float in Debian's libbullet-dev
+    std::vector<int> indices;           // Bullet's index type
+    std::unique_ptr<btTriangleIndexVertexArray> array;
+    std::unique_ptr<btGImpactMeshShape> shape;
+    std::size_t triangles = 0, vertices = 0;
+    // The quantized box set's range, fixed when it is built: the vertices' bounds grown by
+    // Bullet's quantization margin (btQuantizedBvhTree::calc_quantization's 1.0). A refit
+    // clamps boxes to it, so vertices that leave it need the set built again.
+    Vec3 range_lo, range_hi;
+    bool within_range() const {
+      for (std::size_t i = 0; i < mesh.v.size(); i += 3)
+        for (int c = 0; c < 3; ++c)
+          if (mesh.v[i + std::size_t(c)] < range_lo[c] || mesh.v[i + std::size_t(c)] > range_hi[c]) return false;
+      return true;
+    }
+    void build(const Mesh& m) {
+      mesh.set_vertices(m.vertices);
+      mesh.set_triangles(m.triangles);
+      indices.assign(mesh.t.begin(), mesh.t.end());
+      array = std::make_unique<btTriangleIndexVertexArray>(int(m.triangles.size()), indices.data(), 3 * int(sizeof(int)),
+                                                           int(m.vertices.size()), mesh.v.data(), 3 * int(sizeof(float)));
+      shape = std::make_unique<btGImpactMeshShape>(array.get());
+      shape->setMargin(0.0f);
+      shape->updateBound();
+      triangles = m.triangles.size(), vertices = m.vertices.size();
+      set_range();
+    }
+    void set_range() {
+      range_lo = Vec3::Constant(std::numeric_limits<double>::infinity());
+      range_hi = -range_lo;
+      for (std::size_t i = 0; i < mesh.v.size(); i += 3)
+        for (int c = 0; c < 3; ++c) {
+          range_lo[c] = std::min(range_lo[c], double(mesh.v[i + std::size_t(c)]));
+          range_hi[c] = std::max(range_hi[c], double(mesh.v[i + std::size_t(c)]));
+        }
+      range_lo -= Vec3::Constant(1.0);
+      range_hi += Vec3::Constant(1.0);
+    }
+  };
+  struct Body {
+    std::shared_ptr<Shape> own;          // deforming or static: world-space vertices
+    std::shared_ptr<Shape> shared;       // rigid: the shape's, in shape coordinates
+    std::shared_ptr<const Mesh> shape_of;
+    btTransform transform = btTransform::getIdentity();
+    bool identity = true;
+    std::vector<std::uint32_t> rep;
+    Shape& shape() { return shared ? *shared : *own; }
+  };
+  unsigned threads;
+  std::unique_ptr<WorkerPool> pool;
+  std::vector<Body> bodies;
+  std::map<const Mesh*, std::pair<std::shared_ptr<const Mesh>, std::shared_ptr<Shape>>> shapes;
+  std::size_t builds = 0, refits = 0;
+
+  static btTransform to_bt(const Eigen::Affine3d& p) {
+    const Eigen::Matrix3d r = p.linear();
+    btMatrix3x3 basis(btScalar(r(0, 0)), btScalar(r(0, 1)), btScalar(r(0, 2)), btScalar(r(1, 0)), btScalar(r(1, 1)),
+                      btScalar(r(1, 2)), btScalar(r(2, 0)), btScalar(r(2, 1)), btScalar(r(2, 2)));
+    const Vec3 t = p.translation();
+    return btTransform(basis, btVector3(btScalar(t.x()), btScalar(t.y()), btScalar(t.z())));
+  }
+  static bool isometry(const Eigen::Affine3d& pose) {
+    const Eigen::Matrix3d r = pose.linear();
+    return (r.transpose() * r - Eigen::Matrix3d::Identity()).cwiseAbs().maxCoeff() < 1e-12;
+  }
+
+  void sync(std::size_t i, const Object& o) {
+    Body& b = bodies[i];
+    if (o.rigid && o.rigid->shape && isometry(o.rigid->pose)) {  // built once per shape, moved
+      auto& slot = shapes[o.rigid->shape.get()];
+      if (slot.first != o.rigid->shape) {
+        slot.first = o.rigid->shape;
+        slot.second = std::make_shared<Shape>();
+        slot.second->build(*o.rigid->shape);
+        ++builds;
+      }
+      b.shared = slot.second, b.shape_of = o.rigid->shape, b.own.reset();
+      b.identity = o.rigid->pose.matrix().isIdentity(0.0);
+      b.transform = to_bt(o.rigid->pose);
+    } else {  // world space: refitted when the vertices change
+      b.shared.reset(), b.shape_of.reset();
+      b.identity = true;
+      b.transform = btTransform::getIdentity();
+      if (!b.own || b.own->triangles != o.mesh.triangles.size() || b.own->vertices != o.mesh.vertices.size()) {
+        b.own = std::make_shared<Shape>();
+        b.own->build(o.mesh);
+        ++builds;
+      } else {
+        b.own->mesh.set_vertices(o.mesh.vertices);  // in place: the array points at these floats
+        if (b.own->within_range()) {  // refit
+          b.own->shape->postUpdate();
+          b.own->shape->updateBound();
+          ++refits;
+        } else {  // out of the quantization range: the set built again over the same arrays
+          btGImpactMeshShapePart* part = b.own->shape->getMeshPart(0);
+          part->lockChildShapes();
+          const_cast<btGImpactBoxSet*>(part->getBoxSet())->buildSet();
+          part->unlockChildShapes();
+          b.own->shape->postUpdate();
+          b.own->shape->updateBound();
+          b.own->set_range();
+          ++builds;
+        }
+      }
+    }
+    if (o.self && b.rep.size() != o.mesh.vertices.size()) vertex_representatives(o.mesh, SelfAdjacency::index, b.rep);
+  }
+};
+
+BulletPeer::BulletPeer(unsigned threads) : impl_(std::make_unique<Impl>()) {
+  impl_->threads = std::max(1u, threads);
+  if (impl_->threads > 1) impl_->pool = std::make_unique<WorkerPool>(impl_->threads);
+}
+BulletPeer::~BulletPeer() = default;
+std::size_t BulletPeer::builds() const { return impl_->builds; }
+std::size_t BulletPeer::refits() const { return impl_->refits; }
+
+PeerFrame BulletPeer::frame(const std::vector<Object>& objects) {
+  Impl& m = *impl_;
+  PeerFrame f;
+  const auto t0 = Clock::now();
+  m.bodies.resize(objects.size());
+  for (std::size_t i = 0; i < objects.size(); ++i) m.sync(i, objects[i]);
+  std::vector<Aabb> boxes(objects.size());
+  for (std::size_t i = 0; i < objects.size(); ++i) {
+    btVector3 lo, hi;
+    m.bodies[i].shape().shape->getAabb(m.bodies[i].transform, lo, hi);
+    boxes[i].lo = Vec3(lo.x(), lo.y(), lo.z());
+    boxes[i].hi = Vec3(hi.x(), hi.y(), hi.z());
+  }
+  f.objects = overlapping_pairs(boxes);
+  for (std::size_t i = 0; i < objects.size(); ++i)
+    if (objects[i].self && objects[i].mesh.triangles.size() >= 2) f.objects.emplace_back(i, i);
+  std::sort(f.objects.begin(), f.objects.end());
+  f.per_pair.resize(f.objects.size());
+  parallel_for(m.pool.get(), f.objects.size(), [&](std::size_t k) {
+    const auto [a, b] = f.objects[k];
+    Impl::Body& ba = m.bodies[a];
+    Impl::Body& bb = m.bodies[b];
+    const btGImpactBoxSet* sa = ba.shape().shape->getMeshPart(0)->getBoxSet();
+    const btGImpactBoxSet* sb = bb.shape().shape->getMeshPart(0)->getBoxSet();
+    btPairSet pairs;
+    btGImpactQuantizedBvh::find_collision(sa, ba.transform, sb, bb.transform, pairs);
+    // The float test in A's frame: each candidate triangle of B moved by A^-1 B (as GImpact's own
+    // algorithm moves each candidate triangle; nothing when both are in world space).
+    Collector c;
+    c.a = &ba.shape().mesh;
+    c.b = &bb.shape().mesh;
+    if (a != b && !(ba.identity && bb.identity)) {
+      const btTransform rel = ba.transform.inverse() * bb.transform;
+      c.move_b = true;
+      for (int r = 0; r < 3; ++r) {
+        for (int k = 0; k < 3; ++k) c.rel[4 * r + k] = rel.getBasis()[r][k];
+        c.rel[4 * r + 3] = rel.getOrigin()[r];
+      }
+    }
+    if (a == b) c.self_mesh = &objects[a].mesh, c.rep = &ba.rep;
+    c.test(
+        [&pairs](std::size_t i) {
+          return std::pair<std::uint32_t, std::uint32_t>(std::uint32_t(pairs[int(i)].m_index1),
+                                                         std::uint32_t(pairs[int(i)].m_index2));
+        },
+        std::size_t(pairs.size()));
+    f.per_pair[k] = c.take();
+  });
+  for (const auto& p : f.per_pair) f.pairs += p.size();
+  f.ms = ms_since(t0);
+  return f;
+}
+
+}  // namespace peelcd::bench

@@ -1,0 +1,60 @@
+#pragma once
+// The peers a user wanting "all colliding triangle pairs" on a CPU would pick besides FCL and
+// CGAL (peelcd bench): Intel Embree 3's rtcCollide and Bullet 3's GImpact box sets, each with one
+// float triangle test (Moller's, tri_tri_float()), set up as their own documentation and examples
+// do:
+//   EmbreePeer: one scene per object holding one user geometry (a primitive per triangle, its
+//     float box the bounds callback's), rtcCollide between the scenes of every object pair whose
+//     boxes overlap (the boxes: the scenes' own bounds); a self pair: rtcCollide of the scene with
+//     itself. Trees over world-space float vertices, refitted (RTC_BUILD_QUALITY_REFIT) or
+//     rebuilt at low quality (the `Update` mode) for what moves; a static object's tree is never
+//     touched. A scene of two rigid objects keeps A's tree in A's frame, built once, and maps B's
+//     vertices into A's frame every frame (rtcCollide takes no transform).
+//   BulletPeer: one btGImpactMeshShape per shape (its quantized box set, margin 0), built once
+//     for a rigid shape and moved by the object's transform (GImpact's own find_collision takes
+//     both transforms), refitted (postUpdate(), updateBound()) for a deforming object; object
+//     pairs from the shapes' transformed boxes, then btGImpactQuantizedBvh::find_collision.
+// Both use one thread per object pair, the pairs spread over `threads` threads.
+#include "peelcd/bench/peers.h"
+
+#include <array>
+#include <memory>
+
+namespace peelcd::bench {
+
+// Moller's interval test ("A Fast Triangle-Triangle Intersection Test", 1997), in float, as the
+// peers' examples use it (without its optional absolute epsilon): true when the triangles meet.
+bool tri_tri_float(const std::array<float, 9>& t, const std::array<float, 9>& u);
+
+class EmbreePeer {
+ public:
+  enum class Update { refit, rebuild_low };
+  EmbreePeer(Update update, unsigned threads = 1);
+  ~EmbreePeer();
+  EmbreePeer(const EmbreePeer&) = delete;
+  EmbreePeer& operator=(const EmbreePeer&) = delete;
+  PeerFrame frame(const std::vector<Object>& objects);
+  std::size_t builds() const;  // scenes committed for the first time or rebuilt
+  std::size_t refits() const;  // commits of moved or deformed trees
+
+ private:
+  struct Impl;
+  std::unique_ptr<Impl> impl_;
+};
+
+class BulletPeer {
+ public:
+  explicit BulletPeer(unsigned threads = 1);
+  ~BulletPeer();
+  BulletPeer(const BulletPeer&) = delete;
+  BulletPeer& operator=(const BulletPeer&) = delete;
+  PeerFrame frame(const std::vector<Object>& objects);
+  std::size_t builds() const;
+  std::size_t refits() const;
+
+ private:
+  struct Impl;
+  std::unique_ptr<Impl> impl_;
+};
+
+}  // namespace peelcd::bench
