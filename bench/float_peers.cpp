@@ -274,12 +274,14 @@ struct EmbreePeer::Impl {
     if (b.scene) rtcReleaseScene(b.scene);
     b.scene = rtcNewScene(device);
     rtcSetSceneFlags(b.scene, RTC_SCENE_FLAG_DYNAMIC);
-    rtcSetSceneBuildQuality(b.scene, update == Update::refit ? RTC_BUILD_QUALITY_MEDIUM : RTC_BUILD_QUALITY_LOW);
+    // The per-geometry quality (REFIT, LOW) is used only under a LOW scene (Embree's two-level
+    // structure: rtcSetGeometryBuildQuality(3)).
+    rtcSetSceneBuildQuality(b.scene, RTC_BUILD_QUALITY_LOW);
     RTCGeometry g = rtcNewGeometry(device, RTC_GEOMETRY_TYPE_USER);
     rtcSetGeometryUserPrimitiveCount(g, unsigned(b.mesh.t.size() / 3));
     rtcSetGeometryUserData(g, &b.mesh);
     rtcSetGeometryBoundsFunction(g, &Impl::bounds, nullptr);
-    if (update == Update::refit) rtcSetGeometryBuildQuality(g, RTC_BUILD_QUALITY_REFIT);
+    rtcSetGeometryBuildQuality(g, update == Update::refit ? RTC_BUILD_QUALITY_REFIT : RTC_BUILD_QUALITY_LOW);
     rtcCommitGeometry(g);
     rtcAttachGeometry(b.scene, g);
     rtcReleaseGeometry(g);
