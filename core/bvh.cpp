@@ -5,32 +5,27 @@
 #include <numeric>
 
 namespace peelcd {
-namespace {
-
-Aabb merged(const Aabb& a, const Aabb& b) {
-  Aabb m;
-  m.lo = a.lo.cwiseMin(b.lo);
-  m.hi = a.hi.cwiseMax(b.hi);
-  return m;
-}
-
-}  // namespace
-
 void Bvh::build(const std::vector<Vec3>& vertices, const std::vector<Tri>& triangles) {
   const std::size_t n = triangles.size();
   nodes_.clear();
+  parents_.clear();
   depth_ = 0;
   boxes_.resize(n);
   order_.resize(n);
   leaf_of_.resize(n);
+  box_ = Aabb{};
   std::iota(order_.begin(), order_.end(), 0u);
   if (n == 0) return;
   std::vector<Vec3> centroids(n);
   for (std::size_t t = 0; t < n; ++t) {
-    boxes_[t] = triangle_bounds(vertices, triangles[t]);
-    centroids[t] = boxes_[t].center();
+    const Aabb b = triangle_bounds(vertices, triangles[t]);
+    boxes_[t] = FBox::enclosing(b);
+    centroids[t] = b.center();
+    box_.extend(b.lo);
+    box_.extend(b.hi);
   }
   nodes_.reserve(2 * ((n + kBvhLeafSize - 1) / kBvhLeafSize));
+  parents_.reserve(nodes_.capacity());
   build_node(0, std::uint32_t(n), 0, 1, centroids);
   dirty_.assign(nodes_.size(), 0);
 }
@@ -39,12 +34,12 @@ std::uint32_t Bvh::build_node(std::uint32_t begin, std::uint32_t end, std::uint3
                               std::vector<Vec3>& centroids) {
   const std::uint32_t index = std::uint32_t(nodes_.size());
   nodes_.emplace_back();
-  nodes_[index].parent = parent;
+  parents_.push_back(parent);
   depth_ = std::max(depth_, level);
   if (end - begin <= kBvhLeafSize) {
-    Aabb box;
+    FBox box;
     for (std::uint32_t i = begin; i < end; ++i) {
-      box = merged(box, boxes_[order_[i]]);
+      box.merge(boxes_[order_[i]]);
       leaf_of_[order_[i]] = index;
     }
     nodes_[index].box = box;
@@ -67,23 +62,32 @@ std::uint32_t Bvh::build_node(std::uint32_t begin, std::uint32_t end, std::uint3
   const std::uint32_t right = build_node(mid, end, index, level + 1, centroids);
   nodes_[index].first = right;
   nodes_[index].count = 0;
-  nodes_[index].box = merged(nodes_[index + 1].box, nodes_[right].box);
+  FBox box = nodes_[index + 1].box;
+  box.merge(nodes_[right].box);
+  nodes_[index].box = box;
   return index;
 }
 
 void Bvh::refit_node(std::uint32_t i) {
   BvhNode& node = nodes_[i];
+  FBox box;
   if (node.leaf()) {
-    Aabb box;
-    for (std::uint32_t k = node.first; k < node.first + node.count; ++k) box = merged(box, boxes_[order_[k]]);
-    node.box = box;
+    for (std::uint32_t k = node.first; k < node.first + node.count; ++k) box.merge(boxes_[order_[k]]);
   } else {
-    node.box = merged(nodes_[i + 1].box, nodes_[node.first].box);
+    box = nodes_[i + 1].box;
+    box.merge(nodes_[node.first].box);
   }
+  node.box = box;
 }
 
 void Bvh::refit(const std::vector<Vec3>& vertices, const std::vector<Tri>& triangles) {
-  for (std::size_t t = 0; t < boxes_.size(); ++t) boxes_[t] = triangle_bounds(vertices, triangles[t]);
+  box_ = Aabb{};
+  for (std::size_t t = 0; t < boxes_.size(); ++t) {
+    const Aabb b = triangle_bounds(vertices, triangles[t]);
+    boxes_[t] = FBox::enclosing(b);
+    box_.lo = box_.lo.cwiseMin(b.lo);
+    box_.hi = box_.hi.cwiseMax(b.hi);
+  }
   // Children follow their parents: one sweep from the last node refits bottom-up.
   for (std::size_t i = nodes_.size(); i-- > 0;) refit_node(std::uint32_t(i));
 }
@@ -92,10 +96,19 @@ void Bvh::refit(const std::vector<Vec3>& vertices, const std::vector<Tri>& trian
                 const std::vector<std::uint32_t>& changed) {
   if (nodes_.empty()) return;
   stack_.clear();
+  // The exact root box: grown by the changed triangles' new boxes; made again from every
+  // triangle when a changed one's old box reached its boundary (it may shrink).
+  bool recompute = false;
   for (const std::uint32_t t : changed) {
-    boxes_[t] = triangle_bounds(vertices, triangles[t]);
+    const FBox& old = boxes_[t];
+    for (int k = 0; k < 3; ++k)
+      if (double(old.lo[k]) <= box_.lo[k] || double(old.hi[k]) >= box_.hi[k]) recompute = true;
+    const Aabb b = triangle_bounds(vertices, triangles[t]);
+    boxes_[t] = FBox::enclosing(b);
+    box_.extend(b.lo);
+    box_.extend(b.hi);
     // Mark the leaf and its ancestors once; collect them.
-    for (std::uint32_t n = leaf_of_[t];; n = nodes_[n].parent) {
+    for (std::uint32_t n = leaf_of_[t];; n = parents_[n]) {
       if (dirty_[n]) break;
       dirty_[n] = 1;
       stack_.push_back(n);
@@ -107,6 +120,11 @@ void Bvh::refit(const std::vector<Vec3>& vertices, const std::vector<Tri>& trian
   for (const std::uint32_t n : stack_) {
     refit_node(n);
     dirty_[n] = 0;
+  }
+  if (recompute) {
+    box_ = Aabb{};
+    for (const Tri& f : triangles)
+      for (const std::uint32_t v : f) box_.extend(vertices[v]);
   }
 }
 
@@ -137,19 +155,6 @@ void Bvh::query(const Aabb& box, std::vector<std::uint32_t>& out) const {
     }
   }
   std::sort(out.begin(), out.end());
-}
-
-Aabb BvhRelation::moved(const Aabb& box, const Eigen::Matrix3d& linear, const Eigen::Matrix3d& abs_linear,
-                        const Vec3& translation, double reach) {
-  const Vec3 c = box.center(), e = 0.5 * box.extent();
-  const Vec3 center = linear * c + translation;
-  const Vec3 half = abs_linear * e;
-  // Rounding of the products above: a relative 1e-9 of the magnitudes involved covers it.
-  const double grow = 1e-9 * (center.cwiseAbs().maxCoeff() + half.maxCoeff() + reach) + 1e-300;
-  Aabb out;
-  out.lo = center - half - Vec3::Constant(grow);
-  out.hi = center + half + Vec3::Constant(grow);
-  return out;
 }
 
 BvhRelation BvhRelation::between(const Eigen::Affine3d& pose_a, const Eigen::Affine3d& pose_b) {
@@ -183,7 +188,7 @@ void bvh_split(const Bvh& a, const Bvh& b, const BvhRelation& rel, std::size_t t
     for (const auto& [i, j] : level) {
       const BvhNode& x = na[i];
       const BvhNode& y = nb[j];
-      if (!rel.overlap(x.box, rel.to_a(y.box), y.box)) continue;
+      if (!rel.overlap(x.box.aabb(), rel.to_a(y.box.aabb()), y.box.aabb())) continue;
       if (x.leaf() && y.leaf()) {
         out.emplace_back(i, j);
       } else if (x.leaf()) {

@@ -6,22 +6,92 @@
 //
 // Binary, nodes in depth-first order (a node's left child follows it; its parent comes before
 // it), leaves of at most kBvhLeafSize triangles, split at the median centroid along the longest
-// axis of the centroids' box. Boxes are closed and exact: the min/max of the corners' doubles.
+// axis of the centroids' box. Boxes are float, rounded outward from the corners' doubles
+// (FBox): half the memory of double boxes, and never smaller than the exact box, so a couple
+// whose exact boxes touch is always reported (a few more whose boxes are within float rounding
+// may be: the exact test decides them). The root's exact double box is kept too (box()).
 #include "peelcd/core/aabb.h"
 
 #include <Eigen/Geometry>
+#include <cmath>
 #include <cstdint>
+#include <cstring>
+#include <limits>
 #include <vector>
 
 namespace peelcd {
 
 constexpr std::uint32_t kBvhLeafSize = 4;
 
+// A closed box of floats that encloses the double box it was made from (each bound moved
+// outward by about 2^-22 of itself). Empty: lo > hi.
+struct FBox {
+  float lo[3] = {INFINITY, INFINITY, INFINITY};
+  float hi[3] = {-INFINITY, -INFINITY, -INFINITY};
+
+  // A float <= d, and one >= d, within 2^-21 of d relative (d finite, or infinite). Below 1e37
+  // without a branch on the rounding: the nearest float (within 2^-24 relative, or 2^-150 for
+  // subnormals) moved out by 2.4e-7 > 2^-22 of itself plus the smallest normal float, which
+  // covers its own error and the roundings of the widening (the tests check the enclosure).
+  static float down(double d) {
+    const float f = float(d);
+    if (std::abs(f) < 1e37f) return f - (std::abs(f) * 2.4e-7f + 1.2e-38f);
+    return double(f) > d ? step(f, -1) : f;
+  }
+  static float up(double d) {
+    const float f = float(d);
+    if (std::abs(f) < 1e37f) return f + (std::abs(f) * 2.4e-7f + 1.2e-38f);
+    return double(f) < d ? step(f, +1) : f;
+  }
+  // The next float from the finite or infinite `f` toward +inf (dir > 0) or -inf: std::nextafter
+  // without the library call (the refit rounds every box).
+  static float step(float f, int dir) {
+    if (f == 0.0f) return dir > 0 ? std::numeric_limits<float>::denorm_min() : -std::numeric_limits<float>::denorm_min();
+    std::uint32_t bits;
+    std::memcpy(&bits, &f, sizeof bits);
+    // Away from zero: one more in the magnitude's bits; toward it: one less.
+    if ((f > 0.0f) == (dir > 0)) ++bits;
+    else --bits;
+    std::memcpy(&f, &bits, sizeof bits);
+    return f;
+  }
+  static FBox enclosing(const Aabb& b) {
+    FBox f;
+    for (int k = 0; k < 3; ++k) f.lo[k] = down(b.lo[k]), f.hi[k] = up(b.hi[k]);
+    return f;
+  }
+  // The same box in doubles (exact).
+  Aabb aabb() const {
+    Aabb b;
+    b.lo = Vec3(lo[0], lo[1], lo[2]);
+    b.hi = Vec3(hi[0], hi[1], hi[2]);
+    return b;
+  }
+  void merge(const FBox& o) {  // (no NaN here: plain comparisons, no libm call)
+    for (int k = 0; k < 3; ++k) {
+      lo[k] = o.lo[k] < lo[k] ? o.lo[k] : lo[k];
+      hi[k] = o.hi[k] > hi[k] ? o.hi[k] : hi[k];
+    }
+  }
+  bool overlaps(const FBox& o) const {
+    return lo[0] <= o.hi[0] && o.lo[0] <= hi[0] && lo[1] <= o.hi[1] && o.lo[1] <= hi[1] && lo[2] <= o.hi[2] &&
+           o.lo[2] <= hi[2];
+  }
+  bool overlaps(const Aabb& o) const {
+    return lo[0] <= o.hi[0] && o.lo[0] <= hi[0] && lo[1] <= o.hi[1] && o.lo[1] <= hi[1] && lo[2] <= o.hi[2] &&
+           o.lo[2] <= hi[2];
+  }
+  float max_extent() const {
+    const float x = hi[0] - lo[0], y = hi[1] - lo[1], z = hi[2] - lo[2];
+    const float m = x > y ? x : y;
+    return m > z ? m : z;
+  }
+};
+
 struct BvhNode {
-  Aabb box;
+  FBox box;
   std::uint32_t first = 0;   // leaf: first index into Bvh::order(); internal: the right child
   std::uint32_t count = 0;   // leaf: triangles (>= 1); internal: 0
-  std::uint32_t parent = 0;  // the root's is itself (0)
   bool leaf() const { return count != 0; }
 };
 
@@ -38,14 +108,17 @@ class Bvh {
 
   bool empty() const { return nodes_.empty(); }
   std::size_t triangles() const { return boxes_.size(); }
-  // The root's box (empty() for an empty tree).
-  Aabb box() const { return nodes_.empty() ? Aabb{} : nodes_[0].box; }
+  // The exact box of the triangles' corners (empty() for an empty tree).
+  Aabb box() const { return nodes_.empty() ? Aabb{} : box_; }
   const std::vector<BvhNode>& nodes() const { return nodes_; }
+  std::uint32_t parent(std::uint32_t node) const { return parents_[node]; }  // the root's is itself (0)
   const std::vector<std::uint32_t>& order() const { return order_; }  // triangles, leaf by leaf
-  const Aabb& triangle_box(std::uint32_t t) const { return boxes_[t]; }
+  const FBox& triangle_box(std::uint32_t t) const { return boxes_[t]; }
   std::size_t depth() const { return depth_; }
 
-  // The triangles whose boxes touch `box` (closed, in the tree's frame), ascending, into `out`.
+  // The triangles whose (float, outward-rounded) boxes touch `box` (closed, in the tree's frame),
+  // ascending, into `out`: every triangle whose exact box touches it, and possibly some within
+  // float rounding of it.
   void query(const Aabb& box, std::vector<std::uint32_t>& out) const;
 
  private:
@@ -53,9 +126,11 @@ class Bvh {
                            std::vector<Vec3>& centroids);
   void refit_node(std::uint32_t n);
   std::vector<BvhNode> nodes_;
+  std::vector<std::uint32_t> parents_;  // node -> its parent
   std::vector<std::uint32_t> order_;
   std::vector<std::uint32_t> leaf_of_;  // triangle -> its leaf node
-  std::vector<Aabb> boxes_;             // triangle -> its box
+  std::vector<FBox> boxes_;             // triangle -> its box
+  Aabb box_;                            // the exact box of every corner
   std::vector<std::uint8_t> dirty_;     // scratch of the partial refit, per node
   std::vector<std::uint32_t> stack_;    // scratch of the partial refit
   std::size_t depth_ = 0;
@@ -89,8 +164,19 @@ struct BvhRelation {
     return a.overlaps(b_in_a) && (identity || to_b(a).overlaps(b));
   }
   static BvhRelation between(const Eigen::Affine3d& pose_a, const Eigen::Affine3d& pose_b);
+  // Inline: the traversals call it at every node pair.
   static Aabb moved(const Aabb& box, const Eigen::Matrix3d& linear, const Eigen::Matrix3d& abs_linear,
-                    const Vec3& translation, double reach);
+                    const Vec3& translation, double reach) {
+    const Vec3 c = box.center(), e = 0.5 * box.extent();
+    const Vec3 center = linear * c + translation;
+    const Vec3 half = abs_linear * e;
+    // Rounding of the products above: a relative 1e-9 of the magnitudes involved covers it.
+    const double grow = 1e-9 * (center.cwiseAbs().maxCoeff() + half.maxCoeff() + reach) + 1e-300;
+    Aabb out;
+    out.lo = center - half - Vec3::Constant(grow);
+    out.hi = center + half + Vec3::Constant(grow);
+    return out;
+  }
 };
 
 // A pair of nodes (A's, B's) still to visit.
@@ -119,8 +205,8 @@ std::size_t bvh_traverse(const Bvh& a, const Bvh& b, const BvhRelation& rel, Bvh
   std::size_t visited = 0;
   stack.clear();
   {
-    const Aabb yb = rel.to_a(nb[start.second].box);
-    if (!rel.overlap(na[start.first].box, yb, nb[start.second].box)) return 1;
+    const Aabb yb = rel.to_a(nb[start.second].box.aabb());
+    if (!rel.overlap(na[start.first].box.aabb(), yb, nb[start.second].box.aabb())) return 1;
     stack.push_back({start.first, start.second, yb});
   }
   Aabb leaf_boxes[kBvhLeafSize];
@@ -132,24 +218,47 @@ std::size_t bvh_traverse(const Bvh& a, const Bvh& b, const BvhRelation& rel, Bvh
     const BvhNode& y = nb[e.b];
     // Invariant: x.box overlaps e.b_in_a (tested before the push).
     if (x.leaf() && y.leaf()) {
-      for (std::uint32_t v = 0; v < y.count; ++v) leaf_boxes[v] = rel.to_a(b.triangle_box(b.order()[y.first + v]));
+      if (rel.identity) {  // one frame: the float boxes compared as they are
+        for (std::uint32_t u = x.first; u < x.first + x.count; ++u) {
+          const std::uint32_t ta = a.order()[u];
+          const FBox& ba = a.triangle_box(ta);
+          if (!ba.overlaps(e.b_in_a)) continue;
+          for (std::uint32_t v = 0; v < y.count; ++v) {
+            const std::uint32_t tb = b.order()[y.first + v];
+            if (ba.overlaps(b.triangle_box(tb))) fn(ta, tb);
+          }
+        }
+        continue;
+      }
+      for (std::uint32_t v = 0; v < y.count; ++v) leaf_boxes[v] = rel.to_a(b.triangle_box(b.order()[y.first + v]).aabb());
       for (std::uint32_t u = x.first; u < x.first + x.count; ++u) {
         const std::uint32_t ta = a.order()[u];
-        const Aabb& ba = a.triangle_box(ta);
+        const Aabb ba = a.triangle_box(ta).aabb();
         if (!ba.overlaps(e.b_in_a)) continue;
-        const Aabb a_in_b = rel.identity ? ba : rel.to_b(ba);
+        const Aabb a_in_b = rel.to_b(ba);
         for (std::uint32_t v = 0; v < y.count; ++v) {
           const std::uint32_t tb = b.order()[y.first + v];
-          if (ba.overlaps(leaf_boxes[v]) && a_in_b.overlaps(b.triangle_box(tb))) fn(ta, tb);
+          if (ba.overlaps(leaf_boxes[v]) && b.triangle_box(tb).overlaps(a_in_b)) fn(ta, tb);
         }
       }
-    } else if (y.leaf() || (!x.leaf() && x.box.extent().maxCoeff() >= e.b_in_a.extent().maxCoeff())) {
-      for (const std::uint32_t c : {e.a + 1, x.first})
-        if (rel.overlap(na[c].box, e.b_in_a, y.box)) stack.push_back({c, e.b, e.b_in_a});
+    } else if (y.leaf() || (!x.leaf() && double(x.box.max_extent()) >= e.b_in_a.extent().maxCoeff())) {
+      if (rel.identity) {
+        for (const std::uint32_t c : {e.a + 1, x.first})
+          if (na[c].box.overlaps(e.b_in_a)) stack.push_back({c, e.b, e.b_in_a});
+      } else {
+        for (const std::uint32_t c : {e.a + 1, x.first})
+          if (na[c].box.overlaps(e.b_in_a) && y.box.overlaps(rel.to_b(na[c].box.aabb()))) stack.push_back({c, e.b, e.b_in_a});
+      }
+    } else if (rel.identity) {
+      for (const std::uint32_t c : {e.b + 1, y.first})
+        if (x.box.overlaps(nb[c].box)) stack.push_back({e.a, c, nb[c].box.aabb()});
     } else {
+      const Aabb x_in_b = rel.to_b(x.box.aabb());
       for (const std::uint32_t c : {e.b + 1, y.first}) {
-        const Aabb yb = rel.to_a(nb[c].box);
-        if (rel.overlap(x.box, yb, nb[c].box)) stack.push_back({e.a, c, yb});
+        const FBox& cb = nb[c].box;
+        if (!cb.overlaps(x_in_b)) continue;
+        const Aabb yb = rel.to_a(cb.aabb());
+        if (x.box.overlaps(yb)) stack.push_back({e.a, c, yb});
       }
     }
   }
@@ -169,7 +278,7 @@ std::size_t bvh_self_traverse(const Bvh& tree, std::vector<BvhNodePair>& stack, 
   const auto leaf_pairs = [&](const BvhNode& x, const BvhNode& y) {
     for (std::uint32_t i = x.first; i < x.first + x.count; ++i) {
       const std::uint32_t t = tree.order()[i];
-      const Aabb& bt = tree.triangle_box(t);
+      const FBox& bt = tree.triangle_box(t);
       for (std::uint32_t j = y.first; j < y.first + y.count; ++j) {
         const std::uint32_t u = tree.order()[j];
         if (bt.overlaps(tree.triangle_box(u))) fn(t, u);
@@ -199,7 +308,7 @@ std::size_t bvh_self_traverse(const Bvh& tree, std::vector<BvhNodePair>& stack, 
     }
     if (x.leaf() && y.leaf()) {
       leaf_pairs(x, y);
-    } else if (y.leaf() || (!x.leaf() && x.box.extent().maxCoeff() >= y.box.extent().maxCoeff())) {
+    } else if (y.leaf() || (!x.leaf() && x.box.max_extent() >= y.box.max_extent())) {
       for (const std::uint32_t c : {a + 1, x.first})
         if (n[c].box.overlaps(y.box)) stack.push_back({c, b});
     } else {
