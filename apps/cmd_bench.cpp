@@ -15,7 +15,7 @@ struct BenchArgs {
   std::size_t frames = 12;
   std::size_t objects = 200;  // crowd
   int stacks = 288;           // spheres: 330,624 triangles each (570: 1,297,320)
-  int cloth = 130;            // cloth-self: 6 n^2 triangles (130: 101,400)
+  int cloth = 0;              // cloth-self: 6 n^2 triangles (0: 130, 101,400); cloth-crumpled: 2 n^2 (0: 224, 100,352)
   int res = 0;  // 0: the shared 512^2 budget, tiles by need (detect's default)
   std::string backend = kDefaultBackend;
   unsigned threads = 0;  // 0: the machine's (at most 8)
@@ -28,7 +28,7 @@ int run_bench(const BenchArgs& a) {
   if (!a.csv.empty()) {
     check_output_path(a.csv, "peelcd bench: --csv");
     refuse_overwriting_data(a.csv, "peelcd bench: --csv");  // the built-in scenes' meshes
-    const bool builtin = a.scene == "volume" || a.scene == "cloth-self" || a.scene == "spheres" ||
+    const bool builtin = a.scene == "volume" || a.scene == "cloth-self" || a.scene == "cloth-crumpled" || a.scene == "spheres" ||
                          a.scene == "spheres-wave" || a.scene == "test1" || a.scene == "test2" || a.scene == "crowd";
     if (!builtin) refuse_overwriting_input(a.csv, scene_inputs(load_scene(a.scene)), "peelcd bench: --csv");
   }
@@ -43,10 +43,11 @@ int run_bench(const BenchArgs& a) {
     if (!a.csv.empty()) write_output(a.csv, csv);
     return 0;
   }
-  if (a.scene == "cloth-self") {  // self-collision: its own table (peelcd/bench/self_bench.h)
+  if (a.scene == "cloth-self" || a.scene == "cloth-crumpled") {  // self-collision: its own table (peelcd/bench/self_bench.h)
     if (a.threads) setenv("LP_NUM_THREADS", std::to_string(a.threads == 1 ? 0 : a.threads).c_str(), 1);
     bench::SelfSuite self;
-    self.n = a.cloth;
+    self.crumpled = a.scene == "cloth-crumpled";
+    self.n = a.cloth ? a.cloth : self.crumpled ? 224 : 130;
     self.frames = a.frames;
     self.stage = make_image_stage(a.backend, gl::GlOptions{});
     const std::string csv = bench::run_self_suite(self);
@@ -109,18 +110,21 @@ std::vector<Command> add_bench_commands(CLI::App& app) {
   BenchArgs& be = *be_holder;
   CLI::App* benchmark = app.add_subcommand(
       "bench", "Time peelcd's configurations (persistent bodies and the frame API), CGAL (cropped to the overlap box), FCL 0.7 (rigid trees kept, "
-               "deforming ones refitted or rebuilt, its own broad phase) and the bare-draw floor side by side on "
+               "deforming ones refitted or rebuilt, its own broad phase), Embree 3 rtcCollide and Bullet 3 GImpact (float "
+               "triangle tests) and the bare-draw floor side by side on "
                "the same frames; print medians, miss ratios and ratios");
   benchmark->add_option("scene", be.scene, "test1, test2, crowd, spheres (two crossing rigid spheres), spheres-wave "
                                            "(the same, a wave over their vertices every frame), cloth-self (self-collision of a folding "
-                                           "cloth, one thread), volume (the intersection volume of two 99k-triangle "
+                                           "cloth, one thread), cloth-crumpled (self-collision of a 100k-triangle cloth crumpled "
+                                           "over a ball, one thread), volume (the intersection volume of two 99k-triangle "
                                            "spheres against CGAL) or a scene file")
       ->capture_default_str();
   benchmark->add_option("--stacks", be.stacks, "spheres: latitude bands (4 s (s - 1) triangles a sphere: 288 -> 330,624, "
                                                "570 -> 1,297,320)")
       ->check(CLI::Range(3, 2000))->capture_default_str();
-  benchmark->add_option("--cloth", be.cloth, "cloth-self: the cloth's resolution n (6 n^2 triangles: 130 -> 101,400)")
-      ->check(CLI::Range(2, 2000))->capture_default_str();
+  benchmark->add_option("--cloth", be.cloth, "cloth-self: the cloth's resolution n (6 n^2 triangles; default 130 -> 101,400); "
+                                             "cloth-crumpled: n (2 n^2 triangles; default 224 -> 100,352)")
+      ->check(CLI::Range(2, 2000));
   benchmark->add_flag("--short", be.short_rows, "Only the World rows, the frame API's router and image stage, the peers "
                                                  "and the floors (for the scale scenes)");
   benchmark->add_flag("--return-memory", be.return_memory,

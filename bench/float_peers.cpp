@@ -114,25 +114,47 @@ bool intervals(float vv0, float vv1, float vv2, float d0, float d1, float d2, fl
 
 }  // namespace
 
-bool tri_tri_float(const std::array<float, 9>& t, const std::array<float, 9>& u) {
-  // Moller's optional snap of plane distances below an absolute epsilon is off: on unnormalized
-  // normals it is scale dependent (1e-6 on a millimetre triangle's normal snaps a millimetre).
-  constexpr float kEps = 0.0f;
+bool tri_tri_float(const std::array<float, 9>& t_in, const std::array<float, 9>& u_in) {
+  // In a frame at t's first corner scaled to the pair's extent: the no-division test multiplies
+  // up to five small differences, which underflow for small triangles (and flush to zero where
+  // Embree sets FTZ/DAZ), deciding differently from call to call.
+  std::array<float, 9> t, u;
+  float extent = 0.0f, mag = 0.0f;
+  for (std::size_t i = 0; i < 9; ++i) {
+    const float o = t_in[i % 3];
+    t[i] = t_in[i] - o;
+    u[i] = u_in[i] - o;
+    const float e = std::abs(t[i]) > std::abs(u[i]) ? std::abs(t[i]) : std::abs(u[i]);
+    const float g = std::abs(t_in[i]) > std::abs(u_in[i]) ? std::abs(t_in[i]) : std::abs(u_in[i]);
+    extent = e > extent ? e : extent;
+    mag = g > mag ? g : mag;
+  }
+  if (extent == 0.0f) return true;  // all six corners on one point
+  const float scale = 1.0f / extent;
+  for (int k = 0; k < 9; ++k) t[std::size_t(k)] *= scale, u[std::size_t(k)] *= scale;
+  mag *= scale;  // the input's rounding (2^-24 of its magnitude), in these units
+  // Moller's snap of plane distances to 0 (his USE_EPSILON_TEST), with an epsilon of the input's
+  // float rounding instead of his absolute 1e-6 (on the unnormalized normal of a millimetre
+  // triangle that snaps a millimetre): a corner within rounding of the other's plane counts as
+  // on it, and coplanar pairs go to the 2D test.
   const float *v0 = &t[0], *v1 = &t[3], *v2 = &t[6], *u0 = &u[0], *u1 = &u[3], *u2 = &u[6];
   const F3 n1 = cross(sub(v1, v0), sub(v2, v0));
+  // |d| < 4e-7 mag |n|, squared (no square root).
+  const float kEps = 1.6e-13f * mag * mag * (n1[0] * n1[0] + n1[1] * n1[1] + n1[2] * n1[2]);
   const float d1 = -dot(n1, v0);
   float du0 = dot(n1, u0) + d1, du1 = dot(n1, u1) + d1, du2 = dot(n1, u2) + d1;
-  if (std::abs(du0) < kEps) du0 = 0.0f;
-  if (std::abs(du1) < kEps) du1 = 0.0f;
-  if (std::abs(du2) < kEps) du2 = 0.0f;
+  if (du0 * du0 < kEps) du0 = 0.0f;
+  if (du1 * du1 < kEps) du1 = 0.0f;
+  if (du2 * du2 < kEps) du2 = 0.0f;
   const float du0du1 = du0 * du1, du0du2 = du0 * du2;
   if (du0du1 > 0.0f && du0du2 > 0.0f) return false;
   const F3 n2 = cross(sub(u1, u0), sub(u2, u0));
   const float d2 = -dot(n2, u0);
+  const float kEps2 = 1.6e-13f * mag * mag * (n2[0] * n2[0] + n2[1] * n2[1] + n2[2] * n2[2]);
   float dv0 = dot(n2, v0) + d2, dv1 = dot(n2, v1) + d2, dv2 = dot(n2, v2) + d2;
-  if (std::abs(dv0) < kEps) dv0 = 0.0f;
-  if (std::abs(dv1) < kEps) dv1 = 0.0f;
-  if (std::abs(dv2) < kEps) dv2 = 0.0f;
+  if (dv0 * dv0 < kEps2) dv0 = 0.0f;
+  if (dv1 * dv1 < kEps2) dv1 = 0.0f;
+  if (dv2 * dv2 < kEps2) dv2 = 0.0f;
   const float dv0dv1 = dv0 * dv1, dv0dv2 = dv0 * dv2;
   if (dv0dv1 > 0.0f && dv0dv2 > 0.0f) return false;
   const F3 d = cross(n1, n2);
@@ -197,8 +219,9 @@ struct Collector {
     for (std::size_t i = 0; i < n; ++i) {
       std::uint32_t x = pairs(i).first, y = pairs(i).second;
       if (self_mesh) {
-        if (x == y) continue;
-        if (x > y) std::swap(x, y);
+        // A tree against itself reports each couple in both orders (Embree's rtcCollide and
+        // GImpact's find_collision alike): the order with x < y is tested, once.
+        if (x >= y) continue;
         if (triangles_adjacent(*self_mesh, *rep, x, y)) continue;
       }
       a->corners(x, ta);

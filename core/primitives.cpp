@@ -93,4 +93,15 @@ Mesh make_grid_surface(int nu, int nv, const std::function<Vec3(double, double)>
   return m;
 }
 
+Mesh make_crumpled_cloth(int n, double t) {
+  return make_grid_surface(n, n, [t](double u, double v) {
+    const double x = 2 * u - 1, y = 2 * v - 1;
+    // Tangential waves steeper than the identity: the parameter plane folds over itself.
+    const double xs = x + 0.07 * std::sin(23 * y + t) + 0.05 * std::sin(37 * x + 1.3 * t);
+    const double ys = y + 0.07 * std::sin(19 * x - t) + 0.05 * std::sin(31 * y + 0.7 * t);
+    const double h = 0.03 * std::sin(29 * x + 17 * y + 2 * t);  // each layer's height over the ball
+    return Vec3((1.05 + h) * Vec3(1.3 * xs, 1.3 * ys, 1.0).normalized());
+  });
+}
+
 }  // namespace peelcd

@@ -23,7 +23,8 @@
 namespace peelcd::bench {
 
 // Moller's interval test ("A Fast Triangle-Triangle Intersection Test", 1997), in float, as the
-// peers' examples use it (without its optional absolute epsilon): true when the triangles meet.
+// peers' examples use it, its plane-distance snap scaled to float rounding at the coordinates'
+// magnitude (not his absolute 1e-6): true when the triangles meet.
 bool tri_tri_float(const std::array<float, 9>& t, const std::array<float, 9>& u);
 
 class EmbreePeer {

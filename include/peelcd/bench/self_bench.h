@@ -1,10 +1,13 @@
 #pragma once
-// The self-collision benchmark of `peelcd bench --scene cloth-self`: a folded cloth (one
-// deforming object, self-collision on) folding through itself over the frames; peelcd's
-// World (its kept tree refitted, traversed against itself), the frame API (stage router, exact
-// path's sweep, image stage forced) against a BVH self-test with its tree kept and refitted
-// (no World around it) and CGAL's Polygon_mesh_processing::self_intersections; medians per
-// frame after an untimed pass, misses against the exact self pairs.
+// The self-collision benchmarks of `peelcd bench cloth-self` (a folded cloth folding through
+// itself) and `peelcd bench cloth-crumpled` (a cloth crumpled over a ball, its folds drifting):
+// one deforming object, self-collision on; peelcd's World (its kept tree refitted, traversed
+// against itself), the frame API (stage router, exact path's sweep, image stage forced) against
+// Embree's rtcCollide of the cloth's scene with itself and Bullet's GImpact box set against
+// itself (both refitted, Moller's float test: peelcd/bench/float_peers.h), a BVH self-test with
+// its tree kept and refitted (no World around it) and CGAL's
+// Polygon_mesh_processing::self_intersections; medians per frame after an untimed pass, misses
+// and false pairs against the exact self pairs.
 #include "peelcd/core/image_stage.h"
 
 #include <memory>
@@ -13,7 +16,10 @@
 namespace peelcd::bench {
 
 struct SelfSuite {
-  int n = 130;              // make_folded_sheet(n): 6 n^2 triangles (130: 101,400)
+  // false: the folding sheet (make_folded_sheet(n): 6 n^2 triangles, 130: 101,400); true: the
+  // crumpled cloth (make_crumpled_cloth(n): 2 n^2 triangles, 224: 100,352).
+  bool crumpled = false;
+  int n = 130;
   std::size_t frames = 8;
   std::shared_ptr<ImageStage> stage;  // the frame API's image stage
 };
