@@ -40,10 +40,12 @@ void self_overlap_pairs(const Mesh& mesh, const std::vector<std::uint32_t>* tris
 // and unique.
 void self_candidates(const Mesh& mesh, const std::vector<std::uint32_t>& rep, std::vector<std::uint64_t>& pairs);
 
-// The exact test of one self couple (two triangles of one object, not adjacent): as
-// test_triangle_pair(), with CGAL's intersection test first. A smooth surface's neighbours are
-// mostly coplanar or nearly so, which CGAL rejects faster than test_triangle_pair()'s signs;
-// the answer is the same exact one.
+// The exact test of one self couple (two triangles of one object, not adjacent):
+// test_triangle_pair(), with CGAL's intersection test first where the two planes are within
+// about 1e-3 rad of parallel (a smooth surface's neighbours, whose signs are near 0 where the
+// certified double signs give up: CGAL's filtered test rejects them faster). The answer is the
+// same exact one either way; on the crumpled cloth the split is 15% faster a frame than CGAL's
+// test first on every couple, on the folded sheet as fast.
 bool test_self_couple(const TriangleCorners& a, const TriangleCorners& b, Contact& contact);
 
 // Every self candidate (pack_pair(t, u)) through test_self_couple(), the colliding appended to
