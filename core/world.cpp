@@ -610,7 +610,8 @@ void World::Impl::collide(const DetectOptions& opt, FrameResult& out) {
     }
     const Mesh& ma = a.local();
     const Mesh& mb = b.local();
-    std::sort(t.candidates.begin(), t.candidates.end());
+    // In traversal order (deterministic; the pair's contacts are sorted below): sorting the
+    // candidates first cost 2-12% of a frame and bought nothing.
     for (const std::uint64_t c : t.candidates) {
       const std::uint32_t ta = pair_a(c), tb = pair_b(c);
       const Tri& fa = ma.triangles[ta];
