@@ -327,10 +327,9 @@ void World::set_pose(BodyId id, const Eigen::Affine3d& pose) {
   b.pose = pose;
 }
 
-void World::set_vertices(BodyId id, std::vector<Vec3> vertices) {
-  const ExclusiveUse exclusive(impl_->owner, "peelcd::World");
-  Body& b = impl_->body(id, "set_vertices");
-  const std::string label = label_of(b.name, id);
+namespace {
+// Throws unless `vertices` fit deforming body `b` (same count, finite).
+void check_vertices(const Body& b, const std::string& label, const std::vector<Vec3>& vertices) {
   if (b.is_rigid) throw std::invalid_argument("peelcd::World::set_vertices(): " + label + " is rigid (use set_pose)");
   if (vertices.size() != b.mesh.vertices.size())
     throw std::invalid_argument("peelcd::World::set_vertices(): " + label + " has " + std::to_string(b.mesh.vertices.size()) +
@@ -339,6 +338,22 @@ void World::set_vertices(BodyId id, std::vector<Vec3> vertices) {
     if (!vertices[v].allFinite())
       throw std::invalid_argument("peelcd::World::set_vertices(): " + label + ": vertex " + std::to_string(v) + " " +
                                   coordinate_problem(vertices[v], false));
+}
+}  // namespace
+
+void World::set_vertices(BodyId id, const std::vector<Vec3>& vertices) {
+  const ExclusiveUse exclusive(impl_->owner, "peelcd::World");
+  Body& b = impl_->body(id, "set_vertices");
+  check_vertices(b, label_of(b.name, id), vertices);
+  std::copy(vertices.begin(), vertices.end(), b.mesh.vertices.begin());  // into the body's storage
+  b.tree.refit(b.mesh.vertices, b.mesh.triangles);
+  ++impl_->stats.full_refits;
+}
+
+void World::set_vertices(BodyId id, std::vector<Vec3>&& vertices) {
+  const ExclusiveUse exclusive(impl_->owner, "peelcd::World");
+  Body& b = impl_->body(id, "set_vertices");
+  check_vertices(b, label_of(b.name, id), vertices);
   b.mesh.vertices = std::move(vertices);
   b.tree.refit(b.mesh.vertices, b.mesh.triangles);
   ++impl_->stats.full_refits;
