@@ -1,7 +1,7 @@
 #!/usr/bin/env bash
 # Regenerates docs/performance/ and the tables of docs/performance.md: the router's calibration
 # (peelcd calibrate), the two dynamic scenes (peelcd simulate), the benchmarks against CGAL, FCL
-# and the bare-draw floor (peelcd bench: the default scene, test1, test2 and a 400-ball pile,
+# Embree, Bullet and the bare-draw floor (peelcd bench: the default scene, test1, test2 and a 400-ball pile,
 # all with one thread per method; the default scene and the crowd again with one per core; the
 # scale scenes: crossing spheres of 330k and 1.3M triangles, rigid and waving, and a 1,000-ball
 # pile), and the plots. Needs a built ./build/peelcd and python3-matplotlib (Debian's /usr/bin/python3).
@@ -30,6 +30,14 @@ scene=fixtures/scenes/bunny_dragon.json
 ./build/peelcd bench spheres --stacks 570 --frames 4 --threads 1 --short > "$out/bench_spheres_1m.txt"
 ./build/peelcd bench spheres-wave --stacks 570 --frames 4 --threads 1 --short > "$out/bench_spheres_1m_wave.txt"
 ./build/peelcd bench crowd --objects 1000 --frames 4 --threads 1 --short > "$out/bench_pile1000.txt"
+# The large scenes again with one thread per core (the World splits one pair's traversal too).
+./build/peelcd bench spheres --stacks 570 --frames 4 --short > "$out/bench_spheres_1m_2threads.txt"
+./build/peelcd bench spheres-wave --stacks 570 --frames 4 --short > "$out/bench_spheres_1m_wave_2threads.txt"
+./build/peelcd bench crowd --objects 1000 --frames 4 --short > "$out/bench_pile1000_2threads.txt"
+# Self-collision (one thread): the folding sheet and the crumpled cloth; the volume.
+./build/peelcd bench cloth-self --frames 8 > "$out/cloth_self.txt"
+./build/peelcd bench cloth-crumpled --frames 6 > "$out/cloth_crumpled.txt"
+./build/peelcd bench volume --frames 3 > "$out/volume.txt"
 PY=/usr/bin/python3; [ -x "$PY" ] || PY=python3
 "$PY" scripts/plot_performance.py "$out" "$out/bench_default.csv" "$out/bench_test1.csv" "$out/bench_test2.csv" \
   "$out/bench_crowd.csv" --simulate "$out/simulate_test1.csv" "$out/simulate_test2.csv"

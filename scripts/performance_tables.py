@@ -34,10 +34,10 @@ def simulate_table(path):
 
 
 def bench_methods(path):
-    """{method: [median, stage, miss, false, xCGAL, xFCL, xfloor]} from a `peelcd bench` table."""
+    """{method: [median, stage, miss, false, xCGAL, xFCL, xbest, xfloor]} from a `peelcd bench` table."""
     out = {}
     for line in open(path):
-        m = re.match(r"^(peelcd .*?|CGAL.*?|FCL .*?|floor: .*?)\s{2,}(\S.*)$", line.rstrip())
+        m = re.match(r"^(peelcd .*?|CGAL.*?|FCL .*?|Embree .*?|Bullet .*?|floor: .*?)\s{2,}(\S.*)$", line.rstrip())
         if m:
             out[m.group(1)] = m.group(2).split()
     return out
@@ -47,10 +47,10 @@ def bench_table(path):
     """Every row of a `peelcd bench` table, with its header lines as a caption."""
     b = bench_methods(path)
     head = [l.rstrip() for l in open(path) if l.startswith(("peelcd bench:", "threads:", "World:", "router"))]
-    rows = ["| method | median ms | stage ms | miss | false | x CGAL | x FCL | x floor |",
-            "|---|---|---|---|---|---|---|---|"]
+    rows = ["| method | median ms | stage ms | miss | false | x CGAL | x FCL | x best | x floor |",
+            "|---|---|---|---|---|---|---|---|---|"]
     for name, v in b.items():
-        rows.append("| %s | %s |" % (name, " | ".join(v + [""] * (7 - len(v)))))
+        rows.append("| %s | %s |" % (name, " | ".join(v + [""] * (8 - len(v)))))
     return "\n".join(["`" + h + "`" + "  " for h in head] + [""] + rows)
 
 
@@ -62,7 +62,8 @@ def main():
     }
     for name in ("bench_default", "bench_default_2threads", "bench_test1", "bench_test2", "bench_crowd",
                  "bench_crowd_2threads", "bench_spheres", "bench_spheres_wave", "bench_spheres_1m",
-                 "bench_spheres_1m_wave", "bench_pile1000"):
+                 "bench_spheres_1m_wave", "bench_pile1000", "bench_spheres_1m_2threads",
+                 "bench_spheres_1m_wave_2threads", "bench_pile1000_2threads"):
         tables[name] = bench_table(d + "/" + name + ".txt")
     rewrite_marked(doc, tables, "performance_tables.py")
 
