@@ -1,4 +1,5 @@
 #include "peelcd/bench/float_peers.h"
+#include "peelcd/core/clock.h"
 
 #include "peelcd/core/broad_phase.h"
 #include "peelcd/core/id_map.h"
@@ -23,9 +24,6 @@
 
 namespace peelcd::bench {
 namespace {
-
-using Clock = std::chrono::steady_clock;
-double ms_since(Clock::time_point t0) { return std::chrono::duration<double, std::milli>(Clock::now() - t0).count(); }
 
 template <class Body>
 void parallel_for(WorkerPool* pool, std::size_t n, Body body) {

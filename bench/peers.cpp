@@ -1,4 +1,5 @@
 #include "peelcd/bench/peers.h"
+#include "peelcd/core/clock.h"
 
 #include "peelcd/core/broad_phase.h"
 #include "peelcd/core/detector.h"
@@ -22,8 +23,6 @@
 
 namespace peelcd::bench {
 namespace {
-using Clock = std::chrono::steady_clock;
-double ms_since(Clock::time_point t0) { return std::chrono::duration<double, std::milli>(Clock::now() - t0).count(); }
 
 // Runs body(i) for i in [0, n) on `pool`'s lanes (or the calling thread without one).
 template <class Body>

@@ -1,4 +1,5 @@
 #include "peelcd/bench/self_bench.h"
+#include "peelcd/core/clock.h"
 
 #include "peelcd/bench/float_peers.h"
 #include "peelcd/bench/suite.h"
@@ -20,9 +21,6 @@
 
 namespace peelcd::bench {
 namespace {
-
-using Clock = std::chrono::steady_clock;
-double ms_since(Clock::time_point t0) { return std::chrono::duration<double, std::milli>(Clock::now() - t0).count(); }
 
 // Frame f of the fold: the top layer sinks through the bottom as f grows; of the crumpled
 // cloth: its folds drift.

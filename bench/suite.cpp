@@ -1,4 +1,5 @@
 #include "peelcd/bench/suite.h"
+#include "peelcd/core/clock.h"
 
 #include "peelcd/bench/float_peers.h"
 #include "peelcd/bench/floor.h"
@@ -21,9 +22,6 @@
 
 namespace peelcd::bench {
 namespace {
-
-using Clock = std::chrono::steady_clock;
-double ms_since(Clock::time_point t0) { return std::chrono::duration<double, std::milli>(Clock::now() - t0).count(); }
 
 void add(Score& total, const Score& s) {
   total.exact += s.exact;

@@ -1,4 +1,5 @@
 #include "peelcd/bench/volume_bench.h"
+#include "peelcd/core/clock.h"
 
 #include "peelcd/bench/suite.h"
 #include "peelcd/core/frame.h"
@@ -81,8 +82,6 @@ void print_coverage(const VolumeSuite& suite) {
 }  // namespace
 
 std::string run_volume_suite(const VolumeSuite& suite) {
-  using Clock = std::chrono::steady_clock;
-  const auto ms_since = [](Clock::time_point t0) { return std::chrono::duration<double, std::milli>(Clock::now() - t0).count(); };
   const std::size_t frames = std::max<std::size_t>(1, suite.frames);
   const int s = std::max(3, suite.stacks);
   const Mesh base_a = make_uv_sphere(Vec3(0, 0, 0), 1.0, s, 2 * s);

@@ -81,13 +81,23 @@ void Bvh::refit_node(std::uint32_t i) {
 }
 
 void Bvh::refit(const std::vector<Vec3>& vertices, const std::vector<Tri>& triangles) {
-  box_ = Aabb{};
-  for (std::size_t t = 0; t < boxes_.size(); ++t) {
+  refit_nodes(refit_triangles(vertices, triangles, 0, boxes_.size()));
+}
+
+Aabb Bvh::refit_triangles(const std::vector<Vec3>& vertices, const std::vector<Tri>& triangles, std::size_t begin,
+                          std::size_t end) {
+  Aabb exact;
+  for (std::size_t t = begin; t < end; ++t) {
     const Aabb b = triangle_bounds(vertices, triangles[t]);
     boxes_[t] = FBox::enclosing(b);
-    box_.lo = box_.lo.cwiseMin(b.lo);
-    box_.hi = box_.hi.cwiseMax(b.hi);
+    exact.lo = exact.lo.cwiseMin(b.lo);
+    exact.hi = exact.hi.cwiseMax(b.hi);
   }
+  return exact;
+}
+
+void Bvh::refit_nodes(const Aabb& exact) {
+  box_ = exact;
   // Children follow their parents: one sweep from the last node refits bottom-up.
   for (std::size_t i = nodes_.size(); i-- > 0;) refit_node(std::uint32_t(i));
 }

@@ -1,6 +1,8 @@
 #include "peelcd/core/cpu_stage.h"
+#include "peelcd/core/clock.h"
 
 #include "peelcd/core/conservative.h"
+#include "peelcd/core/texel.h"
 
 #include <algorithm>
 #include <chrono>
@@ -9,17 +11,6 @@
 
 namespace peelcd {
 namespace {
-
-using Clock = std::chrono::steady_clock;
-double ms_since(Clock::time_point t0) {
-  return std::chrono::duration<double, std::milli>(Clock::now() - t0).count();
-}
-
-std::uint32_t bits(float f) {
-  std::uint32_t u;
-  std::memcpy(&u, &f, sizeof u);
-  return u;
-}
 
 // Sub-texel precision of the rasterizer: vertices snap to 1/256 of a texel (llvmpipe's
 // FIXED_ORDER).
@@ -175,7 +166,7 @@ void CpuImageStage::peel(const PeelJob& job, PeelResult& out, Timings& timings) 
           }
           if (clipped) continue;
           fragments_.push_back({std::uint32_t(j) * std::uint32_t(n) + std::uint32_t(i),
-                                KFragment{bits(z), key, bits(fzx), bits(fzy)}});
+                                KFragment{texel::bits_of(z), key, texel::bits_of(fzx), texel::bits_of(fzy)}});
         }
       }
     }
@@ -228,7 +219,7 @@ void CpuImageStage::raster_conservative(const conservative::Triangle& t, int n, 
     for (int i = i0; i <= i1; ++i) {
       float lo, hi;
       if (!conservative::texel_interval(t, i, j, lo, hi)) continue;
-      fragments_.push_back({std::uint32_t(j) * std::uint32_t(n) + std::uint32_t(i), KFragment{bits(lo), key, bits(hi), 0u}});
+      fragments_.push_back({std::uint32_t(j) * std::uint32_t(n) + std::uint32_t(i), KFragment{texel::bits_of(lo), key, texel::bits_of(hi), 0u}});
     }
 }
 

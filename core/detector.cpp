@@ -1,4 +1,5 @@
 #include "peelcd/core/detector.h"
+#include "peelcd/core/clock.h"
 
 #include "peelcd/core/broad_phase.h"
 #include "peelcd/core/cull.h"
@@ -19,11 +20,6 @@
 
 namespace peelcd {
 namespace {
-
-using Clock = std::chrono::steady_clock;
-double ms_since(Clock::time_point t0) {
-  return std::chrono::duration<double, std::milli>(Clock::now() - t0).count();
-}
 
 std::string object_label(const Object& o, std::size_t i) {
   return "object " + std::to_string(i) + (o.name.empty() ? "" : " '" + o.name + "'");
@@ -446,9 +442,7 @@ void Detector::detect(const std::vector<const Object*>& object_ptrs, const Detec
   validate_objects(object_ptrs, opt.stage != Stage::exact);
 
   // `out` is reused: its vectors keep their capacity (tests/alloc/test_alloc.cpp counts it).
-  out.timings = Timings{};
-  out.gl_passes = out.rois_peeled = out.triangles_uploaded = out.triangles_indexed = out.shape_uploads = 0;
-  out.pcs_readbacks = out.views_exhaustive = out.rois_exact = 0;
+  out.reset_counters();
   const auto t_total = Clock::now();
 
   auto t0 = Clock::now();
@@ -584,8 +578,6 @@ void Detector::detect(const std::vector<const Object*>& object_ptrs, const Detec
     s.jobs[j].triangles[1] = &s.job_tris[2 * j + 1];
   }
 
-  out.gl_draws = out.gl_dispatches = out.gl_readbacks = out.bytes_uploaded = out.bytes_read = out.geometry_bytes = 0;
-  out.gl_deep_texels = out.views_host_resolved = 0;
   if (!s.jobs.empty()) {
     stage.counters = StageCounters{};
     stage.begin_frame();

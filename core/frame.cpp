@@ -185,4 +185,32 @@ void relate_pairs(std::vector<PairResult>& pairs, const std::function<const Mesh
   }
 }
 
+void FrameResult::reset_counters() {
+  timings = Timings{};
+  gl_passes = rois_peeled = triangles_uploaded = triangles_indexed = shape_uploads = 0;
+  pcs_readbacks = views_exhaustive = rois_exact = 0;
+  gl_draws = gl_dispatches = gl_readbacks = bytes_uploaded = bytes_read = geometry_bytes = 0;
+  gl_deep_texels = views_host_resolved = 0;
+}
+
+void FrameResult::add_image_work(const FrameResult& o) {
+  gl_passes += o.gl_passes;
+  rois_peeled += o.rois_peeled;
+  triangles_uploaded += o.triangles_uploaded;
+  pcs_readbacks += o.pcs_readbacks;
+  views_exhaustive += o.views_exhaustive;
+  gl_draws += o.gl_draws;
+  gl_dispatches += o.gl_dispatches;
+  gl_readbacks += o.gl_readbacks;
+  bytes_uploaded += o.bytes_uploaded;
+  bytes_read += o.bytes_read;
+  geometry_bytes += o.geometry_bytes;
+  gl_deep_texels += o.gl_deep_texels;
+  views_host_resolved += o.views_host_resolved;
+  timings.upload += o.timings.upload;
+  timings.gpu += o.timings.gpu;
+  timings.readback += o.timings.readback;
+  timings.cpu += o.timings.cpu;
+}
+
 }  // namespace peelcd

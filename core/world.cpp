@@ -1,4 +1,5 @@
 #include "peelcd/core/world.h"
+#include "peelcd/core/clock.h"
 
 #include "peelcd/core/broad_phase.h"
 #include "peelcd/core/cull.h"
@@ -18,9 +19,6 @@
 
 namespace peelcd {
 namespace {
-
-using Clock = std::chrono::steady_clock;
-double ms_since(Clock::time_point t0) { return std::chrono::duration<double, std::milli>(Clock::now() - t0).count(); }
 
 constexpr double kCandidateUs = kWorldCandidateUs;
 constexpr std::uint32_t kSmallPair = 0xffffffffu;  // a task's start: scan two small world meshes
@@ -52,6 +50,9 @@ struct Body {
   bool world_tree_fresh = false;
   bool copy_valid = false, moved = false;
   Eigen::Affine3d copied_pose = Eigen::Affine3d::Identity();
+  // Deforming: its tree is refitted whole at the next collide() (set_vertices, many moved
+  // vertices), every such body's triangles split over the frame's lanes.
+  bool refit_pending = false;
   // Deforming: the triangles using each vertex (CSR), built on the first move_vertices().
   std::vector<std::uint32_t> vertex_first, vertex_tris;
   // Self-collision (World::set_self): the vertex representatives of the adjacency in use
@@ -239,6 +240,49 @@ struct World::Impl {
     pool->run(job);
   }
 
+  // The deferred whole-tree refits (World::set_vertices, many moved vertices): every pending
+  // body's triangle boxes in chunks over the lanes (a large body split in as many chunks as
+  // lanes), then each body's nodes.
+  struct RefitChunk {
+    Body* body;
+    std::size_t begin, end;
+    Aabb exact;
+  };
+  std::vector<RefitChunk> refit_chunks;
+  std::vector<Body*> refit_bodies;
+  void refit_pending(unsigned lanes) {
+    refit_chunks.clear();
+    refit_bodies.clear();
+    for (Body& b : bodies) {
+      if (!b.alive || !b.refit_pending) continue;
+      refit_bodies.push_back(&b);
+      const std::size_t n = b.mesh.triangles.size();
+      const std::size_t parts = lanes > 1 && n >= 32768 ? lanes : 1;
+      for (std::size_t k = 0; k < parts; ++k) refit_chunks.push_back({&b, n * k / parts, n * (k + 1) / parts, Aabb{}});
+    }
+    if (refit_bodies.empty()) return;
+    parallel(refit_chunks.size(), lanes, [&](std::size_t k, unsigned) {
+      RefitChunk& c = refit_chunks[k];
+      c.exact = c.body->tree.refit_triangles(c.body->mesh.vertices, c.body->mesh.triangles, c.begin, c.end);
+    });
+    parallel(refit_bodies.size(), lanes, [&](std::size_t k, unsigned) {
+      Body& b = *refit_bodies[k];
+      Aabb exact;
+      for (const RefitChunk& c : refit_chunks)
+        if (c.body == &b) exact.lo = exact.lo.cwiseMin(c.exact.lo), exact.hi = exact.hi.cwiseMax(c.exact.hi);
+      b.tree.refit_nodes(exact);
+      b.refit_pending = false;
+    });
+    stats.full_refits += refit_bodies.size();
+  }
+  // One body's pending refit now (World::tree() asked for it between frames).
+  void refit_now(Body& b) {
+    if (!b.refit_pending) return;
+    b.tree.refit(b.mesh.vertices, b.mesh.triangles);
+    b.refit_pending = false;
+    ++stats.full_refits;
+  }
+
   void collide(const DetectOptions& opt, FrameResult& out);
   // A self pair's contacts: its tasks' (in the body's frame), cached for a rigid body, moved to
   // world space.
@@ -346,8 +390,7 @@ void World::set_vertices(BodyId id, const std::vector<Vec3>& vertices) {
   Body& b = impl_->body(id, "set_vertices");
   check_vertices(b, label_of(b.name, id), vertices);
   std::copy(vertices.begin(), vertices.end(), b.mesh.vertices.begin());  // into the body's storage
-  b.tree.refit(b.mesh.vertices, b.mesh.triangles);
-  ++impl_->stats.full_refits;
+  b.refit_pending = true;
 }
 
 void World::set_vertices(BodyId id, std::vector<Vec3>&& vertices) {
@@ -355,8 +398,7 @@ void World::set_vertices(BodyId id, std::vector<Vec3>&& vertices) {
   Body& b = impl_->body(id, "set_vertices");
   check_vertices(b, label_of(b.name, id), vertices);
   b.mesh.vertices = std::move(vertices);
-  b.tree.refit(b.mesh.vertices, b.mesh.triangles);
-  ++impl_->stats.full_refits;
+  b.refit_pending = true;
 }
 
 void World::move_vertices(BodyId id, const std::vector<std::uint32_t>& indices, const std::vector<Vec3>& positions) {
@@ -377,10 +419,10 @@ void World::move_vertices(BodyId id, const std::vector<std::uint32_t>& indices, 
                                   " " + coordinate_problem(positions[k], false));
   }
   for (std::size_t k = 0; k < indices.size(); ++k) b.mesh.vertices[indices[k]] = positions[k];
-  // Many moved: one sweep over the tree is cheaper than the paths.
-  if (indices.size() * 8 > nv) {
-    b.tree.refit(b.mesh.vertices, b.mesh.triangles);
-    ++impl_->stats.full_refits;
+  // Many moved: one sweep over the tree is cheaper than the paths (a sweep already pending
+  // covers these too).
+  if (b.refit_pending || indices.size() * 8 > nv) {
+    b.refit_pending = true;
     return;
   }
   if (b.vertex_first.empty()) {  // the vertex -> triangles table, once per topology
@@ -412,6 +454,7 @@ void World::set_mesh(BodyId id, Mesh mesh) {
   b.vertex_tris.clear();
   b.topology_changed();
   b.tree.build(b.local().vertices, b.local().triangles);
+  b.refit_pending = false;
   b.world_tree = Bvh{};
   b.world_copy = Mesh{};
   b.copy_valid = false;
@@ -445,7 +488,12 @@ std::size_t World::size() const { return impl_->alive; }
 const std::string& World::name(BodyId id) const { return impl_->body(id).name; }
 bool World::rigid(BodyId id) const { return impl_->body(id).is_rigid; }
 const Mesh& World::mesh(BodyId id) const { return impl_->body(id).local(); }
-const Bvh& World::tree(BodyId id) const { return impl_->body(id).tree; }
+const Bvh& World::tree(BodyId id) const {
+  const ExclusiveUse exclusive(impl_->owner, "peelcd::World");
+  Body& b = impl_->body(id, "tree");
+  impl_->refit_now(b);
+  return b.tree;
+}
 const WorldStats& World::stats() const { return impl_->stats; }
 ImageStage& World::stage() { return *impl_->stage; }
 void World::batch_image_pairs(std::optional<bool> together) { impl_->batch_pairs = together; }
@@ -471,12 +519,9 @@ void World::collide(const DetectOptions& options, FrameResult& out) {
 void World::Impl::collide(const DetectOptions& opt, FrameResult& out) {
   validate_options(opt, stage->max_resolution());
   const auto t_total = Clock::now();
-  out.timings = Timings{};
-  out.gl_passes = out.rois_peeled = out.triangles_uploaded = out.triangles_indexed = out.shape_uploads = 0;
-  out.pcs_readbacks = out.views_exhaustive = out.rois_exact = 0;
-  out.gl_draws = out.gl_dispatches = out.gl_readbacks = out.bytes_uploaded = out.bytes_read = out.geometry_bytes = 0;
-  out.gl_deep_texels = out.views_host_resolved = 0;
+  out.reset_counters();
   stats.node_pairs = stats.candidates = stats.vertices_transformed = 0;
+  refit_pending(lanes_for(opt));
 
   // The broad phase: each body's box (its tree's root, moved by its pose).
   auto t0 = Clock::now();
@@ -771,23 +816,7 @@ void World::Impl::image_pairs(const DetectOptions& opt, FrameResult& out, std::s
       return x.tri_a < y.tri_a || (x.tri_a == y.tri_a && x.tri_b < y.tri_b);
     });
   }
-  out.gl_passes += inner.gl_passes;
-  out.rois_peeled += inner.rois_peeled;
-  out.triangles_uploaded += inner.triangles_uploaded;
-  out.pcs_readbacks += inner.pcs_readbacks;
-  out.views_exhaustive += inner.views_exhaustive;
-  out.gl_draws += inner.gl_draws;
-  out.gl_dispatches += inner.gl_dispatches;
-  out.gl_readbacks += inner.gl_readbacks;
-  out.bytes_uploaded += inner.bytes_uploaded;
-  out.bytes_read += inner.bytes_read;
-  out.geometry_bytes += inner.geometry_bytes;
-  out.gl_deep_texels += inner.gl_deep_texels;
-  out.views_host_resolved += inner.views_host_resolved;
-  out.timings.upload += inner.timings.upload;
-  out.timings.gpu += inner.timings.gpu;
-  out.timings.readback += inner.timings.readback;
-  out.timings.cpu += inner.timings.cpu;
+  out.add_image_work(inner);
 }
 
 void sync_bodies(World& world, const std::vector<Object>& objects, std::vector<BodyId>& bodies) {

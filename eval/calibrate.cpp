@@ -1,4 +1,5 @@
 #include "peelcd/eval/calibrate.h"
+#include "peelcd/core/clock.h"
 
 #include "peelcd/core/world.h"
 #include "peelcd/eval/scenes.h"
@@ -192,10 +193,10 @@ std::vector<LargeMeshRow> calibrate_large_meshes(Detector& detector, const std::
           row.kept += cull.kept_a.size() + cull.kept_b.size();
         }
       }
-      const auto t0 = std::chrono::steady_clock::now();
+      const auto t0 = Clock::now();
       sync_bodies(world, objects, bodies);
       const FrameResult& w = world.collide(opt);
-      const double ms = std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - t0).count();
+      const double ms = ms_since(t0);
       if (f > 0) {
         world_ms.push_back(ms);
         narrow_ms.push_back(w.timings.cpu);

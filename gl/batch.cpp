@@ -13,6 +13,7 @@
 // capturing layers) a view gives the same layers and PCS either way (a point-sampled view smaller
 // than the batch's largest is placed by one more scaling: its samples may differ in the last bit).
 #include "stage_impl.h"
+#include "peelcd/core/texel.h"
 
 #include <algorithm>
 #include <cstring>
@@ -78,8 +79,7 @@ void put_matrix(std::vector<float>& out, const float* m) { out.insert(out.end(),
 
 // A float as an integer of the same order (shaders/batch_select.comp's regions).
 std::uint32_t ordered(float f) {
-  std::uint32_t b;
-  std::memcpy(&b, &f, sizeof b);
+  const std::uint32_t b = texel::bits_of(f);
   return (b & 0x80000000u) ? ~b : b | 0x80000000u;
 }
 

@@ -8,6 +8,7 @@
 //   batch.cpp        one view (peel_one), or conservative views packed into one k-buffer and one draw
 //   gl_stage.cpp     the public class, the floor draw
 #include "peelcd/core/image_stage.h"
+#include "peelcd/core/clock.h"
 #include "peelcd/core/kbuffer.h"
 #include "peelcd/core/worker_pool.h"
 #include "peelcd/gl/gl_stage.h"
@@ -41,11 +42,6 @@ extern const char* const shader_sources_hash;
 }  // namespace peelcd::shaders
 
 namespace peelcd::gl {
-
-using Clock = std::chrono::steady_clock;
-inline double ms_since(Clock::time_point t0) {
-  return std::chrono::duration<double, std::milli>(Clock::now() - t0).count();
-}
 
 // A shader's source as compiled: `defines` after its #version line, and the shared PCS tests
 // (include/peelcd/core/pcs_test.inc) where it says #include "peelcd/core/pcs_test.inc".

@@ -54,17 +54,66 @@ def bench_table(path):
     return "\n".join(["`" + h + "`" + "  " for h in head] + [""] + rows)
 
 
+PEERS = ("CGAL", "FCL", "Embree", "Bullet")
+
+
+def standing_table(d, scenes):
+    """Per bench scene: the World's median, the fastest peer row and the ratio."""
+    rows = ["| scene | World (default) ms | fastest peer | its ms | World / peer |", "|---|---|---|---|---|"]
+    for label, name in scenes:
+        b = bench_methods(d + "/" + name + ".txt")
+        world = float(b["peelcd default (World, stage auto)"][0])
+        peers = [(float(v[0]), k) for k, v in b.items() if k.startswith(PEERS)]
+        best_ms, best = min(peers)
+        rows.append("| %s | %.2f | %s | %.2f | %.2f |" % (label, world, best, best_ms, world / best_ms))
+    return "\n".join(rows)
+
+
+def threads_table(d, scenes):
+    """Per large scene: each row's median with one thread and with one per core."""
+    rows = ["| scene | method | 1 thread ms | 2 threads ms | ratio |", "|---|---|---|---|---|"]
+    for label, one, two in scenes:
+        b1, b2 = bench_methods(d + "/" + one + ".txt"), bench_methods(d + "/" + two + ".txt")
+        for k in b1:
+            if k.startswith("floor") or k not in b2 or "image stage" in k:
+                continue
+            m1, m2 = float(b1[k][0]), float(b2[k][0])
+            rows.append("| %s | %s | %.2f | %.2f | %.2f |" % (label, k, m1, m2, m2 / m1))
+    return "\n".join(rows)
+
+
+def self_table(path):
+    """The rows of a `peelcd bench cloth-self|cloth-crumpled` table."""
+    lines = open(path).read().split("\n")
+    caption = "`" + lines[0] + "`"
+    rows = ["| method | median ms | ratio to the World | exact | found | missed | false |", "|---|---|---|---|---|---|---|"]
+    for line in lines[2:]:
+        m = re.match(r"^(\S.*?)\s{2,}(\d.*)$", line.rstrip())
+        if m and not line.startswith("("):
+            rows.append("| %s | %s |" % (m.group(1), " | ".join(m.group(2).split())))
+    return caption + "\n\n" + "\n".join(rows)
+
+
 def main():
     doc, d = sys.argv[1], sys.argv[2]
     tables = {
         "simulate_test1": simulate_table(d + "/simulate_test1.txt"),
         "simulate_test2": simulate_table(d + "/simulate_test2.txt"),
     }
-    for name in ("bench_default", "bench_default_2threads", "bench_test1", "bench_test2", "bench_crowd",
-                 "bench_crowd_2threads", "bench_spheres", "bench_spheres_wave", "bench_spheres_1m",
-                 "bench_spheres_1m_wave", "bench_pile1000", "bench_spheres_1m_2threads",
-                 "bench_spheres_1m_wave_2threads", "bench_pile1000_2threads"):
+    for name in ("bench_default", "bench_test1", "bench_test2", "bench_crowd", "bench_spheres", "bench_spheres_wave",
+                 "bench_spheres_1m", "bench_spheres_1m_wave", "bench_pile1000"):
         tables[name] = bench_table(d + "/" + name + ".txt")
+    tables["standing"] = standing_table(d, [
+        ("default scene (bunny vs dragon)", "bench_default"), ("test1", "bench_test1"), ("test2", "bench_test2"),
+        ("400-ball pile", "bench_crowd"), ("1,000-ball pile", "bench_pile1000"),
+        ("rigid spheres, 330k each", "bench_spheres"), ("rigid spheres, 1.3M each", "bench_spheres_1m"),
+        ("waving spheres, 330k each", "bench_spheres_wave"), ("waving spheres, 1.3M each", "bench_spheres_1m_wave")])
+    tables["threads"] = threads_table(d, [
+        ("rigid spheres, 1.3M", "bench_spheres_1m", "bench_spheres_1m_2threads"),
+        ("waving spheres, 1.3M", "bench_spheres_1m_wave", "bench_spheres_1m_wave_2threads"),
+        ("1,000-ball pile", "bench_pile1000", "bench_pile1000_2threads")])
+    tables["cloth_crumpled"] = self_table(d + "/cloth_crumpled.txt")
+    tables["cloth_self"] = self_table(d + "/cloth_self.txt")
     rewrite_marked(doc, tables, "performance_tables.py")
 
 

@@ -1,7 +1,7 @@
 #pragma once
 // Seeded random intersecting triangle pairs as two-object scenes at random poses, view frames
 // and resolutions: the property "conservative mode finds every intersecting pair" is checked on
-// them (tests/core/test_conservative.cpp on the CPU stage, tests/gl/test_conservative.cpp on GL).
+// them (tests/eval/test_conservative_classes.cpp on the CPU stage, tests/gl/test_conservative.cpp on GL).
 // The pairs come from the adversarial generator (coplanar, touching, slivers, zero-area, tiny
 // and huge scales, far offsets); each object is a world-space triangle or, every other case, a
 // rigid shape moved by a random pose (the pose's float error is part of what is tested).

@@ -103,6 +103,12 @@ class Bvh {
   void build(const std::vector<Vec3>& vertices, const std::vector<Tri>& triangles);
   // Every box again from `vertices` (the same triangles, moved).
   void refit(const std::vector<Vec3>& vertices, const std::vector<Tri>& triangles);
+  // The same in two steps, for callers that split the first over threads: the boxes of triangles
+  // [begin, end) (returns their exact box; ranges may run concurrently), then every node from
+  // the triangle boxes, with `exact` the union of the ranges' boxes.
+  Aabb refit_triangles(const std::vector<Vec3>& vertices, const std::vector<Tri>& triangles, std::size_t begin,
+                       std::size_t end);
+  void refit_nodes(const Aabb& exact);
   // Only the boxes of `changed` triangles (any order, repeats allowed), their leaves and their
   // ancestors: O(changed * depth).
   void refit(const std::vector<Vec3>& vertices, const std::vector<Tri>& triangles,

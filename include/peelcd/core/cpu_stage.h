@@ -13,7 +13,7 @@
 // (peelcd/core/conservative.h, the shaders' arithmetic), with a depth interval per texel.
 //
 // It models GL's rules, not a particular driver's arithmetic: on the default scene it gives the
-// same PCS as OSMesa (tests/core/test_cpu_stage.cpp); elsewhere a texel centre that lies within
+// same PCS as OSMesa (tests/gl/test_stages.cpp); elsewhere a texel centre that lies within
 // rounding of an edge or of the ROI box may be decided differently.
 #include "peelcd/core/conservative.h"
 #include "peelcd/core/image_stage.h"

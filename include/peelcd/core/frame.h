@@ -218,6 +218,13 @@ struct FrameResult {
   // views resolved on the host instead (views_host_resolved). Both 0 on the host resolve.
   std::size_t gl_deep_texels = 0, views_host_resolved = 0;
   std::string renderer;           // GL_RENDERER of the context that ran it
+
+  // Every counter and timing to zero (the pairs and the renderer stay): a frame's start.
+  void reset_counters();
+  // Adds `other`'s image-stage work to this frame's: GL passes, views peeled, uploads, readbacks,
+  // exhaustive views, the GL calls and bytes, deep texels, and the upload, gpu, readback and cpu
+  // timings (the World's image-routed pairs, run as a frame of their own).
+  void add_image_work(const FrameResult& other);
 };
 
 }  // namespace peelcd

@@ -76,9 +76,10 @@ class World {
   void remove(BodyId body);
 
   void set_pose(BodyId body, const Eigen::Affine3d& pose);  // rigid bodies
-  // Every vertex of a deforming body moved (same count): its tree refitted whole. The const&
-  // overload copies into the body's own storage (no allocation after the first frame); the
-  // rvalue overload takes the vector over.
+  // Every vertex of a deforming body moved (same count): its tree refitted whole at the next
+  // collide() (every such body's refit split over the frame's threads). The const& overload
+  // copies into the body's own storage (no allocation after the first frame); the rvalue
+  // overload takes the vector over.
   void set_vertices(BodyId body, const std::vector<Vec3>& vertices);
   void set_vertices(BodyId body, std::vector<Vec3>&& vertices);
   // Only these vertices moved (indices into the body's vertices, `positions` parallel to them):

@@ -1,7 +1,7 @@
 #pragma once
 // Classes of geometry a collision library meets, as small generated scenes: the accuracy of
 // every configuration is measured and tested on each of them (docs/accuracy.md, "Per class";
-// tests/core/test_classes.cpp; peelcd classes). Every scene is built from closed-form meshes, so
+// tests/eval/test_conservative_classes.cpp; peelcd classes). Every scene is built from closed-form meshes, so
 // its exact contacts are what the construction says (axis-aligned faces, coincident surfaces,
 // zero-area triangles, features thinner than a texel).
 #include "peelcd/core/mesh.h"
