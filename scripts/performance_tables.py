@@ -75,7 +75,7 @@ def threads_table(d, scenes):
     for label, one, two in scenes:
         b1, b2 = bench_methods(d + "/" + one + ".txt"), bench_methods(d + "/" + two + ".txt")
         for k in b1:
-            if k.startswith("floor") or k not in b2 or "image stage" in k:
+            if not k.startswith(("peelcd default", "FCL 0.7, deforming refit", "Embree", "Bullet")) or k not in b2:
                 continue
             m1, m2 = float(b1[k][0]), float(b2[k][0])
             rows.append("| %s | %s | %.2f | %.2f | %.2f |" % (label, k, m1, m2, m2 / m1))
@@ -100,8 +100,7 @@ def main():
         "simulate_test1": simulate_table(d + "/simulate_test1.txt"),
         "simulate_test2": simulate_table(d + "/simulate_test2.txt"),
     }
-    for name in ("bench_default", "bench_test1", "bench_test2", "bench_crowd", "bench_spheres", "bench_spheres_wave",
-                 "bench_spheres_1m", "bench_spheres_1m_wave", "bench_pile1000"):
+    for name in ("bench_default", "bench_crowd", "bench_spheres", "bench_spheres_wave", "bench_pile1000"):
         tables[name] = bench_table(d + "/" + name + ".txt")
     tables["standing"] = standing_table(d, [
         ("default scene (bunny vs dragon)", "bench_default"), ("test1", "bench_test1"), ("test2", "bench_test2"),
