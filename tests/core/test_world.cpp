@@ -352,3 +352,38 @@ TEST_CASE("World: touching bodies far from the origin, every pose: exactly the r
   }
   CHECK(contacts > 0);
 }
+
+// set_vertices refits at the next collide(), split over the frame's threads for a large body;
+// tree() asked for in between sees the refitted tree. Two threads and one give the same pairs.
+TEST_CASE("World: deferred refits, between frames and split over threads", "[world]") {
+  const Mesh base = make_uv_sphere(Vec3::Zero(), 1.0, 100, 200);  // 79,200 triangles: split
+  REQUIRE(base.triangles.size() >= 32768);
+  const Mesh other = make_uv_sphere(Vec3(1.5, 0.1, 0.0), 0.8, 40, 80);
+  std::vector<std::vector<std::uint64_t>> by_threads;
+  for (const unsigned threads : {1u, 2u}) {
+    World world;
+    const BodyId a = world.add_deforming(base, "a");
+    const BodyId b = world.add_deforming(other, "b");
+    DetectOptions opt;
+    opt.threads = threads;
+    std::vector<std::uint64_t> all;
+    for (int f = 0; f < 3; ++f) {
+      std::vector<Vec3> v = base.vertices;
+      for (Vec3& p : v) p *= 1.0 + 0.05 * f;  // grows: the root box too
+      world.set_vertices(a, v);
+      Mesh moved = base;
+      moved.vertices = v;
+      if (f == 0) CHECK(world.tree(a).box().hi == bounds(moved).hi);  // refitted on request; later frames in collide()
+      const FrameResult& r = world.collide(opt);
+      REQUIRE(r.pairs.size() == 1);
+      const std::vector<std::uint64_t> want = exact_colliding_pairs(moved, other);
+      std::vector<std::uint64_t> got;
+      for (const Contact& c : r.pairs[0].colliding) got.push_back(pack_pair(c.tri_a, c.tri_b));
+      CHECK(got == want);
+      all.insert(all.end(), got.begin(), got.end());
+    }
+    CHECK(world.stats().full_refits == 3);
+    by_threads.push_back(all);
+  }
+  CHECK(by_threads[0] == by_threads[1]);
+}

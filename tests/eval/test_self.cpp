@@ -5,6 +5,7 @@
 #include "peelcd/core/cpu_stage.h"
 #include "peelcd/core/detector.h"
 #include "peelcd/core/id_map.h"
+#include "peelcd/core/primitives.h"
 #include "peelcd/core/reference.h"
 #include "peelcd/core/self.h"
 #include "peelcd/core/world.h"
@@ -204,4 +205,30 @@ TEST_CASE("the World's self pairs: its tree against itself, equal to the frame's
   }
   world.set_self(id, false);
   CHECK(world.collide(opt).pairs.empty());
+}
+
+// The crumpled cloth of `peelcd bench cloth-crumpled`: it does pass through itself, and the World
+// finds exactly the reference's self pairs frame after frame (its tree refitted, the refit
+// split over two threads or not).
+TEST_CASE("the crumpled cloth: self pairs exist and the World finds exactly them, one or two threads", "[self]") {
+  for (const unsigned threads : {1u, 2u}) {
+    World world;
+    const BodyId cloth = world.add_deforming(make_crumpled_cloth(60, 0.0), "cloth");
+    world.set_self(cloth, true);
+    DetectOptions opt;
+    opt.threads = threads;
+    for (int f = 0; f < 3; ++f) {
+      const Mesh m = make_crumpled_cloth(60, 0.15 * f);
+      world.set_vertices(cloth, m.vertices);
+      const FrameResult& r = world.collide(opt);
+      const std::vector<std::uint64_t> want = exact_self_pairs(m);
+      INFO("threads " << threads << ", frame " << f);
+      REQUIRE(want.size() > 100);
+      REQUIRE(r.pairs.size() == 1);
+      std::vector<std::uint64_t> got;
+      for (const Contact& c : r.pairs[0].colliding) got.push_back(pack_pair(c.tri_a, c.tri_b));
+      std::sort(got.begin(), got.end());
+      CHECK(got == want);
+    }
+  }
 }
