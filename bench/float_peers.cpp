@@ -1,5 +1,6 @@
 #include "peelcd/bench/float_peers.h"
 #include "peelcd/core/clock.h"
+#include "peer_util.h"
 
 #include "peelcd/core/broad_phase.h"
 #include "peelcd/core/id_map.h"
@@ -24,19 +25,6 @@
 
 namespace peelcd::bench {
 namespace {
-
-template <class Body>
-void parallel_for(WorkerPool* pool, std::size_t n, Body body) {
-  if (!pool || n < 2) {
-    for (std::size_t i = 0; i < n; ++i) body(i);
-    return;
-  }
-  std::atomic<std::size_t> next{0};
-  auto lane = [&](unsigned) {
-    for (std::size_t i; (i = next.fetch_add(1)) < n;) body(i);
-  };
-  pool->run(lane);
-}
 
 // --- Moller's test, float ------------------------------------------------------------------
 
@@ -400,11 +388,7 @@ PeerFrame EmbreePeer::frame(const std::vector<Object>& objects) {
     boxes[i].lo = Vec3(bb.lower_x, bb.lower_y, bb.lower_z);
     boxes[i].hi = Vec3(bb.upper_x, bb.upper_y, bb.upper_z);
   }
-  f.objects = overlapping_pairs(boxes);
-  for (std::size_t i = 0; i < objects.size(); ++i)
-    if (objects[i].self && objects[i].mesh.triangles.size() >= 2) f.objects.emplace_back(i, i);
-  std::sort(f.objects.begin(), f.objects.end());
-  f.per_pair.resize(f.objects.size());
+  plan_object_pairs(boxes, objects, f);
   parallel_for(m.pool.get(), f.objects.size(), [&](std::size_t k) {
     const auto [a, b] = f.objects[k];
     Collector c;
@@ -553,11 +537,7 @@ PeerFrame BulletPeer::frame(const std::vector<Object>& objects) {
     boxes[i].lo = Vec3(lo.x(), lo.y(), lo.z());
     boxes[i].hi = Vec3(hi.x(), hi.y(), hi.z());
   }
-  f.objects = overlapping_pairs(boxes);
-  for (std::size_t i = 0; i < objects.size(); ++i)
-    if (objects[i].self && objects[i].mesh.triangles.size() >= 2) f.objects.emplace_back(i, i);
-  std::sort(f.objects.begin(), f.objects.end());
-  f.per_pair.resize(f.objects.size());
+  plan_object_pairs(boxes, objects, f);
   parallel_for(m.pool.get(), f.objects.size(), [&](std::size_t k) {
     const auto [a, b] = f.objects[k];
     Impl::Body& ba = m.bodies[a];

@@ -1,5 +1,6 @@
 #include "peelcd/bench/peers.h"
 #include "peelcd/core/clock.h"
+#include "peer_util.h"
 
 #include "peelcd/core/broad_phase.h"
 #include "peelcd/core/detector.h"
@@ -22,23 +23,6 @@
 #include <map>
 
 namespace peelcd::bench {
-namespace {
-
-// Runs body(i) for i in [0, n) on `pool`'s lanes (or the calling thread without one).
-template <class Body>
-void parallel_for(WorkerPool* pool, std::size_t n, Body body) {
-  if (!pool || n < 2) {
-    for (std::size_t i = 0; i < n; ++i) body(i);
-    return;
-  }
-  std::atomic<std::size_t> next{0};
-  auto lane = [&](unsigned) {
-    for (std::size_t i; (i = next.fetch_add(1)) < n;) body(i);
-  };
-  pool->run(lane);
-}
-
-}  // namespace
 
 PeerFrame cgal_frame(const std::vector<Object>& objects, unsigned threads) {
   static thread_local std::unique_ptr<WorkerPool> pool;
@@ -48,12 +32,7 @@ PeerFrame cgal_frame(const std::vector<Object>& objects, unsigned threads) {
   std::vector<Aabb> boxes;
   boxes.reserve(objects.size());
   for (const Object& o : objects) boxes.push_back(bounds(o.mesh));
-  f.objects = overlapping_pairs(boxes);
-  // Self pairs (i, i) of the objects that ask for them (Object::self): the exact self reference.
-  for (std::size_t i = 0; i < objects.size(); ++i)
-    if (objects[i].self && objects[i].mesh.triangles.size() >= 2) f.objects.emplace_back(i, i);
-  std::sort(f.objects.begin(), f.objects.end());
-  f.per_pair.resize(f.objects.size());
+  plan_object_pairs(boxes, objects, f);  // self pairs too: the exact self reference
   parallel_for(threads > 1 ? pool.get() : nullptr, f.objects.size(), [&](std::size_t i) {
     const auto [a, b] = f.objects[i];
     if (a == b) {
