@@ -6,14 +6,17 @@
 //   EmbreePeer: one scene per object holding one user geometry (a primitive per triangle, its
 //     float box the bounds callback's), rtcCollide between the scenes of every object pair whose
 //     boxes overlap (the boxes: the scenes' own bounds); a self pair: rtcCollide of the scene with
-//     itself. Trees over world-space float vertices, refitted (RTC_BUILD_QUALITY_REFIT) or
-//     rebuilt at low quality (the `Update` mode) for what moves; a static object's tree is never
-//     touched. A scene of two rigid objects keeps A's tree in A's frame, built once, and maps B's
+//     itself (each couple tested once: it reports both orders). Trees over world-space float
+//     vertices, refitted (RTC_BUILD_QUALITY_REFIT) or rebuilt at low quality (the `Update` mode)
+//     for what moves, under a RTC_BUILD_QUALITY_LOW scene (Embree honours the per-geometry
+//     quality only there); a static object's tree is never touched. A scene of two rigid objects keeps A's tree in A's frame, built once, and maps B's
 //     vertices into A's frame every frame (rtcCollide takes no transform).
 //   BulletPeer: one btGImpactMeshShape per shape (its quantized box set, margin 0), built once
 //     for a rigid shape and moved by the object's transform (GImpact's own find_collision takes
-//     both transforms), refitted (postUpdate(), updateBound()) for a deforming object; object
-//     pairs from the shapes' transformed boxes, then btGImpactQuantizedBvh::find_collision.
+//     both transforms), refitted (postUpdate(), updateBound()) for a deforming object and built
+//     again when its vertices leave the quantization range fixed at its build (a refit clamps to
+//     it); object pairs from the shapes' transformed boxes, then
+//     btGImpactQuantizedBvh::find_collision.
 // Both use one thread per object pair, the pairs spread over `threads` threads.
 #include "peelcd/bench/peers.h"
 
@@ -23,8 +26,10 @@
 namespace peelcd::bench {
 
 // Moller's interval test ("A Fast Triangle-Triangle Intersection Test", 1997), in float, as the
-// peers' examples use it, its plane-distance snap scaled to float rounding at the coordinates'
-// magnitude (not his absolute 1e-6): true when the triangles meet.
+// peers' examples use it: in a frame at t's first corner scaled to the pair's extent (his
+// no-division form multiplies up to five small differences, which underflow for small
+// triangles), its plane-distance snap at the input's float rounding (not his absolute 1e-6):
+// true when the triangles meet.
 bool tri_tri_float(const std::array<float, 9>& t, const std::array<float, 9>& u);
 
 class EmbreePeer {
