@@ -224,7 +224,7 @@ TEST_CASE("World: a frame reads only what lies near the contact", "[world]") {
   // world corners computed are those of the candidates only.
   std::size_t triangles[2], candidates[2], node_pairs[2];
   int i = 0;
-  for (const int stacks : {40, 160}) {
+  for (const int stacks : {48, 192}) {  // 9,024 and 146,688 triangles a sphere: above the small size
     auto ball = std::make_shared<const Mesh>(make_uv_sphere(Vec3::Zero(), 1.0, stacks, 2 * stacks));
     World world;
     world.add_rigid(ball, pose(0.2, Vec3(1, 1, 0), Vec3::Zero()));
@@ -321,9 +321,9 @@ TEST_CASE("World: set_mesh rebuilds (fracture): contacts of the new triangles", 
 TEST_CASE("World: touching bodies far from the origin, every pose: exactly the reference's pairs", "[world]") {
   // Faces that touch, moved by large translations and rotations: the world coordinates carry
   // rounding of the translations' size, which the traversal's grown boxes must cover.
-  // 46 x 46 quads: 4,232 triangles, above the size the World moves into world space whole, so
+  // 66 x 66 quads: 8,712 triangles, above the size the World moves into world space whole, so
   // that the two trees are traversed through the poses.
-  auto cube = std::make_shared<const Mesh>(make_grid(Vec3(0, 0, 0), Vec3(1, 0, 0), Vec3(0, 1, 0), 46, 46));
+  auto cube = std::make_shared<const Mesh>(make_grid(Vec3(0, 0, 0), Vec3(1, 0, 0), Vec3(0, 1, 0), 66, 66));
   std::mt19937 rng(5);
   std::uniform_real_distribution<double> u(-1.0, 1.0);
   std::size_t contacts = 0;
