@@ -246,34 +246,43 @@ struct World::Impl {
   // body's triangle boxes in chunks over the lanes (a large body split in as many chunks as
   // lanes), then each body's nodes.
   struct RefitChunk {
-    Body* body;
     std::size_t begin, end;
     Aabb exact;
   };
+  struct RefitBody {
+    Body* body;
+    std::size_t first, last;  // its chunks in refit_chunks
+  };
   std::vector<RefitChunk> refit_chunks;
-  std::vector<Body*> refit_bodies;
+  std::vector<RefitBody> refit_bodies;
+  std::vector<std::size_t> refit_owner;  // chunk -> its entry in refit_bodies
   void refit_pending(unsigned lanes) {
     refit_chunks.clear();
     refit_bodies.clear();
+    refit_owner.clear();
     for (Body& b : bodies) {
       if (!b.alive || !b.refit_pending) continue;
-      refit_bodies.push_back(&b);
       const std::size_t n = b.mesh.triangles.size();
       const std::size_t parts = lanes > 1 && n >= 32768 ? lanes : 1;
-      for (std::size_t k = 0; k < parts; ++k) refit_chunks.push_back({&b, n * k / parts, n * (k + 1) / parts, Aabb{}});
+      refit_bodies.push_back({&b, refit_chunks.size(), refit_chunks.size() + parts});
+      for (std::size_t k = 0; k < parts; ++k) {
+        refit_chunks.push_back({n * k / parts, n * (k + 1) / parts, Aabb{}});
+        refit_owner.push_back(refit_bodies.size() - 1);
+      }
     }
     if (refit_bodies.empty()) return;
     parallel(refit_chunks.size(), lanes, [&](std::size_t k, unsigned) {
       RefitChunk& c = refit_chunks[k];
-      c.exact = c.body->tree.refit_triangles(c.body->mesh.vertices, c.body->mesh.triangles, c.begin, c.end);
+      Body& b = *refit_bodies[refit_owner[k]].body;
+      c.exact = b.tree.refit_triangles(b.mesh.vertices, b.mesh.triangles, c.begin, c.end);
     });
     parallel(refit_bodies.size(), lanes, [&](std::size_t k, unsigned) {
-      Body& b = *refit_bodies[k];
+      const RefitBody& r = refit_bodies[k];
       Aabb exact;
-      for (const RefitChunk& c : refit_chunks)
-        if (c.body == &b) exact.lo = exact.lo.cwiseMin(c.exact.lo), exact.hi = exact.hi.cwiseMax(c.exact.hi);
-      b.tree.refit_nodes(exact);
-      b.refit_pending = false;
+      for (std::size_t c = r.first; c < r.last; ++c)
+        exact.lo = exact.lo.cwiseMin(refit_chunks[c].exact.lo), exact.hi = exact.hi.cwiseMax(refit_chunks[c].exact.hi);
+      r.body->tree.refit_nodes(exact);
+      r.body->refit_pending = false;
     });
     stats.full_refits += refit_bodies.size();
   }
