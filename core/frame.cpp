@@ -43,35 +43,9 @@ std::optional<Stage> parse_stage(const std::string& text) {
   return std::nullopt;
 }
 
-std::size_t fused_view_frames(const DetectOptions& o, ViewFrame out[3]) {
-  const ViewFrame f = view_frame(o.theta, o.phi, o.roll);
-  out[0] = f;
-  if (o.views < 1 || o.views > 3) throw std::invalid_argument("peelcd: views must be 1, 2 or 3");
-  // Along d, then along u, then along v: each view is the previous one turned a quarter turn.
-  if (o.views >= 2) out[1] = ViewFrame{f.v, f.d, f.u};
-  if (o.views == 3) out[2] = ViewFrame{f.d, f.u, f.v};
-  return std::size_t(o.views);
-}
 
-std::vector<ViewFrame> fused_view_frames(const DetectOptions& o) {
-  ViewFrame f[3];
-  const std::size_t n = fused_view_frames(o, f);
-  return std::vector<ViewFrame>(f, f + n);
-}
 
-int edge_tile_resolution(int share, const Aabb& region, double median_edge, double edge_texels) {
-  if (!(edge_texels > 0.0) || !(median_edge > 0.0) || !std::isfinite(median_edge) || region.empty()) return share;
-  const Vec3 extent = region.hi - region.lo;
-  const double texels = std::ceil(edge_texels * extent.maxCoeff() / median_edge);
-  if (!(texels < double(share))) return share;  // also NaN-safe
-  const int n = std::max(16, int(std::ceil(texels / 16.0)) * 16);
-  return std::min(n, share);
-}
 
-double edge_texels_of(const DetectOptions& o) {
-  if (o.edge_texels) return *o.edge_texels;
-  return o.conservative ? kConservativeEdgeTexels : kPointEdgeTexels;
-}
 
 DetectOptions paper_options() {
   DetectOptions o;
@@ -87,27 +61,7 @@ DetectOptions paper_options() {
   return o;
 }
 
-void allocate_tiles(int budget, const std::vector<int>& needs, std::vector<int>& tiles) {
-  tiles.assign(needs.begin(), needs.end());
-  double area = 0.0;
-  for (const int n : needs) area += double(n) * double(n);
-  const double total = double(budget) * double(budget);
-  if (!(area > total)) return;
-  const double scale = std::sqrt(total / area);
-  for (int& t : tiles) t = std::max(16, int(std::floor(double(t) * scale / 16.0)) * 16);
-  for (std::size_t i = 0; i < tiles.size(); ++i) tiles[i] = std::min(tiles[i], needs[i]);
-}
 
-int tile_resolution(int budget, std::size_t roi_count) {
-  if (budget <= 0) throw std::invalid_argument("peelcd::tile_resolution(): budget must be positive");
-  int n = budget;
-  std::size_t per_side = 1;
-  while (per_side * per_side < roi_count && n > 16) {
-    per_side *= 2;
-    n /= 2;
-  }
-  return std::max(n, std::min(budget, 16));
-}
 
 const char* pair_path(const PairResult& p) {
   if (p.exact_stage) return "exact";

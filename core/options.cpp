@@ -1,4 +1,5 @@
 #include "peelcd/core/options.h"
+#include "peelcd/core/planner.h"
 
 #include <cmath>
 #include <cstdio>

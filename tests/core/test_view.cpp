@@ -1,4 +1,4 @@
-#include "peelcd/core/frame.h"
+#include "peelcd/core/planner.h"
 #include "peelcd/core/view.h"
 
 #include <catch2/catch.hpp>

@@ -9,6 +9,7 @@
 // with distinct stages may run on distinct threads.
 #include "peelcd/core/frame.h"
 #include "peelcd/core/image_stage.h"
+#include "peelcd/core/planner.h"
 
 #include <functional>
 #include <memory>

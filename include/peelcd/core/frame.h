@@ -109,36 +109,9 @@ struct DetectOptions {
 
 constexpr int kVolumeResolution = 256;
 
-constexpr double kConservativeEdgeTexels = 2.0;
-constexpr double kPointEdgeTexels = 12.0;
-// The texels per median edge `options` asks for: its edge_texels, or the mode's default.
-double edge_texels_of(const DetectOptions& options);
-
 // The paper's configuration (ISVC 2007): alternate peeling of every triangle in the ROI box,
 // constant epsilon of one texel, the paper's IDs, one view along world x, point sampling.
 DetectOptions paper_options();
-
-// The view frames a ROI is peeled along for `options` (1, 2 or 3 of them).
-std::vector<ViewFrame> fused_view_frames(const DetectOptions& options);
-// The same into `out` (room for 3); returns the count. Allocates nothing.
-std::size_t fused_view_frames(const DetectOptions& options, ViewFrame out[3]);
-
-// Side of each ROI's tile when `roi_count` ROIs share a budget x budget texture equally: the
-// largest power-of-two fraction of `budget` such that the tiles fit (1 ROI: budget; 2-4:
-// budget/2; ...), never below 16. The paper's way, kept for Cull::box.
-int tile_resolution(int budget, std::size_t roi_count);
-
-// Resolution by need: `needs[i]` is the side ROI i asks for (edge_tile_resolution() with the
-// whole budget as its cap). When the squares fit in budget x budget texels they are granted;
-// otherwise every side is scaled by the same factor so that they fit, rounded down to a multiple
-// of 16, never below 16. Writes `tiles` (same size as `needs`).
-void allocate_tiles(int budget, const std::vector<int>& needs, std::vector<int>& tiles);
-
-// The tile side for a ROI whose region (the culled box) is `region` and whose triangles' median
-// edge is `median_edge`: `edge_texels` texels per median edge across the region's longest side,
-// rounded up to a multiple of 16, at least 16, at most `share` (the budget's tile). `share`
-// itself when edge_texels is 0 or the edge is not positive and finite.
-int edge_tile_resolution(int share, const Aabb& region, double median_edge, double edge_texels);
 
 struct PairResult {
   std::size_t object_a = 0, object_b = 0;  // indices into the frame's objects, a < b; a == b: the

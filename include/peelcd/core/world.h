@@ -46,10 +46,6 @@ namespace peelcd {
 
 using BodyId = std::uint32_t;
 
-// The router's cost of the World's exact path per candidate couple once the trees have found it
-// (the narrow phase), us: `peelcd calibrate` prints it against what it measures.
-constexpr double kWorldCandidateUs = 0.12;
-
 // What the World did, cumulative since it was made (the counters a test or benchmark reads).
 struct WorldStats {
   std::size_t builds = 0;           // trees built (add_*, set_mesh)

@@ -1,0 +1,183 @@
+#include "pair_plan.h"
+
+#include "peelcd/core/self.h"
+
+#include <algorithm>
+#include <numeric>
+
+namespace peelcd::detail {
+
+void FramePlan::find_pairs(const ObjectRefs& objects, const DetectOptions& opt, const std::vector<IndexPair>* only) {
+  boxes.clear();
+  for (std::size_t i = 0; i < objects.size(); ++i) boxes.push_back(bounds(objects[i].mesh));
+  overlapping_pairs(boxes, pairs, order_);
+  if (only)
+    pairs.erase(std::remove_if(pairs.begin(), pairs.end(),
+                               [&](const IndexPair& p) { return !std::binary_search(only->begin(), only->end(), p); }),
+                pairs.end());
+  bool any_self = false;
+  for (std::size_t i = 0; i < objects.size(); ++i)
+    if ((opt.self || objects[i].self) && objects[i].mesh.triangles.size() >= 2) {
+      pairs.emplace_back(i, i);
+      any_self = true;
+    }
+  if (any_self) std::sort(pairs.begin(), pairs.end());
+}
+
+void FramePlan::reset(std::size_t i, const ObjectRefs& objects, int tile) {
+  PairPlan& p = plans[i];
+  p.a = pairs[i].first;
+  p.b = pairs[i].second;
+  p.roi = intersection(boxes[p.a], boxes[p.b]);
+  p.region = p.roi;
+  p.in_roi_a = p.in_roi_b = 0;
+  p.scanned = objects[p.a].mesh.triangles.size() + objects[p.b].mesh.triangles.size();
+  p.culled_out = false;
+  p.tile = tile;
+  p.route = Route{};
+  p.kept_a.clear();
+  p.kept_b.clear();
+}
+
+namespace {
+void cull_pair(const ObjectRefs& objects, PairPlan& p, int rounds, ContactCull& cull) {
+  cull_to_contact_region(objects[p.a].mesh, objects[p.b].mesh, p.roi, cull, rounds);
+  p.region = cull.box;
+  p.in_roi_a = cull.stats.in_roi_a;
+  p.in_roi_b = cull.stats.in_roi_b;
+  p.culled_out = cull.box.empty();
+  p.kept_a.assign(cull.kept_a.begin(), cull.kept_a.end());
+  p.kept_b.assign(cull.kept_b.begin(), cull.kept_b.end());
+  p.median_edge = cull.median_edge;
+}
+}  // namespace
+
+void FramePlan::plan(const ObjectRefs& objects, const DetectOptions& opt, PairLoop& loop) {
+  if (plans.size() < pairs.size()) plans.resize(pairs.size());
+  const int equal = opt.resolution > 0 ? opt.resolution : tile_resolution(opt.budget, pairs.size());
+  const int first_rounds = opt.stage == Stage::image ? kMaxCullRounds : 1;
+  loop.run(pairs.size(), opt, [&](std::size_t i, PairLane& lane) {
+    reset(i, objects, equal);
+    PairPlan& p = plans[i];
+    if (p.a == p.b)
+      plan_self(objects[p.a].mesh, opt, p);
+    else if (opt.cull != Cull::contact)
+      plan_box(objects, opt, p);
+    else
+      cull_pair(objects, p, first_rounds, lane.cull);
+  });
+  share_budget(opt);
+  route(opt);
+  if (opt.stage != Stage::automatic || opt.cull != Cull::contact) return;
+  bool any_image = false;
+  for (std::size_t i = 0; i < pairs.size(); ++i) any_image = any_image || plans[i].peeled();
+  if (!any_image) return;
+  loop.run(pairs.size(), opt, [&](std::size_t i, PairLane& lane) {
+    PairPlan& p = plans[i];
+    if (p.peeled() && p.a != p.b) cull_pair(objects, p, kMaxCullRounds, lane.cull);
+  });
+  share_budget(opt);  // the same ROIs share it: the image ROIs' needs now final
+}
+
+// Cull::box: the router and the exact path need the triangles touching the ROI (the image stage
+// alone peels the whole box).
+void FramePlan::plan_box(const ObjectRefs& objects, const DetectOptions& opt, PairPlan& p) {
+  if (opt.stage == Stage::image) return;
+  triangles_touching(objects[p.a].mesh, p.roi, p.kept_a);
+  triangles_touching(objects[p.b].mesh, p.roi, p.kept_b);
+  p.in_roi_a = p.kept_a.size();
+  p.in_roi_b = p.kept_b.size();
+  p.culled_out = p.kept_a.empty() || p.kept_b.empty();
+}
+
+// A self pair's plan: its ROI is the object's box; its candidates are found by a sweep over all
+// its triangles (self_overlap_pairs()), which is its culling too: the triangles kept are those in
+// some candidate, the region their box. The image stage peels them as both objects.
+void FramePlan::plan_self(const Mesh& mesh, const DetectOptions& opt, PairPlan& p) {
+  p.scanned = p.in_roi_a = p.in_roi_b = mesh.triangles.size();
+  vertex_representatives(mesh, opt.self_adjacency, p.rep);
+  p.self_candidates.clear();
+  self_overlap_pairs(mesh, nullptr, p.rep, p.self_candidates);
+  std::sort(p.self_candidates.begin(), p.self_candidates.end());
+  for (const std::uint64_t c : p.self_candidates) {
+    p.kept_a.push_back(pair_a(c));
+    p.kept_a.push_back(pair_b(c));
+  }
+  std::sort(p.kept_a.begin(), p.kept_a.end());
+  p.kept_a.erase(std::unique(p.kept_a.begin(), p.kept_a.end()), p.kept_a.end());
+  p.kept_b = p.kept_a;
+  p.culled_out = p.kept_a.empty();
+  p.region = Aabb{};
+  std::vector<double> edges;
+  for (const std::uint32_t t : p.kept_a) {
+    const Tri& f = mesh.triangles[t];
+    for (int c = 0; c < 3; ++c) p.region.extend(mesh.vertices[f[c]]);
+    edges.push_back((mesh.vertices[f[1]] - mesh.vertices[f[0]]).norm());
+  }
+  p.median_edge = 0.0;
+  if (!edges.empty()) {
+    std::nth_element(edges.begin(), edges.begin() + edges.size() / 2, edges.end());
+    p.median_edge = edges[edges.size() / 2];
+  }
+  if (opt.cull == Cull::box && !p.culled_out) {  // the image stage peels the whole box
+    p.region = p.roi;
+    p.kept_a.resize(mesh.triangles.size());
+    std::iota(p.kept_a.begin(), p.kept_a.end(), 0u);
+    p.kept_b = p.kept_a;
+  }
+}
+
+// With Cull::contact and a shared budget: each ROI's tile by need (allocate_tiles()), among the
+// ROIs not culled out.
+void FramePlan::share_budget(const DetectOptions& opt) {
+  if (opt.cull != Cull::contact || opt.resolution != 0) return;
+  const double edge_texels = edge_texels_of(opt);
+  needs_.clear();
+  for (std::size_t i = 0; i < pairs.size(); ++i) {
+    const PairPlan& p = plans[i];
+    if (!p.culled_out) needs_.push_back(edge_tile_resolution(opt.budget, p.region, p.median_edge, edge_texels));
+  }
+  allocate_tiles(opt.budget, needs_, tiles_);
+  std::size_t next = 0;
+  for (std::size_t i = 0; i < pairs.size(); ++i)
+    if (!plans[i].culled_out) plans[i].tile = tiles_[next++];
+}
+
+// Each ROI through the router (planner.h): the work is the triangles kept, the scan both
+// objects' triangles.
+void FramePlan::route(const DetectOptions& opt) {
+  if (opt.stage == Stage::image) return;
+  for (std::size_t i = 0; i < pairs.size(); ++i) {
+    PairPlan& p = plans[i];
+    if (p.culled_out) continue;
+    p.route = route_pair(opt, exact_cost, image_cost, double(p.scanned), double(p.kept_a.size() + p.kept_b.size()),
+                         p.tile);
+  }
+}
+
+std::pair<double, double> make_view_job(const ObjectRefs& objects, const FramePlan& frame_plan, std::size_t pair_index,
+                                        const DetectOptions& opt, const ViewFrame& frame, int v, double& epsilon,
+                                        std::vector<std::uint32_t>& tris_a, std::vector<std::uint32_t>& tris_b,
+                                        PeelJob& job) {
+  const PairPlan& plan = frame_plan.plans[pair_index];
+  const std::size_t ia = plan.a, ib = plan.b;
+  const bool contact = opt.cull == Cull::contact;
+  job.view = make_padded_roi_view(plan.region, frame_plan.boxes[ia], frame_plan.boxes[ib], frame, plan.tile);
+  if (v == 0) epsilon = opt.epsilon > 0.0 ? opt.epsilon : job.view.texel();
+  const double min_a = triangles_in_view(objects[ia].mesh, job.view, contact ? &plan.kept_a : nullptr, tris_a);
+  const double min_b = triangles_in_view(objects[ib].mesh, job.view, contact ? &plan.kept_b : nullptr, tris_b);
+  job.objects[0] = &objects[ia];
+  job.objects[1] = &objects[ib];
+  job.pair_index = pair_index;
+  job.view_index = v;
+  job.ids = opt.ids;
+  job.peel = opt.peel;
+  job.epsilon = epsilon;
+  job.slope = opt.slope;
+  job.first = min_a > min_b ? 0 : 1;  // the farther object first; ties: B first
+  job.capture = false;
+  job.conservative = opt.conservative;
+  return {min_a, min_b};
+}
+
+}  // namespace peelcd::detail

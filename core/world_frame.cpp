@@ -1,0 +1,408 @@
+// A frame of the World (World::collide()): the pending refits, the broad phase over the bodies'
+// boxes, the traversals (one task per pair, or its first node pairs over the lanes), the router,
+// the exact tests or the image stage, the relations.
+#include "world_impl.h"
+#include "peelcd/core/clock.h"
+#include "peelcd/core/id_map.h"
+#include "peelcd/core/narrow_phase.h"
+
+#include <algorithm>
+#include <stdexcept>
+
+namespace peelcd {
+namespace {
+// Contacts by (tri_a, tri_b): a pair's contacts in the order every path gives them.
+void sort_contacts(std::vector<Contact>& contacts) {
+  std::sort(contacts.begin(), contacts.end(), [](const Contact& x, const Contact& y) {
+    return x.tri_a < y.tri_a || (x.tri_a == y.tri_a && x.tri_b < y.tri_b);
+  });
+}
+}  // namespace
+
+void World::Impl::refit_pending(unsigned lanes) {
+  refit_chunks.clear();
+  refit_bodies.clear();
+  refit_owner.clear();
+  for (Body& b : bodies) {
+    if (!b.alive || !b.refit_pending) continue;
+    const std::size_t n = b.mesh.triangles.size();
+    const std::size_t parts = lanes > 1 && n >= 32768 ? lanes : 1;
+    refit_bodies.push_back({&b, refit_chunks.size(), refit_chunks.size() + parts});
+    for (std::size_t k = 0; k < parts; ++k) {
+      refit_chunks.push_back({n * k / parts, n * (k + 1) / parts, Aabb{}});
+      refit_owner.push_back(refit_bodies.size() - 1);
+    }
+  }
+  if (refit_bodies.empty()) return;
+  parallel(refit_chunks.size(), lanes, [&](std::size_t k, unsigned) {
+    RefitChunk& c = refit_chunks[k];
+    Body& b = *refit_bodies[refit_owner[k]].body;
+    c.exact = b.tree.refit_triangles(b.mesh.vertices, b.mesh.triangles, c.begin, c.end);
+  });
+  parallel(refit_bodies.size(), lanes, [&](std::size_t k, unsigned) {
+    const RefitBody& r = refit_bodies[k];
+    Aabb exact;
+    for (std::size_t c = r.first; c < r.last; ++c)
+      exact.lo = exact.lo.cwiseMin(refit_chunks[c].exact.lo), exact.hi = exact.hi.cwiseMax(refit_chunks[c].exact.hi);
+    r.body->tree.refit_nodes(exact);
+    r.body->refit_pending = false;
+  });
+  stats.full_refits += refit_bodies.size();
+}
+
+void World::Impl::self_pair(Body& a, std::size_t first, std::size_t last, PairResult& r) {
+  if (!(a.is_rigid && a.self_cached)) {
+    a.self_contacts.clear();
+    std::size_t n = 0;
+    for (std::size_t k = first; k < last; ++k) {
+      a.self_contacts.insert(a.self_contacts.end(), tasks[k].contacts.begin(), tasks[k].contacts.end());
+      n += tasks[k].tested;
+    }
+    sort_contacts(a.self_contacts);
+    a.self_cached = a.is_rigid;
+    r.candidates = n;
+  } else {
+    r.candidates = 0;  // nothing tested this frame
+  }
+  r.colliding = a.self_contacts;
+  if (a.is_rigid)
+    for (Contact& c : r.colliding) {
+      c.p = a.pose * c.p;
+      c.q = a.pose * c.q;
+    }
+}
+
+void World::Impl::collide(const DetectOptions& opt, FrameResult& out) {
+  validate_options(opt, stage->max_resolution());
+  const auto t_total = Clock::now();
+  out.reset_counters();
+  stats.node_pairs = stats.candidates = stats.vertices_transformed = 0;
+  const unsigned lanes = lanes_for(opt);
+  refit_pending(lanes);
+
+  auto t0 = Clock::now();
+  find_pairs(opt);
+  const std::size_t used = plan_tasks(lanes);
+  traverse(used, lanes);
+  out.timings.aabb = ms_since(t0);
+
+  route_pairs(opt, used, out);
+  t0 = Clock::now();
+  test_candidates(opt, used, lanes);
+  gather_contacts(out);
+  out.timings.cpu = ms_since(t0);
+
+  if (batched_image()) {
+    image_pairs(opt, out);
+  } else {
+    for (std::size_t p = 0; p < pairs.size(); ++p)
+      if (to_image[p]) image_pairs(opt, out, p);
+  }
+  t0 = Clock::now();
+  relate(opt, out);
+  out.timings.cpu += ms_since(t0);
+  out.renderer = stage->renderer();
+  out.timings.total = ms_since(t_total);
+}
+
+// The broad phase: each body's box (its tree's root, moved by its pose; small rigid bodies
+// copied into world space first), the overlapping pairs (indices into ids, a < b), and the self
+// pairs (i, i) of the bodies asking for self-collision (set_self, DetectOptions::self).
+void World::Impl::find_pairs(const DetectOptions& opt) {
+  boxes.clear();
+  ids.clear();
+  for (BodyId id = 0; id < bodies.size(); ++id) {
+    if (!bodies[id].alive) continue;
+    stats.vertices_transformed += bodies[id].enter_frame();
+    ids.push_back(id);
+    boxes.push_back(bodies[id].world_box());
+    const Aabb& w = boxes.back();
+    if (opt.stage != Stage::exact && !w.empty() &&
+        std::max(w.lo.cwiseAbs().maxCoeff(), w.hi.cwiseAbs().maxCoeff()) > kFloatMax)
+      throw std::invalid_argument("peelcd::World: " + label_of(bodies[id].name, id) +
+                                  " reaches outside the float range (|x| <= 3.4e38) the image stage works in");
+  }
+  overlapping_pairs(boxes, pairs, order);
+  bool any_self = false;
+  for (std::size_t i = 0; i < ids.size(); ++i) {
+    Body& b = bodies[ids[i]];
+    if (!(opt.self || b.self) || b.local().triangles.size() < 2) continue;
+    b.representatives(opt.self_adjacency);
+    pairs.emplace_back(i, i);
+    any_self = true;
+  }
+  if (any_self) std::sort(pairs.begin(), pairs.end());
+}
+
+// The traversals' tasks: per pair, one task, or (several lanes) the node pairs of its first
+// levels; a self pair one traversal of the body's own tree (none for a rigid body's cache); two
+// small world-space bodies, one of them moved, one scan. Returns the tasks used.
+std::size_t World::Impl::plan_tasks(unsigned lanes) {
+  std::size_t used = 0;
+  for (std::size_t p = 0; p < pairs.size(); ++p) {
+    Body& a = bodies[ids[pairs[p].first]];
+    Body& b = bodies[ids[pairs[p].second]];
+    if (&a == &b) {
+      split.clear();
+      if (!(a.is_rigid && a.self_cached)) split.assign(1, BvhNodePair{kSelfPair, kSelfPair});
+    } else if (a.small() && b.small() && a.world_mesh() && b.world_mesh() && (a.moved || b.moved)) {
+      split.assign(1, BvhNodePair{kSmallPair, kSmallPair});
+    } else {
+      a.ensure_world_tree();
+      b.ensure_world_tree();
+      if (lanes > 1)
+        bvh_split(a.frame_tree(), b.frame_tree(), BvhRelation::between(a.frame_pose(), b.frame_pose()),
+                  8 * std::size_t(lanes), split);
+      else
+        split.assign(1, BvhNodePair{0u, 0u});
+    }
+    for (const BvhNodePair& start : split) {
+      if (used == tasks.size()) tasks.emplace_back();
+      Task& t = tasks[used++];
+      t.pair = p;
+      t.start = start;
+    }
+  }
+  return used;
+}
+
+// Every task's candidates (self tasks: their contacts, each couple tested as the traversal
+// reaches it, adjacent couples dropped), over the lanes.
+void World::Impl::traverse(std::size_t used, unsigned lanes) {
+  parallel(used, lanes, [&](std::size_t k, unsigned lane) {
+    Task& t = tasks[k];
+    const Body& a = bodies[ids[pairs[t.pair].first]];
+    const Body& b = bodies[ids[pairs[t.pair].second]];
+    t.candidates.clear();
+    t.contacts.clear();
+    t.transformed = 0;
+    t.tested = 0;
+    if (t.start.first == kSelfPair) {  // in the body's own frame
+      const Mesh& m = a.local();
+      t.visited = bvh_self_traverse(a.tree, self_stacks[lane], [&](std::uint32_t x, std::uint32_t y) {
+        if (triangles_adjacent(m, a.rep, x, y)) return;
+        ++t.tested;
+        Contact contact;
+        contact.tri_a = std::min(x, y);
+        contact.tri_b = std::max(x, y);
+        if (test_self_couple(corners(m, contact.tri_a), corners(m, contact.tri_b), contact)) t.contacts.push_back(contact);
+      });
+      return;
+    }
+    if (t.start.first == kSmallPair) {  // as the frame API's exact path: one culling round, a sweep
+      const Mesh& ma = *a.world_mesh();
+      const Mesh& mb = *b.world_mesh();
+      LaneScratch& s = *lane_scratch[lane];
+      cull_to_contact_region(ma, mb, intersection(boxes[pairs[t.pair].first], boxes[pairs[t.pair].second]), s.cull, 1);
+      if (!s.cull.box.empty()) box_overlap_pairs(ma, s.cull.kept_a, mb, s.cull.kept_b, t.candidates, &s.boxes);
+      t.visited = 0;
+      return;
+    }
+    const BvhRelation rel = BvhRelation::between(a.frame_pose(), b.frame_pose());
+    t.visited = bvh_traverse(a.frame_tree(), b.frame_tree(), rel, t.start, stacks[lane],
+                             [&](std::uint32_t ta, std::uint32_t tb) { t.candidates.push_back(pack_pair(ta, tb)); });
+  });
+}
+
+// Per pair: its result started, its tasks found (first_task), its route: self pairs and
+// Stage::exact to the exact path, Stage::image to the image stage, else the router with the
+// World's exact model (world_exact_cost(): per candidate couple) against the stage's.
+void World::Impl::route_pairs(const DetectOptions& opt, std::size_t used, FrameResult& out) {
+  out.pairs.resize(pairs.size());
+  first_task.assign(pairs.size() + 1, used);
+  for (std::size_t k = used; k-- > 0;) first_task[tasks[k].pair] = k;
+  for (std::size_t p = pairs.size(); p-- > 0;)
+    if (first_task[p] > first_task[p + 1]) first_task[p] = first_task[p + 1];
+  const StageCost image_cost = stage->router_image_cost();
+  const StageCost exact_cost = world_exact_cost();
+  const int tile = opt.resolution > 0 ? opt.resolution : opt.budget;
+  to_image.assign(pairs.size(), 0);
+  for (std::size_t p = 0; p < pairs.size(); ++p) {
+    PairResult& r = out.pairs[p];
+    std::vector<Contact> colliding = std::move(r.colliding);  // its storage reused frame to frame
+    colliding.clear();
+    r = PairResult{};
+    r.colliding = std::move(colliding);
+    r.object_a = ids[pairs[p].first];
+    r.object_b = ids[pairs[p].second];
+    r.roi = r.region = intersection(boxes[pairs[p].first], boxes[pairs[p].second]);
+    std::size_t n = 0;
+    for (std::size_t k = first_task[p]; k < first_task[p + 1]; ++k) {
+      n += tasks[k].candidates.size();
+      stats.node_pairs += tasks[k].visited;
+    }
+    stats.candidates += n;
+    r.candidates = n;
+    if (r.object_a == r.object_b) {  // self: the exact path always (docs/design.md)
+      r.exact_stage = true;
+      continue;
+    }
+    if (n == 0) continue;  // no couple of boxes overlaps: no contact, nothing to test
+    // The image stage draws at most the candidates' triangles: at most 2n, counted as n.
+    const Route route = route_pair(opt, exact_cost, image_cost, 0.0, double(n), tile);
+    r.predicted_exact_ms = route.predicted_exact_ms;
+    r.predicted_image_ms = route.predicted_image_ms;
+    r.exact_stage = route.exact;
+    to_image[p] = !route.exact;
+  }
+}
+
+// The exact path's tests over the same tasks (a self task's during its traversal).
+void World::Impl::test_candidates(const DetectOptions& opt, std::size_t used, unsigned lanes) {
+  parallel(used, lanes, [&](std::size_t k, unsigned lane) {
+    Task& t = tasks[k];
+    if (t.candidates.empty() || to_image[t.pair]) return;
+    const Body& a = bodies[ids[pairs[t.pair].first]];
+    const Body& b = bodies[ids[pairs[t.pair].second]];
+    if (t.start.first == kSelfPair) return;
+    if (t.start.first == kSmallPair) {  // the sweep's pairs: distinct, boxes overlapping, world meshes at hand
+      sort_unique_pairs(t.candidates, lane_scratch[lane]->sorted);
+      narrow_phase(*a.world_mesh(), *b.world_mesh(), t.candidates, t.contacts, /*boxes_overlap=*/true,
+                   opt.max_contacts);
+      return;
+    }
+    test_task(a, b, opt, t);
+  });
+}
+
+// A traversal task's candidates in traversal order (deterministic; the pair's contacts are
+// sorted after): sorting them first cost 2-12% of a frame and bought nothing. Each couple's world
+// boxes first (exact comparisons of the same doubles the test reads), then the exact test.
+void World::Impl::test_task(const Body& a, const Body& b, const DetectOptions& opt, Task& t) {
+  const Mesh& ma = a.local();
+  const Mesh& mb = b.local();
+  for (const std::uint64_t c : t.candidates) {
+    const std::uint32_t ta = pair_a(c), tb = pair_b(c);
+    const Tri& fa = ma.triangles[ta];
+    const Tri& fb = mb.triangles[tb];
+    const TriangleCorners ca = {a.world(fa[0]), a.world(fa[1]), a.world(fa[2])};
+    const TriangleCorners cb = {b.world(fb[0]), b.world(fb[1]), b.world(fb[2])};
+    t.transformed += (a.is_rigid && !a.world_frame ? 3 : 0) + (b.is_rigid && !b.world_frame ? 3 : 0);
+    const Vec3 lo_a = ca[0].cwiseMin(ca[1]).cwiseMin(ca[2]), hi_a = ca[0].cwiseMax(ca[1]).cwiseMax(ca[2]);
+    const Vec3 lo_b = cb[0].cwiseMin(cb[1]).cwiseMin(cb[2]), hi_b = cb[0].cwiseMax(cb[1]).cwiseMax(cb[2]);
+    if ((hi_a.array() < lo_b.array()).any() || (hi_b.array() < lo_a.array()).any()) continue;
+    Contact contact;
+    contact.tri_a = ta;
+    contact.tri_b = tb;
+    if (test_triangle_pair(ca, cb, contact)) {
+      t.contacts.push_back(contact);
+      if (opt.max_contacts && t.contacts.size() >= opt.max_contacts) return;  // enough for this task
+    }
+  }
+}
+
+// Each exact pair's contacts from its tasks, sorted (self pairs through self_pair()).
+void World::Impl::gather_contacts(FrameResult& out) {
+  for (std::size_t p = 0; p < pairs.size(); ++p) {
+    PairResult& r = out.pairs[p];
+    if (r.object_a == r.object_b) {
+      self_pair(bodies[r.object_a], first_task[p], first_task[p + 1], r);
+      ++out.rois_exact;
+      continue;
+    }
+    if (r.candidates == 0 || to_image[p]) continue;
+    ++out.rois_exact;
+    for (std::size_t k = first_task[p]; k < first_task[p + 1]; ++k) {
+      r.colliding.insert(r.colliding.end(), tasks[k].contacts.begin(), tasks[k].contacts.end());
+      stats.vertices_transformed += tasks[k].transformed;
+    }
+    sort_contacts(r.colliding);
+  }
+}
+
+// Relations (containment where no contact) and, asked for, volumes: world meshes made only for
+// the pairs that need them.
+void World::Impl::relate(const DetectOptions& opt, FrameResult& out) {
+  body_boxes.assign(bodies.size(), Aabb{});
+  for (std::size_t i = 0; i < ids.size(); ++i) body_boxes[ids[i]] = boxes[i];
+  world_meshes.clear();
+  relate_pairs(
+      out.pairs,
+      [&](std::size_t id) -> const Mesh& {
+        const Body& b = bodies[id];
+        if (const Mesh* m = b.world_mesh()) return *m;
+        auto it = world_meshes.find(id);
+        if (it == world_meshes.end()) {
+          Mesh m = *b.shape;
+          for (Vec3& v : m.vertices) v = b.pose * v;
+          it = world_meshes.emplace(id, std::move(m)).first;
+        }
+        return it->second;
+      },
+      body_boxes, opt);
+}
+
+// The image stage on every pair routed there, in one frame of the Detector (one batch of views
+// for all of them): per pair, the candidates' triangles of each body, in world space, as two
+// objects (triangle k of each is the k-th of its ascending list), the Detector asked for those
+// pairs alone (Detector::only_pairs()); the contacts mapped back to the bodies' triangles.
+void World::Impl::image_pairs(const DetectOptions& opt, FrameResult& out, std::size_t only) {
+  image_objects.clear();
+  image_kept.clear();
+  image_of.clear();
+  image_only.clear();
+  for (std::size_t p = 0; p < pairs.size(); ++p) {
+    if (!to_image[p] || (only != kAllPairs && p != only)) continue;
+    const Body* body[2] = {&bodies[ids[pairs[p].first]], &bodies[ids[pairs[p].second]]};
+    std::vector<std::uint32_t> kept[2];
+    for (std::size_t k = first_task[p]; k < first_task[p + 1]; ++k)
+      for (const std::uint64_t c : tasks[k].candidates) {
+        kept[0].push_back(pair_a(c));
+        kept[1].push_back(pair_b(c));
+      }
+    const std::size_t first = image_objects.size();
+    for (int s = 0; s < 2; ++s) {
+      std::sort(kept[s].begin(), kept[s].end());
+      kept[s].erase(std::unique(kept[s].begin(), kept[s].end()), kept[s].end());
+      Object o;
+      const Mesh& local = body[s]->local();
+      for (const std::uint32_t t : kept[s]) {
+        const std::uint32_t base = std::uint32_t(o.mesh.vertices.size());
+        for (const std::uint32_t v : local.triangles[t]) o.mesh.vertices.push_back(body[s]->world(v));
+        o.mesh.triangles.push_back(Tri{base, base + 1, base + 2});
+      }
+      o.name = body[s]->name;
+      image_objects.push_back(std::move(o));
+      image_kept.push_back(std::move(kept[s]));
+    }
+    image_only.emplace_back(first, first + 1);
+    image_of.push_back(p);
+  }
+  if (image_of.empty()) return;
+  if (!detector) detector = std::make_unique<Detector>(stage);
+  DetectOptions image = opt;
+  image.stage = Stage::image;
+  FrameResult inner;
+  struct Only {  // the Detector back to every pair, also on an exception
+    Detector& d;
+    ~Only() { d.only_pairs(nullptr); }
+  } reset_pairs{*detector};
+  detector->only_pairs(&image_only);
+  detector->detect(image_objects, image, inner);
+  for (const PairResult& ir : inner.pairs) {
+    const std::size_t i = ir.object_a / 2;
+    const std::vector<std::uint32_t>& ka = image_kept[2 * i];
+    const std::vector<std::uint32_t>& kb = image_kept[2 * i + 1];
+    PairResult& r = out.pairs[image_of[i]];
+    const double pe = r.predicted_exact_ms, pi = r.predicted_image_ms;
+    const std::size_t oa = r.object_a, ob = r.object_b;
+    const Aabb roi = r.roi;
+    r = ir;
+    r.object_a = oa;
+    r.object_b = ob;
+    r.roi = roi;
+    r.predicted_exact_ms = pe;
+    r.predicted_image_ms = pi;
+    r.triangles_in_roi_a = ka.size();
+    r.triangles_in_roi_b = kb.size();
+    r.pcs.clear();  // IDs of the peeled copies, not of the bodies: the count (pcs_count) stays
+    for (Contact& c : r.colliding) {
+      c.tri_a = ka[c.tri_a];
+      c.tri_b = kb[c.tri_b];
+    }
+    sort_contacts(r.colliding);
+  }
+  out.add_image_work(inner);
+}
+
+}  // namespace peelcd

@@ -1,0 +1,284 @@
+#pragma once
+// The World's state (internal to peelcd_core): its bodies and a frame's scratch. world.cpp holds
+// the API (bodies added, moved, removed); world_frame.cpp a frame (World::collide()).
+
+#include "peelcd/core/world.h"
+#include "peelcd/core/planner.h"
+
+#include "peelcd/core/broad_phase.h"
+#include "peelcd/core/cull.h"
+#include "peelcd/core/reference.h"
+#include "peelcd/core/self.h"
+#include "peelcd/core/worker_pool.h"
+
+#include <atomic>
+#include <map>
+#include <optional>
+#include <string>
+#include <thread>
+
+namespace peelcd {
+namespace world_detail {
+
+constexpr std::uint32_t kSmallPair = 0xffffffffu;  // a task's start: scan two small world meshes
+constexpr std::uint32_t kSelfPair = 0xfffffffeu;   // a task's start: a body's self traversal
+
+// A rigid body with fewer triangles than this is moved into world space every frame (its
+// vertices transformed, a world-space copy of its tree refitted): O(its size), a few
+// microseconds, and its boxes are then exact world boxes, where boxes carried through a rotation
+// grow (a small ball's tree seen from a neighbour's frame overlaps far more of it). Larger rigid
+// bodies are never touched beyond what the traversal reaches.
+// 8,192: against 4,096, test1's 4,512-triangle balls moved into world space, its frame 1.08 ->
+// 0.65 ms (boxes carried through a pose cost a transform per node pair).
+constexpr std::size_t kWorldFrameTriangles = 8192;
+
+struct Body {
+  bool alive = false;
+  bool is_rigid = false;
+  std::string name;
+  std::shared_ptr<const Mesh> shape;  // rigid
+  Mesh mesh;                          // deforming: world space
+  Eigen::Affine3d pose = Eigen::Affine3d::Identity();
+  Bvh tree;
+  // A small rigid body this frame: its world-space mesh, and its tree refitted over it when a
+  // pair with a large body traverses it (world_tree_fresh).
+  // The copy, its box and its tree are kept while the pose stays (a static body is copied once);
+  // `moved`: copied again this frame.
+  bool world_frame = false;
+  Mesh world_copy;
+  Aabb world_copy_box;
+  Bvh world_tree;
+  bool world_tree_fresh = false;
+  bool copy_valid = false, moved = false;
+  Eigen::Affine3d copied_pose = Eigen::Affine3d::Identity();
+  // Deforming: its tree is refitted whole at the next collide() (set_vertices, many moved
+  // vertices), every such body's triangles split over the frame's lanes.
+  bool refit_pending = false;
+  // Deforming: the triangles using each vertex (CSR), built on the first move_vertices().
+  std::vector<std::uint32_t> vertex_first, vertex_tris;
+  // Self-collision (World::set_self): the vertex representatives of the adjacency in use
+  // (rep_valid: for this topology and `rep_adjacency`); a rigid body's self contacts, in its
+  // shape's frame, found once per shape (a rigid motion changes none of them).
+  bool self = false;
+  bool rep_valid = false;
+  SelfAdjacency rep_adjacency = SelfAdjacency::index;
+  std::vector<std::uint32_t> rep;
+  bool self_cached = false;
+  std::vector<Contact> self_contacts;
+  void topology_changed() {
+    rep_valid = false;
+    self_cached = false;
+  }
+  const std::vector<std::uint32_t>& representatives(SelfAdjacency adjacency) {
+    // By position on a deforming body: the positions of this frame.
+    if (!rep_valid || rep_adjacency != adjacency || (adjacency == SelfAdjacency::position && !is_rigid)) {
+      vertex_representatives(local(), adjacency, rep);
+      rep_adjacency = adjacency;
+      rep_valid = true;
+      self_cached = false;
+    }
+    return rep;
+  }
+
+  const Mesh& local() const { return is_rigid ? *shape : mesh; }
+  Vec3 world(std::uint32_t v) const {
+    return !is_rigid ? mesh.vertices[v] : world_frame ? world_copy.vertices[v] : Vec3(pose * shape->vertices[v]);
+  }
+  // Small (under kWorldFrameTriangles) and in world space this frame: a pair of two such bodies,
+  // one of them a rigid body that moved, is tested as the frame API tests it (one culling round
+  // over both meshes, a sweep of the kept triangles' boxes): that scan costs less than refitting
+  // the moved body's world-space tree. Otherwise the trees are current (deforming bodies'
+  // refitted, a still rigid body's world tree kept): their traversal costs less than the scan
+  // (the default scene: 0.24 vs 0.35 ms a frame).
+  bool small() const { return local().triangles.size() < kWorldFrameTriangles; }
+  const Mesh* world_mesh() const { return !is_rigid ? &mesh : world_frame ? &world_copy : nullptr; }
+  // The tree the traversals use and the pose it is posed by: a small rigid body's world copy
+  // (identity), else its own.
+  const Bvh& frame_tree() const { return world_frame ? world_tree : tree; }
+  Eigen::Affine3d frame_pose() const { return world_frame ? Eigen::Affine3d::Identity() : pose; }
+  // Small rigid bodies: into world space for this frame (the tree only when needed:
+  // ensure_world_tree()).
+  // Returns the vertices transformed.
+  std::size_t enter_frame() {
+    world_frame = is_rigid && shape->triangles.size() < kWorldFrameTriangles;
+    moved = false;
+    if (!world_frame) {
+      copy_valid = world_tree_fresh = false;
+      return 0;
+    }
+    if (copy_valid && copied_pose.matrix() == pose.matrix()) return 0;  // unchanged since the last copy
+    world_tree_fresh = false;
+    moved = true;
+    if (world_copy.triangles.size() != shape->triangles.size()) world_copy.triangles = shape->triangles;
+    world_copy.vertices.resize(shape->vertices.size());
+    for (std::size_t v = 0; v < world_copy.vertices.size(); ++v) world_copy.vertices[v] = pose * shape->vertices[v];
+    world_copy_box = world_copy.triangles.empty() ? Aabb{} : bounds(world_copy);
+    copied_pose = pose;
+    copy_valid = true;
+    return world_copy.vertices.size();
+  }
+  void ensure_world_tree() {
+    if (!world_frame || world_tree_fresh) return;
+    if (world_tree.triangles() != shape->triangles.size() || world_tree.empty() != tree.empty())
+      world_tree.build(world_copy.vertices, world_copy.triangles);
+    else
+      world_tree.refit(world_copy.vertices, world_copy.triangles);
+    world_tree_fresh = true;
+  }
+  Aabb world_box() const {
+    if (world_frame) return world_copy_box;
+    const Aabb b = tree.box();
+    if (!is_rigid || b.empty()) return b;
+    // The root box moved by the pose, grown as the traversal grows its boxes.
+    return BvhRelation::moved(b, pose.linear(), pose.linear().cwiseAbs(), pose.translation(),
+                              pose.translation().cwiseAbs().maxCoeff());
+  }
+};
+
+inline std::string label_of(const std::string& name, BodyId id) {
+  return "body " + std::to_string(id) + (name.empty() ? "" : " '" + name + "'");
+}
+
+// One piece of a pair's traversal: a node pair, the candidates found under it, then (exact
+// path) the contacts among them, in candidate order.
+struct Task {
+  std::size_t pair = 0;
+  BvhNodePair start;
+  std::vector<std::uint64_t> candidates;
+  std::vector<Contact> contacts;
+  std::size_t visited = 0, transformed = 0;
+  std::size_t tested = 0;  // a self task's couples given to the exact test
+};
+
+}  // namespace world_detail
+
+using namespace world_detail;
+
+struct World::Impl {
+  std::atomic<std::thread::id> owner{};  // the thread inside a frame or a change (ExclusiveUse)
+  std::shared_ptr<ImageStage> stage;
+  std::unique_ptr<Detector> detector;  // made on the first pair routed to the image stage
+  std::vector<Body> bodies;
+  std::size_t alive = 0;
+  WorldStats stats;
+  FrameResult result;
+  // Frame scratch.
+  std::vector<Aabb> boxes;
+  std::vector<BodyId> ids;
+  std::vector<std::pair<std::size_t, std::size_t>> pairs;
+  std::vector<std::size_t> order;
+  std::vector<Task> tasks;
+  std::vector<BvhNodePair> split;
+  std::vector<std::vector<BvhStackEntry>> stacks;  // per lane
+  std::vector<std::vector<BvhNodePair>> self_stacks;  // per lane
+  struct LaneScratch {
+    ContactCull cull;
+    BoxScratch boxes;
+    std::vector<std::uint64_t> sorted;
+  };
+  std::vector<std::unique_ptr<LaneScratch>> lane_scratch;  // per lane: the small pairs' scan
+  std::vector<std::uint64_t> candidates;
+  std::vector<std::size_t> first_task;  // pair p's tasks: [first_task[p], first_task[p + 1])
+  std::vector<char> to_image;           // pair p goes to the image stage
+  std::vector<Aabb> body_boxes;         // per BodyId, this frame's world box
+  std::map<std::size_t, Mesh> world_meshes;  // large rigid bodies' world meshes a relation needed
+  std::unique_ptr<WorkerPool> pool;
+
+  Body& body(BodyId id, const char* what) {
+    if (id >= bodies.size() || !bodies[id].alive)
+      throw std::invalid_argument(std::string("peelcd::World::") + what + "(): no body " + std::to_string(id));
+    return bodies[id];
+  }
+  const Body& body(BodyId id) const {
+    if (id >= bodies.size() || !bodies[id].alive)
+      throw std::invalid_argument("peelcd::World: no body " + std::to_string(id));
+    return bodies[id];
+  }
+  BodyId add(Body b) {
+    b.alive = true;
+    b.tree.build(b.local().vertices, b.local().triangles);
+    ++stats.builds;
+    ++alive;
+    bodies.push_back(std::move(b));
+    return BodyId(bodies.size() - 1);
+  }
+
+  unsigned lanes_for(const DetectOptions& opt) {
+    if (opt.threads == 1) return 1;
+    if (!pool || (opt.threads != 0 && pool->lanes() != opt.threads)) pool = std::make_unique<WorkerPool>(opt.threads);
+    return pool->lanes();
+  }
+  // body(i, lane) for i in [0, n), spread over the pool's lanes when there are several.
+  template <class Fn>
+  void parallel(std::size_t n, unsigned lanes, Fn&& fn) {
+    if (stacks.size() < lanes) stacks.resize(lanes);
+    if (self_stacks.size() < lanes) self_stacks.resize(lanes);
+    while (lane_scratch.size() < lanes) lane_scratch.push_back(std::make_unique<LaneScratch>());
+    if (lanes <= 1 || n <= 1) {
+      for (std::size_t i = 0; i < n; ++i) fn(i, 0u);
+      return;
+    }
+    std::atomic<std::size_t> next{0};
+    auto job = [&](unsigned lane) {
+      for (std::size_t i = next.fetch_add(1); i < n; i = next.fetch_add(1)) fn(i, lane);
+    };
+    pool->run(job);
+  }
+
+  // The deferred whole-tree refits (World::set_vertices, many moved vertices): every pending
+  // body's triangle boxes in chunks over the lanes (a large body split in as many chunks as
+  // lanes), then each body's nodes.
+  struct RefitChunk {
+    std::size_t begin, end;
+    Aabb exact;
+  };
+  struct RefitBody {
+    Body* body;
+    std::size_t first, last;  // its chunks in refit_chunks
+  };
+  std::vector<RefitChunk> refit_chunks;
+  std::vector<RefitBody> refit_bodies;
+  std::vector<std::size_t> refit_owner;  // chunk -> its entry in refit_bodies
+  void refit_pending(unsigned lanes);
+  // One body's pending refit now (World::tree() asked for it between frames).
+  void refit_now(Body& b) {
+    if (!b.refit_pending) return;
+    b.tree.refit(b.mesh.vertices, b.mesh.triangles);
+    b.refit_pending = false;
+    ++stats.full_refits;
+  }
+
+  void collide(const DetectOptions& opt, FrameResult& out);
+  // The steps of collide(), in order.
+  void find_pairs(const DetectOptions& opt);
+  std::size_t plan_tasks(unsigned lanes);
+  void traverse(std::size_t used, unsigned lanes);
+  void route_pairs(const DetectOptions& opt, std::size_t used, FrameResult& out);
+  void test_candidates(const DetectOptions& opt, std::size_t used, unsigned lanes);
+  void test_task(const Body& a, const Body& b, const DetectOptions& opt, Task& t);
+  void gather_contacts(FrameResult& out);
+  void relate(const DetectOptions& opt, FrameResult& out);
+  // A self pair's contacts: its tasks' (in the body's frame), cached for a rigid body, moved to
+  // world space.
+  void self_pair(Body& a, std::size_t first, std::size_t last, PairResult& r);
+  // The image-routed pairs (or pair `only` alone) through the Detector in one frame.
+  static constexpr std::size_t kAllPairs = std::size_t(-1);
+  void image_pairs(const DetectOptions& opt, FrameResult& out, std::size_t only = kAllPairs);
+  std::optional<bool> batch_pairs;  // World::batch_image_pairs()
+  bool batched_image() const {
+    if (batch_pairs) return *batch_pairs;
+    const std::string& r = stage->renderer();
+    for (const char* soft : {"llvmpipe", "softpipe", "swrast"})
+      if (r.find(soft) != std::string::npos) return false;
+    return stage->backend() != "cpu";
+  }
+  // The image-routed pairs' objects (two a pair), their triangles' indices in the bodies, the
+  // pair each came from, and the object pairs the Detector is asked for.
+  std::vector<Object> image_objects;
+  std::vector<std::vector<std::uint32_t>> image_kept;
+  std::vector<std::size_t> image_of;
+  std::vector<std::pair<std::size_t, std::size_t>> image_only;
+};
+
+
+}  // namespace peelcd
