@@ -77,4 +77,31 @@ double GlImageStage::floor_draw_ms(const PeelJob& job) {
   return ms;
 }
 
+// The stage's one-view entry: the view's geometry uploaded, then peeled by the configured peeler.
+void GlImageStage::peel(const PeelJob& job, PeelResult& out, Timings& timings) { impl_->peel_one(job, out, timings); }
+
+
+void GlImageStage::Impl::peel_one(const PeelJob& job, PeelResult& out, Timings& timings) {
+  out.clear();
+  const auto t0 = Clock::now();
+  shape_uploads = 0;
+  for (int slot = 0; slot < 2; ++slot) prepare(*job.objects[slot], job.view, *job.triangles[slot], job.ids, slot);
+  upload(0);
+  upload(1);
+  timings.upload += ms_since(t0);
+  for (int slot = 0; slot < 2; ++slot)
+    (slot_shape[slot] ? out.triangles_indexed : out.triangles_uploaded) += corners(slot) / 3;
+  out.shape_uploads = shape_uploads;
+  if (job.conservative) {  // intervals need every fragment at once: the k-buffer
+    while (!peel_conservative(job, out, timings)) {
+    }
+  } else if (options.peeler == Peeler::abuffer) {
+    while (!peel_single_pass(job, out, timings)) {
+    }
+  } else {
+    while (!peel_multipass(job, out, timings)) {
+    }
+  }
+}
+
 }  // namespace peelcd::gl

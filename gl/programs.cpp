@@ -53,10 +53,10 @@ GlImageStage::Impl::Impl(std::shared_ptr<Context> ctx, const GlOptions& opt)
       link({stage(GL_COMPUTE_SHADER, shaders::conservative_resolve_comp, "conservative_resolve.comp")},
            "conservative resolve");
   // The batched programs: the same sources with PEELCD_BATCH defined.
-  const char* batch = "#define PEELCD_BATCH\n";
-  cons_batch_program = link({stage(GL_VERTEX_SHADER, shaders::conservative_vert, "conservative.vert (PEELCD_BATCH)", batch),
-                             stage(GL_GEOMETRY_SHADER, shaders::conservative_geom, "conservative.geom (PEELCD_BATCH)", batch),
-                             stage(GL_FRAGMENT_SHADER, shaders::conservative_frag, "conservative.frag (PEELCD_BATCH)", batch)},
+  const char* batch_define = "#define PEELCD_BATCH\n";
+  cons_batch_program = link({stage(GL_VERTEX_SHADER, shaders::conservative_vert, "conservative.vert (PEELCD_BATCH)", batch_define),
+                             stage(GL_GEOMETRY_SHADER, shaders::conservative_geom, "conservative.geom (PEELCD_BATCH)", batch_define),
+                             stage(GL_FRAGMENT_SHADER, shaders::conservative_frag, "conservative.frag (PEELCD_BATCH)", batch_define)},
                             "conservative batch");
   cons_batch_resolve_program =
       link({stage(GL_COMPUTE_SHADER, shaders::conservative_batch_resolve_comp, "conservative_batch_resolve.comp")},
@@ -66,11 +66,11 @@ GlImageStage::Impl::Impl(std::shared_ptr<Context> ctx, const GlOptions& opt)
                            "conservative batch resolve of deep texels");
   u_cd_texels = gl.GetUniformLocation(cons_deep_program, "texels");
   u_cd_row_base = gl.GetUniformLocation(cons_deep_program, "row_base");
-  point_batch_program = link({stage(GL_VERTEX_SHADER, shaders::peel_vert, "peel.vert (PEELCD_BATCH)", batch),
-                              stage(GL_FRAGMENT_SHADER, shaders::abuffer_frag, "abuffer.frag (PEELCD_BATCH)", batch)},
+  point_batch_program = link({stage(GL_VERTEX_SHADER, shaders::peel_vert, "peel.vert (PEELCD_BATCH)", batch_define),
+                              stage(GL_FRAGMENT_SHADER, shaders::abuffer_frag, "abuffer.frag (PEELCD_BATCH)", batch_define)},
                              "point-sampled batch");
   point_batch_resolve_program = link(
-      {stage(GL_COMPUTE_SHADER, shaders::abuffer_resolve_comp, "abuffer_resolve.comp (PEELCD_BATCH)", batch)},
+      {stage(GL_COMPUTE_SHADER, shaders::abuffer_resolve_comp, "abuffer_resolve.comp (PEELCD_BATCH)", batch_define)},
       "point-sampled batch resolve");
   select_program =
       link({stage(GL_COMPUTE_SHADER, shaders::batch_select_comp, "batch_select.comp")},
@@ -143,23 +143,23 @@ GlImageStage::Impl::Impl(std::shared_ptr<Context> ctx, const GlOptions& opt)
   gl.VertexArrayAttribBinding(vao, 1, 0);
   gl.CreateBuffers(2, vbo);
   gl.CreateBuffers(2, ibo);
-  gl.CreateBuffers(1, &batch_frame);
-  gl.CreateBuffers(1, &batch_views);
-  gl.CreateBuffers(1, &batch_entries);
-  gl.CreateBuffers(1, &batch_jobs);
-  gl.CreateBuffers(1, &batch_command);
-  gl.NamedBufferData(batch_command, 16, nullptr, GL_DYNAMIC_DRAW);
+  gl.CreateBuffers(1, &batch.frame);
+  gl.CreateBuffers(1, &batch.views);
+  gl.CreateBuffers(1, &batch.entries);
+  gl.CreateBuffers(1, &batch.jobs);
+  gl.CreateBuffers(1, &batch.command);
+  gl.NamedBufferData(batch.command, 16, nullptr, GL_DYNAMIC_DRAW);
   gl.CreateBuffers(1, &resident_buffer);
   gl.NamedBufferData(resident_buffer, 16, nullptr, GL_STATIC_DRAW);
-  gl.CreateVertexArrays(1, &batch_vao);
-  gl.CreateBuffers(1, &batch_layers);
+  gl.CreateVertexArrays(1, &batch.vao);
+  gl.CreateBuffers(1, &batch.layers);
   gl.CreateBuffers(1, &deep_rows);
-  gl.CreateBuffers(1, &batch_offset_buffer);
-  gl.CreateBuffers(1, &scan_blocks);
-  gl.CreateBuffers(1, &scan_total);
-  gl.CreateBuffers(1, &batch_staged);
-  gl.CreateBuffers(1, &batch_regions);
-  gl.NamedBufferData(scan_total, 4, nullptr, GL_DYNAMIC_READ);
+  gl.CreateBuffers(1, &batch.offset_buffer);
+  gl.CreateBuffers(1, &batch.scan_blocks);
+  gl.CreateBuffers(1, &batch.scan_total);
+  gl.CreateBuffers(1, &batch.staged);
+  gl.CreateBuffers(1, &batch.regions);
+  gl.NamedBufferData(batch.scan_total, 4, nullptr, GL_DYNAMIC_READ);
   u_model_peel = gl.GetUniformLocation(peel_program, "roi_from_object");
   gl.CreateQueries(GL_ANY_SAMPLES_PASSED, 1, &query);
   gl.CreateBuffers(1, &pcs_buffer);
@@ -188,20 +188,20 @@ GlImageStage::Impl::~Impl() {
   gl.DeleteProgram(point_batch_program);
   gl.DeleteProgram(point_batch_resolve_program);
   gl.DeleteProgram(prefix_sum_program);
-  gl.DeleteBuffers(1, &batch_frame);
-  gl.DeleteBuffers(1, &batch_views);
-  gl.DeleteBuffers(1, &batch_entries);
-  gl.DeleteBuffers(1, &batch_jobs);
-  gl.DeleteBuffers(1, &batch_command);
+  gl.DeleteBuffers(1, &batch.frame);
+  gl.DeleteBuffers(1, &batch.views);
+  gl.DeleteBuffers(1, &batch.entries);
+  gl.DeleteBuffers(1, &batch.jobs);
+  gl.DeleteBuffers(1, &batch.command);
   gl.DeleteBuffers(1, &resident_buffer);
-  gl.DeleteVertexArrays(1, &batch_vao);
-  gl.DeleteBuffers(1, &batch_layers);
+  gl.DeleteVertexArrays(1, &batch.vao);
+  gl.DeleteBuffers(1, &batch.layers);
   gl.DeleteBuffers(1, &deep_rows);
-  gl.DeleteBuffers(1, &batch_offset_buffer);
-  gl.DeleteBuffers(1, &scan_blocks);
-  gl.DeleteBuffers(1, &scan_total);
-  gl.DeleteBuffers(1, &batch_staged);
-  gl.DeleteBuffers(1, &batch_regions);
+  gl.DeleteBuffers(1, &batch.offset_buffer);
+  gl.DeleteBuffers(1, &batch.scan_blocks);
+  gl.DeleteBuffers(1, &batch.scan_total);
+  gl.DeleteBuffers(1, &batch.staged);
+  gl.DeleteBuffers(1, &batch.regions);
   gl.DeleteBuffers(1, &count_buffer);
   gl.DeleteBuffers(1, &fragment_buffer);
   gl.DeleteTextures(1, &count_tex);

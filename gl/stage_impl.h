@@ -5,8 +5,9 @@
 //   geometry.cpp     a view's triangles into buffers: ROI-local corners, or a rigid shape's indices
 //   multipass.cpp    the multi-pass peeler (one draw per layer) and the PCS readback
 //   single_pass.cpp  the single-pass peeler (k-buffer), its GPU and host resolves
-//   batch.cpp        one view (peel_one), or conservative views packed into one k-buffer and one draw
-//   gl_stage.cpp     the public class, the floor draw
+//   batch.cpp        views packed into one k-buffer and one draw: gathered, uploaded, selected, drawn
+//   batch_resolve.cpp  a drawn batch resolved: on the host, or by one dispatch (deep texels' rows)
+//   gl_stage.cpp     the public class, its one-view entry (peel_one), the floor draw
 #include "peelcd/core/image_stage.h"
 #include "peelcd/core/clock.h"
 #include "peelcd/core/kbuffer.h"
@@ -69,6 +70,37 @@ struct DeepHeader {
 // so only a scene with more than this many surfaces along one ray reaches it.
 constexpr int kMaxPasses = 4096;
 
+// The batched views' state (batch.cpp), owned by the batch: its GL buffers (grown, reused) and
+// the host's copies of what it uploads or reads back.
+struct BatchState {
+  // The geometry: per view, its matrices (views); the draw's entries (one per triangle: first
+  // corner, view << 1 | object, provoking ID); the corners of deforming objects' triangles,
+  // uploaded per frame (frame); the selection pass's jobs (per view and rigid object) and the
+  // indirect draw's command. Nothing in the vertex array: an empty one.
+  GLuint frame = 0, views = 0, entries = 0, jobs = 0, command = 0, vao = 0;
+  std::size_t frame_capacity = 0, views_capacity = 0, entries_capacity = 0, jobs_capacity = 0;  // bytes
+  std::vector<GpuVertex> corners;
+  std::vector<std::array<std::uint32_t, 4>> entry_data, job_data;
+  std::vector<std::uint32_t> ids;  // the provoking ID by draw order (the host resolve's)
+  std::vector<float> view_data;
+  // The selection pass's staged triangles (pass 0's, before the contact-region round) and the
+  // objects' regions per view (12 words a view, uploaded per frame: what the host knows of them).
+  GLuint staged = 0, regions = 0;
+  std::size_t staged_capacity = 0, regions_capacity = 0;  // bytes
+  std::vector<std::uint32_t> region_data;
+  // The count pass's counts and their prefix sums (the compact packed k-buffer's offsets): on the
+  // host for the host resolve, else by shaders/prefix_sum.comp (per block of 1024 texels its sum
+  // in scan_blocks, the total in scan_total: only that comes back).
+  GLuint offset_buffer = 0, scan_blocks = 0, scan_total = 0;
+  std::size_t offsets_capacity = 0, scan_blocks_capacity = 0;  // bytes
+  std::vector<std::uint32_t> counts, offsets;
+  std::uint32_t deepest = 0;
+  // The GPU resolve's per-view depths (layers) and what it reads back.
+  GLuint layers = 0;
+  std::size_t layers_capacity = 0;  // bytes
+  std::vector<std::uint32_t> view_layers, pairs;
+};
+
 struct GlImageStage::Impl {
   std::shared_ptr<Context> context;
   GlOptions options;
@@ -105,8 +137,8 @@ struct GlImageStage::Impl {
   GLuint cons_batch_program = 0;
   GLint u_cb_viewport = -1;
   // Its GPU resolve (Resolve::gpu): one dispatch over the packed k-buffer, per-view depths kept
-  // in batch_layers, the PCS list (draw orders) the only thing read back beside two headers.
-  GLuint cons_batch_resolve_program = 0, batch_layers = 0;
+  // in batch.layers, the PCS list (draw orders) the only thing read back beside two headers.
+  GLuint cons_batch_resolve_program = 0;  // per-view depths kept in batch.layers
   GLint u_cbr_texels = -1, u_cb_count_only = -1;
   // Its second program for texels deeper than PEELCD_GPU_RESOLVE_DEPTH (the same source with
   // PEELCD_DEEP): their rows (texel, block of fragments) in deep_rows, behind a DeepHeader.
@@ -117,37 +149,17 @@ struct GlImageStage::Impl {
   // PEELCD_BATCH; the GPU resolve: shaders/abuffer_resolve.comp with PEELCD_BATCH).
   GLuint point_batch_program = 0, point_batch_resolve_program = 0;
   GLint u_pb_viewport = -1, u_pb_count_only = -1, u_pbr_texels = -1;
-  // The count pass's counts and their prefix sums (the compact packed k-buffer's offsets): on
-  // the host for the host resolve, else by shaders/prefix_sum.comp (per block of 1024 texels its
-  // sum in scan_blocks, the total in scan_total: only that comes back).
-  GLuint batch_offset_buffer = 0, scan_blocks = 0, scan_total = 0, prefix_sum_program = 0;
+  // The prefix sum of the count pass's counts (shaders/prefix_sum.comp).
+  GLuint prefix_sum_program = 0;
   GLint u_ps_texels = -1, u_ps_blocks = -1, u_ps_pass = -1;
-  std::size_t batch_offsets_capacity = 0, scan_blocks_capacity = 0;  // bytes
-  std::vector<std::uint32_t> batch_counts, batch_offsets;
-  std::uint32_t batch_deepest = 0;
+
+
+  BatchState batch;
   std::size_t read_batch_counts(std::size_t texels, Timings& t);
-  std::size_t batch_layers_capacity = 0;  // bytes
-  std::vector<std::uint32_t> batch_view_layers;
-  std::vector<std::uint32_t> batch_pairs;
-  // The batch's geometry: per view, its matrices (batch_views); the draw's entries (one per
-  // triangle: first corner, view << 1 | object, provoking ID); the corners of deforming objects'
-  // triangles, uploaded per frame (batch_frame); the selection pass's jobs (per view and rigid
-  // object) and the indirect draw's command. Nothing in the vertex array: an empty one.
-  GLuint batch_frame = 0, batch_views = 0, batch_entries = 0, batch_jobs = 0, batch_command = 0, batch_vao = 0;
-  std::size_t batch_frame_capacity = 0, batch_views_capacity = 0, batch_entries_capacity = 0,
-              batch_jobs_capacity = 0;  // bytes
-  std::vector<GpuVertex> batch_corners;
-  std::vector<std::array<std::uint32_t, 4>> batch_entry_data, batch_job_data;
-  std::vector<std::uint32_t> batch_ids;  // the provoking ID by draw order (the host resolve's)
-  std::vector<float> batch_view_data;
   // The selection pass (shaders/batch_select.comp).
   GLuint select_program = 0;
   GLint u_sel_jobs = -1, u_sel_invocations = -1, u_sel_row = -1, u_sel_pass = -1;
-  // Its staged triangles (pass 0's, before the contact-region round) and the objects' regions
-  // per view (12 words a view, uploaded per frame: what the host knows of them).
-  GLuint batch_staged = 0, batch_regions = 0;
-  std::size_t batch_staged_capacity = 0, batch_regions_capacity = 0;  // bytes
-  std::vector<std::uint32_t> batch_region_data;
+
   // Rigid shapes resident for the batch: one buffer holding every shape a batch drew (its
   // corners, with IDs, copied GPU to GPU from the shape's cached buffer: uploaded once), each at
   // its first corner; kept while some object holds the shape, compacted when the buffer grows.
@@ -264,6 +276,31 @@ struct GlImageStage::Impl {
   // One view: its geometry uploaded, then peeled by the configured peeler (GlImageStage::peel).
   void peel_one(const PeelJob& job, PeelResult& out, Timings& timings);
   std::size_t peel_batched_views(const PeelJob* jobs, std::size_t count, PeelResult* outs, Timings& t);
+  // Its steps, in order (one call's state in a BatchRun).
+  struct BatchRun {
+    bool point = false;                         // point-sampled views (else conservative)
+    std::size_t most = 0;                       // fragments one packed k-buffer holds
+    std::size_t take = 0, texels = 0;           // the views batched, their texels
+    int largest = 0;                            // their largest side
+    std::size_t host_entries = 0;               // triangles the host selected
+    std::size_t invocations = 0;                // triangles the GPU selection considers
+    bool gpu_sum = false;                       // offsets by the GPU's prefix sum
+    std::size_t total = 0;                      // fragments counted
+    std::uint32_t deepest = 0;                  // the deepest texel's count (host sum only)
+    std::size_t selected = 0;                   // triangles the GPU selection kept
+  };
+  std::size_t plan_batch(const PeelJob* jobs, std::size_t count, BatchRun& run) const;
+  void gather_batch(const PeelJob* jobs, PeelResult* outs, BatchRun& run);
+  void gather_batch_object(const PeelJob& job, std::size_t j, int slot, PeelResult& out, BatchRun& run);
+  void put_view_record(const PeelJob& job, std::size_t base, bool point, PeelResult& out);
+  void upload_batch_buffer(GLuint buffer, std::size_t& capacity, const void* data, std::size_t bytes,
+                           std::size_t reserve, bool geometry);
+  void upload_batch(const BatchRun& run);
+  void select_batch(const BatchRun& run);
+  void count_batch(BatchRun& run, Timings& t);
+  void batch_offsets(BatchRun& run, Timings& t);
+  void fill_batch(const BatchRun& run);
+  double resolve_batch_on_host(const PeelJob* jobs, PeelResult* outs, const BatchRun& run, Timings& t);
   // The GPU resolve of a drawn batch (batch.cpp): each job's PCS and layers.
   // False when a texel was deeper than the GPU resolve takes (the caller resolves on the host).
   bool resolve_batch_on_gpu(std::size_t take, std::size_t texels, bool point, PeelResult* outs, Timings& t);
