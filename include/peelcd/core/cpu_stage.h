@@ -39,7 +39,13 @@ class CpuImageStage final : public ImageStage {
     std::uint32_t texel;
     KFragment f;
   };
+  struct Corner;  // a projected corner (cpu_stage.cpp)
+  // The steps of peel(): each object's triangles rasterized into fragments_, then the k-buffer
+  // built from them and resolved.
+  void raster_object(const PeelJob& job, int slot);
+  void raster_point(const Corner (&c)[3], int n, std::uint32_t key, const float box_lo[3], const float box_hi[3]);
   void raster_conservative(const conservative::Triangle& t, int n, std::uint32_t key);
+  void resolve(const PeelJob& job, PeelResult& out);
   std::string backend_ = "cpu", renderer_ = "peelcd CPU image stage (k-buffer model)", version_ = "1";
   std::vector<Fragment> fragments_;
   std::vector<std::uint32_t> counts_, ids_[2];
