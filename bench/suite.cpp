@@ -102,89 +102,92 @@ bool keep_freed_memory() {
 
 }  // namespace
 
-std::string run_suite(const Suite& suite) {
-  auto* gl_stage = dynamic_cast<gl::GlImageStage*>(suite.stage.get());
-  if (!gl_stage) throw std::invalid_argument("peelcd bench: the benchmark times GL stages (use osmesa or egl)");
-  if (suite.res > 0 && suite.res > gl_stage->max_resolution())
-    throw std::invalid_argument("peelcd bench: --res " + std::to_string(suite.res) + " is above GL_MAX_TEXTURE_SIZE");
-  // Freed memory stays in the process: the methods take turns on every frame, and one that frees
-  // gigabytes (the CGAL reference, FCL's cropped trees) would otherwise hand them back to the
-  // kernel and make whichever method runs next pay for it (on this project's VMs that made the
-  // next method's frame 2-3x slower: docs/performance.md, "Side by side"). Every method gets
-  // the same allocator; the library itself never changes it.
-  const bool heap_kept = suite.keep_freed_memory && keep_freed_memory();
-  Detector detector(suite.stage);
-  const unsigned threads = std::max(1u, suite.threads);
-  const gl::GlOptions gl_base = gl_stage->options();
+namespace {
 
-  std::vector<Row> rows;
-  const auto row = [&](std::string name, std::string column, Kind kind, const DetectOptions& opt = {},
-                       const gl::GlOptions& gl = {}) -> Row& {
-    Row& r = rows.emplace_back();
+// One run of the suite: its rows (peelcd's configurations, the peers, the floors), the peers'
+// state, the frames timed side by side, the tables printed.
+class SuiteRun {
+ public:
+  SuiteRun(const Suite& suite, gl::GlImageStage& gl_stage)
+      : suite_(suite),
+        gl_stage_(gl_stage),
+        detector_(suite.stage),
+        threads_(std::max(1u, suite.threads)),
+        fcl_refit_(FclPeer::Deforming::refit, threads_),
+        fcl_rebuild_(FclPeer::Deforming::rebuild, threads_),
+        embree_refit_(EmbreePeer::Update::refit, threads_),
+        embree_rebuild_(EmbreePeer::Update::rebuild_low, threads_),
+        bullet_(threads_) {}
+
+  std::string run(bool heap_kept) {
+    add_rows();
+    warm_up();
+    csv_ = "peelcd_version,frame,method,ms,nctp,found,false_contacts\n";
+    for (std::size_t f = 0; f < suite_.frames; ++f) time_frame(f);
+    for (const Object& o : objects_) triangles_ += o.mesh.triangles.size();
+    print_table(heap_kept);
+    if (suite_.phases > 1) print_phases();
+    return csv_;
+  }
+
+ private:
+  const Suite& suite_;
+  gl::GlImageStage& gl_stage_;
+  Detector detector_;
+  unsigned threads_;
+  FclPeer fcl_refit_, fcl_rebuild_;
+  EmbreePeer embree_refit_, embree_rebuild_;
+  BulletPeer bullet_;
+  std::vector<Row> rows_;
+  DetectOptions base_;  // the default of detect: the router
+  std::size_t cg_ = 0, fr_ = 0, fb_ = 0, fl_ = 0, cfl_ = 0;  // the CGAL, FCL and floor rows
+  std::vector<Object> objects_;
+  std::string csv_;
+  std::size_t rois_ = 0, rois_exact_ = 0, world_candidates_ = 0, triangles_ = 0;
+
+  Row& row(std::string name, std::string column, Kind kind, const DetectOptions& opt = {}, const gl::GlOptions& gl = {}) {
+    Row& r = rows_.emplace_back();
     r.name = std::move(name);
     r.column = std::move(column);
     r.kind = kind;
     r.opt = opt;
     r.gl = gl;
     return r;
-  };
-  DetectOptions base;  // the default of detect: the router
-  base.threads = threads;
-  base.resolution = suite.res;
-  gl::GlOptions gpu_resolve = gl_base;
-  gpu_resolve.resolve = Resolve::gpu;
-  gl::GlOptions multi = gl_base;
-  multi.peeler = Peeler::multipass;
-  DetectOptions image = base;
-  image.stage = Stage::image;
+  }
+  void add_rows();
+  void add_image_rows(const DetectOptions& image, const DetectOptions& point, const gl::GlOptions& gl_base);
+  void warm_up();
+  void run_peelcd(Row& r);
+  double time_row(Row& r, const PeerFrame& ref, Score& s, double& stage_ms);
+  void time_frame(std::size_t f);
+  void print_table(bool heap_kept) const;
+  void print_phases() const;
+};
 
+void SuiteRun::add_rows() {
+  const gl::GlOptions gl_base = gl_stage_.options();
+  base_.threads = threads_;
+  base_.resolution = suite_.res;
+  DetectOptions image = base_;
+  image.stage = Stage::image;
   // peelcd's persistent bodies: the default a user with objects that persist gets.
-  row("peelcd default (World, stage auto)", "default", Kind::world, base, gl_base);
+  row("peelcd default (World, stage auto)", "default", Kind::world, base_, gl_base);
   row("peelcd World, image stage", "W image", Kind::world, image, gl_base);
   // The frame API: every frame's world meshes, nothing kept but the GL stage's rigid shapes.
-  row("peelcd frame API (stage auto)", "frame", Kind::frame, base, gl_base);
-  DetectOptions exact = base;
+  row("peelcd frame API (stage auto)", "frame", Kind::frame, base_, gl_base);
+  DetectOptions exact = base_;
   exact.stage = Stage::exact;
-  if (!suite.short_rows) row("peelcd frame API, exact CPU path", "exact", Kind::frame, exact, gl_base);
+  if (!suite_.short_rows) row("peelcd frame API, exact CPU path", "exact", Kind::frame, exact, gl_base);
   row("peelcd frame API, image stage", "image", Kind::frame, image, gl_base);
   DetectOptions point = image;  // the paper's image stage with this project's culling, views, slope
   point.conservative = false;
   point.ids = IdMode::ring;
   point.theta = point.phi = point.roll = 0.0;
   point.views = 3;
-  if (!suite.short_rows) {
-    DetectOptions box = image;
-    box.cull = Cull::box;
-    row("peelcd image stage, box culling", "box cull", Kind::frame, box, gl_base);
-    row("peelcd image stage, GPU resolve", "gpu rslv", Kind::frame, image, gpu_resolve);
-    DetectOptions half = image;  // half the tile side: the texels culling saves
-    if (half.resolution > 0)
-      half.resolution = std::max(16, half.resolution / 2);
-    else
-      half.budget = std::max(16, half.budget / 2);
-    row("peelcd image stage, half resolution", "half res", Kind::frame, half, gl_base);
-    if (image.resolution == 0) {  // the conservative stage's earlier tiles: 12 texels per median edge
-      DetectOptions fine = image;
-      fine.edge_texels = kPointEdgeTexels;
-      row("peelcd image stage, 12 texels per edge", "12 tx/edge", Kind::frame, fine, gl_base);
-    }
-    // Point sampling: lossy, see the miss column.
-    row("peelcd point sampling, 3 views", "point 3v", Kind::frame, point, gl_base);
-    row("peelcd point sampling, multi-pass", "multipass", Kind::frame, point, multi);
-    DetectOptions one = point;
-    one.views = 1;
-    row("peelcd point, 1 view, full peeling", "1v full", Kind::frame, one, gl_base);
-    DetectOptions paper = one;  // the paper's pipeline: the whole overlap box, one view
-    paper.peel = PeelMode::alternate;
-    paper.ids = IdMode::paper;
-    paper.slope = 0.0;
-    paper.cull = Cull::box;
-    if (suite.res == 0 && suite.phases == 1 && suite.scene.find(".json") != std::string::npos)
-      paper.resolution = 256;  // the paper's 256^2 on one pair (its Fig. 8)
-    row("peelcd paper config", "paper", Kind::frame, paper, gl_base);
-    row("peelcd paper config, multi-pass", "paper mp", Kind::frame, paper, multi);
-  }
-  const std::size_t first_peer = rows.size();
+  if (!suite_.short_rows) add_image_rows(image, point, gl_base);
+  cg_ = rows_.size();
+  fr_ = cg_ + 1;
+  fb_ = cg_ + 2;
   row("CGAL, cropped to the overlap box", "CGAL", Kind::cgal);
   row("FCL 0.7, deforming refit", "FCL refit", Kind::fcl_refit);
   row("FCL 0.7, deforming rebuilt cropped", "FCL build", Kind::fcl_rebuild);
@@ -198,136 +201,174 @@ std::string run_suite(const Suite& suite) {
   floor1.cull = Cull::box;
   cfloor1.cull = Cull::contact;
   cfloor1.edge_texels = edge_texels_of(image);  // the conservative image stage's tiles
+  fl_ = rows_.size();
+  cfl_ = fl_ + 1;
   row("floor: 1 bare draw, overlap box", "floor", Kind::floor_box, floor1, gl_base);
   row("floor: 1 bare draw, culled", "cfloor", Kind::floor_culled, cfloor1, gl_base);
-  const std::size_t cg = first_peer, fr = first_peer + 1, fb = first_peer + 2, fl = first_peer + 6, cfl = first_peer + 7;
-  for (Row& r : rows) {
-    r.phase_ms.assign(std::size_t(std::max(1, suite.phases)), {});
-    if (r.kind == Kind::world) r.world = std::make_unique<World>(suite.stage);
+  for (Row& r : rows_) {
+    r.phase_ms.assign(std::size_t(std::max(1, suite_.phases)), {});
+    if (r.kind == Kind::world) r.world = std::make_unique<World>(suite_.stage);
   }
-  FclPeer fcl_refit(FclPeer::Deforming::refit, threads);
-  FclPeer fcl_rebuild(FclPeer::Deforming::rebuild, threads);
-  EmbreePeer embree_refit(EmbreePeer::Update::refit, threads);
-  EmbreePeer embree_rebuild(EmbreePeer::Update::rebuild_low, threads);
-  BulletPeer bullet(threads);
+}
 
-  // One frame of one peelcd row: a World brought to the frame (timed with it: the update is
-  // part of its frame, as FCL's refits are of FCL's), or the frame API.
-  const auto run_peelcd = [&](Row& r, const std::vector<Object>& objects) {
-    gl_stage->set_options(r.gl);
-    if (r.kind == Kind::world) {
-      const auto t0 = Clock::now();
-      sync_bodies(*r.world, objects, r.bodies);
-      r.world->collide(r.opt, r.result);
-      r.result.timings.total = ms_since(t0);
-    } else {
-      detector.detect(objects, r.opt, r.result);
-    }
-  };
+// The image stage's variants (the full table): GPU resolve, half resolution, finer tiles, point
+// sampling (lossy: see the miss column), the paper's configuration.
+void SuiteRun::add_image_rows(const DetectOptions& image, const DetectOptions& point, const gl::GlOptions& gl_base) {
+  gl::GlOptions gpu_resolve = gl_base;
+  gpu_resolve.resolve = Resolve::gpu;
+  gl::GlOptions multi = gl_base;
+  multi.peeler = Peeler::multipass;
+  DetectOptions box = image;
+  box.cull = Cull::box;
+  row("peelcd image stage, box culling", "box cull", Kind::frame, box, gl_base);
+  row("peelcd image stage, GPU resolve", "gpu rslv", Kind::frame, image, gpu_resolve);
+  DetectOptions half = image;  // half the tile side: the texels culling saves
+  if (half.resolution > 0)
+    half.resolution = std::max(16, half.resolution / 2);
+  else
+    half.budget = std::max(16, half.budget / 2);
+  row("peelcd image stage, half resolution", "half res", Kind::frame, half, gl_base);
+  if (image.resolution == 0) {  // the conservative stage at 12 texels per median edge
+    DetectOptions fine = image;
+    fine.edge_texels = kPointEdgeTexels;
+    row("peelcd image stage, 12 texels per edge", "12 tx/edge", Kind::frame, fine, gl_base);
+  }
+  row("peelcd point sampling, 3 views", "point 3v", Kind::frame, point, gl_base);
+  row("peelcd point sampling, multi-pass", "multipass", Kind::frame, point, multi);
+  DetectOptions one = point;
+  one.views = 1;
+  row("peelcd point, 1 view, full peeling", "1v full", Kind::frame, one, gl_base);
+  DetectOptions paper = one;  // the paper's pipeline: the whole overlap box, one view
+  paper.peel = PeelMode::alternate;
+  paper.ids = IdMode::paper;
+  paper.slope = 0.0;
+  paper.cull = Cull::box;
+  if (suite_.res == 0 && suite_.phases == 1 && suite_.scene.find(".json") != std::string::npos)
+    paper.resolution = 256;  // the paper's 256^2 on one pair (its Fig. 8)
+  row("peelcd paper config", "paper", Kind::frame, paper, gl_base);
+  row("peelcd paper config, multi-pass", "paper mp", Kind::frame, paper, multi);
+}
 
-  std::string csv = "peelcd_version,frame,method,ms,nctp,found,false_contacts\n";
-  std::vector<Object> objects;
-  // One untimed pass over the frames first: shader compilation, rigid shapes' uploads, the trees
-  // of rigid shapes and the growth of every buffer happen once, and would otherwise land on
-  // whichever method meets them first. The timed pass is the steady state. (A scene file's
-  // frames are all the same: one untimed frame.)
-  const std::size_t warm = suite.phases > 1 || suite.frames <= 1 ? suite.frames : std::min<std::size_t>(suite.frames, 2);
+// One frame of one peelcd row: a World brought to the frame (timed with it: the update is part
+// of its frame, as FCL's refits are of FCL's), or the frame API.
+void SuiteRun::run_peelcd(Row& r) {
+  gl_stage_.set_options(r.gl);
+  if (r.kind == Kind::world) {
+    const auto t0 = Clock::now();
+    sync_bodies(*r.world, objects_, r.bodies);
+    r.world->collide(r.opt, r.result);
+    r.result.timings.total = ms_since(t0);
+  } else {
+    detector_.detect(objects_, r.opt, r.result);
+  }
+}
+
+// One untimed pass over the frames first: shader compilation, rigid shapes' uploads, the trees
+// of rigid shapes and the growth of every buffer happen once, and would otherwise land on
+// whichever method meets them first. The timed pass is the steady state. (A scene file's frames
+// are all the same: one untimed frame.)
+void SuiteRun::warm_up() {
+  const std::size_t warm = suite_.phases > 1 || suite_.frames <= 1 ? suite_.frames : std::min<std::size_t>(suite_.frames, 2);
   for (std::size_t f = 0; f < warm; ++f) {
-    suite.frame(f, objects);
-    for (Row& r : rows)
-      if (r.peelcd()) run_peelcd(r, objects);
-    fcl_refit.frame(objects);
-    fcl_rebuild.frame(objects);
-    embree_refit.frame(objects);
-    embree_rebuild.frame(objects);
-    bullet.frame(objects);
+    suite_.frame(f, objects_);
+    for (Row& r : rows_)
+      if (r.peelcd()) run_peelcd(r);
+    fcl_refit_.frame(objects_);
+    fcl_rebuild_.frame(objects_);
+    embree_refit_.frame(objects_);
+    embree_rebuild_.frame(objects_);
+    bullet_.frame(objects_);
   }
-  std::size_t rois = 0, rois_exact = 0, world_candidates = 0, triangles = 0;
-  for (std::size_t f = 0; f < suite.frames; ++f) {
-    suite.frame(f, objects);
-    const int phase = suite.phase ? suite.phase(f) : 0;
-    // Side by side on the same frame: the exact reference first (it is the CGAL peer).
-    const PeerFrame ref = cgal_frame(objects, threads);
-    for (std::size_t m = 0; m < rows.size(); ++m) {
-      Row& r = rows[m];
-      double ms = 0.0, stage_ms = 0.0;
-      Score s;
-      switch (r.kind) {
-        case Kind::world:
-        case Kind::frame:
-          run_peelcd(r, objects);
-          ms = r.result.timings.total;
-          stage_ms = r.result.timings.gpu;
-          s = score_frame(r.result, ref);
-          break;
-        case Kind::cgal:
-          ms = ref.ms;
-          s = Score{ref.pairs, ref.pairs, 0, 0};
-          break;
-        case Kind::fcl_refit:
-        case Kind::fcl_rebuild:
-        case Kind::embree_refit:
-        case Kind::embree_rebuild:
-        case Kind::bullet: {
-          const PeerFrame p = r.kind == Kind::fcl_refit        ? fcl_refit.frame(objects)
-                              : r.kind == Kind::fcl_rebuild    ? fcl_rebuild.frame(objects)
-                              : r.kind == Kind::embree_refit   ? embree_refit.frame(objects)
-                              : r.kind == Kind::embree_rebuild ? embree_rebuild.frame(objects)
-                                                               : bullet.frame(objects);
-          ms = p.ms;
-          s = score_peer(ref, p);
-          break;
-        }
-        case Kind::floor_box:
-        case Kind::floor_culled:
-          gl_stage->set_options(r.gl);
-          ms = floor_ms(detector, *gl_stage, objects, r.opt);
-          s = Score{ref.pairs, 0, ref.pairs, 0};
-          break;
-      }
-      r.ms.push_back(ms);
-      r.stage_ms.push_back(stage_ms);
-      r.phase_ms[std::size_t(phase)].push_back(ms);
-      add(r.score, s);
-      char line[256];
-      std::snprintf(line, sizeof line, "%s,%zu,\"%s\",%.4f,%zu,%zu,%zu\n", PEELCD_VERSION_STRING, f, r.name.c_str(), ms,
-                    s.exact, s.found, s.false_contacts);
-      csv += line;
-    }
-    const FrameResult& frame_api = rows[2].result;
-    rois += frame_api.pairs.size();
-    rois_exact += frame_api.rois_exact;
-    for (const PairResult& p : rows[0].result.pairs) world_candidates += p.candidates;
-    if (suite.progress) suite.progress(f + 1, suite.frames);
-  }
-  for (const Object& o : objects) triangles += o.mesh.triangles.size();
+}
 
-  std::vector<double> med(rows.size());
-  for (std::size_t m = 0; m < rows.size(); ++m) med[m] = median(rows[m].ms);
+// One row on the current frame: its time, its score against the exact pairs (`ref`, the CGAL
+// peer's), the image stage's time (peelcd rows).
+double SuiteRun::time_row(Row& r, const PeerFrame& ref, Score& s, double& stage_ms) {
+  stage_ms = 0.0;
+  switch (r.kind) {
+    case Kind::world:
+    case Kind::frame:
+      run_peelcd(r);
+      stage_ms = r.result.timings.gpu;
+      s = score_frame(r.result, ref);
+      return r.result.timings.total;
+    case Kind::cgal:
+      s = Score{ref.pairs, ref.pairs, 0, 0};
+      return ref.ms;
+    case Kind::fcl_refit:
+    case Kind::fcl_rebuild:
+    case Kind::embree_refit:
+    case Kind::embree_rebuild:
+    case Kind::bullet: {
+      const PeerFrame p = r.kind == Kind::fcl_refit        ? fcl_refit_.frame(objects_)
+                          : r.kind == Kind::fcl_rebuild    ? fcl_rebuild_.frame(objects_)
+                          : r.kind == Kind::embree_refit   ? embree_refit_.frame(objects_)
+                          : r.kind == Kind::embree_rebuild ? embree_rebuild_.frame(objects_)
+                                                           : bullet_.frame(objects_);
+      s = score_peer(ref, p);
+      return p.ms;
+    }
+    case Kind::floor_box:
+    case Kind::floor_culled:
+      gl_stage_.set_options(r.gl);
+      s = Score{ref.pairs, 0, ref.pairs, 0};
+      return floor_ms(detector_, gl_stage_, objects_, r.opt);
+  }
+  return 0.0;
+}
+
+// Frame f, every row side by side on it: the exact reference first (it is the CGAL peer).
+void SuiteRun::time_frame(std::size_t f) {
+  suite_.frame(f, objects_);
+  const int phase = suite_.phase ? suite_.phase(f) : 0;
+  const PeerFrame ref = cgal_frame(objects_, threads_);
+  for (Row& r : rows_) {
+    Score s;
+    double stage_ms = 0.0;
+    const double ms = time_row(r, ref, s, stage_ms);
+    r.ms.push_back(ms);
+    r.stage_ms.push_back(stage_ms);
+    r.phase_ms[std::size_t(phase)].push_back(ms);
+    add(r.score, s);
+    char line[256];
+    std::snprintf(line, sizeof line, "%s,%zu,\"%s\",%.4f,%zu,%zu,%zu\n", PEELCD_VERSION_STRING, f, r.name.c_str(), ms,
+                  s.exact, s.found, s.false_contacts);
+    csv_ += line;
+  }
+  const FrameResult& frame_api = rows_[2].result;
+  rois_ += frame_api.pairs.size();
+  rois_exact_ += frame_api.rois_exact;
+  for (const PairResult& p : rows_[0].result.pairs) world_candidates_ += p.candidates;
+  if (suite_.progress) suite_.progress(f + 1, suite_.frames);
+}
+
+void SuiteRun::print_table(bool heap_kept) const {
+  std::vector<double> med(rows_.size());
+  for (std::size_t m = 0; m < rows_.size(); ++m) med[m] = median(rows_[m].ms);
   // The FCL ratio is against the faster of its two ways with deforming objects.
-  const std::size_t fc = med[fr] <= med[fb] ? fr : fb;
+  const std::size_t fc = med[fr_] <= med[fb_] ? fr_ : fb_;
   // The best peer: the fastest of CGAL, FCL, Embree and Bullet rows.
-  std::size_t best = cg;
-  for (std::size_t m = cg; m < fl; ++m)
+  std::size_t best = cg_;
+  for (std::size_t m = cg_; m < fl_; ++m)
     if (med[m] < med[best]) best = m;
-  const int tile = suite.res ? suite.res : base.budget;
+  const int tile = suite_.res ? suite_.res : base_.budget;
   std::printf("peelcd bench: %s, %zu frames, %zu objects, %zu triangles, %s, %s (%s), medians per frame after an untimed pass\n",
-              suite.scene.c_str(), suite.frames, objects.size(), triangles,
-              suite.res ? (std::to_string(tile) + "^2 per ROI").c_str()
-                        : ("a " + std::to_string(tile) + "^2 budget shared by the ROIs").c_str(),
-              suite.stage->backend().c_str(), suite.stage->renderer().c_str());
+              suite_.scene.c_str(), suite_.frames, objects_.size(), triangles_,
+              suite_.res ? (std::to_string(tile) + "^2 per ROI").c_str()
+                         : ("a " + std::to_string(tile) + "^2 budget shared by the ROIs").c_str(),
+              suite_.stage->backend().c_str(), suite_.stage->renderer().c_str());
   const char* lp = std::getenv("LP_NUM_THREADS");
   std::printf("threads: %u for every method (CGAL, FCL: object pairs; peelcd: object pairs, the node pairs of one pair's "
               "trees (World), host resolve lanes); llvmpipe %s; freed memory %s\n",
-              threads, lp ? (std::string("LP_NUM_THREADS=") + lp).c_str() : "its default (one per core)",
+              threads_, lp ? (std::string("LP_NUM_THREADS=") + lp).c_str() : "its default (one per core)",
               heap_kept ? "kept in the process (mallopt)" : "returned as the allocator decides");
   std::printf("World: %.0f candidate couples per frame (mean, default row); frame API router: %zu of %zu ROIs to the "
               "exact CPU path over the timed frames\n",
-              suite.frames ? double(world_candidates) / double(suite.frames) : 0.0, rois_exact, rois);
+              suite_.frames ? double(world_candidates_) / double(suite_.frames) : 0.0, rois_exact_, rois_);
   std::printf("%-38s %10s %9s %8s %7s %8s %8s %8s %8s\n", "method", "median ms", "stage ms", "miss", "false", "x CGAL",
               "x FCL", "x best", "x floor");
-  for (std::size_t m = 0; m < rows.size(); ++m) {
-    const Row& r = rows[m];
+  for (std::size_t m = 0; m < rows_.size(); ++m) {
+    const Row& r = rows_[m];
     std::printf("%-38s %10.2f", r.name.c_str(), med[m]);
     if (r.peelcd())
       std::printf(" %9.2f", median(r.stage_ms));
@@ -337,9 +378,9 @@ std::string run_suite(const Suite& suite) {
       std::printf(" %8s %7s", "-", "-");
     else
       std::printf(" %7.2f%% %7zu", 100.0 * r.score.miss_ratio(), r.score.false_contacts);
-    if (m < cg) {
-      const std::size_t floor = r.opt.cull == Cull::box ? fl : cfl;
-      std::printf(" %8.2f %8.2f %8.2f %8.2f\n", med[m] / med[cg], med[m] / med[fc], med[m] / med[best],
+    if (m < cg_) {
+      const std::size_t floor = r.opt.cull == Cull::box ? fl_ : cfl_;
+      std::printf(" %8.2f %8.2f %8.2f %8.2f\n", med[m] / med[cg_], med[m] / med[fc], med[m] / med[best],
                   med[floor] > 0 ? med[m] / med[floor] : 0.0);
     } else {
       std::printf("\n");
@@ -353,25 +394,42 @@ std::string run_suite(const Suite& suite) {
               " draw of the triangles the configuration would draw, one view. FCL trees kept: %zu (refit row), %zu (rebuilt\n"
               " row); refits %zu; cropped per-pair trees %zu and %zu, all frames. World rows: their bodies brought to each\n"
               " frame (poses; a deforming body's vertices and refit) inside the time.)\n",
-              fc == fr ? "refit" : "rebuilt", rows[best].name.c_str(), fcl_refit.builds(), fcl_rebuild.builds(), fcl_refit.refits(),
-              fcl_refit.pair_builds(), fcl_rebuild.pair_builds());
-  if (suite.phases > 1) {
-    std::printf("\nper phase, median ms:\n%-7s", "phase");
-    for (const Row& r : rows) std::printf(" %9s", r.column.c_str());
-    std::printf(" %9s %9s %9s\n", "dflt/CGAL", "dflt/FCL", "dflt/best");
-    for (int p = 0; p < suite.phases; ++p) {
-      std::printf("(%c)    ", char('a' + p));
-      if (rows[0].phase_ms[std::size_t(p)].empty()) {  // fewer frames than phases
-        std::printf(" no frames\n");
-        continue;
-      }
-      std::vector<double> pm(rows.size());
-      for (std::size_t m = 0; m < rows.size(); ++m) std::printf(" %9.2f", pm[m] = median(rows[m].phase_ms[std::size_t(p)]));
-      const double best_peer = *std::min_element(pm.begin() + std::ptrdiff_t(cg), pm.begin() + std::ptrdiff_t(fl));
-      std::printf(" %9.2f %9.2f %9.2f\n", pm[0] / pm[cg], pm[0] / std::min(pm[fr], pm[fb]), pm[0] / best_peer);
+              fc == fr_ ? "refit" : "rebuilt", rows_[best].name.c_str(), fcl_refit_.builds(), fcl_rebuild_.builds(),
+              fcl_refit_.refits(), fcl_refit_.pair_builds(), fcl_rebuild_.pair_builds());
+}
+
+void SuiteRun::print_phases() const {
+  std::printf("\nper phase, median ms:\n%-7s", "phase");
+  for (const Row& r : rows_) std::printf(" %9s", r.column.c_str());
+  std::printf(" %9s %9s %9s\n", "dflt/CGAL", "dflt/FCL", "dflt/best");
+  for (int p = 0; p < suite_.phases; ++p) {
+    std::printf("(%c)    ", char('a' + p));
+    if (rows_[0].phase_ms[std::size_t(p)].empty()) {  // fewer frames than phases
+      std::printf(" no frames\n");
+      continue;
     }
+    std::vector<double> pm(rows_.size());
+    for (std::size_t m = 0; m < rows_.size(); ++m) std::printf(" %9.2f", pm[m] = median(rows_[m].phase_ms[std::size_t(p)]));
+    const double best_peer = *std::min_element(pm.begin() + std::ptrdiff_t(cg_), pm.begin() + std::ptrdiff_t(fl_));
+    std::printf(" %9.2f %9.2f %9.2f\n", pm[0] / pm[cg_], pm[0] / std::min(pm[fr_], pm[fb_]), pm[0] / best_peer);
   }
-  return csv;
+}
+
+}  // namespace
+
+std::string run_suite(const Suite& suite) {
+  auto* gl_stage = dynamic_cast<gl::GlImageStage*>(suite.stage.get());
+  if (!gl_stage) throw std::invalid_argument("peelcd bench: the benchmark times GL stages (use osmesa or egl)");
+  if (suite.res > 0 && suite.res > gl_stage->max_resolution())
+    throw std::invalid_argument("peelcd bench: --res " + std::to_string(suite.res) + " is above GL_MAX_TEXTURE_SIZE");
+  // Freed memory stays in the process: the methods take turns on every frame, and one that frees
+  // gigabytes (the CGAL reference, FCL's cropped trees) would otherwise hand them back to the
+  // kernel and make whichever method runs next pay for it (2-3x slower frames measured:
+  // docs/performance.md, "Side by side"). Every method gets the same allocator; the library
+  // itself never changes it.
+  const bool heap_kept = suite.keep_freed_memory && keep_freed_memory();
+  SuiteRun run(suite, *gl_stage);
+  return run.run(heap_kept);
 }
 
 }  // namespace peelcd::bench
