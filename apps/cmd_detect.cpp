@@ -39,6 +39,173 @@ void print_relation(FILE* human, const PairResult& p, const std::vector<Object>&
   }
 }
 
+namespace {
+
+// --check: every pair against the exact reference; the first missed pairs for --explain-misses.
+struct CheckResult {
+  Score total;
+  std::vector<Score> scores;              // per pair
+  std::vector<oracle::PairQuery> misses;  // in frame order
+};
+
+CheckResult check_pairs(const FrameResult& result, const std::vector<Object>& objects, const DetectOptions& opt,
+                        std::size_t explain_misses) {
+  CheckResult c;
+  for (const PairResult& p : result.pairs) {
+    const std::vector<std::uint64_t> exact = exact_pair_reference(objects, p.object_a, p.object_b, opt.self_adjacency);
+    c.scores.push_back(score_contacts(exact, p.colliding));
+    for (const std::uint64_t k : exact) {
+      if (c.misses.size() >= explain_misses) break;
+      const bool reported = std::any_of(p.colliding.begin(), p.colliding.end(), [&](const Contact& x) {
+        return x.tri_a == pair_a(k) && x.tri_b == pair_b(k);
+      });
+      if (!reported) c.misses.push_back({p.object_a, p.object_b, pair_a(k), pair_b(k)});
+    }
+    c.total.exact += c.scores.back().exact;
+    c.total.found += c.scores.back().found;
+    c.total.missed += c.scores.back().missed;
+    c.total.false_contacts += c.scores.back().false_contacts;
+  }
+  return c;
+}
+
+// The frame `repeat` times; with several, the per-stage medians reported.
+FrameResult run_frames(Runner& runner, const std::vector<Object>& objects, const DetectOptions& opt, int repeat,
+                       std::size_t& runs) {
+  FrameResult result;
+  std::vector<Timings> timings;
+  for (int i = 0; i < std::max(1, repeat); ++i) {
+    result = runner.detector->detect(objects, opt);
+    timings.push_back(result.timings);
+  }
+  runs = timings.size();
+  if (timings.size() > 1) {
+    const auto med = [&](double Timings::*f) {
+      std::vector<double> v;
+      for (const Timings& t : timings) v.push_back(t.*f);
+      return median(v);
+    };
+    result.timings = {med(&Timings::aabb), med(&Timings::upload), med(&Timings::gpu),
+                      med(&Timings::readback), med(&Timings::cpu), med(&Timings::total)};
+  }
+  return result;
+}
+
+// The frame's header: configuration, the router's split, every fallback (never silent).
+void print_frame_header(FILE* human, const Scene& scene, const std::vector<Object>& objects, const DetectOptions& opt,
+                        const Runner& runner, const FrameResult& result) {
+  std::fprintf(human, "peelcd detect: %s  (%zu objects, %s, %s)\n", scene.path.c_str(), objects.size(),
+               runner.backend().c_str(), result.renderer.c_str());
+  if (opt.conservative)
+    std::fprintf(human, "conservative  view theta=%g phi=%g roll=%g  views=%d  ids=%s  cull=%s\n", opt.theta, opt.phi,
+                 opt.roll, opt.views, to_string(opt.ids), to_string(opt.cull));
+  else
+    std::fprintf(human, "point sampling  view theta=%g phi=%g roll=%g  views=%d  ids=%s  peel=%s  slope=%g  cull=%s\n",
+                 opt.theta, opt.phi, opt.roll, opt.views, to_string(opt.ids), to_string(opt.peel), opt.slope,
+                 to_string(opt.cull));
+  std::size_t culled_out = 0;  // pairs with no triangle of one object near the other: no path ran
+  for (const PairResult& p : result.pairs) culled_out += std::strcmp(pair_path(p), "none") == 0 ? 1 : 0;
+  std::fprintf(human, "stage %s: %zu of %zu ROIs by the exact CPU path, %zu peeled", to_string(opt.stage),
+               result.rois_exact, result.pairs.size(), result.pairs.size() - result.rois_exact - culled_out);
+  if (culled_out) std::fprintf(human, ", %zu with nothing to test (culled)", culled_out);
+  if (opt.stage == Stage::automatic && !runner.stage->cost_models().source.empty())
+    std::fprintf(human, " (router models from %s)", runner.stage->cost_models().source.c_str());
+  if (result.views_exhaustive > 0)
+    std::fprintf(human, " (%zu views fell back to the exhaustive exact test: k-buffer too deep or too large)",
+                 result.views_exhaustive);
+  if (result.gl_deep_texels > 0)
+    std::fprintf(human, " (GPU resolve: %zu texels deeper than %d fragments split over invocations)",
+                 result.gl_deep_texels, PEELCD_GPU_RESOLVE_DEPTH);
+  if (result.views_host_resolved > 0)
+    std::fprintf(human, " (%zu views resolved on the host: a texel deeper than the GPU resolve's %d fragments)",
+                 result.views_host_resolved, PEELCD_GPU_RESOLVE_DEPTH);
+  std::fprintf(human, "\n");
+  if (result.pairs.empty())
+    std::fprintf(human, objects.size() == 1 && !opt.self && !objects[0].self
+                            ? "one object, no pair: --self tests it against itself\n"
+                            : "no overlapping bounding boxes: no GL work\n");
+}
+
+// One pair's line: the path it took and what it found.
+void print_pair(FILE* human, const PairResult& p, const std::vector<Object>& objects, const DetectOptions& opt) {
+  const char* na = objects[p.object_a].name.c_str();
+  const char* nb = objects[p.object_b].name.c_str();
+  if (std::strcmp(pair_path(p), "none") == 0) {
+    std::fprintf(human, "%s x %s: no triangle of one near the other (culled: %zu+%zu tris in the ROI), nothing drawn "
+                 "or tested\n", na, nb, p.triangles_in_roi_a, p.triangles_in_roi_b);
+  } else if (p.exact_stage) {
+    std::fprintf(human, "%s x %s: exact CPU path (predicted %.3f ms; image stage %.3f ms), %zu+%zu tris in the ROI, "
+                 "%zu candidates, %zu colliding\n", na, nb, p.predicted_exact_ms, p.predicted_image_ms,
+                 p.triangles_in_roi_a, p.triangles_in_roi_b, p.candidates, p.colliding.size());
+  } else {
+    char eps[48] = "";  // point sampling's threshold; the conservative stage has none
+    if (!opt.conservative) std::snprintf(eps, sizeof eps, ", eps %.3g", p.epsilon);
+    std::fprintf(human, "%s x %s: ROI %dx%d%s, drawn %zu+%zu of %zu+%zu tris, %d layers, %zu PCS, %zu candidates, %zu "
+                 "colliding\n", na, nb, p.resolution, p.resolution, eps, p.triangles_drawn_a, p.triangles_drawn_b,
+                 p.triangles_in_roi_a, p.triangles_in_roi_b, p.layers, p.pcs_count, p.candidates, p.colliding.size());
+    if (p.views_exhaustive > 0)  // a fallback is never silent
+      std::fprintf(human, "  path %s: %s\n", pair_path(p), pair_path_reason(p, opt).c_str());
+  }
+}
+
+// Pairs of triangle indices (or IDs), ten to a line.
+template <class List, class Get>
+void print_index_pairs(FILE* human, const PairResult& p, const std::vector<Object>& objects, const char* what,
+                       const List& list, const Get& get) {
+  const char* na = objects[p.object_a].name.c_str();
+  const char* nb = objects[p.object_b].name.c_str();
+  std::fprintf(human, "%s x %s: %s (%s, %s)\n", na, nb, what, na, nb);
+  std::string line = " ";
+  for (const auto& c : list) {
+    const auto [ta, tb] = get(c);
+    line += " (" + std::to_string(ta) + "," + std::to_string(tb) + ")";
+    if (line.size() > 90) {
+      std::fprintf(human, "%s\n", line.c_str());
+      line = " ";
+    }
+  }
+  if (line.size() > 1) std::fprintf(human, "%s\n", line.c_str());
+}
+
+// The human summary: the header, each pair (with its check and relation), the totals, the
+// lists asked for, the timings.
+void print_summary(FILE* human, const DetectArgs& a, const Scene& scene, const std::vector<Object>& objects,
+                   const DetectOptions& opt, const Runner& runner, const FrameResult& result, const CheckResult& check,
+                   std::size_t runs) {
+  print_frame_header(human, scene, objects, opt, runner, result);
+  std::size_t colliding = 0, colliding_objects = 0;
+  for (std::size_t i = 0; i < result.pairs.size(); ++i) {
+    const PairResult& p = result.pairs[i];
+    colliding += p.colliding.size();
+    colliding_objects += p.is_collision() ? 1 : 0;
+    print_pair(human, p, objects, opt);
+    if (a.check) {
+      const Score& sc = check.scores[i];
+      std::fprintf(human, "  exact reference: %zu pairs; found %zu, missed %zu (miss ratio %.2f%%), false contacts %zu\n",
+                   sc.exact, sc.found, sc.missed, 100.0 * sc.miss_ratio(), sc.false_contacts);
+    }
+    print_relation(human, p, objects, opt, a.check);
+  }
+  std::fprintf(human, "%s: %zu colliding triangle pairs in %zu of %zu overlapping object pairs%s\n",
+               colliding_objects ? "collision" : "no collision", colliding, colliding_objects, result.pairs.size(),
+               colliding && !a.list ? " (--list prints them)" : "");
+  for (const PairResult& p : result.pairs) {
+    if (a.list && !p.colliding.empty())
+      print_index_pairs(human, p, objects, "triangle pairs", p.colliding,
+                        [](const Contact& c) { return std::pair(c.tri_a, c.tri_b); });
+  }
+  for (const PairResult& p : result.pairs) {
+    if (a.pcs && !p.pcs.empty())
+      print_index_pairs(human, p, objects, "PCS", p.pcs, [](const IdPair& c) { return std::pair(c.a, c.b); });
+  }
+  const Timings& t = result.timings;
+  std::fprintf(human, "timings (ms%s): aabb %.3f  upload %.3f  gpu %.3f  readback %.3f  cpu %.3f  total %.3f\n",
+               runs > 1 ? (", median of " + std::to_string(runs)).c_str() : "", t.aabb, t.upload, t.gpu, t.readback,
+               t.cpu, t.total);
+}
+
+}  // namespace
+
 int run_detect(const DetectArgs& a) {
   if (!a.json_out.empty()) check_output_path(a.json_out, "peelcd detect: --json");
   const Progress progress;
@@ -48,151 +215,26 @@ int run_detect(const DetectArgs& a) {
   const DetectOptions opt = merged_options(scene, a);
   const std::vector<Object> objects = load_objects(scene);
   progress.phase("peelcd detect: running the frame...");
-
   Runner runner = make_runner(a.backend, merged_gl_options(scene, a.peeler, a.resolve, a.no_batch, a.cpu_select), a.costs);
-  FrameResult result;
-  std::vector<Timings> runs;
-  for (int i = 0; i < std::max(1, a.repeat); ++i) {
-    result = runner.detector->detect(objects, opt);
-    runs.push_back(result.timings);
-  }
+  std::size_t runs = 0;
+  const FrameResult result = run_frames(runner, objects, opt, a.repeat, runs);
   progress.clear();
-  if (runs.size() > 1) {  // report per-stage medians over the repeated frames
-    const auto med = [&](double Timings::*f) {
-      std::vector<double> v;
-      for (const Timings& t : runs) v.push_back(t.*f);
-      return median(v);
-    };
-    result.timings = {med(&Timings::aabb), med(&Timings::upload), med(&Timings::gpu),
-                      med(&Timings::readback), med(&Timings::cpu), med(&Timings::total)};
-  }
-
-  // --check: every pair against the exact reference (in the JSON too).
-  Score total;
-  std::vector<Score> scores;
-  std::vector<oracle::PairQuery> misses;  // in frame order, for --explain-misses
-  if (a.check)
-    for (const PairResult& p : result.pairs) {
-      const std::vector<std::uint64_t> exact = exact_pair_reference(objects, p.object_a, p.object_b, opt.self_adjacency);
-      scores.push_back(score_contacts(exact, p.colliding));
-      if (misses.size() < std::size_t(a.explain_misses))
-        for (const std::uint64_t k : exact) {
-          const bool reported = std::any_of(p.colliding.begin(), p.colliding.end(), [&](const Contact& c) {
-            return c.tri_a == pair_a(k) && c.tri_b == pair_b(k);
-          });
-          if (!reported && misses.size() < std::size_t(a.explain_misses))
-            misses.push_back({p.object_a, p.object_b, pair_a(k), pair_b(k)});
-        }
-      total.exact += scores.back().exact;
-      total.found += scores.back().found;
-      total.missed += scores.back().missed;
-      total.false_contacts += scores.back().false_contacts;
-    }
+  const CheckResult check = a.check ? check_pairs(result, objects, opt, std::size_t(std::max(0, a.explain_misses)))
+                                    : CheckResult{};
   // The human summary: on stdout, or on stderr when the JSON goes to stdout.
   FILE* const human = a.json_out == "-" ? stderr : stdout;
-  if (!a.quiet) {
-    std::fprintf(human, "peelcd detect: %s  (%zu objects, %s, %s)\n", scene.path.c_str(), objects.size(),
-                runner.backend().c_str(), result.renderer.c_str());
-    if (opt.conservative)
-      std::fprintf(human, "conservative  view theta=%g phi=%g roll=%g  views=%d  ids=%s  cull=%s\n", opt.theta, opt.phi, opt.roll,
-                  opt.views, to_string(opt.ids), to_string(opt.cull));
-    else
-      std::fprintf(human, "point sampling  view theta=%g phi=%g roll=%g  views=%d  ids=%s  peel=%s  slope=%g  cull=%s\n", opt.theta,
-                  opt.phi, opt.roll, opt.views, to_string(opt.ids), to_string(opt.peel), opt.slope, to_string(opt.cull));
-    std::size_t culled_out = 0;  // pairs with no triangle of one object near the other: no path ran
-    for (const PairResult& p : result.pairs) culled_out += std::strcmp(pair_path(p), "none") == 0 ? 1 : 0;
-    std::fprintf(human, "stage %s: %zu of %zu ROIs by the exact CPU path, %zu peeled", to_string(opt.stage), result.rois_exact,
-                result.pairs.size(), result.pairs.size() - result.rois_exact - culled_out);
-    if (culled_out) std::fprintf(human, ", %zu with nothing to test (culled)", culled_out);
-    if (opt.stage == Stage::automatic && !runner.stage->cost_models().source.empty())
-      std::fprintf(human, " (router models from %s)", runner.stage->cost_models().source.c_str());
-    if (result.views_exhaustive > 0)
-      std::fprintf(human, " (%zu views fell back to the exhaustive exact test: k-buffer too deep or too large)",
-                   result.views_exhaustive);
-    if (result.gl_deep_texels > 0)
-      std::fprintf(human, " (GPU resolve: %zu texels deeper than %d fragments split over invocations)",
-                   result.gl_deep_texels, PEELCD_GPU_RESOLVE_DEPTH);
-    if (result.views_host_resolved > 0)  // a fallback is never silent
-      std::fprintf(human, " (%zu views resolved on the host: a texel deeper than the GPU resolve's %d fragments)",
-                   result.views_host_resolved, PEELCD_GPU_RESOLVE_DEPTH);
-    std::fprintf(human, "\n");
-    if (result.pairs.empty())
-      std::fprintf(human, objects.size() == 1 && !opt.self && !objects[0].self
-                              ? "one object, no pair: --self tests it against itself\n"
-                              : "no overlapping bounding boxes: no GL work\n");
-    std::size_t colliding = 0, colliding_objects = 0;
-    for (const PairResult& p : result.pairs) {
-      colliding += p.colliding.size();
-      colliding_objects += p.is_collision() ? 1 : 0;
-      if (std::strcmp(pair_path(p), "none") == 0) {
-        std::fprintf(human, "%s x %s: no triangle of one near the other (culled: %zu+%zu tris in the ROI), nothing drawn "
-                    "or tested\n",
-                    objects[p.object_a].name.c_str(), objects[p.object_b].name.c_str(), p.triangles_in_roi_a,
-                    p.triangles_in_roi_b);
-      } else if (p.exact_stage) {
-        std::fprintf(human, "%s x %s: exact CPU path (predicted %.3f ms; image stage %.3f ms), %zu+%zu tris in the ROI, "
-                    "%zu candidates, %zu colliding\n",
-                    objects[p.object_a].name.c_str(), objects[p.object_b].name.c_str(), p.predicted_exact_ms,
-                    p.predicted_image_ms, p.triangles_in_roi_a, p.triangles_in_roi_b, p.candidates, p.colliding.size());
-      } else {
-        char eps[48] = "";  // point sampling's threshold; the conservative stage has none
-        if (!opt.conservative) std::snprintf(eps, sizeof eps, ", eps %.3g", p.epsilon);
-        std::fprintf(human, "%s x %s: ROI %dx%d%s, drawn %zu+%zu of %zu+%zu tris, %d layers, %zu PCS, %zu candidates, %zu colliding\n",
-                    objects[p.object_a].name.c_str(), objects[p.object_b].name.c_str(), p.resolution,
-                    p.resolution, eps, p.triangles_drawn_a, p.triangles_drawn_b, p.triangles_in_roi_a,
-                    p.triangles_in_roi_b, p.layers,
-                    p.pcs_count, p.candidates, p.colliding.size());
-        if (p.views_exhaustive > 0)  // a fallback is never silent
-          std::fprintf(human, "  path %s: %s\n", pair_path(p), pair_path_reason(p, opt).c_str());
-      }
-      if (a.check) {
-        const Score& sc = scores[std::size_t(&p - result.pairs.data())];
-        std::fprintf(human, "  exact reference: %zu pairs; found %zu, missed %zu (miss ratio %.2f%%), false contacts %zu\n",
-                    sc.exact, sc.found, sc.missed, 100.0 * sc.miss_ratio(), sc.false_contacts);
-      }
-      print_relation(human, p, objects, opt, a.check);
-    }
-    std::fprintf(human, "%s: %zu colliding triangle pairs in %zu of %zu overlapping object pairs%s\n",
-                 colliding_objects ? "collision" : "no collision", colliding, colliding_objects, result.pairs.size(),
-                 colliding && !a.list ? " (--list prints them)" : "");
-    // Pairs of triangle indices, ten to a line.
-    const auto print_pairs = [&](const PairResult& p, const char* what, const auto& list, const auto& get) {
-      std::fprintf(human, "%s x %s: %s (%s, %s)\n", objects[p.object_a].name.c_str(), objects[p.object_b].name.c_str(),
-                   what, objects[p.object_a].name.c_str(), objects[p.object_b].name.c_str());
-      std::string line = " ";
-      for (const auto& c : list) {
-        const auto [ta, tb] = get(c);
-        line += " (" + std::to_string(ta) + "," + std::to_string(tb) + ")";
-        if (line.size() > 90) {
-          std::fprintf(human, "%s\n", line.c_str());
-          line = " ";
-        }
-      }
-      if (line.size() > 1) std::fprintf(human, "%s\n", line.c_str());
-    };
-    if (a.list)
-      for (const PairResult& p : result.pairs)
-        if (!p.colliding.empty())
-          print_pairs(p, "triangle pairs", p.colliding, [](const Contact& c) { return std::pair(c.tri_a, c.tri_b); });
-    if (a.pcs)
-      for (const PairResult& p : result.pairs)
-        if (!p.pcs.empty())
-          print_pairs(p, "PCS", p.pcs, [](const IdPair& c) { return std::pair(c.a, c.b); });
-    const Timings& t = result.timings;
-    std::fprintf(human, "timings (ms%s): aabb %.3f  upload %.3f  gpu %.3f  readback %.3f  cpu %.3f  total %.3f\n",
-                runs.size() > 1 ? (", median of " + std::to_string(runs.size())).c_str() : "",
-                t.aabb, t.upload, t.gpu, t.readback, t.cpu, t.total);
-  }
+  if (!a.quiet) print_summary(human, a, scene, objects, opt, runner, result, check, runs);
   if (!a.json_out.empty())
-    write_output(a.json_out, to_json(result, objects, opt, a.check ? &scores : nullptr, runner.gl_settings()).dump(2));
+    write_output(a.json_out, to_json(result, objects, opt, a.check ? &check.scores : nullptr, runner.gl_settings()).dump(2));
+  const Score& total = check.total;
   if (a.check && !a.quiet)
     std::fprintf(human, "check: %zu exact pairs, %zu missed (miss ratio %.4f%%)\n", total.exact, total.missed,
-                100.0 * total.miss_ratio());
-  if (!misses.empty()) {  // --explain-misses: the same frame again, every layer captured
+                 100.0 * total.miss_ratio());
+  if (!check.misses.empty()) {  // --explain-misses: the same frame again, every layer captured
     const oracle::FrameTrace trace(*runner.detector, objects, opt);
     std::fprintf(human, "explain: the first %zu missed pair(s) (peelcd explain ... --pair A:TRI,B:TRI for the whole walk)\n",
-                 misses.size());
-    for (const oracle::PairQuery& m : misses)
+                 check.misses.size());
+    for (const oracle::PairQuery& m : check.misses)
       std::fprintf(human, "  %s:%u,%s:%u: %s\n", objects[m.object_a].name.c_str(), m.tri_a,
                    objects[m.object_b].name.c_str(), m.tri_b, trace.explain(m).verdict_line.c_str());
   }

@@ -287,14 +287,14 @@ void GlImageStage::Impl::select_batch(const BatchRun& run) {
   gl.BindBufferBase(GL_SHADER_STORAGE_BUFFER, 10, batch.command);
   gl.BindBufferBase(GL_SHADER_STORAGE_BUFFER, 13, batch.staged);
   gl.BindBufferBase(GL_SHADER_STORAGE_BUFFER, 14, batch.regions);
-  gl.UseProgram(select_program);
+  gl.UseProgram(select.id);
   const std::size_t groups = (run.invocations + 63) / 64;
   const std::size_t gx = std::min<std::size_t>(groups, 65535), gy = (groups + gx - 1) / gx;
-  gl.Uniform1ui(u_sel_jobs, GLuint(batch.job_data.size()));
-  gl.Uniform1ui(u_sel_invocations, GLuint(run.invocations));
-  gl.Uniform1ui(u_sel_row, GLuint(gx * 64));
+  gl.Uniform1ui(select.jobs, GLuint(batch.job_data.size()));
+  gl.Uniform1ui(select.invocations, GLuint(run.invocations));
+  gl.Uniform1ui(select.row, GLuint(gx * 64));
   for (int pass = 0; pass < 2; ++pass) {
-    gl.Uniform1i(u_sel_pass, pass);
+    gl.Uniform1i(select.pass, pass);
     gl.DispatchCompute(GLuint(gx), GLuint(gy), 1);
     count_dispatch();
     gl.MemoryBarrier(GL_SHADER_STORAGE_BARRIER_BIT | GL_COMMAND_BARRIER_BIT);
@@ -317,8 +317,8 @@ void GlImageStage::Impl::count_batch(BatchRun& run, Timings& t) {
   gl.BindBufferBase(GL_SHADER_STORAGE_BUFFER, 8, batch.frame);
   if (run.invocations) select_batch(run);
   gl.BindBuffer(GL_DRAW_INDIRECT_BUFFER, batch.command);
-  gl.UseProgram(run.point ? point_batch_program : cons_batch_program);
-  gl.Uniform1i(run.point ? u_pb_viewport : u_cb_viewport, run.largest);
+  gl.UseProgram(run.point ? point_batch.id : cons_batch.id);
+  gl.Uniform1i(run.point ? point_batch.viewport : cons_batch.viewport, run.largest);
   gl.BindFramebuffer(GL_FRAMEBUFFER, bare_fbo);
   gl.Viewport(0, 0, run.largest, run.largest);
   gl.Disable(GL_DEPTH_TEST);
@@ -327,7 +327,7 @@ void GlImageStage::Impl::count_batch(BatchRun& run, Timings& t) {
   // Point sampling clips to the ROI box; the conservative intervals clip in depth themselves.
   for (int i = 0; i < 6; ++i) run.point ? gl.Enable(GL_CLIP_DISTANCE0 + i) : gl.Disable(GL_CLIP_DISTANCE0 + i);
   gl.BindVertexArray(batch.vao);
-  gl.Uniform1i(run.point ? u_pb_count_only : u_cb_count_only, 1);
+  gl.Uniform1i(run.point ? point_batch.count_only : cons_batch.count_only, 1);
   gl.DrawArraysIndirect(GL_TRIANGLES, nullptr);
   count_draw();
   gl.MemoryBarrier(GL_BUFFER_UPDATE_BARRIER_BIT);
@@ -357,11 +357,11 @@ void GlImageStage::Impl::batch_offsets(BatchRun& run, Timings& t) {
     gl.BindBufferBase(GL_SHADER_STORAGE_BUFFER, 6, batch.offset_buffer);
     gl.BindBufferBase(GL_SHADER_STORAGE_BUFFER, 11, batch.scan_blocks);
     gl.BindBufferBase(GL_SHADER_STORAGE_BUFFER, 12, batch.scan_total);
-    gl.UseProgram(prefix_sum_program);
-    gl.Uniform1ui(u_ps_texels, GLuint(run.texels));
-    gl.Uniform1ui(u_ps_blocks, GLuint(blocks));
+    gl.UseProgram(prefix_sum.id);
+    gl.Uniform1ui(prefix_sum.texels, GLuint(run.texels));
+    gl.Uniform1ui(prefix_sum.blocks, GLuint(blocks));
     for (int pass = 0; pass < 3; ++pass) {
-      gl.Uniform1i(u_ps_pass, pass);
+      gl.Uniform1i(prefix_sum.pass, pass);
       gl.DispatchCompute(pass == 1 ? 1u : GLuint(blocks), 1, 1);
       count_dispatch();
       gl.MemoryBarrier(GL_SHADER_STORAGE_BARRIER_BIT | GL_BUFFER_UPDATE_BARRIER_BIT);
@@ -374,7 +374,7 @@ void GlImageStage::Impl::batch_offsets(BatchRun& run, Timings& t) {
     count_read(sizeof drawn);
     t.readback += ms_since(t_total);
     run.total = sum == 0xffffffffu ? std::numeric_limits<std::size_t>::max() : sum;
-    gl.UseProgram(run.point ? point_batch_program : cons_batch_program);
+    gl.UseProgram(run.point ? point_batch.id : cons_batch.id);
   } else {
     run.total = read_batch_counts(run.texels, t);
     run.deepest = batch.deepest;
@@ -398,7 +398,7 @@ void GlImageStage::Impl::fill_batch(const BatchRun& run) {
                              &zero);
   gl.BindBufferBase(GL_SHADER_STORAGE_BUFFER, 1, fragment_buffer);
   gl.BindBufferBase(GL_SHADER_STORAGE_BUFFER, 6, batch.offset_buffer);
-  gl.Uniform1i(run.point ? u_pb_count_only : u_cb_count_only, 0);
+  gl.Uniform1i(run.point ? point_batch.count_only : cons_batch.count_only, 0);
   gl.DrawArraysIndirect(GL_TRIANGLES, nullptr);
   count_draw();
   gl.BindBuffer(GL_DRAW_INDIRECT_BUFFER, 0);

@@ -89,15 +89,15 @@ std::size_t GlImageStage::Impl::read_batch_counts(std::size_t texels, Timings& t
 // The deep texels' rows (shaders/conservative_batch_resolve.comp with PEELCD_DEEP): a work group
 // per row and block of fragments, rows in dispatches of at most 65535 work groups wide.
 void GlImageStage::Impl::dispatch_deep_rows(const DeepHeader& deep, std::size_t texels) {
-  gl.UseProgram(cons_deep_program);
-  gl.Uniform1ui(u_cd_texels, GLuint(texels));
+  gl.UseProgram(cons_deep.id);
+  gl.Uniform1ui(cons_deep.texels, GLuint(texels));
   for (std::size_t base = 0; base < deep.row_count; base += 65535) {
-    gl.Uniform1ui(u_cd_row_base, GLuint(base));
+    gl.Uniform1ui(cons_deep.row_base, GLuint(base));
     gl.DispatchCompute(GLuint(std::min<std::size_t>(deep.row_count - base, 65535)), deep.max_blocks, 1);
     count_dispatch();
   }
   gl.MemoryBarrier(GL_BUFFER_UPDATE_BARRIER_BIT | GL_SHADER_STORAGE_BARRIER_BIT);
-  gl.UseProgram(cons_batch_resolve_program);
+  gl.UseProgram(cons_batch_resolve.id);
 }
 
 bool GlImageStage::Impl::resolve_batch_on_gpu(std::size_t take, std::size_t texels, bool point, PeelResult* outs,
@@ -115,14 +115,14 @@ bool GlImageStage::Impl::resolve_batch_on_gpu(std::size_t take, std::size_t texe
   gl.BindBufferBase(GL_SHADER_STORAGE_BUFFER, 5, batch.layers);
   gl.BindTextureUnit(0, count_tex);
   gl.BindTextureUnit(1, fragment_tex);
-  gl.UseProgram(point ? point_batch_resolve_program : cons_batch_resolve_program);
-  gl.Uniform1ui(point ? u_pbr_texels : u_cbr_texels, GLuint(texels));
+  gl.UseProgram(point ? point_batch_resolve.id : cons_batch_resolve.id);
+  gl.Uniform1ui(point ? point_batch_resolve.texels : cons_batch_resolve.texels, GLuint(texels));
   gl.BindBufferBase(GL_SHADER_STORAGE_BUFFER, 6, batch.offset_buffer);
-  if (!point && deep_rows_capacity == 0) {
-    deep_rows_capacity = 4096;
-    gl.NamedBufferData(deep_rows, GLsizeiptr(sizeof(DeepHeader) + deep_rows_capacity * 8), nullptr, GL_DYNAMIC_COPY);
+  if (!point && batch.deep_rows_capacity == 0) {
+    batch.deep_rows_capacity = 4096;
+    gl.NamedBufferData(batch.deep_rows, GLsizeiptr(sizeof(DeepHeader) + batch.deep_rows_capacity * 8), nullptr, GL_DYNAMIC_COPY);
   }
-  if (!point) gl.BindBufferBase(GL_SHADER_STORAGE_BUFFER, 7, deep_rows);
+  if (!point) gl.BindBufferBase(GL_SHADER_STORAGE_BUFFER, 7, batch.deep_rows);
   PcsHeader got{};
   DeepHeader deep{};
   for (;;) {  // the list's pairs are 16 bytes here (IDs and view): half as many fit
@@ -130,8 +130,8 @@ bool GlImageStage::Impl::resolve_batch_on_gpu(std::size_t take, std::size_t texe
     gl.NamedBufferSubData(pcs_buffer, 0, sizeof header, &header);
     count_upload(sizeof header);
     if (!point) {
-      const DeepHeader empty{0, std::uint32_t(deep_rows_capacity), 0, 0};
-      gl.NamedBufferSubData(deep_rows, 0, sizeof empty, &empty);
+      const DeepHeader empty{0, std::uint32_t(batch.deep_rows_capacity), 0, 0};
+      gl.NamedBufferSubData(batch.deep_rows, 0, sizeof empty, &empty);
       count_upload(sizeof empty);
     }
     gl.DispatchCompute(GLuint((texels + 63) / 64), 1, 1);
@@ -146,14 +146,14 @@ bool GlImageStage::Impl::resolve_batch_on_gpu(std::size_t take, std::size_t texe
     // (the deepest texel's count, max_layers, says whether any did: no read otherwise).
     if (!point && got.max_layers > PEELCD_GPU_RESOLVE_DEPTH) {
       const auto t_deep = Clock::now();
-      gl.GetNamedBufferSubData(deep_rows, 0, sizeof deep, &deep);
+      gl.GetNamedBufferSubData(batch.deep_rows, 0, sizeof deep, &deep);
       count_read(sizeof deep);
       t.readback += ms_since(t_deep);
-      if (deep.row_count > deep_rows_capacity) {  // larger, and the dispatch again
-        deep_rows_capacity = std::size_t(deep.row_count) * 3 / 2;
-        gl.NamedBufferData(deep_rows, GLsizeiptr(sizeof(DeepHeader) + deep_rows_capacity * 8), nullptr,
+      if (deep.row_count > batch.deep_rows_capacity) {  // larger, and the dispatch again
+        batch.deep_rows_capacity = std::size_t(deep.row_count) * 3 / 2;
+        gl.NamedBufferData(batch.deep_rows, GLsizeiptr(sizeof(DeepHeader) + batch.deep_rows_capacity * 8), nullptr,
                            GL_DYNAMIC_COPY);
-        gl.BindBufferBase(GL_SHADER_STORAGE_BUFFER, 7, deep_rows);
+        gl.BindBufferBase(GL_SHADER_STORAGE_BUFFER, 7, batch.deep_rows);
         continue;
       }
       dispatch_deep_rows(deep, texels);

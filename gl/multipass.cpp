@@ -15,20 +15,20 @@ bool GlImageStage::Impl::peel_multipass(const PeelJob& job, PeelResult& out, Tim
   count_upload(sizeof header);
   gl.BindBufferBase(GL_SHADER_STORAGE_BUFFER, 0, pcs_buffer);
 
-  gl.UseProgram(peel_program);
-  set_view_uniforms(u_clip, u_box_lo, u_box_hi, view);
-  gl.Uniform1ui(u_rank_flip, job.peel == PeelMode::full ? 0u : GLuint(job.first));
-  gl.UseProgram(pcs_program);
+  gl.UseProgram(peel.id);
+  set_view_uniforms(peel.clip, peel.box_lo, peel.box_hi, view);
+  gl.Uniform1ui(peel.rank_flip, job.peel == PeelMode::full ? 0u : GLuint(job.first));
+  gl.UseProgram(pcs.id);
   out.epsilon_window = float(view.world_to_window_depth(job.epsilon));
   out.slope = float(job.slope);
-  gl.Uniform1f(u_eps, out.epsilon_window);
-  gl.Uniform1f(u_slope, out.slope);
-  gl.Uniform1i(u_track, job.peel == PeelMode::full);
+  gl.Uniform1f(pcs.eps, out.epsilon_window);
+  gl.Uniform1f(pcs.slope, out.slope);
+  gl.Uniform1i(pcs.track, job.peel == PeelMode::full);
   if (job.peel == PeelMode::full) {
     gl.ClearTexImage(run_tex, 0, GL_RGBA_INTEGER, GL_UNSIGNED_INT, nullptr);
     gl.BindImageTexture(0, run_tex, 0, GL_FALSE, 0, GL_READ_WRITE, GL_RGBA32UI);
   }
-  gl.Uniform1i(u_res, n);
+  gl.Uniform1i(pcs.res, n);
 
   gl.Viewport(0, 0, n, n);
   gl.Enable(GL_DEPTH_TEST);
@@ -48,16 +48,16 @@ bool GlImageStage::Impl::peel_multipass(const PeelJob& job, PeelResult& out, Tim
     gl.BindFramebuffer(GL_FRAMEBUFFER, fbo[cur]);
     gl.ClearBufferuiv(GL_COLOR, 0, zero);
     gl.ClearBufferfv(GL_DEPTH, 0, &far_depth);
-    gl.UseProgram(peel_program);
-    gl.Uniform1i(u_has_prev, k > 0);
+    gl.UseProgram(peel.id);
+    gl.Uniform1i(peel.has_prev, k > 0);
     gl.BindTextureUnit(0, layer_tex[prev]);
     gl.BeginQuery(GL_ANY_SAMPLES_PASSED, query);
     for (int i = 0; i < 2; ++i) {
       // Alternate: one object per pass, starting with `first`. Full: both, every pass.
       const int slot = job.peel == PeelMode::full ? i : (job.first + k) & 1;
       if (job.peel == PeelMode::alternate && i == 1) break;
-      gl.Uniform1ui(u_object, GLuint(slot));
-      draw(slot, u_model_peel);
+      gl.Uniform1ui(peel.object, GLuint(slot));
+      draw(slot, peel.model);
     }
     gl.EndQuery(GL_ANY_SAMPLES_PASSED);
     ++out.peel_passes;
@@ -76,7 +76,7 @@ bool GlImageStage::Impl::peel_multipass(const PeelJob& job, PeelResult& out, Tim
       check("layer capture");
     }
     if (k == 0) continue;
-    gl.UseProgram(pcs_program);
+    gl.UseProgram(pcs.id);
     gl.BindTextureUnit(0, layer_tex[prev]);
     gl.BindTextureUnit(1, layer_tex[cur]);
     gl.DispatchCompute(GLuint((n + 7) / 8), GLuint((n + 7) / 8), 1);

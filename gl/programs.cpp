@@ -27,113 +27,128 @@ GlImageStage::Impl::Impl(std::shared_ptr<Context> ctx, const GlOptions& opt)
   GLint64 block = 0;
   gl.GetInteger64v(GL_MAX_SHADER_STORAGE_BLOCK_SIZE, &block);
   max_storage_block = std::size_t(std::max<GLint64>(block, 0));
+  build_programs();
+  locate_uniforms();
+  create_objects();
+  check("Pipeline setup");
+}
 
+// Every program, compiled and linked from the embedded sources (shaders/).
+void GlImageStage::Impl::build_programs() {
   // Every source through shader_source(): its includes (the batched variants' sit in #ifdefs).
   const auto stage = [&](GLenum type, const char* src, const char* name, const char* defines = "") {
     return compile(type, shader_source(src, defines).c_str(), name);
   };
-  peel_program = link({stage(GL_VERTEX_SHADER, shaders::peel_vert, "peel.vert"),
+  peel.id = link({stage(GL_VERTEX_SHADER, shaders::peel_vert, "peel.vert"),
                        stage(GL_FRAGMENT_SHADER, shaders::peel_frag, "peel.frag")},
                       "peel");
-  pcs_program = link({stage(GL_COMPUTE_SHADER, shaders::pcs_comp, "pcs.comp")}, "pcs");
+  pcs.id = link({stage(GL_COMPUTE_SHADER, shaders::pcs_comp, "pcs.comp")}, "pcs");
   // The floor (benchmarks): the peel vertex shader and a fragment shader that does nothing.
-  floor_program = link({stage(GL_VERTEX_SHADER, shaders::peel_vert, "peel.vert"),
+  floor_draw.id = link({stage(GL_VERTEX_SHADER, shaders::peel_vert, "peel.vert"),
                         compile(GL_FRAGMENT_SHADER, "#version 450 core\nvoid main() {}\n", "floor.frag")},
                        "floor");
-  abuffer_program = link({stage(GL_VERTEX_SHADER, shaders::peel_vert, "peel.vert"),
+  abuffer.id = link({stage(GL_VERTEX_SHADER, shaders::peel_vert, "peel.vert"),
                           stage(GL_FRAGMENT_SHADER, shaders::abuffer_frag, "abuffer.frag")},
                          "abuffer");
-  resolve_program = link({stage(GL_COMPUTE_SHADER, shaders::abuffer_resolve_comp, "abuffer_resolve.comp")},
+  resolve.id = link({stage(GL_COMPUTE_SHADER, shaders::abuffer_resolve_comp, "abuffer_resolve.comp")},
                          "abuffer resolve");
-  cons_program = link({stage(GL_VERTEX_SHADER, shaders::conservative_vert, "conservative.vert"),
+  cons.id = link({stage(GL_VERTEX_SHADER, shaders::conservative_vert, "conservative.vert"),
                        stage(GL_GEOMETRY_SHADER, shaders::conservative_geom, "conservative.geom"),
                        stage(GL_FRAGMENT_SHADER, shaders::conservative_frag, "conservative.frag")},
                       "conservative");
-  cons_resolve_program =
+  cons_resolve.id =
       link({stage(GL_COMPUTE_SHADER, shaders::conservative_resolve_comp, "conservative_resolve.comp")},
            "conservative resolve");
   // The batched programs: the same sources with PEELCD_BATCH defined.
   const char* batch_define = "#define PEELCD_BATCH\n";
-  cons_batch_program = link({stage(GL_VERTEX_SHADER, shaders::conservative_vert, "conservative.vert (PEELCD_BATCH)", batch_define),
+  cons_batch.id = link({stage(GL_VERTEX_SHADER, shaders::conservative_vert, "conservative.vert (PEELCD_BATCH)", batch_define),
                              stage(GL_GEOMETRY_SHADER, shaders::conservative_geom, "conservative.geom (PEELCD_BATCH)", batch_define),
                              stage(GL_FRAGMENT_SHADER, shaders::conservative_frag, "conservative.frag (PEELCD_BATCH)", batch_define)},
                             "conservative batch");
-  cons_batch_resolve_program =
+  cons_batch_resolve.id =
       link({stage(GL_COMPUTE_SHADER, shaders::conservative_batch_resolve_comp, "conservative_batch_resolve.comp")},
            "conservative batch resolve");
-  cons_deep_program = link({stage(GL_COMPUTE_SHADER, shaders::conservative_batch_resolve_comp,
+  cons_deep.id = link({stage(GL_COMPUTE_SHADER, shaders::conservative_batch_resolve_comp,
                                   "conservative_batch_resolve.comp (PEELCD_DEEP)", "#define PEELCD_DEEP\n")},
                            "conservative batch resolve of deep texels");
-  u_cd_texels = gl.GetUniformLocation(cons_deep_program, "texels");
-  u_cd_row_base = gl.GetUniformLocation(cons_deep_program, "row_base");
-  point_batch_program = link({stage(GL_VERTEX_SHADER, shaders::peel_vert, "peel.vert (PEELCD_BATCH)", batch_define),
+  point_batch.id = link({stage(GL_VERTEX_SHADER, shaders::peel_vert, "peel.vert (PEELCD_BATCH)", batch_define),
                               stage(GL_FRAGMENT_SHADER, shaders::abuffer_frag, "abuffer.frag (PEELCD_BATCH)", batch_define)},
                              "point-sampled batch");
-  point_batch_resolve_program = link(
+  point_batch_resolve.id = link(
       {stage(GL_COMPUTE_SHADER, shaders::abuffer_resolve_comp, "abuffer_resolve.comp (PEELCD_BATCH)", batch_define)},
       "point-sampled batch resolve");
-  select_program =
+  select.id =
       link({stage(GL_COMPUTE_SHADER, shaders::batch_select_comp, "batch_select.comp")},
            "batch select");
-  prefix_sum_program = link({stage(GL_COMPUTE_SHADER, shaders::prefix_sum_comp, "prefix_sum.comp")}, "prefix sum");
-  u_ps_texels = gl.GetUniformLocation(prefix_sum_program, "texels");
-  u_ps_blocks = gl.GetUniformLocation(prefix_sum_program, "block_count");
-  u_ps_pass = gl.GetUniformLocation(prefix_sum_program, "pass");
-  u_pb_viewport = gl.GetUniformLocation(point_batch_program, "viewport");
-  u_pb_count_only = gl.GetUniformLocation(point_batch_program, "count_only");
-  u_pbr_texels = gl.GetUniformLocation(point_batch_resolve_program, "texels");
-  u_sel_jobs = gl.GetUniformLocation(select_program, "job_count");
-  u_sel_invocations = gl.GetUniformLocation(select_program, "invocations");
-  u_sel_row = gl.GetUniformLocation(select_program, "row");
-  u_sel_pass = gl.GetUniformLocation(select_program, "pass");
-  u_cbr_texels = gl.GetUniformLocation(cons_batch_resolve_program, "texels");
-  u_cb_count_only = gl.GetUniformLocation(cons_batch_program, "count_only");
-  u_cb_viewport = gl.GetUniformLocation(cons_batch_program, "viewport");
-  u_cs_clip = gl.GetUniformLocation(cons_program, "clip_from_local");
-  u_cs_model = gl.GetUniformLocation(cons_program, "roi_from_object");
-  u_cs_res = gl.GetUniformLocation(cons_program, "resolution");
-  u_cs_slots = gl.GetUniformLocation(cons_program, "slots");
-  u_cs_object = gl.GetUniformLocation(cons_program, "object_bit");
-  u_cr_res = gl.GetUniformLocation(cons_resolve_program, "resolution");
-  u_cr_slots = gl.GetUniformLocation(cons_resolve_program, "slots");
-  u_cr_append = gl.GetUniformLocation(cons_resolve_program, "append_pcs");
-  u_cr_emit = gl.GetUniformLocation(cons_resolve_program, "emit_layer");
-  u_ab_clip = gl.GetUniformLocation(abuffer_program, "clip_from_local");
-  u_ab_lo = gl.GetUniformLocation(abuffer_program, "box_lo");
-  u_ab_hi = gl.GetUniformLocation(abuffer_program, "box_hi");
-  u_ab_object = gl.GetUniformLocation(abuffer_program, "object_bit");
-  u_model_ab = gl.GetUniformLocation(abuffer_program, "roi_from_object");
-  u_ab_res = gl.GetUniformLocation(abuffer_program, "resolution");
-  u_ab_slots = gl.GetUniformLocation(abuffer_program, "slots");
-  u_rs_slots = gl.GetUniformLocation(resolve_program, "slots");
-  u_rs_eps = gl.GetUniformLocation(resolve_program, "epsilon_window");
-  u_rs_slope = gl.GetUniformLocation(resolve_program, "slope");
-  u_rs_res = gl.GetUniformLocation(resolve_program, "resolution");
-  u_rs_full = gl.GetUniformLocation(resolve_program, "full_peel");
-  u_rs_first = gl.GetUniformLocation(resolve_program, "first_object");
-  u_rs_append = gl.GetUniformLocation(resolve_program, "append_pcs");
-  u_rs_emit = gl.GetUniformLocation(resolve_program, "emit_layer");
+  prefix_sum.id = link({stage(GL_COMPUTE_SHADER, shaders::prefix_sum_comp, "prefix_sum.comp")}, "prefix sum");
+}
+
+// Every program's uniform locations, by the names in its sources.
+void GlImageStage::Impl::locate_uniforms() {
+  cons_deep.texels = gl.GetUniformLocation(cons_deep.id, "texels");
+  cons_deep.row_base = gl.GetUniformLocation(cons_deep.id, "row_base");
+  prefix_sum.texels = gl.GetUniformLocation(prefix_sum.id, "texels");
+  prefix_sum.blocks = gl.GetUniformLocation(prefix_sum.id, "block_count");
+  prefix_sum.pass = gl.GetUniformLocation(prefix_sum.id, "pass");
+  point_batch.viewport = gl.GetUniformLocation(point_batch.id, "viewport");
+  point_batch.count_only = gl.GetUniformLocation(point_batch.id, "count_only");
+  point_batch_resolve.texels = gl.GetUniformLocation(point_batch_resolve.id, "texels");
+  select.jobs = gl.GetUniformLocation(select.id, "job_count");
+  select.invocations = gl.GetUniformLocation(select.id, "invocations");
+  select.row = gl.GetUniformLocation(select.id, "row");
+  select.pass = gl.GetUniformLocation(select.id, "pass");
+  cons_batch_resolve.texels = gl.GetUniformLocation(cons_batch_resolve.id, "texels");
+  cons_batch.count_only = gl.GetUniformLocation(cons_batch.id, "count_only");
+  cons_batch.viewport = gl.GetUniformLocation(cons_batch.id, "viewport");
+  cons.clip = gl.GetUniformLocation(cons.id, "clip_from_local");
+  cons.model = gl.GetUniformLocation(cons.id, "roi_from_object");
+  cons.res = gl.GetUniformLocation(cons.id, "resolution");
+  cons.slots = gl.GetUniformLocation(cons.id, "slots");
+  cons.object = gl.GetUniformLocation(cons.id, "object_bit");
+  cons_resolve.res = gl.GetUniformLocation(cons_resolve.id, "resolution");
+  cons_resolve.slots = gl.GetUniformLocation(cons_resolve.id, "slots");
+  cons_resolve.append = gl.GetUniformLocation(cons_resolve.id, "append_pcs");
+  cons_resolve.emit = gl.GetUniformLocation(cons_resolve.id, "emit_layer");
+  abuffer.clip = gl.GetUniformLocation(abuffer.id, "clip_from_local");
+  abuffer.lo = gl.GetUniformLocation(abuffer.id, "box_lo");
+  abuffer.hi = gl.GetUniformLocation(abuffer.id, "box_hi");
+  abuffer.object = gl.GetUniformLocation(abuffer.id, "object_bit");
+  abuffer.model = gl.GetUniformLocation(abuffer.id, "roi_from_object");
+  abuffer.res = gl.GetUniformLocation(abuffer.id, "resolution");
+  abuffer.slots = gl.GetUniformLocation(abuffer.id, "slots");
+  resolve.slots = gl.GetUniformLocation(resolve.id, "slots");
+  resolve.eps = gl.GetUniformLocation(resolve.id, "epsilon_window");
+  resolve.slope = gl.GetUniformLocation(resolve.id, "slope");
+  resolve.res = gl.GetUniformLocation(resolve.id, "resolution");
+  resolve.full = gl.GetUniformLocation(resolve.id, "full_peel");
+  resolve.first = gl.GetUniformLocation(resolve.id, "first_object");
+  resolve.append = gl.GetUniformLocation(resolve.id, "append_pcs");
+  resolve.emit = gl.GetUniformLocation(resolve.id, "emit_layer");
+  floor_draw.clip = gl.GetUniformLocation(floor_draw.id, "clip_from_local");
+  floor_draw.model = gl.GetUniformLocation(floor_draw.id, "roi_from_object");
+  floor_draw.lo = gl.GetUniformLocation(floor_draw.id, "box_lo");
+  floor_draw.hi = gl.GetUniformLocation(floor_draw.id, "box_hi");
+  peel.clip = gl.GetUniformLocation(peel.id, "clip_from_local");
+  peel.box_lo = gl.GetUniformLocation(peel.id, "box_lo");
+  peel.box_hi = gl.GetUniformLocation(peel.id, "box_hi");
+  peel.has_prev = gl.GetUniformLocation(peel.id, "has_previous");
+  peel.rank_flip = gl.GetUniformLocation(peel.id, "rank_flip");
+  pcs.eps = gl.GetUniformLocation(pcs.id, "epsilon_window");
+  peel.object = gl.GetUniformLocation(peel.id, "object_bit");
+  pcs.slope = gl.GetUniformLocation(pcs.id, "slope");
+  pcs.res = gl.GetUniformLocation(pcs.id, "resolution");
+  pcs.track = gl.GetUniformLocation(pcs.id, "track_runs");
+  peel.model = gl.GetUniformLocation(peel.id, "roi_from_object");
+}
+
+// The vertex arrays, buffers, textures and query the peelers and the batch reuse (grown later).
+void GlImageStage::Impl::create_objects() {
   gl.CreateBuffers(1, &count_buffer);
   gl.CreateBuffers(1, &fragment_buffer);
   gl.CreateTextures(GL_TEXTURE_BUFFER, 1, &count_tex);
   gl.CreateTextures(GL_TEXTURE_BUFFER, 1, &fragment_tex);
   gl.CreateTextures(GL_TEXTURE_BUFFER, 2, corner_tex);
   gl.GetIntegerv(GL_MAX_TEXTURE_BUFFER_SIZE, &max_texture_buffer);
-  u_floor_clip = gl.GetUniformLocation(floor_program, "clip_from_local");
-  u_model_floor = gl.GetUniformLocation(floor_program, "roi_from_object");
-  u_floor_lo = gl.GetUniformLocation(floor_program, "box_lo");
-  u_floor_hi = gl.GetUniformLocation(floor_program, "box_hi");
-  u_clip = gl.GetUniformLocation(peel_program, "clip_from_local");
-  u_box_lo = gl.GetUniformLocation(peel_program, "box_lo");
-  u_box_hi = gl.GetUniformLocation(peel_program, "box_hi");
-  u_has_prev = gl.GetUniformLocation(peel_program, "has_previous");
-  u_rank_flip = gl.GetUniformLocation(peel_program, "rank_flip");
-  u_eps = gl.GetUniformLocation(pcs_program, "epsilon_window");
-  u_object = gl.GetUniformLocation(peel_program, "object_bit");
-  u_slope = gl.GetUniformLocation(pcs_program, "slope");
-  u_res = gl.GetUniformLocation(pcs_program, "resolution");
-  u_track = gl.GetUniformLocation(pcs_program, "track_runs");
-
   gl.CreateVertexArrays(1, &vao);
   gl.EnableVertexArrayAttrib(vao, 0);
   gl.VertexArrayAttribFormat(vao, 0, 3, GL_FLOAT, GL_FALSE, 0);
@@ -153,18 +168,16 @@ GlImageStage::Impl::Impl(std::shared_ptr<Context> ctx, const GlOptions& opt)
   gl.NamedBufferData(resident_buffer, 16, nullptr, GL_STATIC_DRAW);
   gl.CreateVertexArrays(1, &batch.vao);
   gl.CreateBuffers(1, &batch.layers);
-  gl.CreateBuffers(1, &deep_rows);
+  gl.CreateBuffers(1, &batch.deep_rows);
   gl.CreateBuffers(1, &batch.offset_buffer);
   gl.CreateBuffers(1, &batch.scan_blocks);
   gl.CreateBuffers(1, &batch.scan_total);
   gl.CreateBuffers(1, &batch.staged);
   gl.CreateBuffers(1, &batch.regions);
   gl.NamedBufferData(batch.scan_total, 4, nullptr, GL_DYNAMIC_READ);
-  u_model_peel = gl.GetUniformLocation(peel_program, "roi_from_object");
   gl.CreateQueries(GL_ANY_SAMPLES_PASSED, 1, &query);
   gl.CreateBuffers(1, &pcs_buffer);
   grow_pcs(1 << 16);
-  check("Pipeline setup");
 }
 
 GlImageStage::Impl::~Impl() {
@@ -174,20 +187,20 @@ GlImageStage::Impl::~Impl() {
   } catch (const GlError&) {
     return;  // the context is gone: its objects went with it
   }
-  gl.DeleteProgram(peel_program);
-  gl.DeleteProgram(pcs_program);
-  gl.DeleteProgram(floor_program);
-  gl.DeleteProgram(abuffer_program);
-  gl.DeleteProgram(resolve_program);
-  gl.DeleteProgram(cons_program);
-  gl.DeleteProgram(cons_resolve_program);
-  gl.DeleteProgram(cons_batch_program);
-  gl.DeleteProgram(cons_batch_resolve_program);
-  gl.DeleteProgram(cons_deep_program);
-  gl.DeleteProgram(select_program);
-  gl.DeleteProgram(point_batch_program);
-  gl.DeleteProgram(point_batch_resolve_program);
-  gl.DeleteProgram(prefix_sum_program);
+  gl.DeleteProgram(peel.id);
+  gl.DeleteProgram(pcs.id);
+  gl.DeleteProgram(floor_draw.id);
+  gl.DeleteProgram(abuffer.id);
+  gl.DeleteProgram(resolve.id);
+  gl.DeleteProgram(cons.id);
+  gl.DeleteProgram(cons_resolve.id);
+  gl.DeleteProgram(cons_batch.id);
+  gl.DeleteProgram(cons_batch_resolve.id);
+  gl.DeleteProgram(cons_deep.id);
+  gl.DeleteProgram(select.id);
+  gl.DeleteProgram(point_batch.id);
+  gl.DeleteProgram(point_batch_resolve.id);
+  gl.DeleteProgram(prefix_sum.id);
   gl.DeleteBuffers(1, &batch.frame);
   gl.DeleteBuffers(1, &batch.views);
   gl.DeleteBuffers(1, &batch.entries);
@@ -196,7 +209,7 @@ GlImageStage::Impl::~Impl() {
   gl.DeleteBuffers(1, &resident_buffer);
   gl.DeleteVertexArrays(1, &batch.vao);
   gl.DeleteBuffers(1, &batch.layers);
-  gl.DeleteBuffers(1, &deep_rows);
+  gl.DeleteBuffers(1, &batch.deep_rows);
   gl.DeleteBuffers(1, &batch.offset_buffer);
   gl.DeleteBuffers(1, &batch.scan_blocks);
   gl.DeleteBuffers(1, &batch.scan_total);

@@ -70,10 +70,10 @@ bool GlImageStage::Impl::peel_single_pass(const PeelJob& job, PeelResult& out, T
   const auto t_gpu = Clock::now();
   start_kbuffer(n, view_slots);
 
-  gl.UseProgram(abuffer_program);
-  set_view_uniforms(u_ab_clip, u_ab_lo, u_ab_hi, view);
-  gl.Uniform1i(u_ab_res, n);
-  gl.Uniform1ui(u_ab_slots, view_slots);
+  gl.UseProgram(abuffer.id);
+  set_view_uniforms(abuffer.clip, abuffer.lo, abuffer.hi, view);
+  gl.Uniform1i(abuffer.res, n);
+  gl.Uniform1ui(abuffer.slots, view_slots);
   gl.BindFramebuffer(GL_FRAMEBUFFER, bare_fbo);
   gl.Viewport(0, 0, n, n);
   gl.Disable(GL_DEPTH_TEST);
@@ -82,8 +82,8 @@ bool GlImageStage::Impl::peel_single_pass(const PeelJob& job, PeelResult& out, T
   for (int i = 0; i < 6; ++i) gl.Enable(GL_CLIP_DISTANCE0 + i);
   gl.BindVertexArray(vao);
   for (int slot = 0; slot < 2; ++slot) {
-    gl.Uniform1ui(u_ab_object, GLuint(slot));
-    draw(slot, u_model_ab);
+    gl.Uniform1ui(abuffer.object, GLuint(slot));
+    draw(slot, abuffer.model);
   }
   gl.BindFramebuffer(GL_FRAMEBUFFER, 0);
   out.epsilon_window = float(view.world_to_window_depth(job.epsilon));
@@ -95,15 +95,15 @@ bool GlImageStage::Impl::peel_single_pass(const PeelJob& job, PeelResult& out, T
   ++out.gl_passes;
   check("the k-buffer draw");
 
-  gl.UseProgram(resolve_program);
+  gl.UseProgram(resolve.id);
   bind_resolve_inputs();
-  gl.Uniform1f(u_rs_eps, out.epsilon_window);
-  gl.Uniform1f(u_rs_slope, out.slope);
-  gl.Uniform1i(u_rs_res, n);
-  gl.Uniform1ui(u_rs_slots, view_slots);
-  gl.Uniform1i(u_rs_full, job.peel == PeelMode::full);
-  gl.Uniform1ui(u_rs_first, GLuint(job.first));
-  return dispatch_resolve(job, fitting, view_slots, t_gpu, u_rs_append, u_rs_emit, "the k-buffer resolve", out, t);
+  gl.Uniform1f(resolve.eps, out.epsilon_window);
+  gl.Uniform1f(resolve.slope, out.slope);
+  gl.Uniform1i(resolve.res, n);
+  gl.Uniform1ui(resolve.slots, view_slots);
+  gl.Uniform1i(resolve.full, job.peel == PeelMode::full);
+  gl.Uniform1ui(resolve.first, GLuint(job.first));
+  return dispatch_resolve(job, fitting, view_slots, t_gpu, resolve.append, resolve.emit, "the k-buffer resolve", out, t);
 }
 
 bool GlImageStage::Impl::dispatch_resolve(const PeelJob& job, std::size_t fitting, std::uint32_t view_slots,
@@ -235,11 +235,11 @@ bool GlImageStage::Impl::peel_conservative(const PeelJob& job, PeelResult& out, 
   const auto t_gpu = Clock::now();
   start_kbuffer(n, view_slots);
 
-  gl.UseProgram(cons_program);
+  gl.UseProgram(cons.id);
   const std::array<float, 16> m = view.clip_from_local();
-  gl.UniformMatrix4fv(u_cs_clip, 1, GL_FALSE, m.data());
-  gl.Uniform1i(u_cs_res, n);
-  gl.Uniform1ui(u_cs_slots, view_slots);
+  gl.UniformMatrix4fv(cons.clip, 1, GL_FALSE, m.data());
+  gl.Uniform1i(cons.res, n);
+  gl.Uniform1ui(cons.slots, view_slots);
   gl.BindFramebuffer(GL_FRAMEBUFFER, bare_fbo);
   gl.Viewport(0, 0, n, n);
   gl.Disable(GL_DEPTH_TEST);
@@ -247,8 +247,8 @@ bool GlImageStage::Impl::peel_conservative(const PeelJob& job, PeelResult& out, 
   for (int i = 0; i < 6; ++i) gl.Disable(GL_CLIP_DISTANCE0 + i);  // the intervals clip in depth
   gl.BindVertexArray(vao);
   for (int slot = 0; slot < 2; ++slot) {
-    gl.Uniform1ui(u_cs_object, GLuint(slot));
-    draw(slot, u_cs_model);
+    gl.Uniform1ui(cons.object, GLuint(slot));
+    draw(slot, cons.model);
   }
   gl.BindFramebuffer(GL_FRAMEBUFFER, 0);
   out.epsilon_window = 0.0f;
@@ -259,11 +259,11 @@ bool GlImageStage::Impl::peel_conservative(const PeelJob& job, PeelResult& out, 
   ++out.gl_passes;
   check("the conservative k-buffer draw");
 
-  gl.UseProgram(cons_resolve_program);
+  gl.UseProgram(cons_resolve.id);
   bind_resolve_inputs();
-  gl.Uniform1i(u_cr_res, n);
-  gl.Uniform1ui(u_cr_slots, view_slots);
-  return dispatch_resolve(job, fitting, view_slots, t_gpu, u_cr_append, u_cr_emit, "the conservative resolve", out, t);
+  gl.Uniform1i(cons_resolve.res, n);
+  gl.Uniform1ui(cons_resolve.slots, view_slots);
+  return dispatch_resolve(job, fitting, view_slots, t_gpu, cons_resolve.append, cons_resolve.emit, "the conservative resolve", out, t);
 }
 
 }  // namespace peelcd::gl

@@ -70,6 +70,72 @@ struct DeepHeader {
 // so only a scene with more than this many surfaces along one ray reaches it.
 constexpr int kMaxPasses = 4096;
 
+// The programs, one struct per family: its GL program and its uniforms' locations
+// (programs.cpp compiles them and locates the uniforms by the names in their sources).
+// shaders/peel.vert + peel.frag: the multi-pass peeler's draw.
+struct PeelProgram {
+  GLuint id = 0;
+  GLint clip = -1, box_lo = -1, box_hi = -1, has_prev = -1, object = -1, rank_flip = -1, model = -1;
+};
+// shaders/pcs.comp: the PCS test between two peeled layers.
+struct PcsProgram {
+  GLuint id = 0;
+  GLint eps = -1, slope = -1, res = -1, track = -1;
+};
+// The floor (benchmarks): shaders/peel.vert and a fragment shader that does nothing.
+struct FloorProgram {
+  GLuint id = 0;
+  GLint clip = -1, lo = -1, hi = -1, model = -1;
+};
+// shaders/peel.vert + abuffer.frag: the single-pass peeler's draw into the k-buffer.
+struct ABufferProgram {
+  GLuint id = 0;
+  GLint clip = -1, lo = -1, hi = -1, object = -1, res = -1, slots = -1, model = -1;
+};
+// shaders/abuffer_resolve.comp: the single-pass peeler's GPU resolve.
+struct ResolveProgram {
+  GLuint id = 0;
+  GLint eps = -1, slope = -1, res = -1, full = -1, first = -1, append = -1, emit = -1, slots = -1;
+};
+// shaders/conservative.{vert,geom,frag}: the conservative draw into the k-buffer.
+struct ConservativeProgram {
+  GLuint id = 0;
+  GLint clip = -1, model = -1, res = -1, slots = -1, object = -1;
+};
+// shaders/conservative_resolve.comp: its GPU resolve.
+struct ConservativeResolveProgram {
+  GLuint id = 0;
+  GLint res = -1, slots = -1, append = -1, emit = -1;
+};
+// A batched draw (the conservative or point-sampled sources with PEELCD_BATCH): a count pass
+// and a fill pass over every view of a frame.
+struct BatchDrawProgram {
+  GLuint id = 0;
+  GLint viewport = -1, count_only = -1;
+};
+// A batch's GPU resolve (shaders/conservative_batch_resolve.comp, abuffer_resolve.comp with
+// PEELCD_BATCH): one dispatch over the packed k-buffer.
+struct BatchResolveProgram {
+  GLuint id = 0;
+  GLint texels = -1;
+};
+// The conservative batch resolve of texels deeper than PEELCD_GPU_RESOLVE_DEPTH (the same source
+// with PEELCD_DEEP): their rows (texel, block of fragments) in batch.deep_rows.
+struct DeepProgram {
+  GLuint id = 0;
+  GLint texels = -1, row_base = -1;
+};
+// shaders/batch_select.comp: the batch's GPU selection of rigid objects' triangles.
+struct SelectProgram {
+  GLuint id = 0;
+  GLint jobs = -1, invocations = -1, row = -1, pass = -1;
+};
+// shaders/prefix_sum.comp: the prefix sum of the count pass's counts.
+struct PrefixSumProgram {
+  GLuint id = 0;
+  GLint texels = -1, blocks = -1, pass = -1;
+};
+
 // The batched views' state (batch.cpp), owned by the batch: its GL buffers (grown, reused) and
 // the host's copies of what it uploads or reads back.
 struct BatchState {
@@ -99,6 +165,9 @@ struct BatchState {
   GLuint layers = 0;
   std::size_t layers_capacity = 0;  // bytes
   std::vector<std::uint32_t> view_layers, pairs;
+  // The deep texels' rows (texel, block of fragments), behind a DeepHeader.
+  GLuint deep_rows = 0;
+  std::size_t deep_rows_capacity = 0;  // rows
 };
 
 struct GlImageStage::Impl {
@@ -123,42 +192,21 @@ struct GlImageStage::Impl {
   void count_draw() { ++counters->draws; }
   void count_dispatch() { ++counters->dispatches; }
 
-  // Programs and their uniforms.
-  GLuint peel_program = 0, pcs_program = 0, floor_program = 0, abuffer_program = 0, resolve_program = 0;
-  GLint u_clip = -1, u_box_lo = -1, u_box_hi = -1, u_has_prev = -1, u_object = -1;
-  GLint u_eps = -1, u_slope = -1, u_res = -1, u_track = -1;
-  GLint u_ab_clip = -1, u_ab_lo = -1, u_ab_hi = -1, u_ab_object = -1, u_ab_res = -1, u_ab_slots = -1;
-  GLint u_rs_eps = -1, u_rs_slope = -1, u_rs_res = -1, u_rs_full = -1, u_rs_first = -1, u_rs_append = -1,
-        u_rs_emit = -1, u_rs_slots = -1;
-  GLuint cons_program = 0, cons_resolve_program = 0;  // conservative mode
-  GLint u_cs_clip = -1, u_cs_model = -1, u_cs_res = -1, u_cs_slots = -1, u_cs_object = -1;
-  GLint u_cr_res = -1, u_cr_slots = -1, u_cr_append = -1, u_cr_emit = -1;
-  // Batched conservative views (batch.cpp, shaders/conservative.* with PEELCD_BATCH).
-  GLuint cons_batch_program = 0;
-  GLint u_cb_viewport = -1;
-  // Its GPU resolve (Resolve::gpu): one dispatch over the packed k-buffer, per-view depths kept
-  // in batch.layers, the PCS list (draw orders) the only thing read back beside two headers.
-  GLuint cons_batch_resolve_program = 0;  // per-view depths kept in batch.layers
-  GLint u_cbr_texels = -1, u_cb_count_only = -1;
-  // Its second program for texels deeper than PEELCD_GPU_RESOLVE_DEPTH (the same source with
-  // PEELCD_DEEP): their rows (texel, block of fragments) in deep_rows, behind a DeepHeader.
-  GLuint cons_deep_program = 0, deep_rows = 0;
-  GLint u_cd_texels = -1, u_cd_row_base = -1;
-  std::size_t deep_rows_capacity = 0;  // rows
-  // Point-sampled views batched the same way (shaders/peel.vert and abuffer.frag with
-  // PEELCD_BATCH; the GPU resolve: shaders/abuffer_resolve.comp with PEELCD_BATCH).
-  GLuint point_batch_program = 0, point_batch_resolve_program = 0;
-  GLint u_pb_viewport = -1, u_pb_count_only = -1, u_pbr_texels = -1;
-  // The prefix sum of the count pass's counts (shaders/prefix_sum.comp).
-  GLuint prefix_sum_program = 0;
-  GLint u_ps_texels = -1, u_ps_blocks = -1, u_ps_pass = -1;
-
-
+  // Programs (one struct per family: its ID and uniforms).
+  PeelProgram peel;
+  PcsProgram pcs;
+  FloorProgram floor_draw;
+  ABufferProgram abuffer;
+  ResolveProgram resolve;
+  ConservativeProgram cons;
+  ConservativeResolveProgram cons_resolve;
+  BatchDrawProgram cons_batch, point_batch;
+  BatchResolveProgram cons_batch_resolve, point_batch_resolve;
+  DeepProgram cons_deep;
+  SelectProgram select;
+  PrefixSumProgram prefix_sum;
   BatchState batch;
   std::size_t read_batch_counts(std::size_t texels, Timings& t);
-  // The selection pass (shaders/batch_select.comp).
-  GLuint select_program = 0;
-  GLint u_sel_jobs = -1, u_sel_invocations = -1, u_sel_row = -1, u_sel_pass = -1;
 
   // Rigid shapes resident for the batch: one buffer holding every shape a batch drew (its
   // corners, with IDs, copied GPU to GPU from the shape's cached buffer: uploaded once), each at
@@ -171,9 +219,6 @@ struct GlImageStage::Impl {
   GLuint resident_buffer = 0;
   std::size_t resident_capacity = 0, resident_used = 0;  // corners
   std::size_t resident_base(const std::shared_ptr<const Mesh>& shape, IdMode ids);  // batch.cpp
-  GLint u_rank_flip = -1;
-  GLint u_floor_clip = -1, u_floor_lo = -1, u_floor_hi = -1;
-  GLint u_model_peel = -1, u_model_ab = -1, u_model_floor = -1;
 
   // Geometry: per slot (0 = A, 1 = B), the corners of a world-space object's triangles in the
   // view (`staging`, uploaded to `vbo`), or a rigid object's cached shape and the corner indices
@@ -220,6 +265,9 @@ struct GlImageStage::Impl {
   ~Impl();
 
   // programs.cpp
+  void build_programs();
+  void locate_uniforms();
+  void create_objects();
   void check(const char* where);
   GLuint compile(GLenum type, const char* src, const char* name);
   GLuint link(std::initializer_list<GLuint> stages, const char* name);

@@ -289,16 +289,10 @@ PyMesh as_mesh(const py::handle& obj, const std::string& where) {
 
 }  // namespace
 
-PYBIND11_MODULE(_peelcd, m) {
-  m.doc() = "peelcd: image-space collision detection between triangle meshes";
-  m.attr("__version__") = PEELCD_VERSION_STRING;
-  // NumPy's C API looked up now, while the import holds the GIL. Looked up lazily (a function-
-  // local static of pybind11's), two threads' first results deadlocked: one held the static's
-  // guard while importing NumPy (which lets the GIL go), the other waited on the guard holding
-  // the GIL.
-  py::module_::import("numpy");
-  (void)py::detail::npy_api::get();
+namespace {
 
+// Meshes: the Mesh class, load_mesh() and load_scene().
+void bind_meshes(py::module_& m) {
   py::class_<PyMesh>(m, "Mesh", "A triangle mesh: vertices V (n, 3) float64, triangles F (m, 3) integers")
       .def(py::init([](const py::handle& V, const py::handle& F) { return PyMesh{mesh_from_arrays(V, F)}; }), py::arg("V"),
            py::arg("F"))
@@ -360,7 +354,10 @@ PYBIND11_MODULE(_peelcd, m) {
   }, py::arg("path"),
         "A scene file's (or a glTF / GLB file's: one per mesh node) objects in world space: a list of dicts with "
         "name, mesh and self");
+}
 
+// The World: persistent bodies.
+void bind_world(py::module_& m) {
   py::class_<PyWorld>(m, "World", "Persistent bodies kept across frames (peelcd::World): rigid ones move by their pose, "
                                   "deforming ones by their vertices")
       .def(py::init([](const std::string& backend, const py::kwargs& kwargs) {
@@ -412,7 +409,10 @@ PYBIND11_MODULE(_peelcd, m) {
         }
         return result_dict(*r, [&](std::size_t i) { return w.world.name(BodyId(i)); }, w.gl);
       }, "One frame: every pair of bodies whose boxes overlap. Keyword options as in scene files");
+}
 
+// The frame API: the Detector.
+void bind_detector(py::module_& m) {
   py::class_<PyDetector>(m, "Detector", "The frame API (peelcd::Detector): the objects given whole each frame")
       .def(py::init([](const std::string& backend, const py::kwargs& kwargs) {
              return std::make_unique<PyDetector>(backend, gl_options_from(backend, kwargs), costs_from(kwargs));
@@ -451,7 +451,10 @@ PYBIND11_MODULE(_peelcd, m) {
         }
         return result_dict(d.result, [&](std::size_t i) { return objs[i].name; }, d.gl);
       }, py::arg("objects"), "One frame of the objects (Mesh, or dicts with mesh, name, self). Keyword options as in scene files");
+}
 
+// The exact reference: every intersecting triangle pair.
+void bind_reference(py::module_& m) {
   // Packed pairs (pack_pair()) as a (k, 2) array of triangle indices.
   const auto pairs_array = [](const std::vector<std::uint64_t>& k) {
     py::array_t<std::uint32_t> out({py::ssize_t(k.size()), py::ssize_t(2)});
@@ -482,7 +485,10 @@ PYBIND11_MODULE(_peelcd, m) {
   }, py::arg("a"), py::arg("b"),
         "The exact reference: every colliding triangle pair of two meshes, (k, 2); one mesh given twice is tested "
         "against a copy of itself (exact_self_pairs(mesh): its self pairs)");
+}
 
+// What the library knows: its classes of geometry, its options, the GL stage's settings.
+void bind_info(py::module_& m) {
   m.def("classes", []() {
     // The built-in classes of `peelcd classes` (geometry and self-collision, then containment):
     // (name, [dict(name, mesh, self)]).
@@ -528,4 +534,22 @@ PYBIND11_MODULE(_peelcd, m) {
     }
     return d;
   }, "Every GL stage setting (World, Detector and collide keywords on the osmesa and egl backends) with its default");
+}
+
+}  // namespace
+
+PYBIND11_MODULE(_peelcd, m) {
+  m.doc() = "peelcd: image-space collision detection between triangle meshes";
+  m.attr("__version__") = PEELCD_VERSION_STRING;
+  // NumPy's C API looked up now, while the import holds the GIL. Looked up lazily (a function-
+  // local static of pybind11's), two threads' first results deadlocked: one held the static's
+  // guard while importing NumPy (which lets the GIL go), the other waited on the guard holding
+  // the GIL.
+  py::module_::import("numpy");
+  (void)py::detail::npy_api::get();
+  bind_meshes(m);
+  bind_world(m);
+  bind_detector(m);
+  bind_reference(m);
+  bind_info(m);
 }
