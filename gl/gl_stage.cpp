@@ -59,8 +59,8 @@ double GlImageStage::floor_draw_ms(const PeelJob& job) {
   s.ensure_layers(tile);
   s.gl.Finish();
   const auto t0 = Clock::now();
-  s.gl.UseProgram(s.floor_program);
-  s.set_view_uniforms(s.u_floor_clip, s.u_floor_lo, s.u_floor_hi, job.view);
+  s.gl.UseProgram(s.floor_draw.id);
+  s.set_view_uniforms(s.floor_draw.clip, s.floor_draw.lo, s.floor_draw.hi, job.view);
   s.gl.BindFramebuffer(GL_FRAMEBUFFER, s.fbo[0]);
   s.gl.Viewport(0, 0, tile, tile);
   s.gl.Enable(GL_DEPTH_TEST);
@@ -69,7 +69,7 @@ double GlImageStage::floor_draw_ms(const PeelJob& job) {
   const GLfloat far_depth = 1.0f;
   s.gl.ClearBufferfv(GL_DEPTH, 0, &far_depth);
   s.gl.BindVertexArray(s.vao);
-  for (int slot = 0; slot < 2; ++slot) s.draw(slot, s.u_model_floor);
+  for (int slot = 0; slot < 2; ++slot) s.draw(slot, s.floor_draw.model);
   s.gl.Finish();
   const double ms = ms_since(t0);
   s.gl.BindFramebuffer(GL_FRAMEBUFFER, 0);

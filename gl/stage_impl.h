@@ -24,23 +24,7 @@
 #include <string>
 #include <vector>
 
-namespace peelcd::shaders {
-extern const char* const peel_vert;
-extern const char* const peel_frag;
-extern const char* const pcs_comp;
-extern const char* const abuffer_frag;
-extern const char* const abuffer_resolve_comp;
-extern const char* const conservative_vert;
-extern const char* const conservative_geom;
-extern const char* const conservative_frag;
-extern const char* const conservative_resolve_comp;
-extern const char* const conservative_batch_resolve_comp;
-extern const char* const batch_select_comp;
-extern const char* const pcs_test_inc;  // include/peelcd/core/pcs_test.inc
-extern const char* const batch_inc;
-extern const char* const prefix_sum_comp;
-extern const char* const shader_sources_hash;
-}  // namespace peelcd::shaders
+#include "shaders_embedded.h"  // the embedded sources (gl/CMakeLists.txt lists them)
 
 namespace peelcd::gl {
 

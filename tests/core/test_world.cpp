@@ -1,7 +1,6 @@
-// peelcd::World (persistent bodies, peelcd/core/world.h) and its BVH (peelcd/core/bvh.h):
-// exact against the brute-force reference on rigid and deforming bodies, identical on any
-// thread count, refits equal to rebuilt boxes, a frame that reads only what is near contact,
-// and errors that name the body.
+// peelcd::World (persistent bodies, peelcd/core/world.h): exact against the brute-force
+// reference on rigid and deforming bodies, identical on any thread count, a frame that reads only
+// what is near contact, and errors that name the body. Its BVH: test_bvh.cpp.
 #include "peelcd/core/bvh.h"
 #include "peelcd/core/cpu_stage.h"
 #include "peelcd/core/id_map.h"
@@ -50,89 +49,6 @@ void wave(const Mesh& rest, double f, std::vector<Vec3>& out) {
 }
 
 }  // namespace
-
-TEST_CASE("Bvh: every triangle once, boxes enclose their children, queries equal a scan", "[world]") {
-  const Mesh m = make_uv_sphere(Vec3(0.1, -0.2, 0.3), 1.0, 23, 31);
-  Bvh t;
-  t.build(m.vertices, m.triangles);
-  std::vector<std::uint32_t> seen(t.order());
-  std::sort(seen.begin(), seen.end());
-  for (std::uint32_t i = 0; i < seen.size(); ++i) REQUIRE(seen[i] == i);
-  const auto& nodes = t.nodes();
-  for (std::size_t i = 0; i < nodes.size(); ++i) {
-    if (nodes[i].leaf()) {
-      CHECK(nodes[i].count <= kBvhLeafSize);
-      continue;
-    }
-    for (const std::size_t c : {i + 1, std::size_t(nodes[i].first)}) {
-      CHECK(t.parent(std::uint32_t(c)) == i);
-      CHECK((nodes[i].box.aabb().lo.array() <= nodes[c].box.aabb().lo.array()).all());
-      CHECK((nodes[i].box.aabb().hi.array() >= nodes[c].box.aabb().hi.array()).all());
-    }
-  }
-  // Float boxes enclose the exact ones; the root's exact box is the corners' box.
-  for (std::uint32_t f = 0; f < m.triangles.size(); ++f) {
-    const Aabb exact = triangle_bounds(m, f), got = t.triangle_box(f).aabb();
-    REQUIRE(((got.lo.array() <= exact.lo.array()).all() && (got.hi.array() >= exact.hi.array()).all()));
-    REQUIRE(((exact.lo - got.lo).cwiseAbs().maxCoeff() < 1e-6 && (got.hi - exact.hi).cwiseAbs().maxCoeff() < 1e-6));
-  }
-  // At every scale, and across zero, subnormals and float's limit.
-  for (const double d : {0.0, 1e-45, -1e-45, 1e-40, 0.1, -0.1, 1.0 / 3.0, -2.0 / 3.0, 1e10 + 0.3, -7e20, 1e36, 3e38, -3.4e38, 1e300, -1e300}) {
-    CHECK(double(FBox::down(d)) <= d);
-    CHECK(double(FBox::up(d)) >= d);
-  }
-  CHECK(t.box().lo == bounds(m).lo);
-  CHECK(t.box().hi == bounds(m).hi);
-  std::mt19937 rng(7);
-  std::uniform_real_distribution<double> u(-1.3, 1.3);
-  for (int q = 0; q < 50; ++q) {
-    Aabb box;
-    box.extend(Vec3(u(rng), u(rng), u(rng)));
-    box.extend(Vec3(u(rng), u(rng), u(rng)));
-    std::vector<std::uint32_t> got, want;
-    t.query(box, got);
-    for (std::uint32_t f = 0; f < m.triangles.size(); ++f)
-      if (triangle_bounds(m, f).overlaps(box)) want.push_back(f);
-    // Every exact answer; any other within float rounding of the box.
-    REQUIRE(std::includes(got.begin(), got.end(), want.begin(), want.end()));
-    for (const std::uint32_t f : got) {
-      Aabb grown = box;
-      grown.lo -= Vec3::Constant(1e-6);
-      grown.hi += Vec3::Constant(1e-6);
-      REQUIRE(triangle_bounds(m, f).overlaps(grown));
-    }
-  }
-}
-
-TEST_CASE("Bvh: a partial refit gives the boxes of a full one", "[world]") {
-  Mesh m = make_grid(Vec3(0, 0, 0), Vec3(2, 0, 0), Vec3(0, 2, 0), 40, 40);
-  Bvh partial, full;
-  partial.build(m.vertices, m.triangles);
-  full.build(m.vertices, m.triangles);
-  std::mt19937 rng(3);
-  std::uniform_int_distribution<std::uint32_t> pick(0, std::uint32_t(m.vertices.size() - 1));
-  for (int round = 0; round < 5; ++round) {
-    std::vector<std::uint32_t> changed;
-    for (int k = 0; k < 30; ++k) {
-      const std::uint32_t v = pick(rng);
-      m.vertices[v].z() += 0.05 * (k % 3 - 1) + 0.01 * round;
-      for (std::uint32_t t = 0; t < m.triangles.size(); ++t)
-        for (const std::uint32_t c : m.triangles[t])
-          if (c == v) changed.push_back(t);
-    }
-    partial.refit(m.vertices, m.triangles, changed);
-    full.refit(m.vertices, m.triangles);
-    for (std::size_t i = 0; i < full.nodes().size(); ++i) {
-      REQUIRE(partial.nodes()[i].box.aabb().lo == full.nodes()[i].box.aabb().lo);
-      REQUIRE(partial.nodes()[i].box.aabb().hi == full.nodes()[i].box.aabb().hi);
-    }
-    // The exact root box too (it shrinks when the outermost vertices move in).
-    REQUIRE(partial.box().lo == full.box().lo);
-    REQUIRE(partial.box().hi == full.box().hi);
-    REQUIRE(full.box().lo == bounds(m).lo);
-    REQUIRE(full.box().hi == bounds(m).hi);
-  }
-}
 
 TEST_CASE("World: rigid bodies, every pose, exactly the reference's pairs", "[world]") {
   auto ball = std::make_shared<const Mesh>(make_uv_sphere(Vec3::Zero(), 1.0, 14, 21));
@@ -376,6 +292,7 @@ TEST_CASE("World: deferred refits, between frames and split over threads", "[wor
       if (f == 0) CHECK(world.tree(a).box().hi == bounds(moved).hi);  // refitted on request; later frames in collide()
       const FrameResult& r = world.collide(opt);
       REQUIRE(r.pairs.size() == 1);
+      CHECK(r.pairs[0].object_b == b);
       const std::vector<std::uint64_t> want = exact_colliding_pairs(moved, other);
       std::vector<std::uint64_t> got;
       for (const Contact& c : r.pairs[0].colliding) got.push_back(pack_pair(c.tri_a, c.tri_b));

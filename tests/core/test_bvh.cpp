@@ -1,0 +1,206 @@
+// peelcd::Bvh (peelcd/core/bvh.h): the tree's structure and float boxes, queries, refits (whole,
+// partial, in ranges), the two-tree traversal through a relative pose, its split into tasks, the
+// self traversal: each against a brute-force scan.
+#include "peelcd/core/bvh.h"
+#include "peelcd/core/primitives.h"
+
+#include <catch2/catch.hpp>
+
+#include <algorithm>
+#include <random>
+#include <set>
+
+using namespace peelcd;
+
+namespace {
+
+Eigen::Affine3d pose(double angle, const Vec3& axis, const Vec3& t) {
+  Eigen::Affine3d p = Eigen::Affine3d::Identity();
+  p.translate(t);
+  p.rotate(Eigen::AngleAxisd(angle, axis.normalized()));
+  return p;
+}
+
+// The couples of a's and b's triangles whose exact boxes overlap (closed) both in A's frame and in
+// B's (the traversal separates boxes along either frame's axes).
+std::set<std::pair<std::uint32_t, std::uint32_t>> scan(const Mesh& a, const Eigen::Affine3d& pa, const Mesh& b,
+                                                       const Eigen::Affine3d& pb) {
+  const Eigen::Affine3d b_to_a = pa.inverse() * pb, a_to_b = b_to_a.inverse();
+  const auto box_of = [](const Mesh& m, const Eigen::Affine3d& p, std::uint32_t t) {
+    Aabb box;
+    for (const std::uint32_t v : m.triangles[t]) box.extend(p * m.vertices[v]);
+    return box;
+  };
+  std::set<std::pair<std::uint32_t, std::uint32_t>> out;
+  for (std::uint32_t x = 0; x < a.triangles.size(); ++x)
+    for (std::uint32_t y = 0; y < b.triangles.size(); ++y)
+      if (box_of(a, Eigen::Affine3d::Identity(), x).overlaps(box_of(b, b_to_a, y)) &&
+          box_of(b, Eigen::Affine3d::Identity(), y).overlaps(box_of(a, a_to_b, x)))
+        out.emplace(x, y);
+  return out;
+}
+
+}  // namespace
+
+TEST_CASE("Bvh: every triangle once, boxes enclose their children, queries equal a scan", "[bvh]") {
+  const Mesh m = make_uv_sphere(Vec3(0.1, -0.2, 0.3), 1.0, 23, 31);
+  Bvh t;
+  t.build(m.vertices, m.triangles);
+  std::vector<std::uint32_t> seen(t.order());
+  std::sort(seen.begin(), seen.end());
+  for (std::uint32_t i = 0; i < seen.size(); ++i) REQUIRE(seen[i] == i);
+  const auto& nodes = t.nodes();
+  for (std::size_t i = 0; i < nodes.size(); ++i) {
+    if (nodes[i].leaf()) {
+      CHECK(nodes[i].count <= kBvhLeafSize);
+      continue;
+    }
+    for (const std::size_t c : {i + 1, std::size_t(nodes[i].first)}) {
+      CHECK(t.parent(std::uint32_t(c)) == i);
+      CHECK((nodes[i].box.aabb().lo.array() <= nodes[c].box.aabb().lo.array()).all());
+      CHECK((nodes[i].box.aabb().hi.array() >= nodes[c].box.aabb().hi.array()).all());
+    }
+  }
+  // Float boxes enclose the exact ones; the root's exact box is the corners' box.
+  for (std::uint32_t f = 0; f < m.triangles.size(); ++f) {
+    const Aabb exact = triangle_bounds(m, f), got = t.triangle_box(f).aabb();
+    REQUIRE(((got.lo.array() <= exact.lo.array()).all() && (got.hi.array() >= exact.hi.array()).all()));
+    REQUIRE(((exact.lo - got.lo).cwiseAbs().maxCoeff() < 1e-6 && (got.hi - exact.hi).cwiseAbs().maxCoeff() < 1e-6));
+  }
+  // At every scale, and across zero, subnormals and float's limit.
+  for (const double d : {0.0, 1e-45, -1e-45, 1e-40, 0.1, -0.1, 1.0 / 3.0, -2.0 / 3.0, 1e10 + 0.3, -7e20, 1e36, 3e38, -3.4e38, 1e300, -1e300}) {
+    CHECK(double(FBox::down(d)) <= d);
+    CHECK(double(FBox::up(d)) >= d);
+  }
+  CHECK(t.box().lo == bounds(m).lo);
+  CHECK(t.box().hi == bounds(m).hi);
+  std::mt19937 rng(7);
+  std::uniform_real_distribution<double> u(-1.3, 1.3);
+  for (int q = 0; q < 50; ++q) {
+    Aabb box;
+    box.extend(Vec3(u(rng), u(rng), u(rng)));
+    box.extend(Vec3(u(rng), u(rng), u(rng)));
+    std::vector<std::uint32_t> got, want;
+    t.query(box, got);
+    for (std::uint32_t f = 0; f < m.triangles.size(); ++f)
+      if (triangle_bounds(m, f).overlaps(box)) want.push_back(f);
+    // Every exact answer; any other within float rounding of the box.
+    REQUIRE(std::includes(got.begin(), got.end(), want.begin(), want.end()));
+    for (const std::uint32_t f : got) {
+      Aabb grown = box;
+      grown.lo -= Vec3::Constant(1e-6);
+      grown.hi += Vec3::Constant(1e-6);
+      REQUIRE(triangle_bounds(m, f).overlaps(grown));
+    }
+  }
+}
+
+TEST_CASE("Bvh: a partial refit gives the boxes of a full one", "[bvh]") {
+  Mesh m = make_grid(Vec3(0, 0, 0), Vec3(2, 0, 0), Vec3(0, 2, 0), 40, 40);
+  Bvh partial, full;
+  partial.build(m.vertices, m.triangles);
+  full.build(m.vertices, m.triangles);
+  std::mt19937 rng(3);
+  std::uniform_int_distribution<std::uint32_t> pick(0, std::uint32_t(m.vertices.size() - 1));
+  for (int round = 0; round < 5; ++round) {
+    std::vector<std::uint32_t> changed;
+    for (int k = 0; k < 30; ++k) {
+      const std::uint32_t v = pick(rng);
+      m.vertices[v].z() += 0.05 * (k % 3 - 1) + 0.01 * round;
+      for (std::uint32_t t = 0; t < m.triangles.size(); ++t)
+        for (const std::uint32_t c : m.triangles[t])
+          if (c == v) changed.push_back(t);
+    }
+    partial.refit(m.vertices, m.triangles, changed);
+    full.refit(m.vertices, m.triangles);
+    for (std::size_t i = 0; i < full.nodes().size(); ++i) {
+      REQUIRE(partial.nodes()[i].box.aabb().lo == full.nodes()[i].box.aabb().lo);
+      REQUIRE(partial.nodes()[i].box.aabb().hi == full.nodes()[i].box.aabb().hi);
+    }
+    // The exact root box too (it shrinks when the outermost vertices move in).
+    REQUIRE(partial.box().lo == full.box().lo);
+    REQUIRE(partial.box().hi == full.box().hi);
+    REQUIRE(full.box().lo == bounds(m).lo);
+    REQUIRE(full.box().hi == bounds(m).hi);
+  }
+}
+
+TEST_CASE("Bvh: a refit in ranges (as the World splits it over threads) equals a whole refit", "[bvh]") {
+  Mesh m = make_uv_sphere(Vec3(0, 0, 0), 1.0, 20, 24);
+  Bvh split, whole;
+  split.build(m.vertices, m.triangles);
+  whole.build(m.vertices, m.triangles);
+  for (Vec3& v : m.vertices) v = 0.8 * v + Vec3(0.3 * v.y(), 0.1, -0.2 * v.x() * v.x());
+  const std::size_t n = m.triangles.size();
+  Aabb exact;
+  for (std::size_t k = 0; k < 3; ++k) {
+    const Aabb part = split.refit_triangles(m.vertices, m.triangles, n * k / 3, n * (k + 1) / 3);
+    exact.extend(part.lo);
+    exact.extend(part.hi);
+  }
+  split.refit_nodes(exact);
+  whole.refit(m.vertices, m.triangles);
+  for (std::size_t i = 0; i < whole.nodes().size(); ++i) {
+    REQUIRE(split.nodes()[i].box.aabb().lo == whole.nodes()[i].box.aabb().lo);
+    REQUIRE(split.nodes()[i].box.aabb().hi == whole.nodes()[i].box.aabb().hi);
+  }
+  CHECK(split.box().lo == bounds(m).lo);
+  CHECK(split.box().hi == bounds(m).hi);
+}
+
+TEST_CASE("Bvh: the traversal of two posed trees finds every couple of overlapping boxes", "[bvh]") {
+  const Mesh a = make_uv_sphere(Vec3(0, 0, 0), 1.0, 12, 16);
+  const Mesh b = make_box(Vec3(-0.4, -0.4, -0.4), Vec3(0.4, 0.4, 0.4));
+  const Mesh grid = make_grid(Vec3(-1, -1, 0), Vec3(2, 0, 0), Vec3(0, 2, 0), 9, 9);
+  Bvh ta, tb, tg;
+  ta.build(a.vertices, a.triangles);
+  tb.build(b.vertices, b.triangles);
+  tg.build(grid.vertices, grid.triangles);
+  std::vector<BvhStackEntry> stack;
+  for (int k = 0; k < 8; ++k) {
+    const Eigen::Affine3d pa = pose(0.3 * k, Vec3(1, 2, 3), Vec3(0.1 * k, 0, 0));
+    const Eigen::Affine3d pb = pose(-0.5 * k, Vec3(0, 1, 1), Vec3(0.9, 0.05 * k, 0.2));
+    for (const auto& [mesh, tree] : {std::pair<const Mesh*, const Bvh*>{&b, &tb}, {&grid, &tg}}) {
+      const BvhRelation rel = BvhRelation::between(pa, pb);
+      std::set<std::pair<std::uint32_t, std::uint32_t>> got;
+      bvh_traverse(ta, *tree, rel, BvhNodePair{0u, 0u}, stack,
+                   [&](std::uint32_t x, std::uint32_t y) { REQUIRE(got.emplace(x, y).second); });
+      const auto want = scan(a, pa, *mesh, pb);
+      // Every couple whose boxes overlap in both frames; boxes carried through the pose (a box of
+      // a box) may add some.
+      REQUIRE(std::includes(got.begin(), got.end(), want.begin(), want.end()));
+      CHECK(got.size() <= 4 * want.size() + 64);
+      // Split into tasks: the same couples, each once.
+      std::vector<BvhNodePair> tasks;
+      bvh_split(ta, *tree, rel, 6, tasks);
+      std::set<std::pair<std::uint32_t, std::uint32_t>> split;
+      for (const BvhNodePair& start : tasks)
+        bvh_traverse(ta, *tree, rel, start, stack,
+                     [&](std::uint32_t x, std::uint32_t y) { REQUIRE(split.emplace(x, y).second); });
+      CHECK(split == got);
+    }
+  }
+}
+
+TEST_CASE("Bvh: the self traversal gives every couple of distinct triangles whose boxes overlap, once", "[bvh]") {
+  const Mesh m = make_folded_sheet(12, 0.3, 0.2);
+  Bvh t;
+  t.build(m.vertices, m.triangles);
+  std::vector<BvhNodePair> stack;
+  std::set<std::pair<std::uint32_t, std::uint32_t>> got;
+  bvh_self_traverse(t, stack, [&](std::uint32_t x, std::uint32_t y) {
+    REQUIRE(x != y);
+    REQUIRE(got.emplace(std::min(x, y), std::max(x, y)).second);
+  });
+  std::set<std::pair<std::uint32_t, std::uint32_t>> want;
+  for (std::uint32_t x = 0; x < m.triangles.size(); ++x)
+    for (std::uint32_t y = x + 1; y < m.triangles.size(); ++y)
+      if (triangle_bounds(m, x).overlaps(triangle_bounds(m, y))) want.emplace(x, y);
+  REQUIRE(std::includes(got.begin(), got.end(), want.begin(), want.end()));
+  for (const auto& [x, y] : got) {  // any other couple: within float rounding of touching
+    Aabb grown = triangle_bounds(m, x);
+    grown.lo -= Vec3::Constant(1e-6);
+    grown.hi += Vec3::Constant(1e-6);
+    REQUIRE(grown.overlaps(triangle_bounds(m, y)));
+  }
+}
