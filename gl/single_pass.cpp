@@ -88,7 +88,7 @@ bool GlImageStage::Impl::peel_single_pass(const PeelJob& job, PeelResult& out, T
   gl.BindFramebuffer(GL_FRAMEBUFFER, 0);
   out.epsilon_window = float(view.world_to_window_depth(job.epsilon));
   out.slope = float(job.slope);
-  if (options.resolve == Resolve::host || (options.resolve == Resolve::automatic && software_renderer))
+  if (host_resolve())
     return resolve_on_host(job, fitting, view_slots, t_gpu, out, t);
   // The resolve reads what the draw stored through buffer textures (texture fetches).
   gl.MemoryBarrier(GL_SHADER_STORAGE_BARRIER_BIT | GL_TEXTURE_FETCH_BARRIER_BIT);
@@ -253,7 +253,7 @@ bool GlImageStage::Impl::peel_conservative(const PeelJob& job, PeelResult& out, 
   gl.BindFramebuffer(GL_FRAMEBUFFER, 0);
   out.epsilon_window = 0.0f;
   out.slope = 0.0f;
-  if (options.resolve == Resolve::host || (options.resolve == Resolve::automatic && software_renderer))
+  if (host_resolve())
     return resolve_on_host(job, fitting, view_slots, t_gpu, out, t);
   gl.MemoryBarrier(GL_SHADER_STORAGE_BARRIER_BIT | GL_TEXTURE_FETCH_BARRIER_BIT);
   ++out.gl_passes;
