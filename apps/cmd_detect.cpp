@@ -19,6 +19,15 @@ void print_relation(FILE* human, const PairResult& p, const std::vector<Object>&
                  p.relation_note.empty() ? "" : ": ", p.relation_note.c_str());
   else if (p.relation == Relation::unknown)
     std::fprintf(human, "  relation unknown: %s\n", p.relation_note.c_str());
+  if (opt.depth && p.object_a != p.object_b) {
+    if (p.depth.known)
+      std::fprintf(human, "  depth %.9g (+0/-%.1g) along (%.6f, %.6f, %.6f): moving '%s' that far separates it from '%s' "
+                   "(least of %zu directions; the search began from the %s)\n",
+                   p.depth.depth, 2.0 * p.depth.bound, p.depth.direction.x(), p.depth.direction.y(), p.depth.direction.z(),
+                   na.c_str(), nb.c_str(), p.depth.directions, p.depth.source.c_str());
+    else
+      std::fprintf(human, "  depth unknown: %s\n", p.depth.reason.c_str());
+  }
   if (!opt.volume || p.object_a == p.object_b) return;
   if (!p.volume.known) {
     std::fprintf(human, "  volume unknown: %s\n", p.volume.reason.c_str());

@@ -102,6 +102,7 @@ void relate_pairs(std::vector<PairResult>& pairs, const std::function<const Mesh
   for (PairResult& p : pairs) {
     p.relation_note.clear();
     p.volume = VolumeEstimate{};
+    p.depth = PenetrationDepth{};
     // max_contacts: a pair's lanes may each have stopped at N; the first N, sorted, are kept.
     const bool capped = options.max_contacts && p.colliding.size() >= options.max_contacts;
     if (capped) p.colliding.resize(options.max_contacts);
@@ -128,6 +129,13 @@ void relate_pairs(std::vector<PairResult>& pairs, const std::function<const Mesh
         p.relation = touching_relation(mesh_of(p.object_a), mesh_of(p.object_b), ba, bb, p.colliding, p.relation_note);
     } else {
       p.relation = relate(mesh_of(p.object_a), mesh_of(p.object_b), ba, bb, p.colliding, p.relation_note);
+    }
+    if (options.depth) {
+      if (colliding_relation(p.relation))
+        p.depth = penetration_depth(mesh_of(p.object_a), mesh_of(p.object_b), p.colliding);
+      else
+        p.depth.reason = p.relation == Relation::unknown ? "the relation is unknown: " + p.relation_note
+                                                         : std::string("the objects do not collide");
     }
     if (options.volume) {
       if (p.relation == Relation::disjoint) {  // no overlap: nothing to integrate, 0 if both are closed

@@ -145,6 +145,13 @@ const std::vector<OptionSpec> kTable = {
      K::boolean, 0, 0, "must be true or false", "", "", kRecordedWhenSet,
      [](const DetectOptions& o) { return OptionValue(o.volume); },
      [](DetectOptions& o, const OptionValue& v) { o.volume = std::get<bool>(v); }},
+    {"depth", "", "--depth",
+     "A penetration direction n and depth d for every colliding or containing pair of closed objects: moving "
+     "A by d n separates them (touching allowed), no shorter move along n does; the least d over the candidate "
+     "directions of docs/design.md (an open or inside-out object gets none, and why)",
+     K::boolean, 0, 0, "must be true or false", "", "", kRecordedWhenSet,
+     [](const DetectOptions& o) { return OptionValue(o.depth); },
+     [](DetectOptions& o, const OptionValue& v) { o.depth = std::get<bool>(v); }},
 };
 
 }  // namespace

@@ -114,6 +114,46 @@ std::vector<GeometryClass> self_classes() {
 namespace {
 }  // namespace
 
+// A torus in the plane z = c.z(): `along` segments around the ring of radius R, `around` around the
+// tube of radius r; closed, outward.
+Mesh torus(const Vec3& c, double R, double r, int along, int around) {
+  Mesh m;
+  for (int j = 0; j < around; ++j)
+    for (int i = 0; i < along; ++i) {
+      const double a = 2 * M_PI * i / along, b = 2 * M_PI * j / around;
+      m.vertices.push_back(Vec3(c.x() + (R + r * std::cos(b)) * std::cos(a), c.y() + (R + r * std::cos(b)) * std::sin(a),
+                                c.z() + r * std::sin(b)));
+    }
+  const auto id = [&](int i, int j) { return std::uint32_t((j % around) * along + (i % along)); };
+  for (int j = 0; j < around; ++j)
+    for (int i = 0; i < along; ++i) {  // d/da x d/db points out of the tube
+      m.triangles.push_back({id(i, j), id(i + 1, j), id(i + 1, j + 1)});
+      m.triangles.push_back({id(i, j), id(i + 1, j + 1), id(i, j + 1)});
+    }
+  return m;
+}
+
+std::vector<DepthClass> depth_classes() {
+  std::vector<DepthClass> out;
+  const auto two = [](const char* name, const char* what, Mesh a, Mesh b, double expected) {
+    DepthClass c;
+    c.scene = {name, what, {object("a", std::move(a)), object("b", std::move(b))}};
+    c.expected = expected;
+    return c;
+  };
+  out.push_back(two("crossing boxes", "a unit cube and a bar through its side, 0.3 deep: out along -x",
+                    box_mesh(Vec3(0, 0, 0), Vec3(1, 1, 1)), box_mesh(Vec3(0.7, 0.2, 0.3), Vec3(3, 0.8, 0.6)), 0.3));
+  out.push_back(two("deep spheres", "two spheres, radii 1 and 0.8, centres 0.5 apart: out along their centres",
+                    uv_sphere(Vec3(0, 0, 0), 1.0, 48, 24), uv_sphere(Vec3(0.4, 0.3, 0.0), 0.8, 48, 24), -1.0));
+  out.push_back(two("small inside large", "a small box wholly inside a large ball, off centre: out the nearer side",
+                    box_mesh(Vec3(0.3, -0.1, -0.1), Vec3(0.5, 0.1, 0.1)), uv_sphere(Vec3(0, 0, 0), 1.0, 48, 24), -1.0));
+  out.push_back(two("concave rings", "two tori in one plane, crossing in two places (not linked): lifted off",
+                    torus(Vec3(0, 0, 0), 2.0, 0.5, 64, 16), torus(Vec3(2.5, 0.3, 0.1), 2.0, 0.5, 64, 16), -1.0));
+  out.push_back(two("touching boxes", "two unit cubes sharing a face: depth 0",
+                    box_mesh(Vec3(0, 0, 0), Vec3(1, 1, 1)), box_mesh(Vec3(1, 0.2, 0.1), Vec3(2, 0.9, 1.3)), 0.0));
+  return out;
+}
+
 std::vector<ContainmentClass> containment_classes() {
   std::vector<ContainmentClass> out;
   const auto two = [](const char* name, const char* what, Mesh a, Mesh b, Relation r) {

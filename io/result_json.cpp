@@ -55,6 +55,14 @@ nlohmann::json to_json(const FrameResult& r, const std::vector<Object>& objects,
                      {"relation", to_string(p.relation)},
                      {"is_collision", p.is_collision()}});
     if (!p.relation_note.empty()) pairs.back()["relation_note"] = p.relation_note;
+    if (o.depth && p.object_a != p.object_b) {
+      if (p.depth.known)
+        pairs.back()["depth"] = {{"direction", vec(p.depth.direction)}, {"depth", p.depth.depth},
+                                 {"bound", p.depth.bound}, {"directions", p.depth.directions},
+                                 {"from", p.depth.source}};
+      else
+        pairs.back()["depth"] = {{"unknown", p.depth.reason}};
+    }
     if (o.volume && p.object_a != p.object_b) {
       if (p.volume.known)
         pairs.back()["volume"] = {{"volume", p.volume.volume}, {"error", p.volume.error},

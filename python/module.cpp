@@ -212,6 +212,14 @@ py::dict pair_dict(const PairResult& p, const std::function<std::string(std::siz
     d["volume"] = py::none();
     if (!p.volume.reason.empty()) d["volume_unknown"] = p.volume.reason;
   }
+  if (p.depth.known) {  // the depth option: move A by depth * depth_direction to separate
+    d["depth"] = p.depth.depth;
+    d["depth_direction"] = py::array_t<double>(3, p.depth.direction.data());
+    d["depth_bound"] = p.depth.bound;
+  } else {
+    d["depth"] = py::none();
+    if (!p.depth.reason.empty()) d["depth_unknown"] = p.depth.reason;
+  }
   return d;
 }
 

@@ -1,6 +1,7 @@
 #pragma once
 // Request and result of one frame of detection (peelcd/core/detector.h runs it).
 #include "peelcd/core/aabb.h"
+#include "peelcd/core/depth.h"
 #include "peelcd/core/id_map.h"
 #include "peelcd/core/narrow_phase.h"
 #include "peelcd/core/relation.h"
@@ -100,6 +101,9 @@ struct DetectOptions {
   // (PairResult::volume; peelcd/core/relation.h), with resolution x resolution rays per axis
   // (kVolumeResolution when resolution is 0). Off by default.
   bool volume = false;
+  // A penetration direction and depth for each colliding or containing pair of closed objects
+  // (PairResult::depth; peelcd/core/depth.h). Off by default.
+  bool depth = false;
   // At most this many contacts per object pair (0: every one). The exact tests of a pair stop at
   // the N-th colliding triangle pair found (a first-contact query: 1), in candidate order; the
   // pair still collides (is_collision()), its relation is decided from the contacts found
@@ -145,6 +149,9 @@ struct PairResult {
   Relation relation = Relation::disjoint;
   std::string relation_note;
   VolumeEstimate volume;  // DetectOptions::volume: the intersection volume (volume.known)
+  // DetectOptions::depth: move A by depth.depth * depth.direction to separate it from B
+  // (depth.known; a pair that does not collide has none, and says so in depth.reason).
+  PenetrationDepth depth;
   // A collision: a contact, or one object inside the other.
   bool is_collision() const { return !colliding.empty() || colliding_relation(relation); }
 };

@@ -46,6 +46,16 @@ struct ContainmentClass {
 };
 std::vector<ContainmentClass> containment_classes();
 
+// Penetration depth classes (docs/design.md, "Penetration depth"): two closed objects each, and
+// the depth their construction gives where it has one in closed form (-1: none; the exact
+// property checks decide). Crossing boxes, deep spheres, a small object inside a large one, two
+// concave rings crossing in two places, touching boxes (depth 0).
+struct DepthClass {
+  GeometryClass scene;
+  double expected = -1.0;
+};
+std::vector<DepthClass> depth_classes();
+
 // The sum of the lengths of the intersection segments of `pairs` (pack_pair(triA, triB)) of
 // meshes `a` and `b`: the "intersection length" whose missed share docs/accuracy.md reports.
 double intersection_length(const Mesh& a, const Mesh& b, const std::vector<std::uint64_t>& pairs);

@@ -1,0 +1,51 @@
+#pragma once
+// Penetration depth (DetectOptions::depth; docs/design.md, "Penetration depth"): for two closed
+// objects that collide or contain one another, a unit direction n and a depth d such that A
+// translated by d n shares no interior with B (touching allowed) and no shorter translation
+// along n does.
+//
+// Along one direction the depth is decided from the triangles: in a frame where n is the z axis,
+// every couple (a triangle of A, a triangle of B) whose shadows overlap meets for the
+// translations s in one interval, the vertical line through the origin across the convex hull of
+// the nine corner differences; for a direction in general position (every candidate is turned by
+// kDepthPerturbation radians off any face it may be parallel to) the surfaces cross for every s
+// strictly inside it. Walking s up from 0 across the union of these intervals, the first gap in
+// which neither object contains the other (exact point-in-mesh tests) begins at d.
+//
+// The direction: the least d among candidates (the contacts' area-weighted normals of B and of
+// A, the intersection volume's gradient, the centroids' difference, the six axes), then a local
+// search around the best (rotations of a quarter radian, halved when no neighbour improves).
+// The pair is computed in a canonical order of the two meshes, so that swapping A and B gives
+// (-n, d) exactly.
+#include "peelcd/core/mesh.h"
+#include "peelcd/core/narrow_phase.h"
+
+#include <string>
+#include <vector>
+
+namespace peelcd {
+
+// How far a candidate direction is turned to put it in general position (radians).
+constexpr double kDepthPerturbation = 1e-7;
+
+struct PenetrationDepth {
+  bool known = false;
+  std::string reason;             // why unknown (an open or inside-out object), else empty
+  Vec3 direction = Vec3::Zero();  // unit n: move A by depth * n (B fixed)
+  double depth = 0.0;             // d >= 0; 0 when the objects only touch
+  // Rounding bound of d: the least separating translation along n lies in [depth - 2 bound,
+  // depth] (d errs toward separating).
+  double bound = 0.0;
+  std::size_t directions = 0;     // directions evaluated
+  std::string source;             // the candidate the search started from ("contact normals of B", ...)
+};
+
+// The least s >= 0 such that A translated by s n shares no interior with B (touching allowed),
+// both closed; n is used as given (unit). `bound` receives the rounding bound of the result.
+double depth_along(const Mesh& a, const Mesh& b, const Vec3& n, double* bound = nullptr);
+
+// The pair's direction and depth (see above). `contacts`: the pair's colliding triangle pairs
+// (tri_a of A, tri_b of B), for the candidates; may be empty (containment).
+PenetrationDepth penetration_depth(const Mesh& a, const Mesh& b, const std::vector<Contact>& contacts);
+
+}  // namespace peelcd
