@@ -301,6 +301,10 @@ Explanation FrameTrace::explain(const PairQuery& query) const {
 
   // 4. The verdict; containment (the objects collide with no triangle pair: docs/design.md).
   trace_verdict(e, pr != nullptr);
+  if (pr && opt.depth && pr->object_a != pr->object_b) {
+    e.depth_asked = true;
+    e.depth = pr->depth;
+  }
   if (pr && (pr->relation == Relation::a_inside_b || pr->relation == Relation::b_inside_a)) {
     const bool a_in = pr->relation == Relation::a_inside_b;
     e.verdict_line += "; the objects collide without contact: '" + (a_in ? e.name_a : e.name_b) + "' is inside '" +

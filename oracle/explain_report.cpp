@@ -54,6 +54,12 @@ nlohmann::json to_json(const Explanation& e) {
   j["ids"] = {{"a", e.id_a}, {"b", e.id_b}};
   j["candidate"] = e.candidate;
   j["reported"] = e.reported;
+  if (e.depth_asked) {
+    if (e.depth.known)
+      j["penetration"] = {{"direction", vec(e.depth.direction)}, {"depth", e.depth.depth}, {"bound", e.depth.bound}};
+    else
+      j["penetration"] = {{"unknown", e.depth.reason}};
+  }
   json views = json::array();
   for (const ViewReport& v : e.views) {
     json jv = {{"view", v.view},
@@ -159,6 +165,13 @@ std::string explain_text(const Explanation& e) {
   }
   if (!e.views.empty()) s << "(* = the layer's ID stands for the queried triangle)\n";
   s << "verdict: " << e.verdict_line << "\n";
+  if (e.depth_asked) {
+    if (e.depth.known)
+      s << "depth: move '" << e.name_a << "' by " << g(e.depth.depth) << " along " << v3(e.depth.direction)
+        << " to separate the objects\n";
+    else
+      s << "depth: unknown: " << e.depth.reason << "\n";
+  }
   return s.str();
 }
 

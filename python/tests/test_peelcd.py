@@ -82,6 +82,21 @@ def test_containment_and_volume():
     assert abs(p["volume"] - 0.027 * 4.18) < 0.01  # about (0.3)^3 of the faceted unit ball's volume
 
 
+def test_depth_separates_and_swaps():
+    ball = peelcd.load_mesh(os.path.join(FIXTURES, "meshes", "generated", "sphere_24x48.obj"))
+    other = peelcd.Mesh(ball.V * 0.8 + np.array([0.5, 0.2, 0.0]), ball.F)
+    p = peelcd.collide(ball, other, depth=True)
+    assert p["relation"] == "crossing"
+    n, d = p["depth_direction"], p["depth"]
+    assert abs(np.linalg.norm(n) - 1.0) < 1e-12 and 1.0 < d < 1.5  # 1.8 - |(0.5, 0.2)|, faceted
+    moved = peelcd.Mesh(ball.V + (d + 1e-6) * n, ball.F)
+    assert not peelcd.collide(moved, other)["is_collision"]
+    q = peelcd.collide(other, ball, depth=True)  # swapped: (-n, d)
+    assert abs(q["depth"] - d) < 1e-9 * d and np.allclose(q["depth_direction"], -n, atol=1e-9)
+    open_mesh = peelcd.Mesh(ball.V, ball.F[:-1])
+    assert peelcd.collide(open_mesh, other, depth=True)["depth"] is None
+
+
 def bad(fn, kind, words):
     with pytest.raises(kind) as e:
         fn()

@@ -128,6 +128,9 @@ struct Explanation {
   std::vector<ViewReport> views;
   Verdict verdict = Verdict::no_contact;
   std::string verdict_line;        // one line
+  // With the depth option: the object pair's penetration direction and depth (peelcd/core/depth.h).
+  bool depth_asked = false;
+  PenetrationDepth depth;
 };
 
 // One frame run with every layer captured, for explaining any number of pairs of it.
