@@ -4,6 +4,8 @@
 #include "peelcd/bench/self_bench.h"
 #include "peelcd/bench/suite.h"
 #include "peelcd/bench/volume_bench.h"
+#include "peelcd/bench/query_bench.h"
+#include "peelcd/eval/classes.h"
 #include "peelcd/core/cpu_stage.h"
 #include "peelcd/core/broad_phase.h"
 #include "peelcd/core/aabb.h"
@@ -28,7 +30,7 @@ int run_bench(const BenchArgs& a) {
   if (!a.csv.empty()) {
     check_output_path(a.csv, "peelcd bench: --csv");
     refuse_overwriting_data(a.csv, "peelcd bench: --csv");  // the built-in scenes' meshes
-    const bool builtin = a.scene == "volume" || a.scene == "cloth-self" || a.scene == "cloth-crumpled" || a.scene == "spheres" ||
+    const bool builtin = a.scene == "volume" || a.scene == "depth" || a.scene == "distance" || a.scene == "cloth-self" || a.scene == "cloth-crumpled" || a.scene == "spheres" ||
                          a.scene == "spheres-wave" || a.scene == "test1" || a.scene == "test2" || a.scene == "crowd";
     if (!builtin) refuse_overwriting_input(a.csv, scene_inputs(load_scene(a.scene)), "peelcd bench: --csv");
   }
@@ -40,6 +42,31 @@ int run_bench(const BenchArgs& a) {
       v.coverage_meshes.emplace_back(name, load_mesh(data_dir("fixtures/meshes") + "/" + name + ".obj"));
     v.coverage_frames = 20 * a.frames;
     const std::string csv = bench::run_volume_suite(v);
+    if (!a.csv.empty()) write_output(a.csv, csv);
+    return 0;
+  }
+  if (a.scene == "depth" || a.scene == "distance") {  // the queries: their own tables (peelcd/bench/query_bench.h)
+    bench::QuerySuite q;
+    q.frames = a.frames;
+    const std::string meshes = data_dir("fixtures/meshes") + "/";
+    if (a.scene == "depth") {
+      for (const DepthClass& c : depth_classes())
+        q.scenes.push_back({c.scene.name, c.scene.objects[0].mesh, c.scene.objects[1].mesh});
+      Mesh dragon = load_mesh(meshes + "dragon_3k.obj");  // the bunny and the dragon crossing deeply
+      for (Vec3& v : dragon.vertices) v += Vec3(0.1, 0.05, 0.0);
+      q.scenes.push_back({"bunny x dragon", load_mesh(meshes + "bunny_3k.obj"), dragon});
+    } else {
+      const Mesh box = box_mesh(Vec3(0, 0, 0), Vec3(1, 1, 1));
+      q.scenes.push_back({"boxes 1e-4 apart", box, box_mesh(Vec3(1.0001, 0.2, 0.3), Vec3(2, 0.9, 1.5))});
+      q.scenes.push_back({"spheres 0.01 apart", uv_sphere(Vec3(0, 0, 0), 1.0, 96, 48), uv_sphere(Vec3(2.01, 0.0, 0.0), 1.0, 96, 48)});
+      Mesh kitten = load_mesh(meshes + "kitten_1k5.obj");
+      const Mesh fish = load_mesh(meshes + "fish_2k.obj");
+      // The kitten moved off the fish along x until 0.01 of the fish's size apart.
+      const Aabb bf = bounds(fish), bk = bounds(kitten);
+      for (Vec3& v : kitten.vertices) v += Vec3(bf.hi.x() - bk.lo.x() + 0.01 * bf.extent().maxCoeff(), 0.0, 0.0);
+      q.scenes.push_back({"kitten near fish", kitten, fish});
+    }
+    const std::string csv = a.scene == "depth" ? bench::run_depth_suite(q) : bench::run_distance_suite(q);
     if (!a.csv.empty()) write_output(a.csv, csv);
     return 0;
   }
@@ -117,7 +144,8 @@ std::vector<Command> add_bench_commands(CLI::App& app) {
                                            "(the same, a wave over their vertices every frame), cloth-self (self-collision of a folding "
                                            "cloth, one thread), cloth-crumpled (self-collision of a 100k-triangle cloth crumpled "
                                            "over a ball, one thread), volume (the intersection volume of two 99k-triangle "
-                                           "spheres against CGAL) or a scene file")
+                                           "spheres against CGAL), depth (the penetration depth against bisection), "
+                                           "distance (the least distance against FCL's) or a scene file")
       ->capture_default_str();
   benchmark->add_option("--stacks", be.stacks, "spheres: latitude bands (4 s (s - 1) triangles a sphere: 288 -> 330,624, "
                                                "570 -> 1,297,320)")

@@ -19,6 +19,15 @@ void print_relation(FILE* human, const PairResult& p, const std::vector<Object>&
                  p.relation_note.empty() ? "" : ": ", p.relation_note.c_str());
   else if (p.relation == Relation::unknown)
     std::fprintf(human, "  relation unknown: %s\n", p.relation_note.c_str());
+  if (opt.margin > 0.0) {
+    if (p.near.within())
+      std::fprintf(human, "  within %g: %zu triangle pairs; least distance %.9g between (%.6g, %.6g, %.6g) on '%s' and "
+                   "(%.6g, %.6g, %.6g) on '%s'\n",
+                   opt.margin, p.near.pairs.size(), p.near.distance, p.near.p.x(), p.near.p.y(), p.near.p.z(), na.c_str(),
+                   p.near.q.x(), p.near.q.y(), p.near.q.z(), nb.c_str());
+    else
+      std::fprintf(human, "  within %g: no triangle pair\n", opt.margin);
+  }
   if (opt.depth && p.object_a != p.object_b) {
     if (p.depth.known)
       std::fprintf(human, "  depth %.9g (+0/-%.1g) along (%.6f, %.6f, %.6f): moving '%s' that far separates it from '%s' "

@@ -103,6 +103,7 @@ void relate_pairs(std::vector<PairResult>& pairs, const std::function<const Mesh
     p.relation_note.clear();
     p.volume = VolumeEstimate{};
     p.depth = PenetrationDepth{};
+    p.near = Proximity{};
     // max_contacts: a pair's lanes may each have stopped at N; the first N, sorted, are kept.
     const bool capped = options.max_contacts && p.colliding.size() >= options.max_contacts;
     if (capped) p.colliding.resize(options.max_contacts);
@@ -114,8 +115,14 @@ void relate_pairs(std::vector<PairResult>& pairs, const std::function<const Mesh
     if (p.object_a == p.object_b) {  // self: from the contacts alone
       p.relation = contact_relation(p.colliding);
       note_cap();
+      if (options.margin > 0.0) {
+        std::vector<std::uint32_t> rep;
+        vertex_representatives(mesh_of(p.object_a), options.self_adjacency, rep);
+        p.near = near_self_pairs(mesh_of(p.object_a), rep, options.margin);
+      }
       continue;
     }
+    if (options.margin > 0.0) p.near = near_pairs(mesh_of(p.object_a), mesh_of(p.object_b), options.margin);
     const Aabb& ba = boxes[p.object_a];
     const Aabb& bb = boxes[p.object_b];
     const bool within = !ba.empty() && !bb.empty() &&

@@ -152,6 +152,13 @@ const std::vector<OptionSpec> kTable = {
      K::boolean, 0, 0, "must be true or false", "", "", kRecordedWhenSet,
      [](const DetectOptions& o) { return OptionValue(o.depth); },
      [](DetectOptions& o, const OptionValue& v) { o.depth = std::get<bool>(v); }},
+    {"margin", "", "--margin",
+     "Proximity: every triangle pair of two objects (of one object with --self, not sharing a vertex) within "
+     "this distance, with its distance and closest points, and per object pair the least distance and its "
+     "witness points (default 0: off)",
+     K::number, 0, kInf, "must be >= 0 (0 = off)", "", "", kRecordedWhenSet,
+     [](const DetectOptions& o) { return OptionValue(o.margin); },
+     [](DetectOptions& o, const OptionValue& v) { o.margin = num(v); }},
 };
 
 }  // namespace

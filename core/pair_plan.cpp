@@ -10,6 +10,9 @@ namespace peelcd::detail {
 void FramePlan::find_pairs(const ObjectRefs& objects, const DetectOptions& opt, const std::vector<IndexPair>* only) {
   boxes.clear();
   for (std::size_t i = 0; i < objects.size(); ++i) boxes.push_back(bounds(objects[i].mesh));
+  if (opt.margin > 0.0)  // proximity: boxes within the margin of each other make a pair
+    for (Aabb& b : boxes)
+      if (!b.empty()) b.lo -= Vec3::Constant(0.5 * opt.margin), b.hi += Vec3::Constant(0.5 * opt.margin);
   overlapping_pairs(boxes, pairs, order_);
   if (only)
     pairs.erase(std::remove_if(pairs.begin(), pairs.end(),

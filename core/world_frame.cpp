@@ -121,6 +121,8 @@ void World::Impl::find_pairs(const DetectOptions& opt) {
         std::max(w.lo.cwiseAbs().maxCoeff(), w.hi.cwiseAbs().maxCoeff()) > kFloatMax)
       throw std::invalid_argument("peelcd::World: " + label_of(bodies[id].name, id) +
                                   " reaches outside the float range (|x| <= 3.4e38) the image stage works in");
+    if (opt.margin > 0.0 && !w.empty())  // proximity: boxes within the margin of each other make a pair
+      boxes.back().lo -= Vec3::Constant(0.5 * opt.margin), boxes.back().hi += Vec3::Constant(0.5 * opt.margin);
   }
   overlapping_pairs(boxes, pairs, order);
   bool any_self = false;

@@ -55,6 +55,15 @@ nlohmann::json to_json(const FrameResult& r, const std::vector<Object>& objects,
                      {"relation", to_string(p.relation)},
                      {"is_collision", p.is_collision()}});
     if (!p.relation_note.empty()) pairs.back()["relation_note"] = p.relation_note;
+    if (o.margin > 0.0) {
+      json near = json::array();
+      for (const NearPair& n : p.near.pairs)
+        near.push_back({{"tri_a", n.tri_a}, {"tri_b", n.tri_b}, {"distance", n.distance},
+                        {"points", json::array({vec(n.p), vec(n.q)})}});
+      pairs.back()["near"] = {{"margin", o.margin}, {"pairs", near}};
+      if (p.near.within())
+        pairs.back()["near"]["distance"] = p.near.distance, pairs.back()["near"]["witness"] = json::array({vec(p.near.p), vec(p.near.q)});
+    }
     if (o.depth && p.object_a != p.object_b) {
       if (p.depth.known)
         pairs.back()["depth"] = {{"direction", vec(p.depth.direction)}, {"depth", p.depth.depth},

@@ -212,6 +212,25 @@ py::dict pair_dict(const PairResult& p, const std::function<std::string(std::siz
     d["volume"] = py::none();
     if (!p.volume.reason.empty()) d["volume_unknown"] = p.volume.reason;
   }
+  if (!p.near.pairs.empty()) {  // the margin option: triangle pairs within it
+    const std::size_t k = p.near.pairs.size();
+    py::array_t<std::uint32_t> tri({k, std::size_t(2)});
+    py::array_t<double> dist(k);
+    auto t = tri.mutable_unchecked<2>();
+    auto dd = dist.mutable_unchecked<1>();
+    for (std::size_t i = 0; i < k; ++i) {
+      t(i, 0) = p.near.pairs[i].tri_a;
+      t(i, 1) = p.near.pairs[i].tri_b;
+      dd(i) = p.near.pairs[i].distance;
+    }
+    d["near_triangles"] = tri;
+    d["near_distances"] = dist;
+    d["distance"] = p.near.distance;
+    d["witness_a"] = py::array_t<double>(3, p.near.p.data());
+    d["witness_b"] = py::array_t<double>(3, p.near.q.data());
+  } else {
+    d["distance"] = py::none();
+  }
   if (p.depth.known) {  // the depth option: move A by depth * depth_direction to separate
     d["depth"] = p.depth.depth;
     d["depth_direction"] = py::array_t<double>(3, p.depth.direction.data());

@@ -2,6 +2,7 @@
 // Request and result of one frame of detection (peelcd/core/detector.h runs it).
 #include "peelcd/core/aabb.h"
 #include "peelcd/core/depth.h"
+#include "peelcd/core/proximity.h"
 #include "peelcd/core/id_map.h"
 #include "peelcd/core/narrow_phase.h"
 #include "peelcd/core/relation.h"
@@ -104,6 +105,10 @@ struct DetectOptions {
   // A penetration direction and depth for each colliding or containing pair of closed objects
   // (PairResult::depth; peelcd/core/depth.h). Off by default.
   bool depth = false;
+  // Proximity: with a margin m > 0, object pairs whose boxes are within m of each other are pairs
+  // of the frame, and each gets its triangle pairs within m with their distances and its least
+  // distance (PairResult::near; peelcd/core/proximity.h). 0 (the default): off.
+  double margin = 0.0;
   // At most this many contacts per object pair (0: every one). The exact tests of a pair stop at
   // the N-th colliding triangle pair found (a first-contact query: 1), in candidate order; the
   // pair still collides (is_collision()), its relation is decided from the contacts found
@@ -152,6 +157,9 @@ struct PairResult {
   // DetectOptions::depth: move A by depth.depth * depth.direction to separate it from B
   // (depth.known; a pair that does not collide has none, and says so in depth.reason).
   PenetrationDepth depth;
+  // DetectOptions::margin > 0: the triangle pairs within the margin (distance 0 where they meet)
+  // and the least distance with its witness points (near.within(): some pair is within it).
+  Proximity near;
   // A collision: a contact, or one object inside the other.
   bool is_collision() const { return !colliding.empty() || colliding_relation(relation); }
 };

@@ -1,0 +1,42 @@
+#pragma once
+// Proximity (DetectOptions::margin; docs/design.md, "Proximity"): the triangle pairs of two
+// objects (or of one object with self-collision, not sharing a vertex) whose distance is at most
+// a margin, each with its distance and closest points, and per object pair the least distance
+// with its two witness points. A pair that meets has distance 0.
+#include "peelcd/core/mesh.h"
+#include "peelcd/core/narrow_phase.h"
+
+#include <limits>
+#include <vector>
+
+namespace peelcd {
+
+struct NearPair {
+  std::uint32_t tri_a = 0, tri_b = 0;  // self pairs: tri_a < tri_b
+  double distance = 0.0;
+  Vec3 p = Vec3::Zero(), q = Vec3::Zero();  // the closest points, on A's and on B's triangle
+};
+
+struct Proximity {
+  std::vector<NearPair> pairs;  // every pair within the margin, by (tri_a, tri_b)
+  // The least distance of the pairs and its witness points (infinite, no points: none is within
+  // the margin).
+  double distance = std::numeric_limits<double>::infinity();
+  Vec3 p = Vec3::Zero(), q = Vec3::Zero();
+  bool within() const { return !pairs.empty(); }
+};
+
+// The distance of two triangles and their closest points (p on a, q on b): 0 (and a common point)
+// when they meet (the exact test); else the least of the six corner-to-triangle and nine
+// edge-to-edge distances, computed in double (relative error a few units in the last place of
+// the coordinates' magnitude over the distance).
+double triangle_distance(const TriangleCorners& a, const TriangleCorners& b, Vec3& p, Vec3& q);
+
+// Every triangle pair of `a` and `b` within `margin` (a tree over b's triangles, each of a's
+// boxes grown by the margin: no pair within it is missed).
+Proximity near_pairs(const Mesh& a, const Mesh& b, double margin);
+// Every pair of distinct, non-adjacent triangles of `m` within `margin` (`rep`: the vertex
+// representatives of vertex_representatives(): adjacent triangles share one).
+Proximity near_self_pairs(const Mesh& m, const std::vector<std::uint32_t>& rep, double margin);
+
+}  // namespace peelcd
