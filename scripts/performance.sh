@@ -38,6 +38,9 @@ scene=fixtures/scenes/bunny_dragon.json
 ./build/peelcd bench cloth-self --frames 8 > "$out/cloth_self.txt"
 ./build/peelcd bench cloth-crumpled --frames 6 > "$out/cloth_crumpled.txt"
 ./build/peelcd bench volume --frames 3 > "$out/volume.txt"
+# The queries: penetration depth against bisection, the least distance against FCL.
+./build/peelcd bench depth --frames 3 > "$out/depth.txt"
+./build/peelcd bench distance --frames 3 > "$out/distance.txt"
 PY=/usr/bin/python3; [ -x "$PY" ] || PY=python3
 "$PY" scripts/plot_performance.py "$out" "$out/bench_default.csv" "$out/bench_test1.csv" "$out/bench_test2.csv" \
   "$out/bench_crowd.csv" --simulate "$out/simulate_test1.csv" "$out/simulate_test2.csv"

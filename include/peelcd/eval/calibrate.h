@@ -1,5 +1,5 @@
 #pragma once
-// Calibration of the stage router (Stage::automatic, docs/performance.md "The stage router"):
+// Calibration of the stage router (Stage::automatic, docs/router.md):
 // one-ROI scenes of growing size and density timed through the image stage and through the
 // exact CPU path on the same detector, and the two linear cost models fitted to them.
 #include "peelcd/core/detector.h"

@@ -40,7 +40,7 @@ class GlImageStage final : public ImageStage {
   const std::string& version() const override;   // GL_VERSION
   int max_resolution() const override;           // GL_MAX_TEXTURE_SIZE
   // The router's model: one for GL on the CPU (llvmpipe, lavapipe), one for a GPU
-  // (docs/performance.md, "The stage router").
+  // (docs/router.md).
   StageCost cost() const override;
   void begin_frame() override;
   void end_frame() noexcept override;

@@ -1,5 +1,5 @@
 #pragma once
-// The stage router's cost models in a file (docs/performance.md, "The stage router"): written by
+// The stage router's cost models in a file (docs/router.md): written by
 // `peelcd calibrate --write-costs FILE` with the models it fitted, the backend and the renderer
 // they were fitted on; read by `detect`/`simulate`/`bench --costs FILE`, the PEELCD_COSTS
 // environment variable (any program that makes its stage with apply_cost_models_from_env()),
