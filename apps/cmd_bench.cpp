@@ -26,6 +26,33 @@ struct BenchArgs {
   std::string csv;
 };
 
+// `bench depth` and `bench distance`: the queries' scenes and tables (peelcd/bench/query_bench.h).
+int run_query_bench(const BenchArgs& a) {
+  bench::QuerySuite q;
+  q.frames = a.frames;
+  const std::string meshes = data_dir("fixtures/meshes") + "/";
+  if (a.scene == "depth") {
+    for (const DepthClass& c : depth_classes())
+      q.scenes.push_back({c.scene.name, c.scene.objects[0].mesh, c.scene.objects[1].mesh});
+    Mesh dragon = load_mesh(meshes + "dragon_3k.obj");  // the bunny and the dragon crossing deeply
+    for (Vec3& v : dragon.vertices) v += Vec3(0.1, 0.05, 0.0);
+    q.scenes.push_back({"bunny x dragon", load_mesh(meshes + "bunny_3k.obj"), dragon});
+  } else {
+    const Mesh box = box_mesh(Vec3(0, 0, 0), Vec3(1, 1, 1));
+    q.scenes.push_back({"boxes 1e-4 apart", box, box_mesh(Vec3(1.0001, 0.2, 0.3), Vec3(2, 0.9, 1.5))});
+    q.scenes.push_back({"spheres 0.01 apart", uv_sphere(Vec3(0, 0, 0), 1.0, 96, 48), uv_sphere(Vec3(2.01, 0.0, 0.0), 1.0, 96, 48)});
+    Mesh kitten = load_mesh(meshes + "kitten_1k5.obj");
+    const Mesh fish = load_mesh(meshes + "fish_2k.obj");
+    // The kitten moved off the fish along x: its box 0.01 of the fish's size beyond the fish's.
+    const Aabb bf = bounds(fish), bk = bounds(kitten);
+    for (Vec3& v : kitten.vertices) v += Vec3(bf.hi.x() - bk.lo.x() + 0.01 * bf.extent().maxCoeff(), 0.0, 0.0);
+    q.scenes.push_back({"kitten near fish", kitten, fish});
+  }
+  const std::string csv = a.scene == "depth" ? bench::run_depth_suite(q) : bench::run_distance_suite(q);
+  if (!a.csv.empty()) write_output(a.csv, csv);
+  return 0;
+}
+
 int run_bench(const BenchArgs& a) {
   if (!a.csv.empty()) {
     check_output_path(a.csv, "peelcd bench: --csv");
@@ -45,31 +72,7 @@ int run_bench(const BenchArgs& a) {
     if (!a.csv.empty()) write_output(a.csv, csv);
     return 0;
   }
-  if (a.scene == "depth" || a.scene == "distance") {  // the queries: their own tables (peelcd/bench/query_bench.h)
-    bench::QuerySuite q;
-    q.frames = a.frames;
-    const std::string meshes = data_dir("fixtures/meshes") + "/";
-    if (a.scene == "depth") {
-      for (const DepthClass& c : depth_classes())
-        q.scenes.push_back({c.scene.name, c.scene.objects[0].mesh, c.scene.objects[1].mesh});
-      Mesh dragon = load_mesh(meshes + "dragon_3k.obj");  // the bunny and the dragon crossing deeply
-      for (Vec3& v : dragon.vertices) v += Vec3(0.1, 0.05, 0.0);
-      q.scenes.push_back({"bunny x dragon", load_mesh(meshes + "bunny_3k.obj"), dragon});
-    } else {
-      const Mesh box = box_mesh(Vec3(0, 0, 0), Vec3(1, 1, 1));
-      q.scenes.push_back({"boxes 1e-4 apart", box, box_mesh(Vec3(1.0001, 0.2, 0.3), Vec3(2, 0.9, 1.5))});
-      q.scenes.push_back({"spheres 0.01 apart", uv_sphere(Vec3(0, 0, 0), 1.0, 96, 48), uv_sphere(Vec3(2.01, 0.0, 0.0), 1.0, 96, 48)});
-      Mesh kitten = load_mesh(meshes + "kitten_1k5.obj");
-      const Mesh fish = load_mesh(meshes + "fish_2k.obj");
-      // The kitten moved off the fish along x until 0.01 of the fish's size apart.
-      const Aabb bf = bounds(fish), bk = bounds(kitten);
-      for (Vec3& v : kitten.vertices) v += Vec3(bf.hi.x() - bk.lo.x() + 0.01 * bf.extent().maxCoeff(), 0.0, 0.0);
-      q.scenes.push_back({"kitten near fish", kitten, fish});
-    }
-    const std::string csv = a.scene == "depth" ? bench::run_depth_suite(q) : bench::run_distance_suite(q);
-    if (!a.csv.empty()) write_output(a.csv, csv);
-    return 0;
-  }
+  if (a.scene == "depth" || a.scene == "distance") return run_query_bench(a);
   if (a.scene == "cloth-self" || a.scene == "cloth-crumpled") {  // self-collision: its own table (peelcd/bench/self_bench.h)
     if (a.threads) setenv("LP_NUM_THREADS", std::to_string(a.threads == 1 ? 0 : a.threads).c_str(), 1);
     bench::SelfSuite self;

@@ -1,12 +1,17 @@
 // Penetration depth (peelcd/core/depth.h) on the depth classes (eval/classes.cpp): moving A by
 // (d + 1e-6 of the scene's size) n leaves no intersecting triangle pair and no containment
-// (exact), moving it by 0.97 d still overlaps, and the swapped pair gives (-n, d).
+// (exact), moving it by 0.97 d still overlaps, and the swapped pair gives (-n, d). Proximity
+// (peelcd/core/proximity.h) on the same classes against CGAL's exact distances.
 #include "peelcd/core/depth.h"
+#include "peelcd/core/proximity.h"
 #include "peelcd/core/reference.h"
 #include "peelcd/core/relation.h"
 #include "peelcd/eval/classes.h"
 
+#include <CGAL/Exact_predicates_exact_constructions_kernel.h>
 #include <catch2/catch.hpp>
+
+#include <algorithm>
 
 using namespace peelcd;
 
@@ -47,7 +52,7 @@ bool meeting(const Mesh& a, const Mesh& b) {
 
 }  // namespace
 
-TEST_CASE("depth: moving A by d + 1e-6 of the scene along n separates, by 0.97 d does not; swapped (-n, d)", "[depth]") {
+TEST_CASE("depth: moving A by d + 1e-6 of the scene along n separates, by 0.97 d does not, swapped gives (-n, d)", "[depth]") {
   for (const DepthClass& c : depth_classes()) {
     INFO(c.scene.name);
     const Mesh& a = c.scene.objects[0].mesh;
@@ -93,4 +98,46 @@ TEST_CASE("depth: an open object has none, and says why", "[depth]") {
   const PenetrationDepth pd = penetration_depth(open, box_mesh(Vec3(0.5, 0.5, 0.5), Vec3(2, 2, 2)), {});
   CHECK_FALSE(pd.known);
   CHECK(pd.reason.find("open") != std::string::npos);
+}
+
+TEST_CASE("proximity on the depth classes: every listed distance is the exact one (relative 1e-9), none missed", "[depth][proximity]") {
+  using EK = CGAL::Exact_predicates_exact_constructions_kernel;
+  const auto ep = [](const Vec3& v) { return EK::Point_3(v.x(), v.y(), v.z()); };
+  const auto exact_distance = [&](const TriangleCorners& a, const TriangleCorners& b) {
+    const EK::Triangle_3 ta(ep(a[0]), ep(a[1]), ep(a[2])), tb(ep(b[0]), ep(b[1]), ep(b[2]));
+    if (CGAL::do_intersect(ta, tb)) return 0.0;
+    EK::FT best = CGAL::squared_distance(ep(a[0]), tb);
+    for (int k = 0; k < 3; ++k) {
+      best = std::min(best, CGAL::squared_distance(ep(a[k]), tb));
+      best = std::min(best, CGAL::squared_distance(ep(b[k]), ta));
+      for (int j = 0; j < 3; ++j)
+        best = std::min(best, CGAL::squared_distance(EK::Segment_3(ep(a[k]), ep(a[(k + 1) % 3])),
+                                                     EK::Segment_3(ep(b[j]), ep(b[(j + 1) % 3]))));
+    }
+    return std::sqrt(CGAL::to_double(best));
+  };
+  for (const DepthClass& c : depth_classes()) {
+    INFO(c.scene.name);
+    const Mesh& a = c.scene.objects[0].mesh;
+    const Mesh& b = c.scene.objects[1].mesh;
+    const double margin = 0.02;
+    const Proximity p = near_pairs(a, b, margin);  // none for the box deep inside the ball
+    for (const NearPair& n : p.pairs) {
+      const double e = exact_distance(corners(a, n.tri_a), corners(b, n.tri_b));
+      REQUIRE(n.distance == Approx(e).epsilon(1e-9).margin(1e-15));
+      REQUIRE(n.distance <= margin);
+    }
+    // Every colliding pair is listed at distance 0.
+    for (const std::uint64_t k : exact_colliding_pairs(a, b)) {
+      const auto it = std::find_if(p.pairs.begin(), p.pairs.end(),
+                                   [&](const NearPair& n) { return n.tri_a == pair_a(k) && n.tri_b == pair_b(k); });
+      REQUIRE(it != p.pairs.end());
+      CHECK(it->distance == 0.0);
+    }
+    if (a.triangles.size() * b.triangles.size() > 100000) continue;  // the brute force below: small classes
+    std::size_t within = 0;
+    for (std::uint32_t x = 0; x < a.triangles.size(); ++x)
+      for (std::uint32_t y = 0; y < b.triangles.size(); ++y) within += exact_distance(corners(a, x), corners(b, y)) <= margin;
+    CHECK(p.pairs.size() == within);
+  }
 }
