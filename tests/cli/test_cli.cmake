@@ -178,8 +178,11 @@ file(WRITE ${WORK}/stdout.json "${out}")
 # Every JSON output validates against docs/schema/result.schema.json.
 expect("json: two meshes" 0 "" detect ${FIXTURES}/meshes/bunny_3k.obj ${FIXTURES}/meshes/kitten_1k5.obj --json ${WORK}/meshes.json --quiet)
 expect("json: many ROIs" 0 "" detect ${FIXTURES}/golden/crowded_conservative_16/case.json --check --stage image --json ${WORK}/crowd.json --quiet)
+expect("json: depth, margin and volume" 0 "within 0.001: [0-9]+ triangle pairs; least distance 0.*depth [0-9.]+ .* along"
+       detect ${FIXTURES}/scenes/bunny_dragon.json --depth --margin 0.001 --volume --json ${WORK}/queries.json)
+expect("--margin must be finite" 2 "--margin: \"inf\" is not a finite number" detect ${FIXTURES}/scenes/bunny_dragon.json --margin inf)
 validate("json" result.schema.json ${WORK}/stdout.json ${WORK}/meshes.json ${WORK}/crowd.json ${WORK}/out.json
-         ${WORK}/outdir/target.json)
+         ${WORK}/outdir/target.json ${WORK}/queries.json)
 # Inputs: mesh files without a scene; scene validation.
 expect("detect A.obj B.obj" 0 "bunny_3k x dragon_3k" detect ${FIXTURES}/meshes/bunny_3k.obj ${FIXTURES}/meshes/dragon_3k.obj)
 # A glTF scene: one object per node, the node transforms applied ("far" is moved 10 away: no pair).
