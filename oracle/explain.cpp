@@ -19,8 +19,6 @@
 #include <cmath>
 #include <cstdio>
 #include <cstring>
-#include <filesystem>
-#include <fstream>
 #include <limits>
 #include <set>
 #include <sstream>
@@ -28,11 +26,8 @@
 namespace peelcd::oracle {
 namespace {
 
-namespace fs = std::filesystem;
-
 using texel::as_float;
 
-using words::fmt;
 using words::g;
 using words::object_word;
 

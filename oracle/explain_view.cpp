@@ -17,8 +17,6 @@
 #include <cmath>
 #include <cstdio>
 #include <cstring>
-#include <filesystem>
-#include <fstream>
 #include <limits>
 #include <set>
 #include <sstream>
@@ -26,11 +24,8 @@
 namespace peelcd::oracle::detail {
 namespace {
 
-namespace fs = std::filesystem;
-
 using texel::as_float;
 
-using words::fmt;
 using words::g;
 using words::object_word;
 
