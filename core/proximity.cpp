@@ -117,7 +117,12 @@ Aabb grown(const Aabb& box, double margin) {
 
 }  // namespace
 
-Proximity near_pairs(const Mesh& a, const Mesh& b, double margin) {
+namespace {
+
+// Every triangle of `a` against a tree over `b`'s, each of a's boxes grown by the margin; `skip`
+// drops couples (a self search's repeats and adjacent couples).
+template <class Skip>
+Proximity search_near(const Mesh& a, const Mesh& b, double margin, Skip&& skip) {
   Proximity r;
   if (a.triangles.empty() || b.triangles.empty()) return r;
   Bvh tree;
@@ -127,6 +132,7 @@ Proximity near_pairs(const Mesh& a, const Mesh& b, double margin) {
     const TriangleCorners ca = corners(a, ta);
     tree.query(grown(triangle_bounds(a, ta), margin), found);
     for (const std::uint32_t tb : found) {
+      if (skip(ta, tb)) continue;
       NearPair n;
       n.distance = triangle_distance(ca, corners(b, tb), n.p, n.q);
       if (n.distance > margin) continue;
@@ -139,27 +145,15 @@ Proximity near_pairs(const Mesh& a, const Mesh& b, double margin) {
   return r;
 }
 
+}  // namespace
+
+Proximity near_pairs(const Mesh& a, const Mesh& b, double margin) {
+  return search_near(a, b, margin, [](std::uint32_t, std::uint32_t) { return false; });
+}
+
 Proximity near_self_pairs(const Mesh& m, const std::vector<std::uint32_t>& rep, double margin) {
-  Proximity r;
-  if (m.triangles.size() < 2) return r;
-  Bvh tree;
-  tree.build(m.vertices, m.triangles);
-  std::vector<std::uint32_t> found;
-  for (std::uint32_t t = 0; t < m.triangles.size(); ++t) {
-    const TriangleCorners ct = corners(m, t);
-    tree.query(grown(triangle_bounds(m, t), margin), found);
-    for (const std::uint32_t u : found) {
-      if (u <= t || triangles_adjacent(m, rep, t, u)) continue;
-      NearPair n;
-      n.distance = triangle_distance(ct, corners(m, u), n.p, n.q);
-      if (n.distance > margin) continue;
-      n.tri_a = t;
-      n.tri_b = u;
-      r.pairs.push_back(n);
-    }
-  }
-  finish(r);
-  return r;
+  return search_near(m, m, margin,
+                     [&](std::uint32_t t, std::uint32_t u) { return u <= t || triangles_adjacent(m, rep, t, u); });
 }
 
 }  // namespace peelcd
