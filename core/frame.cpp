@@ -6,6 +6,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <map>
 #include <stdexcept>
 
 namespace peelcd {
@@ -99,6 +100,16 @@ namespace peelcd {
 void relate_pairs(std::vector<PairResult>& pairs, const std::function<const Mesh&(std::size_t)>& mesh_of,
                   const std::vector<Aabb>& boxes, const DetectOptions& options) {
   const int n = options.resolution > 0 ? options.resolution : kVolumeResolution;
+  // The margin's trees, one per object, built on its first pair (none without a margin).
+  std::map<std::size_t, Bvh> trees;
+  const auto tree_of = [&](std::size_t id) -> const Bvh& {
+    auto it = trees.find(id);
+    if (it == trees.end()) {
+      it = trees.emplace(id, Bvh{}).first;
+      it->second.build(mesh_of(id).vertices, mesh_of(id).triangles);
+    }
+    return it->second;
+  };
   for (PairResult& p : pairs) {
     p.relation_note.clear();
     p.volume = VolumeEstimate{};
@@ -118,11 +129,12 @@ void relate_pairs(std::vector<PairResult>& pairs, const std::function<const Mesh
       if (options.margin > 0.0) {
         std::vector<std::uint32_t> rep;
         vertex_representatives(mesh_of(p.object_a), options.self_adjacency, rep);
-        p.near = near_self_pairs(mesh_of(p.object_a), rep, options.margin);
+        p.near = near_self_pairs(mesh_of(p.object_a), tree_of(p.object_a), rep, options.margin);
       }
       continue;
     }
-    if (options.margin > 0.0) p.near = near_pairs(mesh_of(p.object_a), mesh_of(p.object_b), options.margin);
+    if (options.margin > 0.0)
+      p.near = near_pairs(mesh_of(p.object_a), mesh_of(p.object_b), tree_of(p.object_b), options.margin);
     const Aabb& ba = boxes[p.object_a];
     const Aabb& bb = boxes[p.object_b];
     const bool within = !ba.empty() && !bb.empty() &&

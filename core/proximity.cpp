@@ -122,11 +122,9 @@ namespace {
 // Every triangle of `a` against a tree over `b`'s, each of a's boxes grown by the margin; `skip`
 // drops couples (a self search's repeats and adjacent couples).
 template <class Skip>
-Proximity search_near(const Mesh& a, const Mesh& b, double margin, Skip&& skip) {
+Proximity search_near(const Mesh& a, const Mesh& b, const Bvh& tree, double margin, Skip&& skip) {
   Proximity r;
   if (a.triangles.empty() || b.triangles.empty()) return r;
-  Bvh tree;
-  tree.build(b.vertices, b.triangles);
   std::vector<std::uint32_t> found;
   for (std::uint32_t ta = 0; ta < a.triangles.size(); ++ta) {
     const TriangleCorners ca = corners(a, ta);
@@ -147,13 +145,25 @@ Proximity search_near(const Mesh& a, const Mesh& b, double margin, Skip&& skip) 
 
 }  // namespace
 
+Proximity near_pairs(const Mesh& a, const Mesh& b, const Bvh& tree_b, double margin) {
+  return search_near(a, b, tree_b, margin, [](std::uint32_t, std::uint32_t) { return false; });
+}
+
+Proximity near_self_pairs(const Mesh& m, const Bvh& tree, const std::vector<std::uint32_t>& rep, double margin) {
+  return search_near(m, m, tree, margin,
+                     [&](std::uint32_t t, std::uint32_t u) { return u <= t || triangles_adjacent(m, rep, t, u); });
+}
+
 Proximity near_pairs(const Mesh& a, const Mesh& b, double margin) {
-  return search_near(a, b, margin, [](std::uint32_t, std::uint32_t) { return false; });
+  Bvh tree;
+  tree.build(b.vertices, b.triangles);
+  return near_pairs(a, b, tree, margin);
 }
 
 Proximity near_self_pairs(const Mesh& m, const std::vector<std::uint32_t>& rep, double margin) {
-  return search_near(m, m, margin,
-                     [&](std::uint32_t t, std::uint32_t u) { return u <= t || triangles_adjacent(m, rep, t, u); });
+  Bvh tree;
+  tree.build(m.vertices, m.triangles);
+  return near_self_pairs(m, tree, rep, margin);
 }
 
 }  // namespace peelcd

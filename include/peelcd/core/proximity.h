@@ -3,6 +3,7 @@
 // objects (or of one object with self-collision, not sharing a vertex) whose distance is at most
 // a margin, each with its distance and closest points, and per object pair the least distance
 // with its two witness points. A pair that meets has distance 0.
+#include "peelcd/core/bvh.h"
 #include "peelcd/core/mesh.h"
 #include "peelcd/core/narrow_phase.h"
 
@@ -38,5 +39,9 @@ Proximity near_pairs(const Mesh& a, const Mesh& b, double margin);
 // Every pair of distinct, non-adjacent triangles of `m` within `margin` (`rep`: the vertex
 // representatives of vertex_representatives(): adjacent triangles share one).
 Proximity near_self_pairs(const Mesh& m, const std::vector<std::uint32_t>& rep, double margin);
+// The same with the tree over b's (or m's) triangles built by the caller (Bvh::build over the
+// same mesh): a frame builds each object's tree once for all its pairs.
+Proximity near_pairs(const Mesh& a, const Mesh& b, const Bvh& tree_b, double margin);
+Proximity near_self_pairs(const Mesh& m, const Bvh& tree, const std::vector<std::uint32_t>& rep, double margin);
 
 }  // namespace peelcd
