@@ -67,6 +67,8 @@ void CpuImageStage::raster_object(const PeelJob& job, int slot) {
     pose.translation() -= view.center;
     model = pose.matrix().cast<float>();
   }
+  float grow_x = 0.0f, grow_z = 0.0f;  // proximity: every triangle grown by PeelJob::grow
+  conservative::grow_of(job.grow, view.texel(), 2.0 * view.half_depth, grow_x, grow_z);
   for (std::size_t order = 0; order < tris.size(); ++order) {
     const std::uint32_t t = tris[order];
     ids[order] = corner_id(rigid ? *object.rigid->shape : mesh, t, 2, job.ids);
@@ -106,7 +108,7 @@ void CpuImageStage::raster_object(const PeelJob& job, int slot) {
     }
     const std::uint32_t key = (std::uint32_t(slot) << 31) | std::uint32_t(order);
     if (job.conservative) {
-      conservative::set_margins(ct, err[0], err[1], err[2], n);
+      conservative::set_margins(ct, err[0], err[1], err[2], n, grow_x, grow_z);
       raster_conservative(ct, n, key);
     } else {
       raster_point(c, n, key, box_lo, box_hi);

@@ -122,8 +122,11 @@ Aabb keep_touching(std::vector<Entry>& entries, std::vector<Aabb>& boxes, const 
 // The triangles of `m` whose boxes touch `roi` (closed). Each vertex gets an outcode, one bit per
 // side of the box it lies strictly beyond; a triangle whose three corners share a bit misses the
 // box (the same test as its box's, exactly), and only the others get a box.
-void gather(const Mesh& m, const Aabb& roi, std::vector<std::uint8_t>& outcodes, std::vector<Entry>& entries,
-            std::vector<Aabb>& boxes) {
+void gather(const Mesh& m, const Aabb& roi_in, double grow, std::vector<std::uint8_t>& outcodes,
+            std::vector<Entry>& entries, std::vector<Aabb>& boxes) {
+  Aabb roi = roi_in;  // a box grown by `grow` touches the ROI: the box touches the ROI grown by it
+  roi.lo -= Vec3::Constant(grow);
+  roi.hi += Vec3::Constant(grow);
   entries.clear();
   boxes.clear();
   outcodes.resize(m.vertices.size());
@@ -137,13 +140,18 @@ void gather(const Mesh& m, const Aabb& roi, std::vector<std::uint8_t>& outcodes,
     const Tri& f = m.triangles[t];
     if (outcodes[f[0]] & outcodes[f[1]] & outcodes[f[2]]) continue;
     entries.push_back(Entry{t, {}, {}});
-    boxes.push_back(triangle_bounds(m, t));
+    Aabb b = triangle_bounds(m, t);
+    b.lo -= Vec3::Constant(grow);
+    b.hi += Vec3::Constant(grow);
+    boxes.push_back(b);
   }
 }
 
 }  // namespace
 
-void cull_to_contact_region(const Mesh& a, const Mesh& b, const Aabb& roi, ContactCull& out, int max_rounds) {
+void cull_to_contact_region(const Mesh& a, const Mesh& b, const Aabb& roi, ContactCull& out, int max_rounds,
+                            double margin) {
+  const double grow = 0.5 * margin;
   max_rounds = std::clamp(max_rounds, 1, kMaxCullRounds);
   out.stats = CullStats{};
   out.kept_a.clear();
@@ -151,10 +159,10 @@ void cull_to_contact_region(const Mesh& a, const Mesh& b, const Aabb& roi, Conta
   out.box = Aabb{};
   out.median_edge = 0.0;
   if (roi.empty()) return;
-  gather(a, roi, out.outcodes, out.entries_a, out.boxes_a);
+  gather(a, roi, grow, out.outcodes, out.entries_a, out.boxes_a);
   out.entries_b.clear();  // none in the ROI when A has none (not the last call's)
   out.boxes_b.clear();
-  if (!out.entries_a.empty()) gather(b, roi, out.outcodes, out.entries_b, out.boxes_b);
+  if (!out.entries_a.empty()) gather(b, roi, grow, out.outcodes, out.entries_b, out.boxes_b);
   out.stats.in_roi_a = out.entries_a.size();
   out.stats.in_roi_b = out.entries_b.size();
   Aabb box = roi;

@@ -69,10 +69,12 @@ void triangles_touching(const Mesh& mesh, const Aabb& box, std::vector<std::uint
 }
 
 double triangles_in_view(const Mesh& mesh, const RoiView& view, const std::vector<std::uint32_t>* only,
-                         std::vector<std::uint32_t>& out) {
+                         std::vector<std::uint32_t>& out, double grow) {
   out.clear();
   double min_depth = view.half_depth;
-  const Aabb& box = view.box;
+  Aabb box = view.box;
+  box.lo -= Vec3::Constant(grow);
+  box.hi += Vec3::Constant(grow);
   const std::size_t count = only ? only->size() : mesh.triangles.size();
   for (std::size_t i = 0; i < count; ++i) {
     const auto t = only ? (*only)[i] : std::uint32_t(i);
@@ -100,6 +102,7 @@ struct Detector::Impl {
   detail::PairLoop loop;
   const std::vector<detail::IndexPair>* only = nullptr;  // Detector::only_pairs()
   std::vector<std::size_t> exact_pairs;
+  std::vector<char> near_found;  // per pair: `near` found from its candidates (relate_pairs skips its search)
   std::vector<std::uint32_t> tris[2];
   std::vector<std::vector<std::uint32_t>> job_tris;  // per job of the frame: A's, B's triangles
   std::vector<PeelJob> jobs;                         // the frame's ROI views, grouped by pair
@@ -176,6 +179,7 @@ void Detector::detect(const std::vector<const Object*>& object_ptrs, const Detec
   ViewFrame frames[3];
   const std::size_t frame_count = fused_view_frames(opt, frames);
   s.exact_pairs.clear();
+  s.near_found.assign(n, 0);
   s.jobs.clear();
   s.job_first.assign(n + 1, 0);
   out.pairs.resize(n);
@@ -202,7 +206,8 @@ void Detector::detect(const std::vector<const Object*>& object_ptrs, const Detec
     if (s.plan.plans[pi].peeled()) s.resolve_pair(objects, opt, pi, out);
   // Relations (containment where no contact) and, asked for, volumes.
   t0 = Clock::now();
-  relate_pairs(out.pairs, [&](std::size_t i) -> const Mesh& { return objects[i].mesh; }, s.plan.boxes, opt);
+  relate_pairs(out.pairs, [&](std::size_t i) -> const Mesh& { return objects[i].mesh; }, s.plan.boxes, opt,
+               &s.near_found);
   out.timings.cpu += ms_since(t0);
   out.timings.total = ms_since(t_total);
 }
@@ -275,10 +280,15 @@ void Detector::Impl::exact_path(const ObjectRefs& objects, const DetectOptions& 
       return;
     }
     lane.candidates.clear();
-    box_overlap_pairs(ma, p.kept_a, mb, p.kept_b, lane.candidates, &lane.boxes);
+    box_overlap_pairs(ma, p.kept_a, mb, p.kept_b, lane.candidates, &lane.boxes, opt.margin);
     sort_unique_pairs(lane.candidates, lane.candidate_scratch);
     r.candidates = lane.candidates.size();
-    narrow_phase(ma, mb, lane.candidates, r.colliding, /*boxes_overlap=*/true, opt.max_contacts);
+    // With a margin the boxes were grown: each couple's own boxes are tested first.
+    narrow_phase(ma, mb, lane.candidates, r.colliding, /*boxes_overlap=*/opt.margin == 0.0, opt.max_contacts);
+    if (opt.margin > 0.0) {
+      r.near = near_among(ma, mb, lane.candidates, opt.margin);
+      near_found[pi] = 1;
+    }
   });
   out.rois_exact = exact_pairs.size();
   out.timings.cpu += ms_since(t0);
@@ -314,7 +324,7 @@ void Detector::Impl::gather_views(std::size_t pi, FrameResult& out) {
       ++r.views_exhaustive;
       const auto t0 = Clock::now();
       box_overlap_pairs(job.objects[0]->mesh, *job.triangles[0], job.objects[1]->mesh, *job.triangles[1], direct,
-                        &box_scratch);
+                        &box_scratch, 2.0 * job.grow);
       out.timings.cpu += ms_since(t0);
     }
     if (capture) {
@@ -369,6 +379,11 @@ void Detector::Impl::resolve_pair(const ObjectRefs& objects, const DetectOptions
     self_narrow_phase(ma, candidates, r.colliding, opt.max_contacts);
   else
     narrow_phase(ma, mb, candidates, r.colliding, false, opt.max_contacts);
+  // Conservative: every couple within the margin is a candidate (PeelJob::grow).
+  if (opt.margin > 0.0 && p.a != p.b && opt.conservative) {
+    r.near = near_among(ma, mb, candidates, opt.margin);
+    near_found[pi] = 1;
+  }
   out.timings.cpu += ms_since(t0);
 }
 

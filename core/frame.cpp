@@ -98,7 +98,7 @@ std::string pair_path_reason(const PairResult& p, const DetectOptions& o) {
 namespace peelcd {
 
 void relate_pairs(std::vector<PairResult>& pairs, const std::function<const Mesh&(std::size_t)>& mesh_of,
-                  const std::vector<Aabb>& boxes, const DetectOptions& options) {
+                  const std::vector<Aabb>& boxes, const DetectOptions& options, const std::vector<char>* near_found) {
   const int n = options.resolution > 0 ? options.resolution : kVolumeResolution;
   // The margin's trees, one per object, built on its first pair (none without a margin).
   std::map<std::size_t, Bvh> trees;
@@ -110,11 +110,13 @@ void relate_pairs(std::vector<PairResult>& pairs, const std::function<const Mesh
     }
     return it->second;
   };
-  for (PairResult& p : pairs) {
+  for (std::size_t pi = 0; pi < pairs.size(); ++pi) {
+    PairResult& p = pairs[pi];
+    const bool found = near_found && (*near_found)[pi];
     p.relation_note.clear();
     p.volume = VolumeEstimate{};
     p.depth = PenetrationDepth{};
-    p.near = Proximity{};
+    if (!found) p.near = Proximity{};
     // max_contacts: a pair's lanes may each have stopped at N; the first N, sorted, are kept.
     const bool capped = options.max_contacts && p.colliding.size() >= options.max_contacts;
     if (capped) p.colliding.resize(options.max_contacts);
@@ -133,7 +135,7 @@ void relate_pairs(std::vector<PairResult>& pairs, const std::function<const Mesh
       }
       continue;
     }
-    if (options.margin > 0.0)
+    if (options.margin > 0.0 && !found)
       p.near = near_pairs(mesh_of(p.object_a), mesh_of(p.object_b), tree_of(p.object_b), options.margin);
     const Aabb& ba = boxes[p.object_a];
     const Aabb& bb = boxes[p.object_b];

@@ -43,8 +43,8 @@ void FramePlan::reset(std::size_t i, const ObjectRefs& objects, int tile) {
 }
 
 namespace {
-void cull_pair(const ObjectRefs& objects, PairPlan& p, int rounds, ContactCull& cull) {
-  cull_to_contact_region(objects[p.a].mesh, objects[p.b].mesh, p.roi, cull, rounds);
+void cull_pair(const ObjectRefs& objects, PairPlan& p, int rounds, double margin, ContactCull& cull) {
+  cull_to_contact_region(objects[p.a].mesh, objects[p.b].mesh, p.roi, cull, rounds, margin);
   p.region = cull.box;
   p.in_roi_a = cull.stats.in_roi_a;
   p.in_roi_b = cull.stats.in_roi_b;
@@ -67,7 +67,7 @@ void FramePlan::plan(const ObjectRefs& objects, const DetectOptions& opt, PairLo
     else if (opt.cull != Cull::contact)
       plan_box(objects, opt, p);
     else
-      cull_pair(objects, p, first_rounds, lane.cull);
+      cull_pair(objects, p, first_rounds, opt.margin, lane.cull);
   });
   share_budget(opt);
   route(opt);
@@ -77,7 +77,7 @@ void FramePlan::plan(const ObjectRefs& objects, const DetectOptions& opt, PairLo
   if (!any_image) return;
   loop.run(pairs.size(), opt, [&](std::size_t i, PairLane& lane) {
     PairPlan& p = plans[i];
-    if (p.peeled() && p.a != p.b) cull_pair(objects, p, kMaxCullRounds, lane.cull);
+    if (p.peeled() && p.a != p.b) cull_pair(objects, p, kMaxCullRounds, opt.margin, lane.cull);
   });
   share_budget(opt);  // the same ROIs share it: the image ROIs' needs now final
 }
@@ -86,8 +86,11 @@ void FramePlan::plan(const ObjectRefs& objects, const DetectOptions& opt, PairLo
 // alone peels the whole box).
 void FramePlan::plan_box(const ObjectRefs& objects, const DetectOptions& opt, PairPlan& p) {
   if (opt.stage == Stage::image) return;
-  triangles_touching(objects[p.a].mesh, p.roi, p.kept_a);
-  triangles_touching(objects[p.b].mesh, p.roi, p.kept_b);
+  Aabb roi = p.roi;  // proximity: a triangle within the margin of the other object touches it grown by half
+  roi.lo -= Vec3::Constant(0.5 * opt.margin);
+  roi.hi += Vec3::Constant(0.5 * opt.margin);
+  triangles_touching(objects[p.a].mesh, roi, p.kept_a);
+  triangles_touching(objects[p.b].mesh, roi, p.kept_b);
   p.in_roi_a = p.kept_a.size();
   p.in_roi_b = p.kept_b.size();
   p.culled_out = p.kept_a.empty() || p.kept_b.empty();
@@ -167,8 +170,9 @@ std::pair<double, double> make_view_job(const ObjectRefs& objects, const FramePl
   const bool contact = opt.cull == Cull::contact;
   job.view = make_padded_roi_view(plan.region, frame_plan.boxes[ia], frame_plan.boxes[ib], frame, plan.tile);
   if (v == 0) epsilon = opt.epsilon > 0.0 ? opt.epsilon : job.view.texel();
-  const double min_a = triangles_in_view(objects[ia].mesh, job.view, contact ? &plan.kept_a : nullptr, tris_a);
-  const double min_b = triangles_in_view(objects[ib].mesh, job.view, contact ? &plan.kept_b : nullptr, tris_b);
+  const double grow = opt.conservative ? 0.5 * opt.margin : 0.0;
+  const double min_a = triangles_in_view(objects[ia].mesh, job.view, contact ? &plan.kept_a : nullptr, tris_a, grow);
+  const double min_b = triangles_in_view(objects[ib].mesh, job.view, contact ? &plan.kept_b : nullptr, tris_b, grow);
   job.objects[0] = &objects[ia];
   job.objects[1] = &objects[ib];
   job.pair_index = pair_index;
@@ -180,6 +184,7 @@ std::pair<double, double> make_view_job(const ObjectRefs& objects, const FramePl
   job.first = min_a > min_b ? 0 : 1;  // the farther object first; ties: B first
   job.capture = false;
   job.conservative = opt.conservative;
+  job.grow = grow;
   return {min_a, min_b};
 }
 

@@ -2,6 +2,7 @@
 #include "peelcd/core/proximity.h"
 
 #include "peelcd/core/bvh.h"
+#include "peelcd/core/id_map.h"
 #include "peelcd/core/self.h"
 
 #include <algorithm>
@@ -152,6 +153,19 @@ Proximity near_pairs(const Mesh& a, const Mesh& b, const Bvh& tree_b, double mar
 Proximity near_self_pairs(const Mesh& m, const Bvh& tree, const std::vector<std::uint32_t>& rep, double margin) {
   return search_near(m, m, tree, margin,
                      [&](std::uint32_t t, std::uint32_t u) { return u <= t || triangles_adjacent(m, rep, t, u); });
+}
+
+Proximity near_among(const Mesh& a, const Mesh& b, const std::vector<std::uint64_t>& candidates, double margin) {
+  Proximity r;
+  for (const std::uint64_t c : candidates) {
+    NearPair n;
+    n.tri_a = pair_a(c);
+    n.tri_b = pair_b(c);
+    n.distance = triangle_distance(corners(a, n.tri_a), corners(b, n.tri_b), n.p, n.q);
+    if (n.distance <= margin) r.pairs.push_back(n);
+  }
+  finish(r);
+  return r;
 }
 
 Proximity near_pairs(const Mesh& a, const Mesh& b, double margin) {

@@ -122,13 +122,17 @@ BoxScratch::~BoxScratch() = default;
 // reported. (The exact reference above keeps CGAL's
 // box_intersection_d: the two are checked against each other by every --check.)
 void box_overlap_pairs(const Mesh& a, const std::vector<std::uint32_t>& ta, const Mesh& b,
-                       const std::vector<std::uint32_t>& tb, std::vector<std::uint64_t>& out, BoxScratch* scratch) {
+                       const std::vector<std::uint32_t>& tb, std::vector<std::uint64_t>& out, BoxScratch* scratch,
+                       double margin) {
   std::vector<SweepBox> own_a, own_b;
   std::vector<SweepBox>& ba = scratch ? scratch->impl->a : own_a;
   std::vector<SweepBox>& bb = scratch ? scratch->impl->b : own_b;
   ba.clear();
   bb.clear();
-  for (const std::uint32_t t : ta) ba.push_back(sweep_box(a, t));
+  for (const std::uint32_t t : ta) {
+    ba.push_back(sweep_box(a, t));
+    for (int k = 0; k < 3; ++k) ba.back().lo[k] -= margin, ba.back().hi[k] += margin;
+  }
   for (const std::uint32_t t : tb) bb.push_back(sweep_box(b, t));
   if (ba.empty() || bb.empty()) return;
   const int ax = 0;  // along x (choosing the axis by the boxes' spread cost more than it saved here)

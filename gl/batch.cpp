@@ -13,6 +13,7 @@
 // capturing layers) a view gives the same layers and PCS either way (a point-sampled view smaller
 // than the batch's largest is placed by one more scaling: its samples may differ in the last bit).
 #include "stage_impl.h"
+#include "peelcd/core/conservative.h"
 #include "peelcd/core/texel.h"
 
 #include <algorithm>
@@ -224,7 +225,8 @@ void GlImageStage::Impl::gather_batch_object(const PeelJob& job, std::size_t j, 
     batch.entry_data.push_back({0x80000000u | corner, view_object, batch.corners.back().id, 0u});
     batch.ids.push_back(batch.corners.back().id);
   }
-  put_region(batch.region_data, lo, hi);
+  const float grow = float(job.grow);  // proximity: the region of the triangles grown (batch_select.comp)
+  put_region(batch.region_data, (lo.array() - grow).matrix(), (hi.array() + grow).matrix());
   out.triangles_uploaded += tris.size();
 }
 
@@ -233,16 +235,20 @@ void GlImageStage::Impl::gather_batch_object(const PeelJob& job, std::size_t j, 
 void GlImageStage::Impl::put_view_record(const PeelJob& job, std::size_t base, bool point, PeelResult& out) {
   const RoiView& view = job.view;
   const std::int32_t flags = point ? std::int32_t(job.peel == PeelMode::full) << 1 | std::int32_t(job.first & 1) : 0;
+  float grow_x = 0.0f, grow_z = 0.0f;  // conservative: the proximity growth (0 in point sampling)
+  if (!point) conservative::grow_of(job.grow, view.texel(), 2.0 * view.half_depth, grow_x, grow_z);
   const std::int32_t info[4] = {view.resolution, std::int32_t(base), flags, 0};
   float info_words[4];
   std::memcpy(info_words, info, sizeof info);
+  info_words[3] = grow_z;
   batch.view_data.insert(batch.view_data.end(), info_words, info_words + 4);
   const Vec3 half = 0.5 * view.box.extent();
-  batch.view_data.insert(batch.view_data.end(), {float(half.x()), float(half.y()), float(half.z()), 0.0f});
+  batch.view_data.insert(batch.view_data.end(), {float(half.x()), float(half.y()), float(half.z()), grow_x});
   out.epsilon_window = point ? float(view.world_to_window_depth(job.epsilon)) : 0.0f;
   out.slope = point ? float(job.slope) : 0.0f;
   const Vec3 lo = view.box.lo - view.center, hi = view.box.hi - view.center;
-  batch.view_data.insert(batch.view_data.end(), {float(lo.x()), float(lo.y()), float(lo.z()), out.epsilon_window});
+  const float w = point ? out.epsilon_window : float(job.grow);  // conservative: the growth, world units
+  batch.view_data.insert(batch.view_data.end(), {float(lo.x()), float(lo.y()), float(lo.z()), w});
   batch.view_data.insert(batch.view_data.end(), {float(hi.x()), float(hi.y()), float(hi.z()), out.slope});
 }
 
@@ -293,6 +299,7 @@ void GlImageStage::Impl::select_batch(const BatchRun& run) {
   gl.Uniform1ui(select.jobs, GLuint(batch.job_data.size()));
   gl.Uniform1ui(select.invocations, GLuint(run.invocations));
   gl.Uniform1ui(select.row, GLuint(gx * 64));
+  gl.Uniform1i(select.conservative, run.point ? 0 : 1);
   for (int pass = 0; pass < 2; ++pass) {
     gl.Uniform1i(select.pass, pass);
     gl.DispatchCompute(GLuint(gx), GLuint(gy), 1);

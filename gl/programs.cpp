@@ -120,6 +120,8 @@ void GlImageStage::Impl::locate_uniforms() {
   cons.res = gl.GetUniformLocation(cons.id, "resolution");
   cons.slots = gl.GetUniformLocation(cons.id, "slots");
   cons.object = gl.GetUniformLocation(cons.id, "object_bit");
+  cons.grow_texels = gl.GetUniformLocation(cons.id, "grow_texels");
+  cons.grow_depth = gl.GetUniformLocation(cons.id, "grow_depth");
   cons_resolve.res = gl.GetUniformLocation(cons_resolve.id, "resolution");
   cons_resolve.slots = gl.GetUniformLocation(cons_resolve.id, "slots");
   cons_resolve.append = gl.GetUniformLocation(cons_resolve.id, "append_pcs");
@@ -134,6 +136,7 @@ void GlImageStage::Impl::locate_uniforms() {
   point_batch_resolve.texels = gl.GetUniformLocation(point_batch_resolve.id, "texels");
   select.jobs = gl.GetUniformLocation(select.id, "job_count");
   select.invocations = gl.GetUniformLocation(select.id, "invocations");
+  select.conservative = gl.GetUniformLocation(select.id, "conservative");
   select.row = gl.GetUniformLocation(select.id, "row");
   select.pass = gl.GetUniformLocation(select.id, "pass");
   prefix_sum.texels = gl.GetUniformLocation(prefix_sum.id, "texels");

@@ -2,6 +2,7 @@
 // (shaders/abuffer.frag), then the layers and PCS recovered per texel, by a compute pass on the
 // GPU (shaders/abuffer_resolve.comp) or on the host (core/kbuffer.cpp) where GL runs on the CPU.
 #include "stage_impl.h"
+#include "peelcd/core/conservative.h"
 
 #include <algorithm>
 
@@ -240,6 +241,10 @@ bool GlImageStage::Impl::peel_conservative(const PeelJob& job, PeelResult& out, 
   gl.UniformMatrix4fv(cons.clip, 1, GL_FALSE, m.data());
   gl.Uniform1i(cons.res, n);
   gl.Uniform1ui(cons.slots, view_slots);
+  float grow_x = 0.0f, grow_z = 0.0f;
+  conservative::grow_of(job.grow, view.texel(), 2.0 * view.half_depth, grow_x, grow_z);
+  gl.Uniform1f(cons.grow_texels, grow_x);
+  gl.Uniform1f(cons.grow_depth, grow_z);
   gl.BindFramebuffer(GL_FRAMEBUFFER, bare_fbo);
   gl.Viewport(0, 0, n, n);
   gl.Disable(GL_DEPTH_TEST);

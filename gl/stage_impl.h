@@ -84,7 +84,7 @@ struct ResolveProgram {
 // shaders/conservative.{vert,geom,frag}: the conservative draw into the k-buffer.
 struct ConservativeProgram {
   GLuint id = 0;
-  GLint clip = -1, model = -1, res = -1, slots = -1, object = -1;
+  GLint clip = -1, model = -1, res = -1, slots = -1, object = -1, grow_texels = -1, grow_depth = -1;
 };
 // shaders/conservative_resolve.comp: its GPU resolve.
 struct ConservativeResolveProgram {
@@ -112,7 +112,7 @@ struct DeepProgram {
 // shaders/batch_select.comp: the batch's GPU selection of rigid objects' triangles.
 struct SelectProgram {
   GLuint id = 0;
-  GLint jobs = -1, invocations = -1, row = -1, pass = -1;
+  GLint jobs = -1, invocations = -1, row = -1, pass = -1, conservative = -1;
 };
 // shaders/prefix_sum.comp: the prefix sum of the count pass's counts.
 struct PrefixSumProgram {

@@ -18,7 +18,8 @@
 //      draw's entries, and its three vertices to the indirect draw's count (which the host set
 //      to the entries it wrote itself, those of deforming objects).
 // Regions are kept as ordered integers (a float's bits, flipped so that integer order is float
-// order: atomicMin and atomicMax merge them).
+// order: atomicMin and atomicMax merge them). With a proximity margin (conservative views) every
+// triangle's box is grown by half the margin in both passes (as the host's selection grows them).
 layout(local_size_x = 64) in;
 
 #include "batch.inc"  // the views
@@ -36,6 +37,10 @@ uniform uint job_count;
 uniform uint invocations;
 uniform uint row;  // invocations per row of the dispatch (work groups along x times 64)
 uniform int pass;
+uniform int conservative;  // conservative views: triangle boxes grown by the proximity growth
+
+// The growth of view's triangles (PeelJob::grow: 0 without a margin).
+float grow_of(uint view) { return conservative != 0 ? views[view].box_lo.w : 0.0; }
 
 uint ordered(float f) {
   uint b = floatBitsToUint(f);
@@ -70,6 +75,8 @@ void main() {
     vec3 lo_r = max(max(lo_a, lo_b), -h) - vec3(margin), hi_r = min(min(hi_a, hi_b), h) + vec3(margin);
     vec3 lo3, hi3;
     triangle_box(e.x, views[view].roi_from_object[e.y & 1u], lo3, hi3);
+    lo3 -= vec3(grow_of(view));
+    hi3 += vec3(grow_of(view));
     if (any(greaterThan(lo3, hi_r)) || any(lessThan(hi3, lo_r))) return;
     uint slot = atomicAdd(vertex_count, 3u) / 3u;
     entries[slot] = e;
@@ -88,6 +95,8 @@ void main() {
   vec3 reach = h + vec3(1.0e-3 * max(max(h.x, h.y), h.z));
   vec3 lo3, hi3;
   triangle_box(corner, views[view].roi_from_object[job.z & 1u], lo3, hi3);
+  lo3 -= vec3(grow_of(view));
+  hi3 += vec3(grow_of(view));
   if (any(greaterThan(lo3, reach)) || any(lessThan(hi3, -reach))) return;
   staged[atomicAdd(staged_header.w, 1u)] = uvec4(corner, job.z, resident[corner + 2u].w, 0u);
   uint r = 12u * view + 6u * (job.z & 1u);

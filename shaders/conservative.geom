@@ -25,6 +25,8 @@ flat out uint g_view;
 #else
 uniform mat4 clip_from_local;
 uniform int resolution;
+uniform float grow_texels;  // proximity: every triangle grown by PeelJob::grow (texels,
+uniform float grow_depth;   // window depth; 0 without a margin)
 #endif
 
 flat out vec3 g_x;       // window x of the three corners, texels
@@ -43,6 +45,8 @@ void main() {
   mat4 clip_from_local = views[v_view[0] >> 1].clip_from_local;
   float n = float(views[v_view[0] >> 1].info.x);
   float w = float(viewport);
+  float grow_texels = views[v_view[0] >> 1].half_box.w;
+  float grow_depth = intBitsToFloat(views[v_view[0] >> 1].info.w);
 #else
   float n = float(resolution);
   float w = n;
@@ -59,8 +63,8 @@ void main() {
                    abs(clip_from_local[2].xyz) * m.z + abs(clip_from_local[3].xyz));
   }
   float big = max(max(max(abs(wx.x), abs(wx.y)), max(abs(wx.z), abs(wy.x))), max(abs(wy.y), abs(wy.z)));
-  float mx = max(e.x, e.y) * kVertexRel * (0.5 * n) + kWindowRel * (big + n) + kTexelAbs;
-  float mz = e.z * kVertexRel * 0.5 + kDepthAbs;
+  float mx = max(e.x, e.y) * kVertexRel * (0.5 * n) + kWindowRel * (big + n) + kTexelAbs + grow_texels;
+  float mz = e.z * kVertexRel * 0.5 + kDepthAbs + grow_depth;
   // Wholly in front of or behind the ROI's depth range: no fragment can hold a contact.
   if (max(max(wz.x, wz.y), wz.z) + mz < 0.0 || min(min(wz.x, wz.y), wz.z) - mz > 1.0) return;
   float h = 0.5 + mx + 1.0 / 16.0;  // texel centres within h of the box: strictly inside the quad

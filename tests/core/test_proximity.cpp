@@ -1,6 +1,7 @@
 // Proximity (peelcd/core/proximity.h, DetectOptions::margin): triangle distances against CGAL's
 // exact distances, every pair within the margin against a brute-force exact reference (two
-// objects, one object's self pairs), the same through the frame API on both paths and the World.
+// objects, one object's self pairs), the same through the frame API on both paths and the World
+// (tests/eval/test_proximity_classes.cpp: the stages' candidates on every class).
 #include "peelcd/core/cpu_stage.h"
 #include "peelcd/core/detector.h"
 #include "peelcd/core/primitives.h"

@@ -1,6 +1,7 @@
 // Conservative mode on the GL stage (shaders/conservative.*): no colliding pair is missed on any
 // class of geometry at several resolutions, nor on random intersecting pairs; a view no
 // k-buffer can hold falls back to the exact CPU path. Point sampling keeps ties in both peelers.
+#include "../core/proximity_cases.h"
 #include "../core/random_contacts.h"
 #include "gl_fixture.h"
 #include "peelcd/core/primitives.h"
@@ -406,4 +407,34 @@ TEST_CASE("the World's image-routed pairs together in one batch or one at a time
     runs.push_back(all);
   }
   CHECK(runs[0] == runs[1]);
+}
+
+TEST_CASE("conservative mode serves proximity: no pair within the margin missed, one view and batched", "[conservative][proximity]") {
+  // Triangles grown by half the margin (PeelJob::grow) in the geometry shader, the batch's view
+  // records and the GPU's selection: one view drawn alone, three batched with the host's and the
+  // GPU's resolve, and the objects made rigid (the GPU selects their triangles).
+  const std::vector<GeometryClass> scenes = test::proximity_scenes();
+  std::size_t within = 0;
+  for (const bool rigid : {false, true})
+    for (const Resolve resolve : {Resolve::host, Resolve::gpu}) {
+      gl::GlOptions o;
+      o.resolve = resolve;
+      test_pipeline().set_gl_options(o);
+      for (GeometryClass g : scenes) {
+        if (rigid)
+          for (Object& object : g.objects)
+            object.rigid = RigidMotion{std::make_shared<const Mesh>(object.mesh), Eigen::Affine3d::Identity()};
+        for (const double rel : {1e-3, 2e-2})
+          for (const int views : {1, 3}) {
+            DetectOptions opt;
+            opt.stage = Stage::image;
+            opt.views = views;
+            opt.margin = rel * test::scene_size(g);
+            INFO((rigid ? "rigid, " : "deforming, ") << "resolve " << to_string(resolve) << ", " << views << " views");
+            within += test::check_near(test_pipeline().detector(), g, opt);
+          }
+      }
+      test_pipeline().set_gl_options(gl::GlOptions{});
+    }
+  CHECK(within > 1000);
 }

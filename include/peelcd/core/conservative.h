@@ -8,6 +8,7 @@
 // window depth (0 at the near face of the ROI's depth range, 1 at the far face).
 #include <algorithm>
 #include <cmath>
+#include <limits>
 
 namespace peelcd::conservative {
 
@@ -25,12 +26,22 @@ struct Triangle {
 };
 
 // The margins of a triangle whose corners' clip coordinates carry at most `ex`, `ey`, `ez`
-// times kVertexRel of error (|M| |p| + |M_t| per corner, the largest), in a view of n texels.
-inline void set_margins(Triangle& t, float ex, float ey, float ez, int n) {
+// times kVertexRel of error (|M| |p| + |M_t| per corner, the largest), in a view of n texels;
+// plus `gx` texels and `gz` of window depth, the growth for proximity (grow_of()).
+inline void set_margins(Triangle& t, float ex, float ey, float ez, int n, float gx = 0.0f, float gz = 0.0f) {
   float big = 0.0f;
   for (int k = 0; k < 3; ++k) big = std::max(big, std::max(std::fabs(t.x[k]), std::fabs(t.y[k])));
-  t.mx = std::max(ex, ey) * kVertexRel * (0.5f * float(n)) + kWindowRel * (big + float(n)) + kTexelAbs;
-  t.mz = ez * kVertexRel * 0.5f + kDepthAbs;
+  t.mx = std::max(ex, ey) * kVertexRel * (0.5f * float(n)) + kWindowRel * (big + float(n)) + kTexelAbs + gx;
+  t.mz = ez * kVertexRel * 0.5f + kDepthAbs + gz;
+}
+
+// A growth of `grow` world units (PeelJob::grow) in texels of side `texel` (gx) and in window
+// depth over a depth range of `depth_range` world units (gz), rounded up to floats: zero for no
+// growth (the margins then are those without proximity, bit for bit).
+inline void grow_of(double grow, double texel, double depth_range, float& gx, float& gz) {
+  const float inf = std::numeric_limits<float>::infinity();
+  gx = grow > 0.0 ? std::nextafter(float(grow / texel), inf) : 0.0f;
+  gz = grow > 0.0 ? std::nextafter(float(grow / depth_range), inf) : 0.0f;
 }
 
 // Does the triangle, grown by its margins, touch texel (i, j)? If so, [lo, hi] is the depth

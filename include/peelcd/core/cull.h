@@ -58,7 +58,11 @@ constexpr int kMaxCullRounds = 3;
 // `max_rounds` rounds (1 to kMaxCullRounds). The detector's exact CPU path stops after one round
 // (later rounds cost more than the box overlaps they save there); the image stage takes all of
 // them (fewer triangles drawn, a smaller region, a finer tile).
+// `margin` > 0 (proximity, DetectOptions::margin): every triangle's box is grown by half the
+// margin, so that two triangles within the margin of each other share a cell (their closest
+// points' midpoint lies in both grown boxes) and are kept; `roi` is then the overlap of the
+// objects' boxes grown by half the margin.
 void cull_to_contact_region(const Mesh& a, const Mesh& b, const Aabb& roi, ContactCull& out,
-                            int max_rounds = kMaxCullRounds);
+                            int max_rounds = kMaxCullRounds, double margin = 0.0);
 
 }  // namespace peelcd

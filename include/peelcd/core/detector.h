@@ -56,10 +56,11 @@ std::string pose_problem(const Eigen::Affine3d& pose);
 void validate_options(const DetectOptions& options, int max_resolution);
 
 // The triangles of `mesh` (all, or those listed in `only`, ascending) whose box touches
-// `view.box`, ascending, into `out`. Returns the smallest depth along the view direction of
-// their corners, clamped to [-half_depth, half_depth] (half_depth when there is none).
+// `view.box` (grown by `grow` on every side), ascending, into `out`. Returns the smallest depth
+// along the view direction of their corners, clamped to [-half_depth, half_depth] (half_depth
+// when there is none).
 double triangles_in_view(const Mesh& mesh, const RoiView& view, const std::vector<std::uint32_t>* only,
-                         std::vector<std::uint32_t>& out);
+                         std::vector<std::uint32_t>& out, double grow = 0.0);
 
 // Triangle t's box touches `box` (closed): the test of triangles_touching() and culling's ROI.
 bool triangle_touches(const Mesh& mesh, std::uint32_t t, const Aabb& box);

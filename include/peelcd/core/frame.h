@@ -165,9 +165,12 @@ struct PairResult {
 };
 
 // Fills each pair's relation (and with options.volume its volume) from its contacts and the
-// objects' meshes: `mesh_of(i)` gives object i's world mesh (called only when needed).
+// objects' meshes: `mesh_of(i)` gives object i's world mesh (called only when needed). With
+// options.margin, also each pair's `near` by a tree search, except for the pairs whose
+// `near_found[i]` is set (their stage found them from its candidates).
 void relate_pairs(std::vector<PairResult>& pairs, const std::function<const Mesh&(std::size_t)>& mesh_of,
-                  const std::vector<Aabb>& boxes, const DetectOptions& options);
+                  const std::vector<Aabb>& boxes, const DetectOptions& options,
+                  const std::vector<char>* near_found = nullptr);
 
 // Which path tested a pair, in one word: "exact" (the exact CPU path), "image" (the image
 // stage's PCS), "exhaustive" (every view fell back to box-overlap tests: no layer, no PCS) or

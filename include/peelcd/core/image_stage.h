@@ -34,6 +34,10 @@ struct PeelJob {
   // (lower depth bits, object << 31 | ID + 1, upper depth bits, 0); the PCS are all overlapping
   // couples of different objects in a texel; `peel`, `epsilon` and `slope` do not apply.
   bool conservative = false;
+  // Conservative mode, proximity (DetectOptions::margin): every triangle is grown by `grow`
+  // (world units, half the margin) on every side, so that two triangles within the margin of
+  // each other overlap in a texel (at their closest points' midpoint) and make a PCS.
+  double grow = 0.0;
 };
 
 // What a stage returns for one job.

@@ -43,5 +43,9 @@ Proximity near_self_pairs(const Mesh& m, const std::vector<std::uint32_t>& rep, 
 // same mesh): a frame builds each object's tree once for all its pairs.
 Proximity near_pairs(const Mesh& a, const Mesh& b, const Bvh& tree_b, double margin);
 Proximity near_self_pairs(const Mesh& m, const Bvh& tree, const std::vector<std::uint32_t>& rep, double margin);
+// The pairs within `margin` among `candidates` (pack_pair(tri_a, tri_b)): a stage's candidates
+// when every pair within the margin is among them (the image stage's conservative PCS with
+// triangles grown by half the margin, the exact path's boxes grown by the margin).
+Proximity near_among(const Mesh& a, const Mesh& b, const std::vector<std::uint64_t>& candidates, double margin);
 
 }  // namespace peelcd

@@ -20,7 +20,8 @@ std::vector<std::uint64_t> exact_pair_reference(const std::vector<Object>& objec
 // Appends pack_pair(triA, triB) for every triangle of `ta` (of A) and of `tb` (of B) whose
 // closed boxes overlap, by a sweep along x: the candidates of the exact CPU path (no image stage).
 // With `scratch`, the boxes' storage is kept there from call to call (a frame loop allocates
-// nothing once it has grown).
+// nothing once it has grown). `margin` > 0 grows A's boxes by it: every couple within the
+// margin of each other is among the pairs (proximity).
 class BoxScratch {
  public:
   BoxScratch();
@@ -30,7 +31,7 @@ class BoxScratch {
 };
 void box_overlap_pairs(const Mesh& a, const std::vector<std::uint32_t>& ta, const Mesh& b,
                        const std::vector<std::uint32_t>& tb, std::vector<std::uint64_t>& out,
-                       BoxScratch* scratch = nullptr);
+                       BoxScratch* scratch = nullptr, double margin = 0.0);
 
 // The same pairs through CGAL's box_intersection_d (the benchmark's CGAL peer; the exact
 // reference uses it too). box_overlap_pairs() sweeps along x instead: faster on the few thousand
