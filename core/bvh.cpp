@@ -8,43 +8,57 @@ namespace peelcd {
 void Bvh::build(const std::vector<Vec3>& vertices, const std::vector<Tri>& triangles) {
   const std::size_t n = triangles.size();
   nodes_.clear();
+  leaves_.clear();
+  leaf_node_.clear();
   parents_.clear();
   depth_ = 0;
-  boxes_.resize(n);
   order_.resize(n);
   leaf_of_.resize(n);
+  lane_of_.resize(n);
   box_ = Aabb{};
   std::iota(order_.begin(), order_.end(), 0u);
   if (n == 0) return;
   std::vector<Vec3> centroids(n);
+  std::vector<FBox>& boxes = boxes_;
+  boxes.resize(n);
   for (std::size_t t = 0; t < n; ++t) {
     const Aabb b = triangle_bounds(vertices, triangles[t]);
-    boxes_[t] = FBox::enclosing(b);
+    boxes[t] = FBox::enclosing(b);
     centroids[t] = b.center();
     box_.extend(b.lo);
     box_.extend(b.hi);
   }
   nodes_.reserve(2 * ((n + kBvhLeafSize - 1) / kBvhLeafSize));
   parents_.reserve(nodes_.capacity());
-  build_node(0, std::uint32_t(n), 0, 1, centroids);
+  leaves_.reserve(nodes_.capacity() / 2 + 1);
+  build_node(0, std::uint32_t(n), 0, 1, centroids, boxes);
   dirty_.assign(nodes_.size(), 0);
 }
 
 std::uint32_t Bvh::build_node(std::uint32_t begin, std::uint32_t end, std::uint32_t parent, std::size_t level,
-                              std::vector<Vec3>& centroids) {
+                              std::vector<Vec3>& centroids, const std::vector<FBox>& boxes) {
   const std::uint32_t index = std::uint32_t(nodes_.size());
   nodes_.emplace_back();
   parents_.push_back(parent);
   depth_ = std::max(depth_, level);
   if (end - begin <= kBvhLeafSize) {
+    BvhLeaf& leaf = leaves_.emplace_back();
+    const FBox empty;
     FBox box;
-    for (std::uint32_t i = begin; i < end; ++i) {
-      box.merge(boxes_[order_[i]]);
-      leaf_of_[order_[i]] = index;
+    for (std::uint32_t lane = 0; lane < kBvhLeafSize; ++lane) {
+      const bool used = begin + lane < end;
+      const std::uint32_t t = used ? order_[begin + lane] : 0u;
+      leaf.tri[lane] = t;
+      leaf.set(lane, used ? boxes[t] : empty);
+      if (!used) continue;
+      box.merge(boxes[t]);
+      leaf_of_[t] = index;
+      lane_of_[t] = std::uint8_t(lane);
     }
     nodes_[index].box = box;
-    nodes_[index].first = begin;
+    nodes_[index].first = std::uint32_t(leaves_.size() - 1);
     nodes_[index].count = end - begin;
+    leaf_node_.push_back(index);
     return index;
   }
   Aabb cbox;
@@ -58,8 +72,8 @@ std::uint32_t Bvh::build_node(std::uint32_t begin, std::uint32_t end, std::uint3
                      const double ca = centroids[a][axis], cb = centroids[b][axis];
                      return ca < cb || (ca == cb && a < b);
                    });
-  build_node(begin, mid, index, level + 1, centroids);  // the left child: index + 1
-  const std::uint32_t right = build_node(mid, end, index, level + 1, centroids);
+  build_node(begin, mid, index, level + 1, centroids, boxes);  // the left child: index + 1
+  const std::uint32_t right = build_node(mid, end, index, level + 1, centroids, boxes);
   nodes_[index].first = right;
   nodes_[index].count = 0;
   FBox box = nodes_[index + 1].box;
@@ -72,7 +86,8 @@ void Bvh::refit_node(std::uint32_t i) {
   BvhNode& node = nodes_[i];
   FBox box;
   if (node.leaf()) {
-    for (std::uint32_t k = node.first; k < node.first + node.count; ++k) box.merge(boxes_[order_[k]]);
+    const BvhLeaf& leaf = leaves_[node.first];
+    for (std::uint32_t lane = 0; lane < node.count; ++lane) box.merge(leaf.box(lane));
   } else {
     box = nodes_[i + 1].box;
     box.merge(nodes_[node.first].box);
@@ -81,12 +96,15 @@ void Bvh::refit_node(std::uint32_t i) {
 }
 
 void Bvh::refit(const std::vector<Vec3>& vertices, const std::vector<Tri>& triangles) {
-  refit_nodes(refit_triangles(vertices, triangles, 0, boxes_.size()));
+  refit_nodes(refit_triangles(vertices, triangles, 0, triangles.size()));
 }
 
+// Triangle by triangle in the mesh's order (its vertices read in order); the leaves gather the
+// boxes in refit_nodes().
 Aabb Bvh::refit_triangles(const std::vector<Vec3>& vertices, const std::vector<Tri>& triangles, std::size_t begin,
                           std::size_t end) {
   Aabb exact;
+  if (boxes_.size() != triangles.size()) boxes_.resize(triangles.size());  // (a caller splitting sizes it first)
   for (std::size_t t = begin; t < end; ++t) {
     const Aabb b = triangle_bounds(vertices, triangles[t]);
     boxes_[t] = FBox::enclosing(b);
@@ -98,8 +116,25 @@ Aabb Bvh::refit_triangles(const std::vector<Vec3>& vertices, const std::vector<T
 
 void Bvh::refit_nodes(const Aabb& exact) {
   box_ = exact;
+  for (std::size_t l = 0; l < leaves_.size(); ++l) {  // each leaf's lanes from the triangles' boxes
+    BvhLeaf& leaf = leaves_[l];
+    BvhNode& node = nodes_[leaf_node_[l]];
+    FBox box;
+    for (std::uint32_t lane = 0; lane < node.count; ++lane) {
+      const FBox& f = boxes_[leaf.tri[lane]];
+      leaf.set(lane, f);
+      box.merge(f);
+    }
+    node.box = box;
+  }
   // Children follow their parents: one sweep from the last node refits bottom-up.
-  for (std::size_t i = nodes_.size(); i-- > 0;) refit_node(std::uint32_t(i));
+  for (std::size_t i = nodes_.size(); i-- > 0;) {
+    BvhNode& node = nodes_[i];
+    if (node.leaf()) continue;
+    FBox box = nodes_[i + 1].box;
+    box.merge(nodes_[node.first].box);
+    node.box = box;
+  }
 }
 
 void Bvh::refit(const std::vector<Vec3>& vertices, const std::vector<Tri>& triangles,
@@ -110,11 +145,12 @@ void Bvh::refit(const std::vector<Vec3>& vertices, const std::vector<Tri>& trian
   // triangle when a changed one's old box reached its boundary (it may shrink).
   bool recompute = false;
   for (const std::uint32_t t : changed) {
-    const FBox& old = boxes_[t];
+    BvhLeaf& leaf = leaves_[nodes_[leaf_of_[t]].first];
+    const FBox old = leaf.box(lane_of_[t]);
     for (int k = 0; k < 3; ++k)
       if (double(old.lo[k]) <= box_.lo[k] || double(old.hi[k]) >= box_.hi[k]) recompute = true;
     const Aabb b = triangle_bounds(vertices, triangles[t]);
-    boxes_[t] = FBox::enclosing(b);
+    leaf.set(lane_of_[t], FBox::enclosing(b));
     box_.extend(b.lo);
     box_.extend(b.hi);
     // Mark the leaf and its ancestors once; collect them.
@@ -157,8 +193,9 @@ void Bvh::query(const Aabb& box, std::vector<std::uint32_t>& out) const {
     const BvhNode& node = nodes_[i];
     if (!node.box.overlaps(box)) continue;
     if (node.leaf()) {
-      for (std::uint32_t k = node.first; k < node.first + node.count; ++k)
-        if (boxes_[order_[k]].overlaps(box)) out.push_back(order_[k]);
+      const BvhLeaf& leaf = leaves_[node.first];
+      for (std::uint32_t lane = 0; lane < node.count; ++lane)
+        if (leaf.box(lane).overlaps(box)) out.push_back(leaf.tri[lane]);
     } else {
       stack[top++] = node.first;
       stack[top++] = i + 1;

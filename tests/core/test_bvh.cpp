@@ -146,6 +146,10 @@ TEST_CASE("Bvh: a refit in ranges (as the World splits it over threads) equals a
   }
   CHECK(split.box().lo == bounds(m).lo);
   CHECK(split.box().hi == bounds(m).hi);
+  for (std::uint32_t t = 0; t < m.triangles.size(); ++t) {  // every triangle's box the new one
+    const FBox want = FBox::enclosing(triangle_bounds(m, t)), got = split.triangle_box(t);
+    for (int k = 0; k < 3; ++k) REQUIRE((got.lo[k] == want.lo[k] && got.hi[k] == want.hi[k]));
+  }
 }
 
 TEST_CASE("Bvh: the traversal of two posed trees finds every couple of overlapping boxes", "[bvh]") {
