@@ -138,16 +138,21 @@ void World::Impl::find_pairs(const DetectOptions& opt) {
 
 // The traversals' tasks: per pair, one task, or (several lanes) the node pairs of its first
 // levels; a self pair one traversal of the body's own tree (none for a rigid body's cache); two
-// small world-space bodies, one of them moved, one scan. Returns the tasks used.
+// small world-space bodies, one of them moved, one scan when each moved one is in no other pair
+// (Body::small()). Returns the tasks used.
 std::size_t World::Impl::plan_tasks(unsigned lanes) {
   std::size_t used = 0;
+  pairs_of.assign(ids.size(), 0);
+  for (const auto& [i, j] : pairs)
+    if (i != j) ++pairs_of[i], ++pairs_of[j];
   for (std::size_t p = 0; p < pairs.size(); ++p) {
     Body& a = bodies[ids[pairs[p].first]];
     Body& b = bodies[ids[pairs[p].second]];
     if (&a == &b) {
       split.clear();
       if (!(a.is_rigid && a.self_cached)) split.assign(1, BvhNodePair{kSelfPair, kSelfPair});
-    } else if (a.small() && b.small() && a.world_mesh() && b.world_mesh() && (a.moved || b.moved)) {
+    } else if (a.small() && b.small() && a.world_mesh() && b.world_mesh() && (a.moved || b.moved) &&
+               (!a.moved || pairs_of[pairs[p].first] == 1) && (!b.moved || pairs_of[pairs[p].second] == 1)) {
       split.assign(1, BvhNodePair{kSmallPair, kSmallPair});
     } else {
       a.ensure_world_tree();
@@ -201,8 +206,9 @@ void World::Impl::traverse(std::size_t used, unsigned lanes) {
       return;
     }
     const BvhRelation rel = BvhRelation::between(a.frame_pose(), b.frame_pose());
-    t.visited = bvh_traverse(a.frame_tree(), b.frame_tree(), rel, t.start, stacks[lane],
-                             [&](std::uint32_t ta, std::uint32_t tb) { t.candidates.push_back(pack_pair(ta, tb)); });
+    const auto take = [&](std::uint32_t ta, std::uint32_t tb) { t.candidates.push_back(pack_pair(ta, tb)); };
+    t.visited = rel.identity ? bvh_traverse_same_frame(a.frame_tree(), b.frame_tree(), t.start, self_stacks[lane], take)
+                             : bvh_traverse(a.frame_tree(), b.frame_tree(), rel, t.start, stacks[lane], take);
   });
 }
 

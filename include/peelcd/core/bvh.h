@@ -329,6 +329,43 @@ std::size_t bvh_traverse(const Bvh& a, const Bvh& b, const BvhRelation& rel, Bvh
   return visited;
 }
 
+// bvh_traverse() for two trees in one frame (BvhRelation::identity): float boxes compared as
+// they are, the stack of node pairs alone. The same couples.
+template <class Fn>
+std::size_t bvh_traverse_same_frame(const Bvh& a, const Bvh& b, BvhNodePair start, std::vector<BvhNodePair>& stack,
+                                    Fn&& fn) {
+  const auto& na = a.nodes();
+  const auto& nb = b.nodes();
+  stack.clear();
+  if (!na[start.first].box.overlaps(nb[start.second].box)) return 1;
+  stack.push_back(start);
+  std::size_t visited = 0;
+  while (!stack.empty()) {
+    const auto [i, j] = stack.back();
+    stack.pop_back();
+    ++visited;
+    const BvhNode& x = na[i];
+    const BvhNode& y = nb[j];
+    // Invariant: x.box overlaps y.box (tested before the push).
+    if (x.leaf() && y.leaf()) {
+      const BvhLeaf& la = a.leaf(x);
+      const BvhLeaf& lb = b.leaf(y);
+      for (std::uint32_t u = 0; u < x.count; ++u) {
+        const FBox ba = la.box(u);
+        if (!ba.overlaps(y.box)) continue;
+        for (unsigned m = overlap_mask(ba, lb); m;) fn(la.tri[u], lb.tri[take_lane(m)]);
+      }
+    } else if (y.leaf() || (!x.leaf() && x.box.max_extent() >= y.box.max_extent())) {
+      for (const std::uint32_t c : {i + 1, x.first})
+        if (na[c].box.overlaps(y.box)) stack.push_back({c, j});
+    } else {
+      for (const std::uint32_t c : {j + 1, y.first})
+        if (x.box.overlaps(nb[c].box)) stack.push_back({i, c});
+    }
+  }
+  return visited;
+}
+
 // Every couple of distinct triangles of one tree whose boxes overlap (closed): fn(t, u), once
 // per couple, in no particular order of t and u (the self-collision search: the caller drops
 // adjacent couples). `stack` is scratch. Returns the node pairs visited.
