@@ -208,3 +208,32 @@ TEST_CASE("Bvh: the self traversal gives every couple of distinct triangles whos
     REQUIRE(grown.overlaps(triangle_bounds(m, y)));
   }
 }
+
+TEST_CASE("Bvh: two trees in one frame, traversed on float boxes, give every couple of overlapping boxes", "[bvh]") {
+  // bvh_traverse_same_frame() (the World's pairs of world-space trees) against the scan and
+  // against the posed traversal at identity poses, from the roots and split into tasks.
+  const Mesh a = make_uv_sphere(Vec3(0, 0, 0), 1.0, 12, 16);
+  const Mesh grid = make_grid(Vec3(-1, -1, 0), Vec3(2, 0, 0), Vec3(0, 2, 0), 9, 9);
+  Bvh ta, tg;
+  ta.build(a.vertices, a.triangles);
+  tg.build(grid.vertices, grid.triangles);
+  const Eigen::Affine3d id = Eigen::Affine3d::Identity();
+  const BvhRelation rel = BvhRelation::between(id, id);
+  REQUIRE(rel.identity);
+  std::vector<BvhNodePair> stack;
+  std::vector<BvhStackEntry> posed_stack;
+  std::set<std::pair<std::uint32_t, std::uint32_t>> got, posed;
+  bvh_traverse_same_frame(ta, tg, BvhNodePair{0u, 0u}, stack,
+                          [&](std::uint32_t x, std::uint32_t y) { REQUIRE(got.emplace(x, y).second); });
+  bvh_traverse(ta, tg, rel, BvhNodePair{0u, 0u}, posed_stack, [&](std::uint32_t x, std::uint32_t y) { posed.emplace(x, y); });
+  const auto want = scan(a, id, grid, id);
+  CHECK(got == want);
+  CHECK(posed == want);
+  CHECK_FALSE(want.empty());
+  std::vector<BvhNodePair> tasks;
+  bvh_split(ta, tg, rel, 6, tasks);
+  std::set<std::pair<std::uint32_t, std::uint32_t>> split;
+  for (const BvhNodePair& start : tasks)
+    bvh_traverse_same_frame(ta, tg, start, stack, [&](std::uint32_t x, std::uint32_t y) { REQUIRE(split.emplace(x, y).second); });
+  CHECK(split == want);
+}

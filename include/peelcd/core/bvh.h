@@ -266,6 +266,11 @@ void bvh_split(const Bvh& a, const Bvh& b, const BvhRelation& rel, std::size_t t
 
 // Every couple (triangle of a, triangle of b) under the node pair `start` whose boxes overlap (B's
 // through `rel`): fn(tri_a, tri_b). `stack` is scratch. Returns the node pairs visited.
+// Posed trees: a node pair is pushed when the boxes overlap in A's frame (and, descending B, in
+// B's too); a couple is reported when A's triangle box overlaps B's leaf in A's frame and,
+// carried into B's frame and rounded outward, B's triangle box there (one transform per
+// triangle of A, B's eight boxes tested at once). Boxes carried through a pose are boxes of
+// boxes: some couples whose own boxes do not overlap are reported (the exact test decides).
 template <class Fn>
 std::size_t bvh_traverse(const Bvh& a, const Bvh& b, const BvhRelation& rel, BvhNodePair start,
                          std::vector<BvhStackEntry>& stack, Fn&& fn) {
@@ -278,7 +283,6 @@ std::size_t bvh_traverse(const Bvh& a, const Bvh& b, const BvhRelation& rel, Bvh
     if (!rel.overlap(na[start.first].box.aabb(), yb, nb[start.second].box.aabb())) return 1;
     stack.push_back({start.first, start.second, yb});
   }
-  Aabb leaf_boxes[kBvhLeafSize];
   while (!stack.empty()) {
     const BvhStackEntry e = stack.back();
     stack.pop_back();
@@ -297,13 +301,14 @@ std::size_t bvh_traverse(const Bvh& a, const Bvh& b, const BvhRelation& rel, Bvh
         }
         continue;
       }
-      for (std::uint32_t v = 0; v < y.count; ++v) leaf_boxes[v] = rel.to_a(lb.box(v).aabb());
+      // Each of A's triangle boxes that reaches B's leaf, seen from B (rounded outward to
+      // floats), against B's eight at once.
       for (std::uint32_t u = 0; u < x.count; ++u) {
         const Aabb ba = la.box(u).aabb();
         if (!ba.overlaps(e.b_in_a)) continue;
-        const Aabb a_in_b = rel.to_b(ba);
-        for (std::uint32_t v = 0; v < y.count; ++v)
-          if (ba.overlaps(leaf_boxes[v]) && lb.box(v).overlaps(a_in_b)) fn(la.tri[u], lb.tri[v]);
+        const FBox a_in_b = FBox::enclosing(rel.to_b(ba));
+        if (!a_in_b.overlaps(y.box)) continue;
+        for (unsigned m = overlap_mask(a_in_b, lb); m;) fn(la.tri[u], lb.tri[take_lane(m)]);
       }
     } else if (y.leaf() || (!x.leaf() && double(x.box.max_extent()) >= e.b_in_a.extent().maxCoeff())) {
       if (rel.identity) {
@@ -311,7 +316,7 @@ std::size_t bvh_traverse(const Bvh& a, const Bvh& b, const BvhRelation& rel, Bvh
           if (na[c].box.overlaps(e.b_in_a)) stack.push_back({c, e.b, e.b_in_a});
       } else {
         for (const std::uint32_t c : {e.a + 1, x.first})
-          if (na[c].box.overlaps(e.b_in_a) && y.box.overlaps(rel.to_b(na[c].box.aabb()))) stack.push_back({c, e.b, e.b_in_a});
+          if (na[c].box.overlaps(e.b_in_a)) stack.push_back({c, e.b, e.b_in_a});
       }
     } else if (rel.identity) {
       for (const std::uint32_t c : {e.b + 1, y.first})
