@@ -17,10 +17,18 @@ void Bvh::build(const std::vector<Vec3>& vertices, const std::vector<Tri>& trian
   lane_of_.resize(n);
   box_ = Aabb{};
   std::iota(order_.begin(), order_.end(), 0u);
+  vertex_boxes_.resize(vertices.size());
+  unused_.clear();
   if (n == 0) return;
+  std::vector<std::uint8_t> used(vertices.size(), 0);
+  for (const Tri& f : triangles)
+    for (const std::uint32_t v : f) used[v] = 1;
+  if (std::find(used.begin(), used.end(), 0) != used.end()) {  // vertices no triangle uses: kept out of box()
+    unused_.resize(used.size());
+    for (std::size_t v = 0; v < used.size(); ++v) unused_[v] = !used[v];
+  }
   std::vector<Vec3> centroids(n);
-  std::vector<FBox>& boxes = boxes_;
-  boxes.resize(n);
+  std::vector<FBox> boxes(n);
   for (std::size_t t = 0; t < n; ++t) {
     const Aabb b = triangle_bounds(vertices, triangles[t]);
     boxes[t] = FBox::enclosing(b);
@@ -96,38 +104,52 @@ void Bvh::refit_node(std::uint32_t i) {
 }
 
 void Bvh::refit(const std::vector<Vec3>& vertices, const std::vector<Tri>& triangles) {
-  refit_nodes(refit_triangles(vertices, triangles, 0, triangles.size()));
+  const Aabb exact = refit_vertices(vertices, 0, vertices.size());
+  refit_leaves(triangles, 0, leaves_.size());
+  refit_nodes(exact);
 }
 
-// Triangle by triangle in the mesh's order (its vertices read in order); the leaves gather the
-// boxes in refit_nodes().
-Aabb Bvh::refit_triangles(const std::vector<Vec3>& vertices, const std::vector<Tri>& triangles, std::size_t begin,
-                          std::size_t end) {
+// Each vertex rounded outward to floats once (a vertex is a corner of several triangles); the
+// exact box of the vertices the triangles use.
+Aabb Bvh::refit_vertices(const std::vector<Vec3>& vertices, std::size_t begin, std::size_t end) {
   Aabb exact;
-  if (boxes_.size() != triangles.size()) boxes_.resize(triangles.size());  // (a caller splitting sizes it first)
-  for (std::size_t t = begin; t < end; ++t) {
-    const Aabb b = triangle_bounds(vertices, triangles[t]);
-    boxes_[t] = FBox::enclosing(b);
-    exact.lo = exact.lo.cwiseMin(b.lo);
-    exact.hi = exact.hi.cwiseMax(b.hi);
+  for (std::size_t v = begin; v < end; ++v) {
+    const Vec3& p = vertices[v];
+    VertexBox& r = vertex_boxes_[v];
+    for (int k = 0; k < 3; ++k) r.lo[k] = FBox::down(p[k]), r.hi[k] = FBox::up(p[k]);
+    if (!unused_.empty() && unused_[v]) continue;
+    exact.lo = exact.lo.cwiseMin(p);
+    exact.hi = exact.hi.cwiseMax(p);
   }
   return exact;
 }
 
-void Bvh::refit_nodes(const Aabb& exact) {
-  box_ = exact;
-  for (std::size_t l = 0; l < leaves_.size(); ++l) {  // each leaf's lanes from the triangles' boxes
+// Each lane's box from its corners' rounded vertices (min and max of floats: no rounding), the
+// leaf's box their union.
+void Bvh::refit_leaves(const std::vector<Tri>& triangles, std::size_t begin, std::size_t end) {
+  for (std::size_t l = begin; l < end; ++l) {
     BvhLeaf& leaf = leaves_[l];
     BvhNode& node = nodes_[leaf_node_[l]];
     FBox box;
     for (std::uint32_t lane = 0; lane < node.count; ++lane) {
-      const FBox& f = boxes_[leaf.tri[lane]];
-      leaf.set(lane, f);
-      box.merge(f);
+      const Tri& f = triangles[leaf.tri[lane]];
+      const VertexBox &p = vertex_boxes_[f[0]], &q = vertex_boxes_[f[1]], &r = vertex_boxes_[f[2]];
+      FBox b;
+      for (int k = 0; k < 3; ++k) {
+        b.lo[k] = std::min(std::min(p.lo[k], q.lo[k]), r.lo[k]);
+        b.hi[k] = std::max(std::max(p.hi[k], q.hi[k]), r.hi[k]);
+      }
+      leaf.set(lane, b);
+      box.merge(b);
     }
     node.box = box;
   }
-  // Children follow their parents: one sweep from the last node refits bottom-up.
+}
+
+void Bvh::refit_nodes(const Aabb& exact) {
+  box_ = exact;
+  // Children follow their parents: one sweep from the last node refits bottom-up (the leaves'
+  // boxes are refit_leaves()').
   for (std::size_t i = nodes_.size(); i-- > 0;) {
     BvhNode& node = nodes_[i];
     if (node.leaf()) continue;

@@ -23,23 +23,32 @@ void World::Impl::refit_pending(unsigned lanes) {
   refit_chunks.clear();
   refit_bodies.clear();
   refit_owner.clear();
+  leaf_chunks.clear();
+  leaf_owner.clear();
   for (Body& b : bodies) {
     if (!b.alive || !b.refit_pending) continue;
-    const std::size_t n = b.mesh.triangles.size();
-    const std::size_t parts = lanes > 1 && n >= 32768 ? lanes : 1;
+    const std::size_t parts = lanes > 1 && b.mesh.triangles.size() >= 32768 ? lanes : 1;
+    const std::size_t nv = b.mesh.vertices.size(), nl = b.tree.leaves();
     refit_bodies.push_back({&b, refit_chunks.size(), refit_chunks.size() + parts});
     for (std::size_t k = 0; k < parts; ++k) {
-      refit_chunks.push_back({n * k / parts, n * (k + 1) / parts, Aabb{}});
+      refit_chunks.push_back({nv * k / parts, nv * (k + 1) / parts, Aabb{}});
       refit_owner.push_back(refit_bodies.size() - 1);
+      leaf_chunks.push_back({nl * k / parts, nl * (k + 1) / parts, Aabb{}});
+      leaf_owner.push_back(refit_bodies.size() - 1);
     }
   }
   if (refit_bodies.empty()) return;
-  parallel(refit_chunks.size(), lanes, [&](std::size_t k, unsigned) {
+  parallel(refit_chunks.size(), lanes, [&](std::size_t k, unsigned) {  // the vertices rounded
     RefitChunk& c = refit_chunks[k];
     Body& b = *refit_bodies[refit_owner[k]].body;
-    c.exact = b.tree.refit_triangles(b.mesh.vertices, b.mesh.triangles, c.begin, c.end);
+    c.exact = b.tree.refit_vertices(b.mesh.vertices, c.begin, c.end);
   });
-  parallel(refit_bodies.size(), lanes, [&](std::size_t k, unsigned) {
+  parallel(leaf_chunks.size(), lanes, [&](std::size_t k, unsigned) {  // the leaves from them
+    const RefitChunk& c = leaf_chunks[k];
+    Body& b = *refit_bodies[leaf_owner[k]].body;
+    b.tree.refit_leaves(b.mesh.triangles, c.begin, c.end);
+  });
+  parallel(refit_bodies.size(), lanes, [&](std::size_t k, unsigned) {  // the nodes
     const RefitBody& r = refit_bodies[k];
     Aabb exact;
     for (std::size_t c = r.first; c < r.last; ++c)

@@ -242,6 +242,8 @@ struct World::Impl {
   std::vector<RefitChunk> refit_chunks;
   std::vector<RefitBody> refit_bodies;
   std::vector<std::size_t> refit_owner;  // chunk -> its entry in refit_bodies
+  std::vector<RefitChunk> leaf_chunks;   // the same bodies' leaves, in ranges
+  std::vector<std::size_t> leaf_owner;
   void refit_pending(unsigned lanes);
   // One body's pending refit now (World::tree() asked for it between frames).
   void refit_now(Body& b) {

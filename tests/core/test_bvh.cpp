@@ -131,13 +131,14 @@ TEST_CASE("Bvh: a refit in ranges (as the World splits it over threads) equals a
   split.build(m.vertices, m.triangles);
   whole.build(m.vertices, m.triangles);
   for (Vec3& v : m.vertices) v = 0.8 * v + Vec3(0.3 * v.y(), 0.1, -0.2 * v.x() * v.x());
-  const std::size_t n = m.triangles.size();
+  const std::size_t nv = m.vertices.size(), nl = split.leaves();
   Aabb exact;
   for (std::size_t k = 0; k < 3; ++k) {
-    const Aabb part = split.refit_triangles(m.vertices, m.triangles, n * k / 3, n * (k + 1) / 3);
+    const Aabb part = split.refit_vertices(m.vertices, nv * k / 3, nv * (k + 1) / 3);
     exact.extend(part.lo);
     exact.extend(part.hi);
   }
+  for (std::size_t k = 0; k < 3; ++k) split.refit_leaves(m.triangles, nl * k / 3, nl * (k + 1) / 3);
   split.refit_nodes(exact);
   whole.refit(m.vertices, m.triangles);
   for (std::size_t i = 0; i < whole.nodes().size(); ++i) {
@@ -236,4 +237,23 @@ TEST_CASE("Bvh: two trees in one frame, traversed on float boxes, give every cou
   for (const BvhNodePair& start : tasks)
     bvh_traverse_same_frame(ta, tg, start, stack, [&](std::uint32_t x, std::uint32_t y) { REQUIRE(split.emplace(x, y).second); });
   CHECK(split == want);
+}
+
+TEST_CASE("Bvh: a vertex no triangle uses stays out of the box, built and refitted", "[bvh]") {
+  Mesh m = make_box(Vec3(0, 0, 0), Vec3(1, 1, 1));
+  const Aabb corners = [&] {
+    Aabb b;
+    for (const Tri& f : m.triangles)
+      for (const std::uint32_t v : f) b.extend(m.vertices[v]);
+    return b;
+  }();
+  m.vertices.push_back(Vec3(50, -50, 9));  // used by no triangle
+  Bvh t;
+  t.build(m.vertices, m.triangles);
+  CHECK(t.box().lo == corners.lo);
+  CHECK(t.box().hi == corners.hi);
+  for (Vec3& v : m.vertices) v += Vec3(0.5, 0.25, -1);
+  t.refit(m.vertices, m.triangles);
+  CHECK(t.box().lo == corners.lo + Vec3(0.5, 0.25, -1));
+  CHECK(t.box().hi == corners.hi + Vec3(0.5, 0.25, -1));
 }

@@ -158,12 +158,13 @@ class Bvh {
   void build(const std::vector<Vec3>& vertices, const std::vector<Tri>& triangles);
   // Every box again from `vertices` (the same triangles, moved).
   void refit(const std::vector<Vec3>& vertices, const std::vector<Tri>& triangles);
-  // The same in two steps, for callers that split the first over threads: the boxes of triangles
-  // [begin, end) (returns their exact box; ranges may run concurrently once the first call of
-  // a tree has sized its storage, as build() does), then every leaf and node from the triangle
-  // boxes, with `exact` the union of the ranges' boxes.
-  Aabb refit_triangles(const std::vector<Vec3>& vertices, const std::vector<Tri>& triangles, std::size_t begin,
-                       std::size_t end);
+  // The same in three steps, for callers that split the first two over threads (ranges of one
+  // step may run concurrently): each vertex of [begin, end) rounded outward to floats (returns
+  // the exact box of those the triangles use), then the leaves [begin, end) of leaves() from
+  // their corners' rounded vertices, then every internal node, with `exact` the union of the
+  // first step's boxes. The vertices and triangles are the tree's (the same count as at build).
+  Aabb refit_vertices(const std::vector<Vec3>& vertices, std::size_t begin, std::size_t end);
+  void refit_leaves(const std::vector<Tri>& triangles, std::size_t begin, std::size_t end);
   void refit_nodes(const Aabb& exact);
   // Only the boxes of `changed` triangles (any order, repeats allowed), their leaves and their
   // ancestors: O(changed * depth).
@@ -194,7 +195,11 @@ class Bvh {
   std::vector<BvhNode> nodes_;
   std::vector<BvhLeaf> leaves_;
   std::vector<std::uint32_t> leaf_node_;  // leaf -> its node
-  std::vector<FBox> boxes_;               // triangle -> its box (the refit's, gathered into the leaves)
+  struct VertexBox {
+    float lo[3], hi[3];
+  };
+  std::vector<VertexBox> vertex_boxes_;  // vertex -> its coordinates rounded down and up (the refit's)
+  std::vector<std::uint8_t> unused_;     // vertex -> no triangle uses it (empty: all are used)
   std::vector<std::uint32_t> parents_;    // node -> its parent
   std::vector<std::uint32_t> order_;
   std::vector<std::uint32_t> leaf_of_;  // triangle -> its leaf node
