@@ -113,8 +113,14 @@ struct Body {
     moved = true;
     if (world_copy.triangles.size() != shape->triangles.size()) world_copy.triangles = shape->triangles;
     world_copy.vertices.resize(shape->vertices.size());
-    for (std::size_t v = 0; v < world_copy.vertices.size(); ++v) world_copy.vertices[v] = pose * shape->vertices[v];
-    world_copy_box = world_copy.triangles.empty() ? Aabb{} : bounds(world_copy);
+    Aabb box;  // the copy's box, in the same pass (as bounds(world_copy))
+    for (std::size_t v = 0; v < world_copy.vertices.size(); ++v) {
+      const Vec3 p = pose * shape->vertices[v];
+      world_copy.vertices[v] = p;
+      box.lo = box.lo.cwiseMin(p);
+      box.hi = box.hi.cwiseMax(p);
+    }
+    world_copy_box = world_copy.triangles.empty() ? Aabb{} : box;
     copied_pose = pose;
     copy_valid = true;
     return world_copy.vertices.size();
