@@ -122,7 +122,7 @@ void World::Impl::find_pairs(const DetectOptions& opt) {
   ids.clear();
   for (BodyId id = 0; id < bodies.size(); ++id) {
     if (!bodies[id].alive) continue;
-    stats.vertices_transformed += bodies[id].enter_frame();
+    bodies[id].enter_frame();
     ids.push_back(id);
     boxes.push_back(bodies[id].world_box());
     const Aabb& w = boxes.back();
@@ -134,6 +134,7 @@ void World::Impl::find_pairs(const DetectOptions& opt) {
       boxes.back().lo -= Vec3::Constant(0.5 * opt.margin), boxes.back().hi += Vec3::Constant(0.5 * opt.margin);
   }
   overlapping_pairs(boxes, pairs, order);
+  copy_paired(opt);
   bool any_self = false;
   for (std::size_t i = 0; i < ids.size(); ++i) {
     Body& b = bodies[ids[i]];
@@ -145,13 +146,42 @@ void World::Impl::find_pairs(const DetectOptions& opt) {
   if (any_self) std::sort(pairs.begin(), pairs.end());
 }
 
+// The small rigid bodies the broad phase paired whose copies are stale: copied into world
+// space when still (the copy serves the next frames too) or in kCopyPairs pairs or more (the
+// copy and its tree serve them all; the pairs whose exact boxes then do not overlap are
+// dropped), else traversed through their pose this frame. pairs_of: each body's pairs.
+void World::Impl::copy_paired(const DetectOptions& opt) {
+  pairs_of.assign(ids.size(), 0);
+  for (const auto& [i, j] : pairs) ++pairs_of[i], ++pairs_of[j];
+  bool copied = false;
+  for (std::size_t k = 0; k < ids.size(); ++k) {
+    Body& b = bodies[ids[k]];
+    if (!b.world_frame || b.copy_valid || pairs_of[k] == 0) continue;
+    if (!b.still && pairs_of[k] < kCopyPairs) {
+      b.posed_this_frame();
+      continue;
+    }
+    stats.vertices_transformed += b.ensure_copy();
+    boxes[k] = b.world_box();
+    if (opt.margin > 0.0 && !boxes[k].empty())
+      boxes[k].lo -= Vec3::Constant(0.5 * opt.margin), boxes[k].hi += Vec3::Constant(0.5 * opt.margin);
+    copied = true;
+  }
+  if (copied)
+    pairs.erase(std::remove_if(pairs.begin(), pairs.end(),
+                               [&](const std::pair<std::size_t, std::size_t>& p) {
+                                 return !boxes[p.first].overlaps(boxes[p.second]);
+                               }),
+                pairs.end());
+}
+
 // The traversals' tasks: per pair, one task, or (several lanes) the node pairs of its first
 // levels; a self pair one traversal of the body's own tree (none for a rigid body's cache); two
 // small world-space bodies, one of them moved, one scan when each moved one is in no other pair
 // (Body::small()). Returns the tasks used.
 std::size_t World::Impl::plan_tasks(unsigned lanes) {
   std::size_t used = 0;
-  pairs_of.assign(ids.size(), 0);
+  pairs_of.assign(ids.size(), 0);  // after copy_paired()'s drops
   for (const auto& [i, j] : pairs)
     if (i != j) ++pairs_of[i], ++pairs_of[j];
   for (std::size_t p = 0; p < pairs.size(); ++p) {

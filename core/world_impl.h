@@ -23,14 +23,21 @@ namespace world_detail {
 constexpr std::uint32_t kSmallPair = 0xffffffffu;  // a task's start: scan two small world meshes
 constexpr std::uint32_t kSelfPair = 0xfffffffeu;   // a task's start: a body's self traversal
 
-// A rigid body with fewer triangles than this is moved into world space every frame (its
-// vertices transformed, a world-space copy of its tree refitted): O(its size), a few
-// microseconds, and its boxes are then exact world boxes, where boxes carried through a rotation
-// grow (a small ball's tree seen from a neighbour's frame overlaps far more of it). Larger rigid
-// bodies are never touched beyond what the traversal reaches.
+// A rigid body with fewer triangles than this may be copied into world space for a frame (its
+// vertices transformed, a copy of its tree refitted over them): O(its size), and its boxes are
+// then exact world boxes, where boxes carried through a rotation grow (a small ball's tree seen
+// from a neighbour's frame overlaps far more of it). It is, when it stands still (the copy
+// serves later frames) or has kCopyPairs pairs or more. Larger rigid bodies are never touched
+// beyond what the traversal reaches.
 // 8,192: against 4,096, test1's 4,512-triangle balls moved into world space, its frame 1.08 ->
 // 0.65 ms (boxes carried through a pose cost a transform per node pair).
 constexpr std::size_t kWorldFrameTriangles = 8192;
+// A moving small rigid body paired with this many bodies or more is copied into world space;
+// with fewer it is traversed through its pose (World::Impl::copy_paired()).
+// 4: test2's falling objects (one to three pairs) 1.38 -> 0.87 ms a frame traversed through
+// their poses; the 400-ball pile (about five pairs a ball) keeps its copies (25 ms; 53 ms
+// without them).
+constexpr std::size_t kCopyPairs = 4;
 
 struct Body {
   bool alive = false;
@@ -51,6 +58,8 @@ struct Body {
   bool world_tree_fresh = false;
   bool copy_valid = false, moved = false;
   Eigen::Affine3d copied_pose = Eigen::Affine3d::Identity();
+  bool still = false;  // the pose is the last frame's (a copy made now will serve the next frames)
+  Eigen::Affine3d last_pose = Eigen::Affine3d::Identity();
   // Deforming: its tree is refitted whole at the next collide() (set_vertices, many moved
   // vertices), every such body's triangles split over the frame's lanes.
   bool refit_pending = false;
@@ -93,24 +102,33 @@ struct Body {
   // (deforming bodies' refitted, a still rigid body's world tree kept): their traversal costs
   // less than the scan (the default scene: 0.24 vs 0.35 ms a frame).
   bool small() const { return local().triangles.size() < kWorldFrameTriangles; }
-  const Mesh* world_mesh() const { return !is_rigid ? &mesh : world_frame ? &world_copy : nullptr; }
+  const Mesh* world_mesh() const { return !is_rigid ? &mesh : world_frame && copy_valid ? &world_copy : nullptr; }
   // The tree the traversals use and the pose it is posed by: a small rigid body's world copy
   // (identity), else its own.
   const Bvh& frame_tree() const { return world_frame ? world_tree : tree; }
   Eigen::Affine3d frame_pose() const { return world_frame ? Eigen::Affine3d::Identity() : pose; }
-  // Small rigid bodies: into world space for this frame (the tree only when needed:
-  // ensure_world_tree()).
-  // Returns the vertices transformed.
-  std::size_t enter_frame() {
+  // Small rigid bodies: into world space for this frame. enter_frame() only notes whether the
+  // copy is current (`moved`: the pose changed since it was made); World::Impl::copy_paired()
+  // makes it for the bodies that need it (ensure_copy()) or leaves a moved body with one pair
+  // in its own frame (posed_this_frame()); the tree only when a traversal needs it
+  // (ensure_world_tree()).
+  void enter_frame() {
     world_frame = is_rigid && shape->triangles.size() < kWorldFrameTriangles;
     moved = false;
     if (!world_frame) {
       copy_valid = world_tree_fresh = false;
-      return 0;
+      return;
     }
-    if (copy_valid && copied_pose.matrix() == pose.matrix()) return 0;  // unchanged since the last copy
+    still = last_pose.matrix() == pose.matrix();
+    last_pose = pose;
+    if (copy_valid && copied_pose.matrix() == pose.matrix()) return;  // unchanged since the last copy
     world_tree_fresh = false;
+    copy_valid = false;
     moved = true;
+  }
+  // Returns the vertices transformed (0: the copy was current).
+  std::size_t ensure_copy() {
+    if (!world_frame || copy_valid) return 0;
     if (world_copy.triangles.size() != shape->triangles.size()) world_copy.triangles = shape->triangles;
     world_copy.vertices.resize(shape->vertices.size());
     Aabb box;  // the copy's box, in the same pass (as bounds(world_copy))
@@ -125,16 +143,20 @@ struct Body {
     copy_valid = true;
     return world_copy.vertices.size();
   }
+  // This frame in its own frame, posed (a moved small body in one pair: a traversal through its
+  // pose costs less than copying it; its copy stays stale).
+  void posed_this_frame() { world_frame = false; }
   void ensure_world_tree() {
     if (!world_frame || world_tree_fresh) return;
-    if (world_tree.triangles() != shape->triangles.size() || world_tree.empty() != tree.empty())
-      world_tree.build(world_copy.vertices, world_copy.triangles);
-    else
-      world_tree.refit(world_copy.vertices, world_copy.triangles);
+    // The shape's tree, its boxes refitted over the copy (a rigid motion keeps its grouping: no
+    // build).
+    if (world_tree.triangles() != shape->triangles.size() || world_tree.empty() != tree.empty()) world_tree = tree;
+    world_tree.refit(world_copy.vertices, world_copy.triangles);
     world_tree_fresh = true;
   }
+  // The world box: the copy's (exact) where it is current, else the root box moved by the pose.
   Aabb world_box() const {
-    if (world_frame) return world_copy_box;
+    if (world_frame && copy_valid) return world_copy_box;
     const Aabb b = tree.box();
     if (!is_rigid || b.empty()) return b;
     // The root box moved by the pose, grown as the traversal grows its boxes.
@@ -262,6 +284,7 @@ struct World::Impl {
   void collide(const DetectOptions& opt, FrameResult& out);
   // The steps of collide(), in order.
   void find_pairs(const DetectOptions& opt);
+  void copy_paired(const DetectOptions& opt);
   std::size_t plan_tasks(unsigned lanes);
   void traverse(std::size_t used, unsigned lanes);
   void route_pairs(const DetectOptions& opt, std::size_t used, FrameResult& out);
