@@ -199,6 +199,7 @@ struct World::Impl {
   std::vector<std::size_t> order;
   std::vector<Task> tasks;
   std::vector<BvhNodePair> split;
+  std::vector<std::size_t> to_copy;     // copy_paired(): the bodies (ids) copied this frame
   std::vector<std::uint32_t> pairs_of;  // plan_tasks(): per body of the frame (ids), its pairs with others
   std::vector<std::vector<BvhStackEntry>> stacks;  // per lane
   std::vector<std::vector<BvhNodePair>> self_stacks;  // per lane
@@ -283,8 +284,8 @@ struct World::Impl {
 
   void collide(const DetectOptions& opt, FrameResult& out);
   // The steps of collide(), in order.
-  void find_pairs(const DetectOptions& opt);
-  void copy_paired(const DetectOptions& opt);
+  void find_pairs(const DetectOptions& opt, unsigned lanes);
+  void copy_paired(const DetectOptions& opt, unsigned lanes);
   std::size_t plan_tasks(unsigned lanes);
   void traverse(std::size_t used, unsigned lanes);
   void route_pairs(const DetectOptions& opt, std::size_t used, FrameResult& out);
