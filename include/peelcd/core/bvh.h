@@ -339,6 +339,21 @@ std::size_t bvh_traverse(const Bvh& a, const Bvh& b, const BvhRelation& rel, Bvh
   return visited;
 }
 
+// One step down from node pair (i, j) of two trees in one frame, not both leaves: the larger
+// node's children whose boxes overlap the other node's, pushed with it.
+inline void descend_same_frame(const std::vector<BvhNode>& na, const std::vector<BvhNode>& nb, std::uint32_t i,
+                               std::uint32_t j, std::vector<BvhNodePair>& stack) {
+  const BvhNode& x = na[i];
+  const BvhNode& y = nb[j];
+  if (y.leaf() || (!x.leaf() && x.box.max_extent() >= y.box.max_extent())) {
+    for (const std::uint32_t c : {i + 1, x.first})
+      if (na[c].box.overlaps(y.box)) stack.push_back({c, j});
+  } else {
+    for (const std::uint32_t c : {j + 1, y.first})
+      if (x.box.overlaps(nb[c].box)) stack.push_back({i, c});
+  }
+}
+
 // bvh_traverse() for two trees in one frame (BvhRelation::identity): float boxes compared as
 // they are, the stack of node pairs alone. The same couples.
 template <class Fn>
@@ -365,12 +380,8 @@ std::size_t bvh_traverse_same_frame(const Bvh& a, const Bvh& b, BvhNodePair star
         if (!ba.overlaps(y.box)) continue;
         for (unsigned m = overlap_mask(ba, lb); m;) fn(la.tri[u], lb.tri[take_lane(m)]);
       }
-    } else if (y.leaf() || (!x.leaf() && x.box.max_extent() >= y.box.max_extent())) {
-      for (const std::uint32_t c : {i + 1, x.first})
-        if (na[c].box.overlaps(y.box)) stack.push_back({c, j});
     } else {
-      for (const std::uint32_t c : {j + 1, y.first})
-        if (x.box.overlaps(nb[c].box)) stack.push_back({i, c});
+      descend_same_frame(na, nb, i, j, stack);
     }
   }
   return visited;
@@ -411,15 +422,10 @@ std::size_t bvh_self_traverse(const Bvh& tree, std::vector<BvhNodePair>& stack, 
       if (n[l].box.overlaps(n[r].box)) stack.push_back({l, r});
       continue;
     }
-    if (x.leaf() && y.leaf()) {
+    if (x.leaf() && y.leaf())
       leaf_pairs(x, y);
-    } else if (y.leaf() || (!x.leaf() && x.box.max_extent() >= y.box.max_extent())) {
-      for (const std::uint32_t c : {a + 1, x.first})
-        if (n[c].box.overlaps(y.box)) stack.push_back({c, b});
-    } else {
-      for (const std::uint32_t c : {b + 1, y.first})
-        if (x.box.overlaps(n[c].box)) stack.push_back({a, c});
-    }
+    else
+      descend_same_frame(n, n, a, b, stack);
   }
   return visited;
 }
