@@ -124,9 +124,7 @@ Aabb keep_touching(std::vector<Entry>& entries, std::vector<Aabb>& boxes, const 
 // box (the same test as its box's, exactly), and only the others get a box.
 void gather(const Mesh& m, const Aabb& roi_in, double grow, std::vector<std::uint8_t>& outcodes,
             std::vector<Entry>& entries, std::vector<Aabb>& boxes) {
-  Aabb roi = roi_in;  // a box grown by `grow` touches the ROI: the box touches the ROI grown by it
-  roi.lo -= Vec3::Constant(grow);
-  roi.hi += Vec3::Constant(grow);
+  const Aabb roi = roi_in.grown(grow);  // a box grown by `grow` touches the ROI: it touches the ROI grown by it
   entries.clear();
   boxes.clear();
   outcodes.resize(m.vertices.size());
@@ -140,10 +138,7 @@ void gather(const Mesh& m, const Aabb& roi_in, double grow, std::vector<std::uin
     const Tri& f = m.triangles[t];
     if (outcodes[f[0]] & outcodes[f[1]] & outcodes[f[2]]) continue;
     entries.push_back(Entry{t, {}, {}});
-    Aabb b = triangle_bounds(m, t);
-    b.lo -= Vec3::Constant(grow);
-    b.hi += Vec3::Constant(grow);
-    boxes.push_back(b);
+    boxes.push_back(triangle_bounds(m, t).grown(grow));
   }
 }
 

@@ -72,9 +72,7 @@ double triangles_in_view(const Mesh& mesh, const RoiView& view, const std::vecto
                          std::vector<std::uint32_t>& out, double grow) {
   out.clear();
   double min_depth = view.half_depth;
-  Aabb box = view.box;
-  box.lo -= Vec3::Constant(grow);
-  box.hi += Vec3::Constant(grow);
+  const Aabb box = view.box.grown(grow);
   const std::size_t count = only ? only->size() : mesh.triangles.size();
   for (std::size_t i = 0; i < count; ++i) {
     const auto t = only ? (*only)[i] : std::uint32_t(i);

@@ -12,7 +12,7 @@ void FramePlan::find_pairs(const ObjectRefs& objects, const DetectOptions& opt, 
   for (std::size_t i = 0; i < objects.size(); ++i) boxes.push_back(bounds(objects[i].mesh));
   if (opt.margin > 0.0)  // proximity: boxes within the margin of each other make a pair
     for (Aabb& b : boxes)
-      if (!b.empty()) b.lo -= Vec3::Constant(0.5 * opt.margin), b.hi += Vec3::Constant(0.5 * opt.margin);
+      b = b.grown(0.5 * opt.margin);
   overlapping_pairs(boxes, pairs, order_);
   if (only)
     pairs.erase(std::remove_if(pairs.begin(), pairs.end(),
@@ -86,9 +86,8 @@ void FramePlan::plan(const ObjectRefs& objects, const DetectOptions& opt, PairLo
 // alone peels the whole box).
 void FramePlan::plan_box(const ObjectRefs& objects, const DetectOptions& opt, PairPlan& p) {
   if (opt.stage == Stage::image) return;
-  Aabb roi = p.roi;  // proximity: a triangle within the margin of the other object touches it grown by half
-  roi.lo -= Vec3::Constant(0.5 * opt.margin);
-  roi.hi += Vec3::Constant(0.5 * opt.margin);
+  // Proximity: a triangle within the margin of the other object touches the ROI grown by half.
+  const Aabb roi = p.roi.grown(0.5 * opt.margin);
   triangles_touching(objects[p.a].mesh, roi, p.kept_a);
   triangles_touching(objects[p.b].mesh, roi, p.kept_b);
   p.in_roi_a = p.kept_a.size();

@@ -109,12 +109,6 @@ void finish(Proximity& r) {
     if (n.distance < r.distance) r.distance = n.distance, r.p = n.p, r.q = n.q;
 }
 
-Aabb grown(const Aabb& box, double margin) {
-  Aabb g = box;
-  g.lo -= Vec3::Constant(margin);
-  g.hi += Vec3::Constant(margin);
-  return g;
-}
 
 }  // namespace
 
@@ -129,7 +123,7 @@ Proximity search_near(const Mesh& a, const Mesh& b, const Bvh& tree, double marg
   std::vector<std::uint32_t> found;
   for (std::uint32_t ta = 0; ta < a.triangles.size(); ++ta) {
     const TriangleCorners ca = corners(a, ta);
-    tree.query(grown(triangle_bounds(a, ta), margin), found);
+    tree.query(triangle_bounds(a, ta).grown(margin), found);
     for (const std::uint32_t tb : found) {
       if (skip(ta, tb)) continue;
       NearPair n;

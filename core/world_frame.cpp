@@ -130,8 +130,7 @@ void World::Impl::find_pairs(const DetectOptions& opt, unsigned lanes) {
         std::max(w.lo.cwiseAbs().maxCoeff(), w.hi.cwiseAbs().maxCoeff()) > kFloatMax)
       throw std::invalid_argument("peelcd::World: " + label_of(bodies[id].name, id) +
                                   " reaches outside the float range (|x| <= 3.4e38) the image stage works in");
-    if (opt.margin > 0.0 && !w.empty())  // proximity: boxes within the margin of each other make a pair
-      boxes.back().lo -= Vec3::Constant(0.5 * opt.margin), boxes.back().hi += Vec3::Constant(0.5 * opt.margin);
+    boxes.back() = w.grown(0.5 * opt.margin);  // proximity: boxes within the margin of each other make a pair
   }
   overlapping_pairs(boxes, pairs, order);
   copy_paired(opt, lanes);
@@ -146,13 +145,19 @@ void World::Impl::find_pairs(const DetectOptions& opt, unsigned lanes) {
   if (any_self) std::sort(pairs.begin(), pairs.end());
 }
 
+// pairs_of: each body's pairs with other bodies.
+void World::Impl::count_pairs() {
+  pairs_of.assign(ids.size(), 0);
+  for (const auto& [i, j] : pairs)
+    if (i != j) ++pairs_of[i], ++pairs_of[j];
+}
+
 // The small rigid bodies the broad phase paired whose copies are stale: copied into world
 // space when still (the copy serves the next frames too) or in kCopyPairs pairs or more (the
 // copy and its tree serve them all; the pairs whose exact boxes then do not overlap are
 // dropped), else traversed through their pose this frame. pairs_of: each body's pairs.
 void World::Impl::copy_paired(const DetectOptions& opt, unsigned lanes) {
-  pairs_of.assign(ids.size(), 0);
-  for (const auto& [i, j] : pairs) ++pairs_of[i], ++pairs_of[j];
+  count_pairs();
   to_copy.clear();
   for (std::size_t k = 0; k < ids.size(); ++k) {
     Body& b = bodies[ids[k]];
@@ -172,9 +177,7 @@ void World::Impl::copy_paired(const DetectOptions& opt, unsigned lanes) {
   });
   for (const std::size_t k : to_copy) {
     stats.vertices_transformed += bodies[ids[k]].world_copy.vertices.size();
-    boxes[k] = bodies[ids[k]].world_box();
-    if (opt.margin > 0.0 && !boxes[k].empty())
-      boxes[k].lo -= Vec3::Constant(0.5 * opt.margin), boxes[k].hi += Vec3::Constant(0.5 * opt.margin);
+    boxes[k] = bodies[ids[k]].world_box().grown(0.5 * opt.margin);
   }
   pairs.erase(std::remove_if(pairs.begin(), pairs.end(),
                              [&](const std::pair<std::size_t, std::size_t>& p) {
@@ -189,9 +192,7 @@ void World::Impl::copy_paired(const DetectOptions& opt, unsigned lanes) {
 // (Body::small()). Returns the tasks used.
 std::size_t World::Impl::plan_tasks(unsigned lanes) {
   std::size_t used = 0;
-  pairs_of.assign(ids.size(), 0);  // after copy_paired()'s drops
-  for (const auto& [i, j] : pairs)
-    if (i != j) ++pairs_of[i], ++pairs_of[j];
+  count_pairs();  // again, after copy_paired()'s drops
   for (std::size_t p = 0; p < pairs.size(); ++p) {
     Body& a = bodies[ids[pairs[p].first]];
     Body& b = bodies[ids[pairs[p].second]];

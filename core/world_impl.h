@@ -109,8 +109,8 @@ struct Body {
   Eigen::Affine3d frame_pose() const { return world_frame ? Eigen::Affine3d::Identity() : pose; }
   // Small rigid bodies: into world space for this frame. enter_frame() only notes whether the
   // copy is current (`moved`: the pose changed since it was made); World::Impl::copy_paired()
-  // makes it for the bodies that need it (ensure_copy()) or leaves a moved body with one pair
-  // in its own frame (posed_this_frame()); the tree only when a traversal needs it
+  // makes it for the bodies that need it (ensure_copy()) or leaves a moving body with fewer than
+  // kCopyPairs pairs in its own frame (posed_this_frame()); the tree only when a traversal needs it
   // (ensure_world_tree()).
   void enter_frame() {
     world_frame = is_rigid && shape->triangles.size() < kWorldFrameTriangles;
@@ -285,6 +285,7 @@ struct World::Impl {
   void collide(const DetectOptions& opt, FrameResult& out);
   // The steps of collide(), in order.
   void find_pairs(const DetectOptions& opt, unsigned lanes);
+  void count_pairs();
   void copy_paired(const DetectOptions& opt, unsigned lanes);
   std::size_t plan_tasks(unsigned lanes);
   void traverse(std::size_t used, unsigned lanes);

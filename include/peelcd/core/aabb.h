@@ -17,6 +17,13 @@ struct Aabb {
   }
   Vec3 center() const { return 0.5 * (lo + hi); }
   Vec3 extent() const { return hi - lo; }
+  // The box grown by d on every side (an empty box stays empty).
+  Aabb grown(double d) const {
+    Aabb g;
+    g.lo = lo - Vec3::Constant(d);
+    g.hi = hi + Vec3::Constant(d);
+    return g;
+  }
   // Closed-box overlap: boxes that only touch overlap (a touching contact must not be lost).
   bool overlaps(const Aabb& o) const {
     return (lo.array() <= o.hi.array()).all() && (o.lo.array() <= hi.array()).all();
