@@ -87,6 +87,7 @@ void World::Impl::collide(const DetectOptions& opt, FrameResult& out) {
   out.reset_counters();
   stats.node_pairs = stats.candidates = stats.vertices_transformed = 0;
   const unsigned lanes = lanes_for(opt);
+  frame_lanes = lanes;
   refit_pending(lanes);
 
   auto t0 = Clock::now();
@@ -331,7 +332,30 @@ void World::Impl::test_candidates(const DetectOptions& opt, std::size_t used, un
 void World::Impl::test_task(const Body& a, const Body& b, const DetectOptions& opt, Task& t) {
   const Mesh& ma = a.local();
   const Mesh& mb = b.local();
-  for (const std::uint64_t c : t.candidates) {
+  // The candidates' data is read in an order the hardware cannot guess: their triangles are
+  // asked for kAhead candidates ahead, their corners kAhead / 2 ahead (a frame whose data other
+  // work evicted, as in the bench where the methods take turns: the default scene's tests 0.16
+  // -> 0.11 ms after 64 MB of other work; no change on warm data).
+  constexpr std::size_t kAhead = 16;
+  const Vec3* va = a.world_vertices();
+  const Vec3* vb = b.world_vertices();
+  const std::size_t n = t.candidates.size();
+  for (std::size_t k = 0; k < n; ++k) {
+    if (k + kAhead < n) {
+      const std::uint64_t f = t.candidates[k + kAhead];
+      __builtin_prefetch(&ma.triangles[pair_a(f)]);
+      __builtin_prefetch(&mb.triangles[pair_b(f)]);
+    }
+    if (k + kAhead / 2 < n) {
+      const std::uint64_t f = t.candidates[k + kAhead / 2];
+      const Tri& pa = ma.triangles[pair_a(f)];
+      const Tri& pb = mb.triangles[pair_b(f)];
+      for (int i = 0; i < 3; ++i) {
+        __builtin_prefetch(&va[pa[i]]);
+        __builtin_prefetch(&vb[pb[i]]);
+      }
+    }
+    const std::uint64_t c = t.candidates[k];
     const std::uint32_t ta = pair_a(c), tb = pair_b(c);
     const Tri& fa = ma.triangles[ta];
     const Tri& fb = mb.triangles[tb];

@@ -93,6 +93,10 @@ struct Body {
   Vec3 world(std::uint32_t v) const {
     return !is_rigid ? mesh.vertices[v] : world_frame ? world_copy.vertices[v] : Vec3(pose * shape->vertices[v]);
   }
+  // The array world() reads (a posed rigid body's: its shape's, before the pose).
+  const Vec3* world_vertices() const {
+    return !is_rigid ? mesh.vertices.data() : world_frame ? world_copy.vertices.data() : shape->vertices.data();
+  }
   // Small (under kWorldFrameTriangles) and in world space this frame: a pair of two such bodies,
   // one of them a rigid body that moved and in no other pair, is tested as the frame API tests
   // it (one culling round over both meshes, a sweep of the kept triangles' boxes): that scan
@@ -235,6 +239,10 @@ struct World::Impl {
     return BodyId(bodies.size() - 1);
   }
 
+  // The last frame's lanes: World::set_vertices() checks and copies a large body's vertices
+  // over them.
+  unsigned frame_lanes = 1;
+  std::size_t vertex_parts(std::size_t n) const;  // the parts set_vertices() splits n vertices in
   unsigned lanes_for(const DetectOptions& opt) {
     if (opt.threads == 1) return 1;
     if (!pool || (opt.threads != 0 && pool->lanes() != opt.threads)) pool = std::make_unique<WorkerPool>(opt.threads);

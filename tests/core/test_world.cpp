@@ -304,3 +304,28 @@ TEST_CASE("World: deferred refits, between frames and split over threads", "[wor
   }
   CHECK(by_threads[0] == by_threads[1]);
 }
+
+TEST_CASE("World: a large body's new vertices checked and copied in parts: the first bad vertex named, nothing changed", "[world]") {
+  const Mesh base = make_uv_sphere(Vec3::Zero(), 1.0, 200, 400);  // 79,602 vertices: split over two lanes
+  REQUIRE(base.vertices.size() >= 65536);
+  World world;
+  const BodyId d = world.add_deforming(base, "big");
+  DetectOptions opt;
+  opt.threads = 2;
+  world.collide(opt);  // the lanes set_vertices() splits over
+  std::vector<Vec3> v = base.vertices;
+  for (Vec3& p : v) p *= 1.5;
+  std::vector<Vec3> bad = v;
+  bad[70000].x() = NAN;  // in the second part
+  CHECK_THROWS_WITH(world.set_vertices(d, bad), Catch::Contains("'big'") && Catch::Contains("vertex 70000"));
+  bad[40000].z() = INFINITY;  // in the first part too: the first named
+  CHECK_THROWS_WITH(world.set_vertices(d, bad), Catch::Contains("vertex 40000"));
+  CHECK_THROWS_WITH(world.set_vertices(d, std::vector<Vec3>(bad)), Catch::Contains("vertex 40000"));
+  CHECK(world.world_mesh(d).vertices == base.vertices);  // refused whole
+  world.set_vertices(d, v);
+  CHECK(world.world_mesh(d).vertices == v);  // every part copied
+  world.collide(opt);
+  Mesh moved = base;
+  moved.vertices = v;
+  CHECK(world.tree(d).box().hi == bounds(moved).hi);
+}

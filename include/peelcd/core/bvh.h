@@ -178,6 +178,11 @@ class Bvh {
   Aabb box() const { return nodes_.empty() ? Aabb{} : box_; }
   const std::vector<BvhNode>& nodes() const { return nodes_; }
   const BvhLeaf& leaf(const BvhNode& node) const { return leaves_[node.first]; }
+  // Asks for a leaf's lines ahead of its test (a traversal that pushes a pair of leaves).
+  void prefetch_leaf(const BvhNode& node) const {
+    const char* p = reinterpret_cast<const char*>(&leaves_[node.first]);
+    for (std::size_t k = 0; k < sizeof(BvhLeaf); k += 64) __builtin_prefetch(p + k);
+  }
   std::uint32_t parent(std::uint32_t node) const { return parents_[node]; }  // the root's is itself (0)
   const std::vector<std::uint32_t>& order() const { return order_; }  // triangles, leaf by leaf
   FBox triangle_box(std::uint32_t t) const { return leaves_[nodes_[leaf_of_[t]].first].box(lane_of_[t]); }
@@ -341,16 +346,26 @@ std::size_t bvh_traverse(const Bvh& a, const Bvh& b, const BvhRelation& rel, Bvh
 
 // One step down from node pair (i, j) of two trees in one frame, not both leaves: the larger
 // node's children whose boxes overlap the other node's, pushed with it.
-inline void descend_same_frame(const std::vector<BvhNode>& na, const std::vector<BvhNode>& nb, std::uint32_t i,
-                               std::uint32_t j, std::vector<BvhNodePair>& stack) {
+// A pair of leaves pushed has its leaves' lines asked for (it is popped soon: the stack is
+// last in, first out).
+inline void descend_same_frame(const Bvh& a, const Bvh& b, std::uint32_t i, std::uint32_t j,
+                               std::vector<BvhNodePair>& stack) {
+  const auto& na = a.nodes();
+  const auto& nb = b.nodes();
   const BvhNode& x = na[i];
   const BvhNode& y = nb[j];
   if (y.leaf() || (!x.leaf() && x.box.max_extent() >= y.box.max_extent())) {
     for (const std::uint32_t c : {i + 1, x.first})
-      if (na[c].box.overlaps(y.box)) stack.push_back({c, j});
+      if (na[c].box.overlaps(y.box)) {
+        stack.push_back({c, j});
+        if (na[c].leaf() && y.leaf()) a.prefetch_leaf(na[c]), b.prefetch_leaf(y);
+      }
   } else {
     for (const std::uint32_t c : {j + 1, y.first})
-      if (x.box.overlaps(nb[c].box)) stack.push_back({i, c});
+      if (x.box.overlaps(nb[c].box)) {
+        stack.push_back({i, c});
+        if (x.leaf() && nb[c].leaf()) a.prefetch_leaf(x), b.prefetch_leaf(nb[c]);
+      }
   }
 }
 
@@ -381,7 +396,7 @@ std::size_t bvh_traverse_same_frame(const Bvh& a, const Bvh& b, BvhNodePair star
         for (unsigned m = overlap_mask(ba, lb); m;) fn(la.tri[u], lb.tri[take_lane(m)]);
       }
     } else {
-      descend_same_frame(na, nb, i, j, stack);
+      descend_same_frame(a, b, i, j, stack);
     }
   }
   return visited;
@@ -425,7 +440,7 @@ std::size_t bvh_self_traverse(const Bvh& tree, std::vector<BvhNodePair>& stack, 
     if (x.leaf() && y.leaf())
       leaf_pairs(x, y);
     else
-      descend_same_frame(n, n, a, b, stack);
+      descend_same_frame(tree, tree, a, b, stack);
   }
   return visited;
 }
