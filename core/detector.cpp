@@ -4,6 +4,7 @@
 
 #include "peelcd/core/broad_phase.h"
 #include "peelcd/core/cull.h"
+#include "peelcd/core/narrow_phase.h"
 #include "peelcd/core/options.h"
 #include "peelcd/core/reference.h"
 #include "peelcd/core/worker_pool.h"
@@ -275,6 +276,7 @@ void Detector::Impl::exact_path(const ObjectRefs& objects, const DetectOptions& 
     if (p.a == p.b) {
       r.candidates = p.self_candidates.size();
       self_narrow_phase(ma, p.self_candidates, r.colliding, opt.max_contacts);
+      sort_contacts(r.colliding);  // candidates in traversal order (FramePlan::plan_self())
       return;
     }
     lane.candidates.clear();

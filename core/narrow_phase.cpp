@@ -402,6 +402,12 @@ bool test_triangle_pair(const TriangleCorners& ca, const TriangleCorners& cb, Co
   return true;
 }
 
+void sort_contacts(std::vector<Contact>& contacts) {
+  std::sort(contacts.begin(), contacts.end(), [](const Contact& x, const Contact& y) {
+    return x.tri_a < y.tri_a || (x.tri_a == y.tri_a && x.tri_b < y.tri_b);
+  });
+}
+
 void narrow_phase(const Mesh& a, const Mesh& b, const std::vector<std::uint64_t>& candidates,
                   std::vector<Contact>& out, bool boxes_overlap, std::size_t max_contacts) {
   const std::size_t limit = max_contacts ? out.size() + max_contacts : std::size_t(-1);

@@ -57,13 +57,14 @@ void cull_pair(const ObjectRefs& objects, PairPlan& p, int rounds, double margin
 
 void FramePlan::plan(const ObjectRefs& objects, const DetectOptions& opt, PairLoop& loop) {
   if (plans.size() < pairs.size()) plans.resize(pairs.size());
+  if (self_trees_.size() < objects.size()) self_trees_.resize(objects.size());
   const int equal = opt.resolution > 0 ? opt.resolution : tile_resolution(opt.budget, pairs.size());
   const int first_rounds = opt.stage == Stage::image ? kMaxCullRounds : 1;
   loop.run(pairs.size(), opt, [&](std::size_t i, PairLane& lane) {
     reset(i, objects, equal);
     PairPlan& p = plans[i];
     if (p.a == p.b)
-      plan_self(objects[p.a].mesh, opt, p);
+      plan_self(objects[p.a].mesh, opt, p, self_trees_[p.a]);
     else if (opt.cull != Cull::contact)
       plan_box(objects, opt, p);
     else
@@ -95,21 +96,24 @@ void FramePlan::plan_box(const ObjectRefs& objects, const DetectOptions& opt, Pa
   p.culled_out = p.kept_a.empty() || p.kept_b.empty();
 }
 
-// A self pair's plan: its ROI is the object's box; its candidates are found by a sweep over all
-// its triangles (self_overlap_pairs()), which is its culling too: the triangles kept are those in
-// some candidate, the region their box. The image stage peels them as both objects.
-void FramePlan::plan_self(const Mesh& mesh, const DetectOptions& opt, PairPlan& p) {
+// A self pair's plan: its ROI is the object's box; its candidates are found by its tree against
+// itself (self_overlap_pairs(); the tree kept for the object's next frames, SelfTree), which is
+// its culling too: the triangles kept are those in some candidate, the region their box. The
+// image stage peels them as both objects.
+void FramePlan::plan_self(const Mesh& mesh, const DetectOptions& opt, PairPlan& p, SelfTree& tree) {
   p.scanned = p.in_roi_a = p.in_roi_b = mesh.triangles.size();
   vertex_representatives(mesh, opt.self_adjacency, p.rep);
   p.self_candidates.clear();
-  self_overlap_pairs(mesh, nullptr, p.rep, p.self_candidates);
-  std::sort(p.self_candidates.begin(), p.self_candidates.end());
-  for (const std::uint64_t c : p.self_candidates) {
-    p.kept_a.push_back(pair_a(c));
-    p.kept_a.push_back(pair_b(c));
-  }
-  std::sort(p.kept_a.begin(), p.kept_a.end());
-  p.kept_a.erase(std::unique(p.kept_a.begin(), p.kept_a.end()), p.kept_a.end());
+  self_overlap_pairs(mesh, tree, p.rep, p.self_candidates);
+  // In the traversal's order (deterministic; the exact path sorts the contacts, far fewer): a
+  // limit on the contacts keeps the first in (tri_a, tri_b) order, as every path gives them.
+  if (opt.max_contacts) std::sort(p.self_candidates.begin(), p.self_candidates.end());
+  // The kept triangles, ascending: marked, then read in order (the cloth's 736k couples: a sort
+  // of their 1.5M ends cost a fifth of the frame).
+  p.marks.assign(mesh.triangles.size(), 0);
+  for (const std::uint64_t c : p.self_candidates) p.marks[pair_a(c)] = p.marks[pair_b(c)] = 1;
+  for (std::uint32_t t = 0; t < p.marks.size(); ++t)
+    if (p.marks[t]) p.kept_a.push_back(t);
   p.kept_b = p.kept_a;
   p.culled_out = p.kept_a.empty();
   p.region = Aabb{};

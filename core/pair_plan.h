@@ -6,6 +6,7 @@
 #include "peelcd/core/broad_phase.h"
 #include "peelcd/core/cull.h"
 #include "peelcd/core/reference.h"
+#include "peelcd/core/self.h"
 #include "peelcd/core/detector.h"
 #include "peelcd/core/worker_pool.h"
 
@@ -40,6 +41,7 @@ struct PairPlan {
   // candidates (non-adjacent couples whose boxes overlap), found while planning.
   std::vector<std::uint32_t> rep;
   std::vector<std::uint64_t> self_candidates;
+  std::vector<std::uint8_t> marks;  // scratch: a self pair's kept triangles
   bool peeled() const { return !(culled_out || route.exact); }
 };
 
@@ -105,7 +107,8 @@ class FramePlan {
   std::vector<std::size_t> order_;
   std::vector<int> needs_, tiles_;
   void reset(std::size_t i, const ObjectRefs& objects, int tile);
-  void plan_self(const Mesh& mesh, const DetectOptions& opt, PairPlan& p);
+  std::vector<SelfTree> self_trees_;  // per object asking for self-collision (self_overlap_pairs())
+  void plan_self(const Mesh& mesh, const DetectOptions& opt, PairPlan& p, SelfTree& tree);
   void plan_box(const ObjectRefs& objects, const DetectOptions& opt, PairPlan& p);
   void share_budget(const DetectOptions& opt);
   void route(const DetectOptions& opt);

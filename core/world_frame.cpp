@@ -10,15 +10,6 @@
 #include <stdexcept>
 
 namespace peelcd {
-namespace {
-// Contacts by (tri_a, tri_b): a pair's contacts in the order every path gives them.
-void sort_contacts(std::vector<Contact>& contacts) {
-  std::sort(contacts.begin(), contacts.end(), [](const Contact& x, const Contact& y) {
-    return x.tri_a < y.tri_a || (x.tri_a == y.tri_a && x.tri_b < y.tri_b);
-  });
-}
-}  // namespace
-
 void World::Impl::refit_pending(unsigned lanes) {
   refit_chunks.clear();
   refit_bodies.clear();

@@ -14,6 +14,7 @@
 #include <catch2/catch.hpp>
 
 #include <algorithm>
+#include <random>
 
 using namespace peelcd;
 
@@ -230,5 +231,69 @@ TEST_CASE("the crumpled cloth: self pairs exist and the World finds exactly them
       std::sort(got.begin(), got.end());
       CHECK(got == want);
     }
+  }
+}
+
+TEST_CASE("a kept self tree: refitted while the triangles stay, the same candidates as a tree built each frame", "[self]") {
+  SelfTree st;
+  std::vector<std::uint32_t> rep;
+  for (int f = 0; f < 4; ++f) {
+    const Mesh m = make_crumpled_cloth(24, 0.3 + 0.05 * f);  // 1,152 triangles folding further each frame
+    vertex_representatives(m, SelfAdjacency::index, rep);
+    std::vector<std::uint64_t> kept, fresh;
+    self_overlap_pairs(m, st, rep, kept);
+    self_overlap_pairs(m, nullptr, rep, fresh);
+    std::sort(kept.begin(), kept.end());
+    std::sort(fresh.begin(), fresh.end());
+    INFO("frame " << f);
+    CHECK(kept == fresh);
+    CHECK_FALSE(kept.empty());
+    CHECK(st.builds == 1);  // built on the first frame only
+  }
+  // New triangles: built again.
+  Mesh cut = make_crumpled_cloth(24, 0.5);
+  cut.triangles.pop_back();
+  vertex_representatives(cut, SelfAdjacency::index, rep);
+  std::vector<std::uint64_t> kept, fresh;
+  self_overlap_pairs(cut, st, rep, kept);
+  self_overlap_pairs(cut, nullptr, rep, fresh);
+  std::sort(kept.begin(), kept.end());
+  std::sort(fresh.begin(), fresh.end());
+  CHECK(kept == fresh);
+  CHECK(st.builds == 2);
+  // Vertices shuffled under the same triangles: the refitted tree's grouping no longer fits
+  // them, its traversal visits far more node pairs, and the next frame builds again.
+  Mesh shuffled = cut;
+  std::mt19937 rng(7);
+  std::shuffle(shuffled.vertices.begin(), shuffled.vertices.end(), rng);
+  vertex_representatives(shuffled, SelfAdjacency::index, rep);
+  kept.clear();
+  fresh.clear();
+  self_overlap_pairs(shuffled, st, rep, kept);
+  self_overlap_pairs(shuffled, nullptr, rep, fresh);
+  std::sort(kept.begin(), kept.end());
+  std::sort(fresh.begin(), fresh.end());
+  CHECK(kept == fresh);
+  CHECK(st.builds == 2);
+  CHECK(st.rebuild);
+  kept.clear();
+  self_overlap_pairs(shuffled, st, rep, kept);
+  CHECK(st.builds == 3);
+}
+
+TEST_CASE("the frame API over a cloth folding frame by frame: exactly the exact self pairs every frame", "[self]") {
+  Detector d(std::make_shared<CpuImageStage>());
+  std::vector<Object> objects(1);
+  objects[0].name = "cloth";
+  objects[0].self = true;
+  DetectOptions opt;
+  opt.stage = Stage::exact;
+  for (int f = 0; f < 3; ++f) {
+    objects[0].mesh = make_crumpled_cloth(24, 0.3 + 0.1 * f);
+    const FrameResult r = d.detect(objects, opt);
+    const auto want = exact_self_pairs(objects[0].mesh);
+    INFO("frame " << f);
+    CHECK_FALSE(want.empty());
+    CHECK(self_pairs_found(r, 0) == want);  // sorted as every path gives them
   }
 }

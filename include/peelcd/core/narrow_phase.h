@@ -46,6 +46,9 @@ std::pair<Vec3, Vec3> intersection_segment(const TriangleCorners& a, const Trian
 // test narrow_phase() runs on each candidate.
 bool test_triangle_pair(const TriangleCorners& a, const TriangleCorners& b, Contact& contact);
 
+// Contacts by (tri_a, tri_b): a pair's contacts in the order every path gives them.
+void sort_contacts(std::vector<Contact>& contacts);
+
 // Tests every candidate pair (packed with pack_pair(triA, triB), see id_map.h) and appends
 // the colliding ones to `out` in candidate order. boxes_overlap: every candidate is known to be
 // a pair of overlapping triangle boxes (box_overlap_pairs()'s output), so that first test is

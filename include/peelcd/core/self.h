@@ -7,6 +7,7 @@
 // default), or by position (vertices at bitwise-equal coordinates are one vertex: the seams of
 // an OBJ whose patches duplicate their border vertices, or a soup of unwelded triangles).
 // A self pair is listed like an inter-object pair with object A = object B, tri_a < tri_b.
+#include "peelcd/core/bvh.h"
 #include "peelcd/core/mesh.h"
 #include "peelcd/core/narrow_phase.h"
 
@@ -34,6 +35,24 @@ bool triangles_adjacent(const Mesh& mesh, const std::vector<std::uint32_t>& rep,
 // frame API's exact CPU path: no n^2; peelcd::World keeps its bodies' trees instead).
 void self_overlap_pairs(const Mesh& mesh, const std::vector<std::uint32_t>* tris, const std::vector<std::uint32_t>& rep,
                         std::vector<std::uint64_t>& out);
+
+// A mesh's tree for its self search, kept from frame to frame (the frame API keeps one per
+// object that asks for self-collision): refitted while the triangles stay the same, built again
+// when they change, and when the refitted tree's traversal visited more than twice the node
+// pairs it visited when built (a refit keeps the grouping of the first frame; a cloth that
+// crumples far from it overlaps more of itself).
+struct SelfTree {
+  Bvh tree;
+  std::vector<Tri> triangles;  // of the last build
+  std::size_t visited_at_build = 0;
+  bool rebuild = true;
+  std::size_t builds = 0;
+};
+
+// self_overlap_pairs() over all of `mesh` with the kept tree `st` (brought to `mesh` first):
+// the same pairs. Returns the node pairs visited.
+std::size_t self_overlap_pairs(const Mesh& mesh, SelfTree& st, const std::vector<std::uint32_t>& rep,
+                               std::vector<std::uint64_t>& out);
 
 // Makes image-stage candidates (pack_pair(ID of A, ID of B) of the same mesh peeled twice) self
 // candidates: each pair as (min, max), adjacent pairs and a triangle with itself dropped, sorted
