@@ -175,8 +175,8 @@ bool cut_by_plane(const TriangleCorners& t, const int side[3], const Vec3& n, do
     if (side[i] != 0 && side[j] != 0 && side[i] != side[j]) {
       // An edge nearly parallel to the plane (both ends within rounding of it) has no
       // well-defined crossing point in double: leave it to the exact construction.
-      const double denom = d[i] - d[j];
-      if (!(std::abs(denom) > 1e-6 * n.norm() * (t[j] - t[i]).norm())) return false;
+      const double denom = d[i] - d[j];  // |denom| > 1e-6 |n| |edge|, in squares (no root)
+      if (!(denom * denom > 1e-12 * n.squaredNorm() * (t[j] - t[i]).squaredNorm())) return false;
       pts[count++] = t[i] + (t[j] - t[i]) * std::clamp(d[i] / denom, 0.0, 1.0);
     }
   }
@@ -198,10 +198,17 @@ bool crossing_segment(const TriangleCorners& a, const TriangleCorners& b, const 
   const Vec3 na = a1.cross(a2), nb = b1.cross(b2);
   // The double construction is ill-conditioned for planes within 1e-6 rad of parallel, and
   // for needles (an angle under 1e-6 rad), whose normals rounding can turn anywhere.
-  const bool steep_enough = na.norm() > 1e-6 * a1.norm() * a2.norm() && nb.norm() > 1e-6 * b1.norm() * b2.norm() &&
-                            na.cross(nb).norm() > 1e-6 * na.norm() * nb.norm();
-  if (!steep_enough) return false;
+  // Compared in squares (no roots), whose products reach the eighth power of the triangles'
+  // extent: outside 1e-30 .. 1e30 that could leave double's normal range, and the exact
+  // construction is used instead.
+  const double extent = std::max({a1.cwiseAbs().maxCoeff(), a2.cwiseAbs().maxCoeff(), b1.cwiseAbs().maxCoeff(),
+                                  b2.cwiseAbs().maxCoeff()});
+  if (!(extent > 1e-30 && extent < 1e30)) return false;
+  const double na2 = na.squaredNorm(), nb2 = nb.squaredNorm();
   const Vec3 dir = na.cross(nb);
+  const bool steep_enough = na2 > 1e-12 * a1.squaredNorm() * a2.squaredNorm() &&
+                            nb2 > 1e-12 * b1.squaredNorm() * b2.squaredNorm() && dir.squaredNorm() > 1e-12 * na2 * nb2;
+  if (!steep_enough) return false;
   if (!(dir.squaredNorm() > 0.0)) return false;
   Vec3 alo, ahi, blo, bhi;
   if (!cut_by_plane(a, sa, nb, nb.dot(b[0]), dir, alo, ahi) || !cut_by_plane(b, sb, na, na.dot(a[0]), dir, blo, bhi))
