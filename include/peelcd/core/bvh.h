@@ -79,9 +79,11 @@ struct FBox {
       hi[k] = o.hi[k] > hi[k] ? o.hi[k] : hi[k];
     }
   }
+  // All six comparisons, combined without branches (a traversal's overlap tests follow the
+  // geometry, which no branch predictor learns).
   bool overlaps(const FBox& o) const {
-    return lo[0] <= o.hi[0] && o.lo[0] <= hi[0] && lo[1] <= o.hi[1] && o.lo[1] <= hi[1] && lo[2] <= o.hi[2] &&
-           o.lo[2] <= hi[2];
+    return bool(int(lo[0] <= o.hi[0]) & int(o.lo[0] <= hi[0]) & int(lo[1] <= o.hi[1]) & int(o.lo[1] <= hi[1]) &
+                int(lo[2] <= o.hi[2]) & int(o.lo[2] <= hi[2]));
   }
   bool overlaps(const Aabb& o) const {
     return lo[0] <= o.hi[0] && o.lo[0] <= hi[0] && lo[1] <= o.hi[1] && o.lo[1] <= hi[1] && lo[2] <= o.hi[2] &&
@@ -348,24 +350,29 @@ std::size_t bvh_traverse(const Bvh& a, const Bvh& b, const BvhRelation& rel, Bvh
 // node's children whose boxes overlap the other node's, pushed with it.
 // A pair of leaves pushed has its leaves' lines asked for (it is popped soon: the stack is
 // last in, first out).
+// The stack is stack[0, top); a child is written in any case and kept by moving top past it
+// (no branch on the overlap).
 inline void descend_same_frame(const Bvh& a, const Bvh& b, std::uint32_t i, std::uint32_t j,
-                               std::vector<BvhNodePair>& stack) {
+                               std::vector<BvhNodePair>& stack, std::size_t& top) {
+  if (stack.size() < top + 2) stack.resize(2 * top + 64);
   const auto& na = a.nodes();
   const auto& nb = b.nodes();
   const BvhNode& x = na[i];
   const BvhNode& y = nb[j];
   if (y.leaf() || (!x.leaf() && x.box.max_extent() >= y.box.max_extent())) {
-    for (const std::uint32_t c : {i + 1, x.first})
-      if (na[c].box.overlaps(y.box)) {
-        stack.push_back({c, j});
-        if (na[c].leaf() && y.leaf()) a.prefetch_leaf(na[c]), b.prefetch_leaf(y);
-      }
+    for (const std::uint32_t c : {i + 1, x.first}) {
+      const bool keep = na[c].box.overlaps(y.box);
+      stack[top] = {c, j};
+      top += keep;
+      if (keep && na[c].leaf() && y.leaf()) a.prefetch_leaf(na[c]), b.prefetch_leaf(y);
+    }
   } else {
-    for (const std::uint32_t c : {j + 1, y.first})
-      if (x.box.overlaps(nb[c].box)) {
-        stack.push_back({i, c});
-        if (x.leaf() && nb[c].leaf()) a.prefetch_leaf(x), b.prefetch_leaf(nb[c]);
-      }
+    for (const std::uint32_t c : {j + 1, y.first}) {
+      const bool keep = x.box.overlaps(nb[c].box);
+      stack[top] = {i, c};
+      top += keep;
+      if (keep && x.leaf() && nb[c].leaf()) a.prefetch_leaf(x), b.prefetch_leaf(nb[c]);
+    }
   }
 }
 
@@ -376,13 +383,12 @@ std::size_t bvh_traverse_same_frame(const Bvh& a, const Bvh& b, BvhNodePair star
                                     Fn&& fn) {
   const auto& na = a.nodes();
   const auto& nb = b.nodes();
-  stack.clear();
   if (!na[start.first].box.overlaps(nb[start.second].box)) return 1;
-  stack.push_back(start);
-  std::size_t visited = 0;
-  while (!stack.empty()) {
-    const auto [i, j] = stack.back();
-    stack.pop_back();
+  if (stack.size() < 64) stack.resize(64);
+  stack[0] = start;
+  std::size_t top = 1, visited = 0;
+  while (top != 0) {
+    const auto [i, j] = stack[--top];
     ++visited;
     const BvhNode& x = na[i];
     const BvhNode& y = nb[j];
@@ -390,13 +396,10 @@ std::size_t bvh_traverse_same_frame(const Bvh& a, const Bvh& b, BvhNodePair star
     if (x.leaf() && y.leaf()) {
       const BvhLeaf& la = a.leaf(x);
       const BvhLeaf& lb = b.leaf(y);
-      for (std::uint32_t u = 0; u < x.count; ++u) {
-        const FBox ba = la.box(u);
-        if (!ba.overlaps(y.box)) continue;
-        for (unsigned m = overlap_mask(ba, lb); m;) fn(la.tri[u], lb.tri[take_lane(m)]);
-      }
+      for (std::uint32_t u = 0; u < x.count; ++u)  // (no test of A's box against B's node first: a branch)
+        for (unsigned m = overlap_mask(la.box(u), lb); m;) fn(la.tri[u], lb.tri[take_lane(m)]);
     } else {
-      descend_same_frame(a, b, i, j, stack);
+      descend_same_frame(a, b, i, j, stack, top);
     }
   }
   return visited;
@@ -409,18 +412,17 @@ template <class Fn>
 std::size_t bvh_self_traverse(const Bvh& tree, std::vector<BvhNodePair>& stack, Fn&& fn) {
   const auto& n = tree.nodes();
   if (n.empty()) return 0;
-  std::size_t visited = 0;
-  stack.clear();
-  stack.push_back({0u, 0u});
+  std::size_t visited = 0, top = 1;
+  if (stack.size() < 64) stack.resize(64);
+  stack[0] = {0u, 0u};
   const auto leaf_pairs = [&](const BvhNode& x, const BvhNode& y) {
     const BvhLeaf& lx = tree.leaf(x);
     const BvhLeaf& ly = tree.leaf(y);
     for (std::uint32_t i = 0; i < x.count; ++i)
       for (unsigned m = overlap_mask(lx.box(i), ly); m;) fn(lx.tri[i], ly.tri[take_lane(m)]);
   };
-  while (!stack.empty()) {
-    const auto [a, b] = stack.back();
-    stack.pop_back();
+  while (top != 0) {
+    const auto [a, b] = stack[--top];
     ++visited;
     const BvhNode& x = n[a];
     const BvhNode& y = n[b];
@@ -432,15 +434,17 @@ std::size_t bvh_self_traverse(const Bvh& tree, std::vector<BvhNodePair>& stack, 
         continue;
       }
       const std::uint32_t l = a + 1, r = x.first;
-      stack.push_back({l, l});
-      stack.push_back({r, r});
-      if (n[l].box.overlaps(n[r].box)) stack.push_back({l, r});
+      if (stack.size() < top + 3) stack.resize(2 * top + 64);
+      stack[top++] = {l, l};
+      stack[top++] = {r, r};
+      stack[top] = {l, r};
+      top += n[l].box.overlaps(n[r].box);
       continue;
     }
     if (x.leaf() && y.leaf())
       leaf_pairs(x, y);
     else
-      descend_same_frame(tree, tree, a, b, stack);
+      descend_same_frame(tree, tree, a, b, stack, top);
   }
   return visited;
 }
