@@ -315,7 +315,6 @@ double SuiteRun::time_row(Row& r, const PeerFrame& ref, Score& s, double& stage_
     case Kind::world:
     case Kind::frame:
       run_peelcd(r);
-      if (std::getenv("PHASES") && &r == &rows_[0]) std::fprintf(stderr, "PH pre %.4f aabb %.4f cpu %.4f total %.4f\n", r.result.timings.gpu, r.result.timings.aabb, r.result.timings.cpu, r.result.timings.total);
       stage_ms = r.result.timings.gpu;
       s = score_frame(r.result, ref);
       return r.result.timings.total;
