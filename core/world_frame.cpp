@@ -377,9 +377,15 @@ void World::Impl::gather_contacts(FrameResult& out) {
     }
     if (r.candidates == 0 || to_image[p]) continue;
     ++out.rois_exact;
-    for (std::size_t k = first_task[p]; k < first_task[p + 1]; ++k) {
-      r.colliding.insert(r.colliding.end(), tasks[k].contacts.begin(), tasks[k].contacts.end());
-      stats.vertices_transformed += tasks[k].transformed;
+    if (first_task[p + 1] - first_task[p] == 1 && r.colliding.empty()) {
+      // One task: its contacts taken whole (the two vectors trade storage, no copy).
+      r.colliding.swap(tasks[first_task[p]].contacts);
+      stats.vertices_transformed += tasks[first_task[p]].transformed;
+    } else {
+      for (std::size_t k = first_task[p]; k < first_task[p + 1]; ++k) {
+        r.colliding.insert(r.colliding.end(), tasks[k].contacts.begin(), tasks[k].contacts.end());
+        stats.vertices_transformed += tasks[k].transformed;
+      }
     }
     sort_contacts(r.colliding);
   }
