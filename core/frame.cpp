@@ -75,6 +75,12 @@ std::string pair_path_reason(const PairResult& p, const DetectOptions& o) {
   char buf[320];
   if (p.exact_stage) {
     if (o.stage == Stage::exact) return "--stage exact";
+    if (p.object_a == p.object_b) {
+      std::snprintf(buf, sizeof buf,
+                    "a self pair: the exact CPU path under --stage auto (predicted at %.3f ms by its candidate couples)",
+                    p.predicted_exact_ms);
+      return buf;
+    }
     std::snprintf(buf, sizeof buf, "routed: the exact CPU path was predicted at %.3f ms, the image stage at %.3f ms",
                   p.predicted_exact_ms, p.predicted_image_ms);
     return buf;

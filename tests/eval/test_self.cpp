@@ -4,6 +4,7 @@
 // conservative image stage at any tile; inter-object pairs unchanged beside self pairs.
 #include "peelcd/core/cpu_stage.h"
 #include "peelcd/core/detector.h"
+#include "peelcd/core/frame.h"
 #include "peelcd/core/id_map.h"
 #include "peelcd/core/planner.h"
 #include "peelcd/core/primitives.h"
@@ -297,10 +298,13 @@ TEST_CASE("the frame API over a cloth folding frame by frame: exactly the exact 
     CHECK_FALSE(want.empty());
     CHECK(self_pairs_found(r, 0) == want);  // sorted as every path gives them
   }
-  // Routed by its candidate couples (the World's model), not by its triangles.
+  // Under Stage::automatic: the exact path, predicted by its candidate couples (the World's
+  // model), not by its triangles.
   opt.stage = Stage::automatic;
   const FrameResult r = d.detect(objects, opt);
   REQUIRE(r.pairs.size() == 1);
+  CHECK(r.pairs[0].exact_stage);
   CHECK(r.pairs[0].candidates > objects[0].mesh.triangles.size());
   CHECK(r.pairs[0].predicted_exact_ms == Approx(1e-3 * kWorldCandidateUs * double(r.pairs[0].candidates)));
+  CHECK_THAT(pair_path_reason(r.pairs[0], opt), Catch::Contains("a self pair"));
 }

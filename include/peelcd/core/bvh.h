@@ -348,10 +348,10 @@ std::size_t bvh_traverse(const Bvh& a, const Bvh& b, const BvhRelation& rel, Bvh
 
 // One step down from node pair (i, j) of two trees in one frame, not both leaves: the larger
 // node's children whose boxes overlap the other node's, pushed with it.
-// A pair of leaves pushed has its leaves' lines asked for (it is popped soon: the stack is
-// last in, first out).
 // The stack is stack[0, top); a child is written in any case and kept by moving top past it
-// (no branch on the overlap).
+// (no branch on the overlap). A child pair of two leaves has its leaves' lines asked for, kept
+// or not (a kept one is popped soon: the stack is last in, first out; asking only for kept ones
+// branched on the overlap again: the folded sheet's self frame 119 -> 125 ms).
 inline void descend_same_frame(const Bvh& a, const Bvh& b, std::uint32_t i, std::uint32_t j,
                                std::vector<BvhNodePair>& stack, std::size_t& top) {
   if (stack.size() < top + 2) stack.resize(2 * top + 64);
@@ -364,14 +364,14 @@ inline void descend_same_frame(const Bvh& a, const Bvh& b, std::uint32_t i, std:
       const bool keep = na[c].box.overlaps(y.box);
       stack[top] = {c, j};
       top += keep;
-      if (keep && na[c].leaf() && y.leaf()) a.prefetch_leaf(na[c]), b.prefetch_leaf(y);
+      if (na[c].leaf() & y.leaf()) a.prefetch_leaf(na[c]), b.prefetch_leaf(y);
     }
   } else {
     for (const std::uint32_t c : {j + 1, y.first}) {
       const bool keep = x.box.overlaps(nb[c].box);
       stack[top] = {i, c};
       top += keep;
-      if (keep && x.leaf() && nb[c].leaf()) a.prefetch_leaf(x), b.prefetch_leaf(nb[c]);
+      if (x.leaf() & nb[c].leaf()) a.prefetch_leaf(x), b.prefetch_leaf(nb[c]);
     }
   }
 }
