@@ -269,14 +269,17 @@ void Detector::Impl::exact_path(const ObjectRefs& objects, const DetectOptions& 
   const auto t0 = Clock::now();
   loop.run(exact_pairs.size(), opt, [&](std::size_t k, PairLane& lane) {
     const std::size_t pi = exact_pairs[k];
-    const PairPlan& p = plan.plans[pi];
+    PairPlan& p = plan.plans[pi];
     PairResult& r = out.pairs[pi];
     const Mesh& ma = objects[p.a].mesh;
     const Mesh& mb = objects[p.b].mesh;
     if (p.a == p.b) {
-      r.candidates = p.self_candidates.size();
-      self_narrow_phase(ma, p.self_candidates, r.colliding, opt.max_contacts);
-      sort_contacts(r.colliding);  // candidates in traversal order (FramePlan::plan_self())
+      r.candidates = p.self_count;
+      if (p.self_tested)  // tested while planning (FramePlan::plan_self())
+        r.colliding.swap(p.self_contacts);
+      else
+        self_narrow_phase(ma, p.self_candidates, r.colliding, opt.max_contacts);
+      sort_contacts(r.colliding);  // in traversal order
       return;
     }
     lane.candidates.clear();

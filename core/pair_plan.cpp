@@ -104,14 +104,31 @@ void FramePlan::plan_self(const Mesh& mesh, const DetectOptions& opt, PairPlan& 
   p.scanned = p.in_roi_a = p.in_roi_b = mesh.triangles.size();
   vertex_representatives(mesh, opt.self_adjacency, p.rep);
   p.self_candidates.clear();
-  self_overlap_pairs(mesh, tree, p.rep, p.self_candidates);
-  // In the traversal's order (deterministic; the exact path sorts the contacts, far fewer): a
-  // limit on the contacts keeps the first in (tri_a, tri_b) order, as every path gives them.
-  if (opt.max_contacts) std::sort(p.self_candidates.begin(), p.self_candidates.end());
+  p.self_contacts.clear();
   // The kept triangles, ascending: marked, then read in order (the cloth's 736k couples: a sort
   // of their 1.5M ends cost a fifth of the frame).
   p.marks.assign(mesh.triangles.size(), 0);
-  for (const std::uint64_t c : p.self_candidates) p.marks[pair_a(c)] = p.marks[pair_b(c)] = 1;
+  // A self pair takes the exact path unless peeled (FramePlan::route()): each couple is tested
+  // as the traversal finds it, as in the World (no list of candidates; the exact path takes the
+  // contacts). A limit on the contacts keeps the first in (tri_a, tri_b) order, as every path
+  // gives them: the candidates are listed and sorted first.
+  p.self_tested = opt.stage != Stage::image && opt.max_contacts == 0;
+  if (p.self_tested) {
+    p.self_count = 0;
+    self_overlap_visit(mesh, tree, p.rep, [&](std::uint32_t t, std::uint32_t u) {
+      p.marks[t] = p.marks[u] = 1;
+      ++p.self_count;
+      Contact contact;
+      contact.tri_a = t;
+      contact.tri_b = u;
+      if (test_self_couple(corners(mesh, t), corners(mesh, u), contact)) p.self_contacts.push_back(contact);
+    });
+  } else {
+    self_overlap_pairs(mesh, tree, p.rep, p.self_candidates);
+    if (opt.max_contacts) std::sort(p.self_candidates.begin(), p.self_candidates.end());
+    p.self_count = p.self_candidates.size();
+    for (const std::uint64_t c : p.self_candidates) p.marks[pair_a(c)] = p.marks[pair_b(c)] = 1;
+  }
   for (std::uint32_t t = 0; t < p.marks.size(); ++t)
     if (p.marks[t]) p.kept_a.push_back(t);
   p.kept_b = p.kept_a;
@@ -168,7 +185,7 @@ void FramePlan::route(const DetectOptions& opt) {
                          p.tile);
     if (p.a == p.b && opt.stage == Stage::automatic) {
       p.route.predicted_exact_ms = route_pair(opt, world_exact_cost(), image_cost, double(p.scanned),
-                                              double(p.self_candidates.size()), p.tile)
+                                              double(p.self_count), p.tile)
                                        .predicted_exact_ms;
       p.route.exact = true;
     }

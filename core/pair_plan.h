@@ -40,7 +40,12 @@ struct PairPlan {
   // A self pair (a == b): the object's vertex representatives (SelfAdjacency) and its self
   // candidates (non-adjacent couples whose boxes overlap), found while planning.
   std::vector<std::uint32_t> rep;
+  // self_tested: its couples were tested while planning (self_contacts, in traversal order;
+  // self_candidates left empty); self_count: its candidate couples either way.
   std::vector<std::uint64_t> self_candidates;
+  bool self_tested = false;
+  std::size_t self_count = 0;
+  std::vector<Contact> self_contacts;
   std::vector<std::uint8_t> marks;  // scratch: a self pair's kept triangles
   bool peeled() const { return !(culled_out || route.exact); }
 };

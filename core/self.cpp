@@ -69,24 +69,21 @@ void self_overlap_pairs(const Mesh& mesh, const std::vector<std::uint32_t>* tris
   });
 }
 
+bool SelfTree::update(const Mesh& mesh) {
+  const bool build = rebuild || tree.empty() != mesh.triangles.empty() || triangles != mesh.triangles;
+  if (build) {
+    tree.build(mesh.vertices, mesh.triangles);
+    triangles = mesh.triangles;
+    ++builds;
+  } else {
+    tree.refit(mesh.vertices, mesh.triangles);
+  }
+  return build;
+}
+
 std::size_t self_overlap_pairs(const Mesh& mesh, SelfTree& st, const std::vector<std::uint32_t>& rep,
                                std::vector<std::uint64_t>& out) {
-  const bool build = st.rebuild || st.tree.empty() != mesh.triangles.empty() || st.triangles != mesh.triangles;
-  if (build) {
-    st.tree.build(mesh.vertices, mesh.triangles);
-    st.triangles = mesh.triangles;
-    ++st.builds;
-  } else {
-    st.tree.refit(mesh.vertices, mesh.triangles);
-  }
-  std::vector<BvhNodePair> stack;
-  const std::size_t visited = bvh_self_traverse(st.tree, stack, [&](std::uint32_t x, std::uint32_t y) {
-    if (triangles_adjacent(mesh, rep, x, y)) return;
-    out.push_back(x < y ? pack_pair(x, y) : pack_pair(y, x));
-  });
-  if (build) st.visited_at_build = visited;
-  st.rebuild = visited > 2 * st.visited_at_build;
-  return visited;
+  return self_overlap_visit(mesh, st, rep, [&](std::uint32_t t, std::uint32_t u) { out.push_back(pack_pair(t, u)); });
 }
 
 void self_candidates(const Mesh& mesh, const std::vector<std::uint32_t>& rep, std::vector<std::uint64_t>& pairs) {

@@ -47,10 +47,36 @@ struct SelfTree {
   std::size_t visited_at_build = 0;
   bool rebuild = true;
   std::size_t builds = 0;
+  // Brings the tree to `mesh` (refitted or built); returns true when it was built.
+  bool update(const Mesh& mesh);
+  // After a traversal that visited `visited` node pairs: a rebuild is due when a refitted tree
+  // visited more than twice what it did when built.
+  void visited(std::size_t visited, bool built) {
+    if (built) visited_at_build = visited;
+    rebuild = visited > 2 * visited_at_build;
+  }
 };
 
-// self_overlap_pairs() over all of `mesh` with the kept tree `st` (brought to `mesh` first):
-// the same pairs. Returns the node pairs visited.
+// Every candidate self couple of all of `mesh` (as self_overlap_pairs()) through the kept tree
+// `st`, brought to `mesh` first: fn(t, u) with t < u, in traversal order. Returns the node pairs
+// visited.
+template <class Fn>
+std::size_t self_overlap_visit(const Mesh& mesh, SelfTree& st, const std::vector<std::uint32_t>& rep, Fn&& fn) {
+  const bool built = st.update(mesh);
+  std::vector<BvhNodePair> stack;
+  const std::size_t visited = bvh_self_traverse(st.tree, stack, [&](std::uint32_t x, std::uint32_t y) {
+    if (triangles_adjacent(mesh, rep, x, y)) return;
+    if (x < y)
+      fn(x, y);
+    else
+      fn(y, x);
+  });
+  st.visited(visited, built);
+  return visited;
+}
+
+// self_overlap_pairs() over all of `mesh` with the kept tree `st`: the same pairs, appended.
+// Returns the node pairs visited.
 std::size_t self_overlap_pairs(const Mesh& mesh, SelfTree& st, const std::vector<std::uint32_t>& rep,
                                std::vector<std::uint64_t>& out);
 
