@@ -200,8 +200,11 @@ std::size_t World::Impl::plan_tasks(unsigned lanes) {
       // Few pairs: each split into node pairs for the lanes to share (32 a lane: the contact
       // region of two crossing spheres sits in few of them; rigid 1.3M spheres at 2 threads
       // 0.66 -> 0.61 of one); many pairs share the lanes as they are (a split costs a
-      // breadth-first walk and its tasks: the 1,000-ball pile at 2 threads 0.86 -> 0.56).
-      if (lanes > 1 && pairs.size() < 8 * std::size_t(lanes))
+      // breadth-first walk and its tasks: the 1,000-ball pile at 2 threads 0.86 -> 0.56), and so
+      // does a small pair (under kSplitTriangles between its bodies: the default scene at 2
+      // threads took 1.3x its one-thread frame split).
+      if (lanes > 1 && pairs.size() < 8 * std::size_t(lanes) &&
+          a.local().triangles.size() + b.local().triangles.size() >= kSplitTriangles)
         bvh_split(a.frame_tree(), b.frame_tree(), BvhRelation::between(a.frame_pose(), b.frame_pose()),
                   32 * std::size_t(lanes), split);
       else

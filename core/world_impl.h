@@ -39,6 +39,10 @@ constexpr std::size_t kWorldFrameTriangles = 8192;
 // without them).
 constexpr std::size_t kCopyPairs = 4;
 
+// A pair of bodies with fewer triangles than this between them is one task, whatever the lanes
+// (a split's walk and tasks cost more than a second lane saves on it).
+constexpr std::size_t kSplitTriangles = 32768;
+
 struct Body {
   bool alive = false;
   bool is_rigid = false;
