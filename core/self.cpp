@@ -45,30 +45,6 @@ bool triangles_adjacent(const Mesh& mesh, const std::vector<std::uint32_t>& rep,
   return false;
 }
 
-void self_overlap_pairs(const Mesh& mesh, const std::vector<std::uint32_t>* tris, const std::vector<std::uint32_t>& rep,
-                        std::vector<std::uint64_t>& out) {
-  // A tree over the triangles, traversed against itself (a sweep along one axis meets every
-  // triangle of a sheet's column: O(n^1.5) on a cloth).
-  Mesh sub;
-  const Mesh* m = &mesh;
-  if (tris) {  // the listed triangles only: a sub-mesh over the same vertices
-    sub.triangles.reserve(tris->size());
-    for (const std::uint32_t t : *tris) sub.triangles.push_back(mesh.triangles[t]);
-    m = &sub;
-  }
-  Bvh tree;
-  tree.build(mesh.vertices, m->triangles);
-  std::vector<BvhNodePair> stack;
-  bvh_self_traverse(tree, stack, [&](std::uint32_t x, std::uint32_t y) {
-    if (tris) {
-      x = (*tris)[x];
-      y = (*tris)[y];
-    }
-    if (triangles_adjacent(mesh, rep, x, y)) return;
-    out.push_back(x < y ? pack_pair(x, y) : pack_pair(y, x));
-  });
-}
-
 bool SelfTree::update(const Mesh& mesh) {
   const bool build = rebuild || tree.empty() != mesh.triangles.empty() || triangles != mesh.triangles;
   if (build) {

@@ -77,17 +77,17 @@ namespace {
 constexpr std::size_t kSplitVertices = 65536;
 
 // Throws unless `vertices` fit deforming body `b` (same count, finite): the first vertex that is
-// not, searched in `parts` parts (World::Impl::parallel()).
-template <class Parallel>
-void check_vertices(const Body& b, const std::string& label, const std::vector<Vec3>& vertices, std::size_t parts,
-                    Parallel&& parallel) {
+// not, searched in `parts` parts over the World's lanes (w: World::Impl, in_parts()).
+template <class Lanes>
+void check_vertices(Lanes& w, const Body& b, const std::string& label, const std::vector<Vec3>& vertices,
+                    std::size_t parts) {
   if (b.is_rigid) throw std::invalid_argument("peelcd::World::set_vertices(): " + label + " is rigid (use set_pose)");
   const std::size_t n = vertices.size();
   if (n != b.mesh.vertices.size())
     throw std::invalid_argument("peelcd::World::set_vertices(): " + label + " has " + std::to_string(b.mesh.vertices.size()) +
                                 " vertices, given " + std::to_string(n) + " (a new topology: set_mesh)");
   std::vector<std::size_t> first_bad(parts, n);
-  parallel(parts, [&](std::size_t k) {
+  w.in_parts(parts, [&](std::size_t k) {
     for (std::size_t v = n * k / parts, end = n * (k + 1) / parts; v < end; ++v)
       if (!vertices[v].allFinite()) {
         first_bad[k] = v;
@@ -109,11 +109,8 @@ void World::set_vertices(BodyId id, const std::vector<Vec3>& vertices) {
   const ExclusiveUse exclusive(impl_->owner, "peelcd::World");
   Body& b = impl_->body(id, "set_vertices");
   const std::size_t n = vertices.size(), parts = impl_->vertex_parts(n);
-  const auto parallel = [&](std::size_t count, auto&& fn) {
-    impl_->parallel(count, unsigned(parts), [&](std::size_t k, unsigned) { fn(k); });
-  };
-  check_vertices(b, label_of(b.name, id), vertices, parts, parallel);
-  parallel(parts, [&](std::size_t k) {  // into the body's storage
+  check_vertices(*impl_, b, label_of(b.name, id), vertices, parts);
+  impl_->in_parts(parts, [&](std::size_t k) {  // into the body's storage
     std::copy(vertices.begin() + std::ptrdiff_t(n * k / parts), vertices.begin() + std::ptrdiff_t(n * (k + 1) / parts),
               b.mesh.vertices.begin() + std::ptrdiff_t(n * k / parts));
   });
@@ -123,10 +120,7 @@ void World::set_vertices(BodyId id, const std::vector<Vec3>& vertices) {
 void World::set_vertices(BodyId id, std::vector<Vec3>&& vertices) {
   const ExclusiveUse exclusive(impl_->owner, "peelcd::World");
   Body& b = impl_->body(id, "set_vertices");
-  const std::size_t parts = impl_->vertex_parts(vertices.size());
-  check_vertices(b, label_of(b.name, id), vertices, parts, [&](std::size_t count, auto&& fn) {
-    impl_->parallel(count, unsigned(parts), [&](std::size_t k, unsigned) { fn(k); });
-  });
+  check_vertices(*impl_, b, label_of(b.name, id), vertices, impl_->vertex_parts(vertices.size()));
   b.mesh.vertices = std::move(vertices);
   b.refit_pending = true;
 }

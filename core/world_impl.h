@@ -247,6 +247,11 @@ struct World::Impl {
   // over them.
   unsigned frame_lanes = 1;
   std::size_t vertex_parts(std::size_t n) const;  // the parts set_vertices() splits n vertices in
+  // fn(k) for k in [0, parts), one part a lane (parts <= the pool's lanes).
+  template <class Fn>
+  void in_parts(std::size_t parts, Fn&& fn) {
+    parallel(parts, unsigned(parts), [&](std::size_t k, unsigned) { fn(k); });
+  }
   unsigned lanes_for(const DetectOptions& opt) {
     if (opt.threads == 1) return 1;
     if (!pool || (opt.threads != 0 && pool->lanes() != opt.threads)) pool = std::make_unique<WorkerPool>(opt.threads);

@@ -103,7 +103,8 @@ TEST_CASE("the self search finds every reference pair's candidate and tests no a
     std::vector<std::uint32_t> rep;
     vertex_representatives(m, SelfAdjacency::index, rep);
     std::vector<std::uint64_t> cands;
-    self_overlap_pairs(m, nullptr, rep, cands);
+    SelfTree st;
+    self_overlap_pairs(m, st, rep, cands);
     std::sort(cands.begin(), cands.end());
     for (const std::uint64_t c : cands) {
       REQUIRE(pair_a(c) < pair_b(c));
@@ -243,8 +244,9 @@ TEST_CASE("a kept self tree: refitted while the triangles stay, the same candida
     std::vector<std::uint32_t> rep;
     vertex_representatives(m, SelfAdjacency::index, rep);
     std::vector<std::uint64_t> kept, fresh;
+    SelfTree built;  // a tree built for m
     self_overlap_pairs(m, st, rep, kept);
-    self_overlap_pairs(m, nullptr, rep, fresh);
+    self_overlap_pairs(m, built, rep, fresh);
     std::sort(kept.begin(), kept.end());
     std::sort(fresh.begin(), fresh.end());
     CHECK(kept == fresh);

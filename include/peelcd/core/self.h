@@ -29,13 +29,6 @@ void vertex_representatives(const Mesh& mesh, SelfAdjacency adjacency, std::vect
 // adjacent to itself.
 bool triangles_adjacent(const Mesh& mesh, const std::vector<std::uint32_t>& rep, std::uint32_t t, std::uint32_t u);
 
-// Candidate self pairs: every couple of the triangles `tris` (all of the mesh when null) whose
-// closed boxes overlap and that are not adjacent, appended as pack_pair(t, u) with t < u, in no
-// particular order: a BVH built over them and traversed against itself (the self search of the
-// frame API's exact CPU path: no n^2; peelcd::World keeps its bodies' trees instead).
-void self_overlap_pairs(const Mesh& mesh, const std::vector<std::uint32_t>* tris, const std::vector<std::uint32_t>& rep,
-                        std::vector<std::uint64_t>& out);
-
 // A mesh's tree for its self search, kept from frame to frame (the frame API keeps one per
 // object that asks for self-collision): refitted while the triangles stay the same, built again
 // when they change, and when the refitted tree's traversal visited more than twice the node
@@ -47,6 +40,7 @@ struct SelfTree {
   std::size_t visited_at_build = 0;
   bool rebuild = true;
   std::size_t builds = 0;
+  std::vector<BvhNodePair> stack;  // the traversal's scratch, kept with the tree
   // Brings the tree to `mesh` (refitted or built); returns true when it was built.
   bool update(const Mesh& mesh);
   // After a traversal that visited `visited` node pairs: a rebuild is due when a refitted tree
@@ -57,14 +51,13 @@ struct SelfTree {
   }
 };
 
-// Every candidate self couple of all of `mesh` (as self_overlap_pairs()) through the kept tree
-// `st`, brought to `mesh` first: fn(t, u) with t < u, in traversal order. Returns the node pairs
-// visited.
+// Every candidate self couple of `mesh` (two triangles whose closed boxes overlap and that are
+// not adjacent) through the kept tree `st`, brought to `mesh` first and traversed against itself
+// (no n^2): fn(t, u) with t < u, in traversal order. Returns the node pairs visited.
 template <class Fn>
 std::size_t self_overlap_visit(const Mesh& mesh, SelfTree& st, const std::vector<std::uint32_t>& rep, Fn&& fn) {
   const bool built = st.update(mesh);
-  std::vector<BvhNodePair> stack;
-  const std::size_t visited = bvh_self_traverse(st.tree, stack, [&](std::uint32_t x, std::uint32_t y) {
+  const std::size_t visited = bvh_self_traverse(st.tree, st.stack, [&](std::uint32_t x, std::uint32_t y) {
     if (triangles_adjacent(mesh, rep, x, y)) return;
     if (x < y)
       fn(x, y);
@@ -75,8 +68,8 @@ std::size_t self_overlap_visit(const Mesh& mesh, SelfTree& st, const std::vector
   return visited;
 }
 
-// self_overlap_pairs() over all of `mesh` with the kept tree `st`: the same pairs, appended.
-// Returns the node pairs visited.
+// The candidate self couples of self_overlap_visit(), appended as pack_pair(t, u). Returns the
+// node pairs visited.
 std::size_t self_overlap_pairs(const Mesh& mesh, SelfTree& st, const std::vector<std::uint32_t>& rep,
                                std::vector<std::uint64_t>& out);
 
