@@ -109,10 +109,40 @@ void Bvh::refit(const std::vector<Vec3>& vertices, const std::vector<Tri>& trian
   refit_nodes(exact);
 }
 
-// Each vertex rounded outward to floats once (a vertex is a corner of several triangles); the
-// exact box of the vertices the triangles use.
+// Each vertex rounded outward to floats once (a vertex is a corner of about six triangles),
+// and the exact box of the vertices [begin, end) that the triangles use. With SSE2 a vertex's
+// three coordinates are rounded together by FBox::down()'s and up()'s formula, the same bits; a
+// coordinate at or past 1e37 (or infinite) takes their scalar path.
 Aabb Bvh::refit_vertices(const std::vector<Vec3>& vertices, std::size_t begin, std::size_t end) {
   Aabb exact;
+#if defined(__SSE2__)
+  const __m128 rel = _mm_set1_ps(2.4e-7f), tiny = _mm_set1_ps(1.2e-38f), big = _mm_set1_ps(1e37f);
+  const __m128 magnitude = _mm_castsi128_ps(_mm_set1_epi32(0x7fffffff));
+  __m128d lo_xy = _mm_set1_pd(INFINITY), lo_z = lo_xy, hi_xy = _mm_set1_pd(-INFINITY), hi_z = hi_xy;
+  const bool all_used = unused_.empty();
+  for (std::size_t v = begin; v < end; ++v) {
+    const double* p = vertices[v].data();
+    const __m128d xy = _mm_loadu_pd(p), z = _mm_load_sd(p + 2);
+    const __m128 f = _mm_movelh_ps(_mm_cvtpd_ps(xy), _mm_cvtpd_ps(z));  // (x, y, z, 0), nearest
+    const __m128 a = _mm_and_ps(f, magnitude);
+    const __m128 e = _mm_add_ps(_mm_mul_ps(a, rel), tiny);
+    VertexBox& r = vertex_boxes_[v];
+    _mm_store_ps(r.lo, _mm_sub_ps(f, e));
+    _mm_store_ps(r.hi, _mm_add_ps(f, e));
+    if (__builtin_expect(_mm_movemask_ps(_mm_cmpge_ps(a, big)) != 0, 0))
+      for (int k = 0; k < 3; ++k) r.lo[k] = FBox::down(p[k]), r.hi[k] = FBox::up(p[k]);
+    if (!all_used && unused_[v]) continue;
+    lo_xy = _mm_min_pd(lo_xy, xy), hi_xy = _mm_max_pd(hi_xy, xy);
+    lo_z = _mm_min_sd(lo_z, z), hi_z = _mm_max_sd(hi_z, z);
+  }
+  if (_mm_cvtsd_f64(lo_xy) <= _mm_cvtsd_f64(hi_xy)) {  // some vertex used
+    alignas(16) double l[2], h[2];
+    _mm_store_pd(l, lo_xy);
+    _mm_store_pd(h, hi_xy);
+    exact.lo = Vec3(l[0], l[1], _mm_cvtsd_f64(lo_z));
+    exact.hi = Vec3(h[0], h[1], _mm_cvtsd_f64(hi_z));
+  }
+#else
   for (std::size_t v = begin; v < end; ++v) {
     const Vec3& p = vertices[v];
     VertexBox& r = vertex_boxes_[v];
@@ -121,12 +151,56 @@ Aabb Bvh::refit_vertices(const std::vector<Vec3>& vertices, std::size_t begin, s
     exact.lo = exact.lo.cwiseMin(p);
     exact.hi = exact.hi.cwiseMax(p);
   }
+#endif
   return exact;
 }
 
 // Each lane's box from its corners' rounded vertices (min and max of floats: no rounding), the
-// leaf's box their union.
+// leaf's box their union. With SSE2, four lanes at a time: their boxes as rows, transposed into
+// the leaf's lanes (lanes past the count get the empty box).
 void Bvh::refit_leaves(const std::vector<Tri>& triangles, std::size_t begin, std::size_t end) {
+#if defined(__SSE2__)
+  const __m128 inf = _mm_set1_ps(INFINITY), ninf = _mm_set1_ps(-INFINITY);
+  // The triangles are read in leaf order, which the hardware cannot guess: those of the leaf
+  // kAhead on are asked for ahead (the default scene's bunny and dragon as deforming bodies,
+  // 6,398 triangles, after 64 MB of other work: the whole refit 0.075 -> 0.05 ms; 4 ahead 0.06,
+  // 16 and 32 0.055; the scalar refit before these vector paths took 0.113).
+  constexpr std::size_t kAhead = 8;
+  for (std::size_t l = begin; l < end; ++l) {
+    if (l + kAhead < end) {
+      const BvhLeaf& next = leaves_[l + kAhead];
+      for (std::uint32_t i = 0; i < kBvhLeafSize; ++i) __builtin_prefetch(&triangles[next.tri[i]]);
+    }
+    BvhLeaf& leaf = leaves_[l];
+    BvhNode& node = nodes_[leaf_node_[l]];
+    __m128 box_lo = inf, box_hi = ninf;
+    for (std::uint32_t h = 0; h < kBvhLeafSize; h += 4) {
+      __m128 lo[4], hi[4];
+      for (std::uint32_t i = 0; i < 4; ++i) {
+        if (h + i < node.count) {
+          const Tri& f = triangles[leaf.tri[h + i]];
+          const VertexBox &p = vertex_boxes_[f[0]], &q = vertex_boxes_[f[1]], &r = vertex_boxes_[f[2]];
+          lo[i] = _mm_min_ps(_mm_min_ps(_mm_load_ps(p.lo), _mm_load_ps(q.lo)), _mm_load_ps(r.lo));
+          hi[i] = _mm_max_ps(_mm_max_ps(_mm_load_ps(p.hi), _mm_load_ps(q.hi)), _mm_load_ps(r.hi));
+          box_lo = _mm_min_ps(box_lo, lo[i]);
+          box_hi = _mm_max_ps(box_hi, hi[i]);
+        } else {
+          lo[i] = inf, hi[i] = ninf;
+        }
+      }
+      _MM_TRANSPOSE4_PS(lo[0], lo[1], lo[2], lo[3]);
+      _MM_TRANSPOSE4_PS(hi[0], hi[1], hi[2], hi[3]);
+      for (int k = 0; k < 3; ++k) {
+        _mm_store_ps(leaf.lo[k] + h, lo[k]);
+        _mm_store_ps(leaf.hi[k] + h, hi[k]);
+      }
+    }
+    alignas(16) float blo[4], bhi[4];
+    _mm_store_ps(blo, box_lo);
+    _mm_store_ps(bhi, box_hi);
+    for (int k = 0; k < 3; ++k) node.box.lo[k] = blo[k], node.box.hi[k] = bhi[k];
+  }
+#else
   for (std::size_t l = begin; l < end; ++l) {
     BvhLeaf& leaf = leaves_[l];
     BvhNode& node = nodes_[leaf_node_[l]];
@@ -144,6 +218,7 @@ void Bvh::refit_leaves(const std::vector<Tri>& triangles, std::size_t begin, std
     }
     node.box = box;
   }
+#endif
 }
 
 void Bvh::refit_nodes(const Aabb& exact) {

@@ -13,31 +13,25 @@ namespace peelcd {
 void World::Impl::refit_pending(unsigned lanes) {
   refit_chunks.clear();
   refit_bodies.clear();
-  refit_owner.clear();
-  leaf_chunks.clear();
-  leaf_owner.clear();
   for (Body& b : bodies) {
     if (!b.alive || !b.refit_pending) continue;
     const std::size_t parts = lanes > 1 && b.mesh.triangles.size() >= 32768 ? lanes : 1;
     const std::size_t nv = b.mesh.vertices.size(), nl = b.tree.leaves();
     refit_bodies.push_back({&b, refit_chunks.size(), refit_chunks.size() + parts});
-    for (std::size_t k = 0; k < parts; ++k) {
-      refit_chunks.push_back({nv * k / parts, nv * (k + 1) / parts, Aabb{}});
-      refit_owner.push_back(refit_bodies.size() - 1);
-      leaf_chunks.push_back({nl * k / parts, nl * (k + 1) / parts, Aabb{}});
-      leaf_owner.push_back(refit_bodies.size() - 1);
-    }
+    for (std::size_t k = 0; k < parts; ++k)
+      refit_chunks.push_back(
+          {refit_bodies.size() - 1, nv * k / parts, nv * (k + 1) / parts, nl * k / parts, nl * (k + 1) / parts, Aabb{}});
   }
   if (refit_bodies.empty()) return;
   parallel(refit_chunks.size(), lanes, [&](std::size_t k, unsigned) {  // the vertices rounded
     RefitChunk& c = refit_chunks[k];
-    Body& b = *refit_bodies[refit_owner[k]].body;
-    c.exact = b.tree.refit_vertices(b.mesh.vertices, c.begin, c.end);
+    Body& b = *refit_bodies[c.body].body;
+    c.exact = b.tree.refit_vertices(b.mesh.vertices, c.vertex_begin, c.vertex_end);
   });
-  parallel(leaf_chunks.size(), lanes, [&](std::size_t k, unsigned) {  // the leaves from them
-    const RefitChunk& c = leaf_chunks[k];
-    Body& b = *refit_bodies[leaf_owner[k]].body;
-    b.tree.refit_leaves(b.mesh.triangles, c.begin, c.end);
+  parallel(refit_chunks.size(), lanes, [&](std::size_t k, unsigned) {  // the leaves from them
+    const RefitChunk& c = refit_chunks[k];
+    Body& b = *refit_bodies[c.body].body;
+    b.tree.refit_leaves(b.mesh.triangles, c.leaf_begin, c.leaf_end);
   });
   parallel(refit_bodies.size(), lanes, [&](std::size_t k, unsigned) {  // the nodes
     const RefitBody& r = refit_bodies[k];

@@ -277,9 +277,10 @@ struct World::Impl {
   // The deferred whole-tree refits (World::set_vertices, many moved vertices): every pending
   // body's triangle boxes in chunks over the lanes (a large body split in as many chunks as
   // lanes), then each body's nodes.
-  struct RefitChunk {
-    std::size_t begin, end;
-    Aabb exact;
+  struct RefitChunk {  // a part of a body's refit: a range of its vertices and one of its leaves
+    std::size_t body;    // its entry in refit_bodies
+    std::size_t vertex_begin, vertex_end, leaf_begin, leaf_end;
+    Aabb exact;          // the exact box of its vertices the triangles use
   };
   struct RefitBody {
     Body* body;
@@ -287,9 +288,6 @@ struct World::Impl {
   };
   std::vector<RefitChunk> refit_chunks;
   std::vector<RefitBody> refit_bodies;
-  std::vector<std::size_t> refit_owner;  // chunk -> its entry in refit_bodies
-  std::vector<RefitChunk> leaf_chunks;   // the same bodies' leaves, in ranges
-  std::vector<std::size_t> leaf_owner;
   void refit_pending(unsigned lanes);
   // One body's pending refit now (World::tree() asked for it between frames).
   void refit_now(Body& b) {

@@ -153,6 +153,33 @@ TEST_CASE("Bvh: a refit in ranges (as the World splits it over threads) equals a
   }
 }
 
+TEST_CASE("Bvh: a refit rounds every corner outward at every scale, as a build does", "[bvh]") {
+  // A grid whose vertices are scaled through subnormals, float's limit and past it (infinite
+  // float boxes), so that the refit's vector path and its scalar fallback both run.
+  Mesh m = make_grid(Vec3(-1, -1, 0), Vec3(2, 0, 0), Vec3(0, 2, 0), 12, 12);
+  const double scales[] = {1e-44, 1e-39, 0.37, 3.3e36, 1e37, 2.9e38, 3.5e38, 1e300};
+  for (std::size_t v = 0; v < m.vertices.size(); ++v) {
+    const double s = scales[v % 8];
+    m.vertices[v] = Vec3(s * m.vertices[v].x() + 0.1 * s, -s * m.vertices[v].y(), s * (v % 3 == 0 ? -1.0 : 1.0) / 3.0);
+  }
+  Bvh built, refitted;
+  built.build(m.vertices, m.triangles);
+  const Mesh first = make_grid(Vec3(-1, -1, 0), Vec3(2, 0, 0), Vec3(0, 2, 0), 12, 12);
+  refitted.build(first.vertices, first.triangles);
+  refitted.refit(m.vertices, m.triangles);
+  for (std::uint32_t t = 0; t < m.triangles.size(); ++t) {
+    const Aabb exact = triangle_bounds(m, t);
+    const FBox want = FBox::enclosing(exact), got = refitted.triangle_box(t);
+    for (int k = 0; k < 3; ++k) {
+      REQUIRE((double(got.lo[k]) <= exact.lo[k] && double(got.hi[k]) >= exact.hi[k]));
+      REQUIRE((got.lo[k] == want.lo[k] && got.hi[k] == want.hi[k]));
+      REQUIRE((got.lo[k] == built.triangle_box(t).lo[k] && got.hi[k] == built.triangle_box(t).hi[k]));
+    }
+  }
+  CHECK(refitted.box().lo == bounds(m).lo);
+  CHECK(refitted.box().hi == bounds(m).hi);
+}
+
 TEST_CASE("Bvh: the traversal of two posed trees finds every couple of overlapping boxes", "[bvh]") {
   const Mesh a = make_uv_sphere(Vec3(0, 0, 0), 1.0, 12, 16);
   const Mesh b = make_box(Vec3(-0.4, -0.4, -0.4), Vec3(0.4, 0.4, 0.4));

@@ -202,8 +202,8 @@ class Bvh {
   std::vector<BvhNode> nodes_;
   std::vector<BvhLeaf> leaves_;
   std::vector<std::uint32_t> leaf_node_;  // leaf -> its node
-  struct VertexBox {
-    float lo[3], hi[3];
+  struct alignas(16) VertexBox {  // (the fourth lanes unused: one SSE load a corner)
+    float lo[4], hi[4];
   };
   std::vector<VertexBox> vertex_boxes_;  // vertex -> its coordinates rounded down and up (the refit's)
   std::vector<std::uint8_t> unused_;     // vertex -> no triangle uses it (empty: all are used)
@@ -351,7 +351,10 @@ std::size_t bvh_traverse(const Bvh& a, const Bvh& b, const BvhRelation& rel, Bvh
 // The stack is stack[0, top); a child is written in any case and kept by moving top past it
 // (no branch on the overlap). A child pair of two leaves has its leaves' lines asked for, kept
 // or not (a kept one is popped soon: the stack is last in, first out; asking only for kept ones
-// branched on the overlap again: the folded sheet's self frame 119 -> 125 ms).
+// branched on the overlap again: the folded sheet's self frame 119 -> 125 ms); a child's right
+// child (its left one is next to it) is asked for in any case, ahead of the child's own descent
+// (the default scene in the bench: 0.23 -> 0.22 ms; a leaf's `first` is a leaf index, which
+// only wastes the hint).
 inline void descend_same_frame(const Bvh& a, const Bvh& b, std::uint32_t i, std::uint32_t j,
                                std::vector<BvhNodePair>& stack, std::size_t& top) {
   if (stack.size() < top + 2) stack.resize(2 * top + 64);
@@ -365,6 +368,7 @@ inline void descend_same_frame(const Bvh& a, const Bvh& b, std::uint32_t i, std:
       stack[top] = {c, j};
       top += keep;
       if (na[c].leaf() & y.leaf()) a.prefetch_leaf(na[c]), b.prefetch_leaf(y);
+      __builtin_prefetch(&na[na[c].first]);
     }
   } else {
     for (const std::uint32_t c : {j + 1, y.first}) {
@@ -372,6 +376,7 @@ inline void descend_same_frame(const Bvh& a, const Bvh& b, std::uint32_t i, std:
       stack[top] = {i, c};
       top += keep;
       if (x.leaf() & nb[c].leaf()) a.prefetch_leaf(x), b.prefetch_leaf(nb[c]);
+      __builtin_prefetch(&nb[nb[c].first]);
     }
   }
 }
