@@ -142,17 +142,21 @@ void plane_sides(const TriangleCorners& plane, const TriangleCorners& t, int sid
   const double cx = e1y * e2z - e1z * e2y, cy = e1z * e2x - e1x * e2z, cz = e1x * e2y - e1y * e2x;
   const double mx = std::fabs(e1y * e2z) + std::fabs(e1z * e2y), my = std::fabs(e1z * e2x) + std::fabs(e1x * e2z),
                mz = std::fabs(e1x * e2y) + std::fabs(e1y * e2x);
+  // The certified signs without a branch on them (which side a corner lies on follows the
+  // geometry, which no branch predictor learns); CGAL only where a sign is uncertain (rare).
+  int certain = 1;
   for (int i = 0; i < 3; ++i) {
     const double fx = t[i].x() - p.x(), fy = t[i].y() - p.y(), fz = t[i].z() - p.z();
     const double det = fx * cx + fy * cy + fz * cz;
     const double bound = kOrient3dBound * (std::fabs(fx) * mx + std::fabs(fy) * my + std::fabs(fz) * mz) + kUnderflowSlack;
-    if (det > bound)
-      side[i] = 1;
-    else if (det < -bound)
-      side[i] = -1;
-    else
-      side[i] = int(CGAL::orientation(to_cgal(plane[0]), to_cgal(plane[1]), to_cgal(plane[2]), to_cgal(t[i])));
+    const int above = det > bound, below = det < -bound;
+    side[i] = above - below;
+    certain &= above | below;
   }
+  if (__builtin_expect(!certain, 0))
+    for (int i = 0; i < 3; ++i)
+      if (side[i] == 0)
+        side[i] = int(CGAL::orientation(to_cgal(plane[0]), to_cgal(plane[1]), to_cgal(plane[2]), to_cgal(t[i])));
 }
 
 bool all_zero(const int s[3]) { return s[0] == 0 && s[1] == 0 && s[2] == 0; }
