@@ -21,6 +21,7 @@ struct BenchArgs {
   int res = 0;  // 0: the shared 512^2 budget, tiles by need (detect's default)
   std::string backend = kDefaultBackend;
   unsigned threads = 0;  // 0: the machine's (at most 8)
+  unsigned scaling = 0;  // > 0: the default World row again with this many threads
   bool short_rows = false;
   bool return_memory = false;
   std::string csv;
@@ -61,6 +62,9 @@ int run_bench(const BenchArgs& a) {
                          a.scene == "spheres-wave" || a.scene == "test1" || a.scene == "test2" || a.scene == "crowd";
     if (!builtin) refuse_overwriting_input(a.csv, scene_inputs(load_scene(a.scene)), "peelcd bench: --csv");
   }
+  if (a.scaling && (a.scene == "volume" || a.scene == "depth" || a.scene == "distance" || a.scene == "cloth-self" ||
+                    a.scene == "cloth-crumpled"))
+    throw InputError("peelcd bench: --scaling times the World rows of the pair scenes, not " + a.scene);
   if (a.scene == "volume") {  // intersection volume: its own table (peelcd/bench/volume_bench.h)
     bench::VolumeSuite v;
     v.frames = a.frames;
@@ -121,6 +125,7 @@ int run_bench(const BenchArgs& a) {
   };
   suite.res = a.res;
   suite.threads = threads;
+  suite.scaling_threads = a.scaling;
   suite.short_rows = a.short_rows;
   suite.keep_freed_memory = !a.return_memory;
   const Progress progress;
@@ -167,6 +172,9 @@ std::vector<Command> add_bench_commands(CLI::App& app) {
   benchmark->add_option("--threads", be.threads, "Threads of the peers, of peelcd's host resolve and of llvmpipe "
                                                  "(LP_NUM_THREADS); 0 = one per core, at most 8")
       ->check(CLI::Range(0, 64))->capture_default_str();
+  benchmark->add_option("--scaling", be.scaling, "Time the default World row again with N threads, side by side with "
+                                                  "the others on the same frames, and print its ratio to the default row")
+      ->check(CLI::Range(1, 64));
   benchmark->add_option("--frames", be.frames, "Frames (of the test scene; repeats of a scene file)")
       ->check(kPositive)->capture_default_str();
   benchmark->add_option("--res", be.res, "Texture size per ROI for peelcd; 0 = share the 512^2 budget with "

@@ -167,6 +167,7 @@ class SuiteRun {
   std::vector<Row> rows_;
   DetectOptions base_;  // the default of detect: the router
   std::size_t cg_ = 0, fr_ = 0, fb_ = 0, fl_ = 0, cfl_ = 0;  // the CGAL, FCL and floor rows
+  std::size_t scaling_ = 0;  // the default World row with Suite::scaling_threads (0: none)
   std::vector<Object> objects_;
   std::string csv_;
   std::size_t rois_ = 0, rois_exact_ = 0, world_candidates_ = 0, triangles_ = 0;
@@ -231,6 +232,13 @@ void SuiteRun::add_rows() {
   cfl_ = fl_ + 1;
   row("floor: 1 bare draw, overlap box", "floor", Kind::floor_box, floor1, gl_base);
   row("floor: 1 bare draw, culled", "cfloor", Kind::floor_culled, cfloor1, gl_base);
+  if (suite_.scaling_threads > 0) {  // last: the other rows keep their places
+    DetectOptions scaled = base_;
+    scaled.threads = suite_.scaling_threads;
+    scaling_ = rows_.size();
+    row("peelcd default, " + std::to_string(suite_.scaling_threads) + " threads", "dflt " + std::to_string(suite_.scaling_threads) + "t",
+        Kind::world, scaled, gl_base);
+  }
   for (Row& r : rows_) {
     r.phase_ms.assign(std::size_t(std::max(1, suite_.phases)), {});
     if (r.kind == Kind::world) r.world = std::make_unique<World>(suite_.stage);
@@ -404,7 +412,7 @@ void SuiteRun::print_table(bool heap_kept) const {
       std::printf(" %8s %7s", "-", "-");
     else
       std::printf(" %7.2f%% %7zu", 100.0 * r.score.miss_ratio(), r.score.false_contacts);
-    if (m < cg_) {
+    if (m < cg_ || (scaling_ && m == scaling_)) {
       const std::size_t floor = r.opt.cull == Cull::box ? fl_ : cfl_;
       std::printf(" %8.2f %8.2f %8.2f %8.2f\n", med[m] / med[cg_], med[m] / med[fc], med[m] / med[best],
                   med[floor] > 0 ? med[m] / med[floor] : 0.0);
@@ -423,6 +431,9 @@ void SuiteRun::print_table(bool heap_kept) const {
               " as the float peers keep theirs).)\n",
               fc == fr_ ? "refit" : "rebuilt", rows_[best].name.c_str(), fcl_refit_.builds(), fcl_rebuild_.builds(),
               fcl_refit_.refits(), fcl_refit_.pair_builds(), fcl_rebuild_.pair_builds());
+  if (scaling_)
+    std::printf("scaling: the default World with %u threads / with %u, the same frames side by side: %.2f (medians %.2f / %.2f ms)\n",
+                suite_.scaling_threads, threads_, med[scaling_] / med[0], med[scaling_], med[0]);
 }
 
 void SuiteRun::print_phases() const {

@@ -29,6 +29,9 @@ struct Suite {
   std::function<void(std::size_t, std::vector<Object>&)> frame;
   int res = 0;            // 0: the shared 512^2 budget with tiles by need (detect's default)
   unsigned threads = 1;   // every method's threads
+  // > 0: the default World row again with this many threads, timed side by side with the
+  // others (its ratio to the default row, same frames, printed under the table).
+  unsigned scaling_threads = 0;
   bool short_rows = false;
   // Freed memory stays in the process while the suite runs (glibc: mallopt), so that one
   // method's frees do not slow the next method's frame; false leaves the allocator as it is.
