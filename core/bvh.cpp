@@ -5,6 +5,13 @@
 #include <numeric>
 
 namespace peelcd {
+namespace {
+
+// A box's three extents summed (Bvh::growth()'s measure).
+double extents(const FBox& b) { return (double(b.hi[0]) - b.lo[0]) + (double(b.hi[1]) - b.lo[1]) + (double(b.hi[2]) - b.lo[2]); }
+
+}  // namespace
+
 void Bvh::build(const std::vector<Vec3>& vertices, const std::vector<Tri>& triangles) {
   const std::size_t n = triangles.size();
   nodes_.clear();
@@ -12,6 +19,7 @@ void Bvh::build(const std::vector<Vec3>& vertices, const std::vector<Tri>& trian
   leaf_node_.clear();
   parents_.clear();
   depth_ = 0;
+  size_ = size_at_build_ = 0.0;
   order_.resize(n);
   leaf_of_.resize(n);
   lane_of_.resize(n);
@@ -41,6 +49,10 @@ void Bvh::build(const std::vector<Vec3>& vertices, const std::vector<Tri>& trian
   leaves_.reserve(nodes_.capacity() / 2 + 1);
   build_node(0, std::uint32_t(n), 0, 1, centroids, boxes);
   dirty_.assign(nodes_.size(), 0);
+  size_ = 0.0;
+  for (const BvhNode& node : nodes_)
+    if (!node.leaf()) size_ += extents(node.box);
+  size_at_build_ = size_;
 }
 
 std::uint32_t Bvh::build_node(std::uint32_t begin, std::uint32_t end, std::uint32_t parent, std::size_t level,
@@ -239,13 +251,16 @@ void Bvh::refit_nodes(const Aabb& exact) {
   box_ = exact;
   // Children follow their parents: one sweep from the last node refits bottom-up (the leaves'
   // boxes are refit_leaves()').
+  double size = 0.0;
   for (std::size_t i = nodes_.size(); i-- > 0;) {
     BvhNode& node = nodes_[i];
     if (node.leaf()) continue;
     FBox box = nodes_[i + 1].box;
     box.merge(nodes_[node.first].box);
     node.box = box;
+    size += extents(box);
   }
+  size_ = size;
 }
 
 void Bvh::refit(const std::vector<Vec3>& vertices, const std::vector<Tri>& triangles,

@@ -46,13 +46,15 @@ bool triangles_adjacent(const Mesh& mesh, const std::vector<std::uint32_t>& rep,
 }
 
 bool SelfTree::update(const Mesh& mesh) {
-  const bool build = rebuild || tree.empty() != mesh.triangles.empty() || triangles != mesh.triangles;
+  bool build = builds == 0 || tree.empty() != mesh.triangles.empty() || triangles != mesh.triangles;
+  if (!build) {
+    tree.refit(mesh.vertices, mesh.triangles);
+    build = tree.growth() > kBvhRebuildGrowth;
+  }
   if (build) {
     tree.build(mesh.vertices, mesh.triangles);
-    triangles = mesh.triangles;
+    if (triangles != mesh.triangles) triangles = mesh.triangles;
     ++builds;
-  } else {
-    tree.refit(mesh.vertices, mesh.triangles);
   }
   return build;
 }

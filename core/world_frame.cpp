@@ -17,7 +17,7 @@ void World::Impl::refit_pending(unsigned lanes) {
     if (!b.alive || !b.refit_pending) continue;
     const std::size_t parts = lanes > 1 && b.mesh.triangles.size() >= 32768 ? lanes : 1;
     const std::size_t nv = b.mesh.vertices.size(), nl = b.tree.leaves();
-    refit_bodies.push_back({&b, refit_chunks.size(), refit_chunks.size() + parts});
+    refit_bodies.push_back({&b, refit_chunks.size(), refit_chunks.size() + parts, false});
     for (std::size_t k = 0; k < parts; ++k)
       refit_chunks.push_back(
           {refit_bodies.size() - 1, nv * k / parts, nv * (k + 1) / parts, nl * k / parts, nl * (k + 1) / parts, Aabb{}});
@@ -33,15 +33,21 @@ void World::Impl::refit_pending(unsigned lanes) {
     Body& b = *refit_bodies[c.body].body;
     b.tree.refit_leaves(b.mesh.triangles, c.leaf_begin, c.leaf_end);
   });
-  parallel(refit_bodies.size(), lanes, [&](std::size_t k, unsigned) {  // the nodes
-    const RefitBody& r = refit_bodies[k];
+  parallel(refit_bodies.size(), lanes, [&](std::size_t k, unsigned) {  // the nodes (or a build)
+    RefitBody& r = refit_bodies[k];
     Aabb exact;
     for (std::size_t c = r.first; c < r.last; ++c)
       exact.lo = exact.lo.cwiseMin(refit_chunks[c].exact.lo), exact.hi = exact.hi.cwiseMax(refit_chunks[c].exact.hi);
-    r.body->tree.refit_nodes(exact);
+    Bvh& tree = r.body->tree;
+    tree.refit_nodes(exact);
     r.body->refit_pending = false;
+    if (tree.growth() > kBvhRebuildGrowth) {
+      tree.build(r.body->mesh.vertices, r.body->mesh.triangles);
+      r.rebuilt = true;
+    }
   });
   stats.full_refits += refit_bodies.size();
+  for (const RefitBody& r : refit_bodies) stats.builds += r.rebuilt;
 }
 
 void World::Impl::self_pair(Body& a, std::size_t first, std::size_t last, PairResult& r) {

@@ -285,6 +285,7 @@ struct World::Impl {
   struct RefitBody {
     Body* body;
     std::size_t first, last;  // its chunks in refit_chunks
+    bool rebuilt;             // its tree grew past kBvhRebuildGrowth: built again
   };
   std::vector<RefitChunk> refit_chunks;
   std::vector<RefitBody> refit_bodies;
@@ -295,6 +296,10 @@ struct World::Impl {
     b.tree.refit(b.mesh.vertices, b.mesh.triangles);
     b.refit_pending = false;
     ++stats.full_refits;
+    if (b.tree.growth() > kBvhRebuildGrowth) {  // as refit_pending()
+      b.tree.build(b.mesh.vertices, b.mesh.triangles);
+      ++stats.builds;
+    }
   }
 
   void collide(const DetectOptions& opt, FrameResult& out);

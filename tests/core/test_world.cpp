@@ -115,6 +115,46 @@ TEST_CASE("World: deforming bodies, whole and partial updates, exactly the refer
   CHECK(world.stats().full_refits == 6);
 }
 
+TEST_CASE("World: a deforming body's tree built again once refits grew it past kBvhRebuildGrowth", "[world]") {
+  const Mesh rest = make_grid(Vec3(-1, -1, 0), Vec3(2, 0, 0), Vec3(0, 2, 0), 30, 30);
+  World world;
+  const BodyId cloth = world.add_deforming(rest, "cloth");
+  const BodyId wall = world.add_deforming(make_grid(Vec3(-1, 0.05, -0.6), Vec3(2, 0, 0), Vec3(0, 0, 1.2), 20, 12), "wall");
+  DetectOptions opt;
+  opt.stage = Stage::exact;
+  const auto check = [&](const char* what) {
+    const FrameResult& r = world.collide(opt);
+    const PairResult* p = find_pair(r, cloth, wall);
+    INFO(what);
+    CHECK((p ? keys(*p) : std::vector<std::uint64_t>{}) == reference(world, cloth, wall));
+  };
+  std::vector<Vec3> v;
+  wave(rest, 1, v);  // a gentle wave: refit, the tree kept
+  world.set_vertices(cloth, v);
+  check("wave");
+  CHECK(world.stats().builds == 2);
+  CHECK(world.tree(cloth).growth() < kBvhRebuildGrowth);
+  // The vertices shuffled under the same triangles: every refitted box spans the sheet.
+  std::mt19937 rng(5);
+  std::shuffle(v.begin(), v.end(), rng);
+  world.set_vertices(cloth, v);
+  check("shuffled");
+  CHECK(world.stats().builds == 3);
+  CHECK(world.tree(cloth).growth() == 1.0);
+  world.set_vertices(cloth, v);  // the same again: a refit, nothing grew
+  check("shuffled again");
+  CHECK(world.stats().builds == 3);
+  // Between frames (World::tree() refits a pending body): the same rule, on the wall (its
+  // tree built for its rest shape).
+  std::vector<Vec3> w = world.mesh(wall).vertices;
+  std::shuffle(w.begin(), w.end(), rng);
+  world.set_vertices(wall, w);
+  CHECK(world.tree(wall).growth() == 1.0);
+  CHECK(world.stats().builds == 4);
+  check("the wall shuffled");
+  CHECK(world.stats().builds == 4);
+}
+
 TEST_CASE("World: the same contacts on 1, 2 and 5 threads", "[world]") {
   // 9,360 triangles between the two: one task; 71,400: the pair split over the lanes
   // (kSplitTriangles).

@@ -37,18 +37,12 @@ bool triangles_adjacent(const Mesh& mesh, const std::vector<std::uint32_t>& rep,
 struct SelfTree {
   Bvh tree;
   std::vector<Tri> triangles;  // of the last build
-  std::size_t visited_at_build = 0;
-  bool rebuild = true;
   std::size_t builds = 0;
   std::vector<BvhNodePair> stack;  // the traversal's scratch, kept with the tree
-  // Brings the tree to `mesh` (refitted or built); returns true when it was built.
+  // Brings the tree to `mesh`: built for new triangles, else refitted, and built again when
+  // the refit grew it past kBvhRebuildGrowth (as the World's deforming bodies). Returns true
+  // when it was built.
   bool update(const Mesh& mesh);
-  // After a traversal that visited `visited` node pairs: a rebuild is due when a refitted tree
-  // visited more than twice what it did when built.
-  void visited(std::size_t visited, bool built) {
-    if (built) visited_at_build = visited;
-    rebuild = visited > 2 * visited_at_build;
-  }
 };
 
 // Every candidate self couple of `mesh` (two triangles whose closed boxes overlap and that are
@@ -56,16 +50,14 @@ struct SelfTree {
 // (no n^2): fn(t, u) with t < u, in traversal order. Returns the node pairs visited.
 template <class Fn>
 std::size_t self_overlap_visit(const Mesh& mesh, SelfTree& st, const std::vector<std::uint32_t>& rep, Fn&& fn) {
-  const bool built = st.update(mesh);
-  const std::size_t visited = bvh_self_traverse(st.tree, st.stack, [&](std::uint32_t x, std::uint32_t y) {
+  st.update(mesh);
+  return bvh_self_traverse(st.tree, st.stack, [&](std::uint32_t x, std::uint32_t y) {
     if (triangles_adjacent(mesh, rep, x, y)) return;
     if (x < y)
       fn(x, y);
     else
       fn(y, x);
   });
-  st.visited(visited, built);
-  return visited;
 }
 
 // The candidate self couples of self_overlap_visit(), appended as pack_pair(t, u). Returns the
