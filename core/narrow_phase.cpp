@@ -130,6 +130,28 @@ int orientation_sign(const Vec3& p, const Vec3& q, const Vec3& r, const Vec3& s)
   return int(CGAL::orientation(to_cgal(p), to_cgal(q), to_cgal(r), to_cgal(s)));
 }
 
+// The axis (0, 1, 2) whose coordinate is the same double in the three corners of `a` (and of
+// `b` when given: both triangles in one axis-aligned plane, exactly), or -1.
+int axis_plane(const TriangleCorners& a, const TriangleCorners* b = nullptr) {
+  for (int k = 0; k < 3; ++k) {
+    const double c = a[0][k];
+    if (a[1][k] == c && a[2][k] == c && (!b || ((*b)[0][k] == c && (*b)[1][k] == c && (*b)[2][k] == c))) return k;
+  }
+  return -1;
+}
+
+// Shewchuk's orient2d bound: |det - exact| <= (3 + 16 eps) eps (|left| + |right|), eps = 2^-53.
+constexpr double kOrient2dBound = (3.0 + 16.0 * 1.1102230246251565e-16) * 1.1102230246251565e-16;
+
+// The sign of orient2d(p, q, r) in the coordinates (u, v) when the double evaluation certifies
+// it, else 0 (too close to call, or a product under- or overflowing).
+int certain_orientation_2d(const Vec3& p, const Vec3& q, const Vec3& r, int u, int v) {
+  const double left = (p[u] - r[u]) * (q[v] - r[v]), right = (p[v] - r[v]) * (q[u] - r[u]);
+  const double det = left - right;
+  const double bound = kOrient2dBound * (std::fabs(left) + std::fabs(right)) + kUnderflowSlack;
+  return (det > bound) - (det < -bound);
+}
+
 // The signs of the corners of `t` against the plane of `plane` (orientation_sign()): the same
 // determinant expanded about plane[0], det(q - p, r - p, d - p) = (d - p) . ((q - p) x (r - p)),
 // whose 2x2 minors (and their magnitudes) are computed once for the three corners. It is
@@ -153,10 +175,24 @@ void plane_sides(const TriangleCorners& plane, const TriangleCorners& t, int sid
     side[i] = above - below;
     certain &= above | below;
   }
-  if (__builtin_expect(!certain, 0))
+  if (__builtin_expect(!certain, 0)) {
+    // A plane of constant coordinate k (a flat sheet, a face resting on a floor): its normal is
+    // exactly along k, so a corner's side is the sign of its k offset (exact) times the sign of
+    // the triangle's orientation in the other two coordinates (certified in double when it can
+    // be). The corners exactly on such a plane, which every filter leaves to exact arithmetic,
+    // cost nothing then.
+    if (const int k = axis_plane(plane); k >= 0) {
+      const int turn = certain_orientation_2d(plane[0], plane[1], plane[2], (k + 1) % 3, (k + 2) % 3);
+      if (turn != 0) {
+        const double c = plane[0][k];
+        for (int i = 0; i < 3; ++i) side[i] = ((t[i][k] > c) - (t[i][k] < c)) * turn;
+        return;
+      }
+    }
     for (int i = 0; i < 3; ++i)
       if (side[i] == 0)
         side[i] = int(CGAL::orientation(to_cgal(plane[0]), to_cgal(plane[1]), to_cgal(plane[2]), to_cgal(t[i])));
+  }
 }
 
 bool all_zero(const int s[3]) { return s[0] == 0 && s[1] == 0 && s[2] == 0; }
@@ -357,7 +393,28 @@ ContactKind classify_contact(const TriangleCorners& a, const TriangleCorners& b)
   return meet_in_one_point(a, b, side_a, side_b) ? ContactKind::touching : ContactKind::crossing;
 }
 
+bool coplanar_apart(const TriangleCorners& a, const TriangleCorners& b) {
+  const int k = axis_plane(a, &b);
+  if (k < 0) return false;
+  const int u = (k + 1) % 3, v = (k + 2) % 3;
+  const int ta = certain_orientation_2d(a[0], a[1], a[2], u, v), tb = certain_orientation_2d(b[0], b[1], b[2], u, v);
+  if (ta == 0 || tb == 0) return false;  // a triangle without area there, or too thin to tell
+  // Closed convex polygons in a plane are apart exactly when the line of some edge has the
+  // other polygon strictly on its outer side (the separating axis theorem, edge normals).
+  const auto separates = [&](const TriangleCorners& t, int inside, const TriangleCorners& o) {
+    for (int e = 0; e < 3; ++e) {
+      const Vec3 &p = t[e], &q = t[(e + 1) % 3];
+      if (certain_orientation_2d(p, q, o[0], u, v) == -inside && certain_orientation_2d(p, q, o[1], u, v) == -inside &&
+          certain_orientation_2d(p, q, o[2], u, v) == -inside)
+        return true;
+    }
+    return false;
+  };
+  return separates(a, ta, b) || separates(b, tb, a);
+}
+
 bool triangles_intersect(const TriangleCorners& a, const TriangleCorners& b) {
+  if (coplanar_apart(a, b)) return false;  // a flat sheet's neighbours: no exact predicate needed
   const Simplex sa = simplex(a), sb = simplex(b);
   return std::visit([](const auto& x, const auto& y) { return intersect(x, y); }, sa, sb);
 }

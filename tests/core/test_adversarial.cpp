@@ -12,8 +12,10 @@
 #include <CGAL/Exact_predicates_inexact_constructions_kernel.h>
 
 #include <algorithm>
+#include <cmath>
 #include <array>
 #include <cstdlib>
+#include <random>
 
 using namespace peelcd;
 using namespace peelcd::test;
@@ -187,6 +189,66 @@ TEST_CASE("adversarial pairs: exact answers, order-invariant, segments on both t
   // The generator must really produce every kind of contact, or the test proves little.
   for (int k = 0; k < 4; ++k) CHECK(t.kinds[k] > 0);
   for (int f = 0; f < int(Family::count); ++f) CHECK(t.hits[f] > 0);
+}
+
+TEST_CASE("triangles on an axis-aligned plane: the shortcuts give the exact answer", "[narrow][adversarial]") {
+  // coplanar_apart() and plane_sides()' axis-plane signs decide these without exact
+  // arithmetic: A on a plane of constant x, y or z; B on the same plane (coplanar: apart,
+  // touching at an edge or a corner, overlapping) or with one or two corners on it (touching it
+  // from one side, or crossing it). Small lattice coordinates make every touching case common;
+  // the scales and offsets (not exact) make near-touching ones.
+  std::mt19937_64 rng(20261126);
+  const auto pick = [&](int n) { return int(rng() % std::uint64_t(n)); };
+  const auto lattice = [&] { return double(pick(7) - 3); };
+  std::size_t cases = 0, apart = 0, hits = 0, wrong = 0, unsafe = 0;
+  for (int i = 0; i < 15000; ++i) {
+    const int k = pick(3);
+    const double c = lattice();
+    const auto on_plane = [&] {
+      Vec3 p(lattice(), lattice(), lattice());
+      p[k] = c;
+      return p;
+    };
+    TriangleCorners a = {on_plane(), on_plane(), on_plane()}, b = {on_plane(), on_plane(), on_plane()};
+    const int off = pick(3);  // B's corners off the plane: 0, 1 or 2
+    for (int j = 0; j < off; ++j) b[j][k] = c + (pick(2) ? 1.0 : -1.0) * (1 + pick(2));
+    const double scales[] = {1.0, 0.1, 1e-6, 1e6, std::ldexp(1.0, -30)};
+    const double offsets[] = {0.0, 0.0, 1e3, 0.3};
+    const double scale = scales[pick(5)], offset = offsets[pick(4)];
+    for (auto* t : {&a, &b})
+      for (Vec3& p : *t) p = p * scale + Vec3::Constant(offset);
+    const bool expected = oracle(a, b);
+    ++cases;
+    hits += expected;
+    if (coplanar_apart(a, b)) {
+      ++apart;
+      if (expected) ++unsafe;  // "apart" must be certain
+    }
+    Mesh ma, mb;
+    ma.triangles = mb.triangles = {{0, 1, 2}};
+    std::array<int, 3> pa = {0, 1, 2};
+    do {
+      std::array<int, 3> pb = {0, 1, 2};
+      do {
+        const TriangleCorners x = {a[pa[0]], a[pa[1]], a[pa[2]]}, y = {b[pb[0]], b[pb[1]], b[pb[2]]};
+        ma.vertices.assign(x.begin(), x.end());
+        mb.vertices.assign(y.begin(), y.end());
+        std::vector<Contact> contacts;
+        narrow_phase(ma, mb, {pack_pair(0, 0)}, contacts);
+        narrow_phase(mb, ma, {pack_pair(0, 0)}, contacts);
+        if (triangles_intersect(x, y) != expected || triangles_intersect(y, x) != expected ||
+            contacts.size() != (expected ? 2u : 0u))
+          ++wrong;
+      } while (std::next_permutation(pb.begin(), pb.end()));
+    } while (std::next_permutation(pa.begin(), pa.end()));
+  }
+  std::printf("axis-plane pairs: %zu cases, %zu intersecting, %zu certified apart; %zu wrong answers, %zu unsafe\n", cases,
+              hits, apart, wrong, unsafe);
+  CHECK(wrong == 0);
+  CHECK(unsafe == 0);
+  CHECK(apart > cases / 20);       // the shortcut is taken (on about a fifth of the coplanar third)
+  CHECK(hits > cases / 10);        // and touching, crossing, overlapping cases are common
+  CHECK(hits + apart < cases);     // some pairs apart are left to the exact predicates
 }
 
 TEST_CASE("contact kinds tell touching from penetrating", "[narrow]") {

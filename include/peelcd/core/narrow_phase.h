@@ -33,6 +33,11 @@ inline TriangleCorners corners(const Mesh& m, std::uint32_t t) {
 }
 
 bool triangles_intersect(const TriangleCorners& a, const TriangleCorners& b);
+// True when both triangles lie in one axis-aligned plane (one coordinate the same double in all
+// six corners) and an edge of either separates them in it, every orientation certified in
+// double; false otherwise (apart or not, the exact predicates decide). A flat sheet's
+// neighbours are all coplanar, where CGAL's filters fail and its exact arithmetic is slow.
+bool coplanar_apart(const TriangleCorners& a, const TriangleCorners& b);
 
 // Kind of contact of two intersecting triangles (undefined if they are disjoint).
 ContactKind classify_contact(const TriangleCorners& a, const TriangleCorners& b);
