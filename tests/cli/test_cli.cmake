@@ -407,6 +407,9 @@ expect("bench" 0 "threads: 1 for every method.*World, stage auto.*exact CPU path
 expect("bench spheres" 0 "spheres .1680 triangles each., 2 frames, 2 objects.*World, stage auto. +[0-9.]+ +[0-9.]+ +0.00%" bench spheres --stacks 21 --frames 2 --short)
 expect("bench spheres-wave" 0 "World, stage auto. +[0-9.]+ +[0-9.]+ +0.00% +0 .*FCL 0.7, deforming refit" bench spheres-wave --stacks 21 --frames 2 --short)
 expect("bench crowd" 0 "crowd, 1 frames, 8 objects.*CGAL, cropped" bench crowd --objects 8 --frames 1)
+expect("bench --scaling" 0 "peelcd default, 2 threads +[0-9.]+ +[0-9.]+ +0.00% +0 .*scaling: the default World with 2 threads / with 1, the same frames side by side: [0-9.]+"
+       bench spheres-wave --stacks 21 --frames 2 --short --threads 1 --scaling 2)
+expect("bench --scaling: not for self" 2 "--scaling times the World rows of the pair scenes, not cloth-self" bench cloth-self --scaling 2)
 expect("calibrate help" 0 "cost models" calibrate --help)
 expect("calibrate: large meshes" 0 "large meshes.*stacks +triangles.*\n +10 +720 .*\n +16 +1920 .*ratio: measured / predicted" calibrate --backend cpu --repeat 1 --budgets 16 --large 10 16)
 expect("bench: bad peeler" 2 "unknown peeler" detect ${scene} --peeler magic)
