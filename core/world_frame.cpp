@@ -233,7 +233,7 @@ void World::Impl::traverse(std::size_t used, unsigned lanes) {
     t.tested = 0;
     if (t.start.first == kSelfPair) {  // in the body's own frame
       const Mesh& m = a.local();
-      t.visited = bvh_self_traverse(a.tree, self_stacks[lane], [&](std::uint32_t x, std::uint32_t y) {
+      t.visited = bvh_self_traverse(a.tree, self_stacks[lane].v, [&](std::uint32_t x, std::uint32_t y) {
         if (triangles_adjacent(m, a.rep, x, y)) return;
         ++t.tested;
         Contact contact;
@@ -254,8 +254,8 @@ void World::Impl::traverse(std::size_t used, unsigned lanes) {
     }
     const BvhRelation rel = BvhRelation::between(a.frame_pose(), b.frame_pose());
     const auto take = [&](std::uint32_t ta, std::uint32_t tb) { t.candidates.push_back(pack_pair(ta, tb)); };
-    t.visited = rel.identity ? bvh_traverse_same_frame(a.frame_tree(), b.frame_tree(), t.start, self_stacks[lane], take)
-                             : bvh_traverse(a.frame_tree(), b.frame_tree(), rel, t.start, stacks[lane], take);
+    t.visited = rel.identity ? bvh_traverse_same_frame(a.frame_tree(), b.frame_tree(), t.start, self_stacks[lane].v, take)
+                             : bvh_traverse(a.frame_tree(), b.frame_tree(), rel, t.start, stacks[lane].v, take);
   });
 }
 
@@ -334,6 +334,13 @@ void World::Impl::test_task(const Body& a, const Body& b, const DetectOptions& o
   const Vec3* va = a.world_vertices();
   const Vec3* vb = b.world_vertices();
   const std::size_t n = t.candidates.size();
+  const std::size_t corners_moved = (a.is_rigid && !a.world_frame ? 3 : 0) + (b.is_rigid && !b.world_frame ? 3 : 0);
+  std::size_t transformed = 0;
+  struct Count {  // into the task once, also on the early return
+    Task& t;
+    const std::size_t& n;
+    ~Count() { t.transformed += n; }
+  } count{t, transformed};
   for (std::size_t k = 0; k < n; ++k) {
     if (k + kAhead < n) {
       const std::uint64_t f = t.candidates[k + kAhead];
@@ -355,7 +362,7 @@ void World::Impl::test_task(const Body& a, const Body& b, const DetectOptions& o
     const Tri& fb = mb.triangles[tb];
     const TriangleCorners ca = {a.world(fa[0]), a.world(fa[1]), a.world(fa[2])};
     const TriangleCorners cb = {b.world(fb[0]), b.world(fb[1]), b.world(fb[2])};
-    t.transformed += (a.is_rigid && !a.world_frame ? 3 : 0) + (b.is_rigid && !b.world_frame ? 3 : 0);
+    transformed += corners_moved;
     const Vec3 lo_a = ca[0].cwiseMin(ca[1]).cwiseMin(ca[2]), hi_a = ca[0].cwiseMax(ca[1]).cwiseMax(ca[2]);
     const Vec3 lo_b = cb[0].cwiseMin(cb[1]).cwiseMin(cb[2]), hi_b = cb[0].cwiseMax(cb[1]).cwiseMax(cb[2]);
     if ((hi_a.array() < lo_b.array()).any() || (hi_b.array() < lo_a.array()).any()) continue;

@@ -179,7 +179,8 @@ inline std::string label_of(const std::string& name, BodyId id) {
 
 // One piece of a pair's traversal: a node pair, the candidates found under it, then (exact
 // path) the contacts among them, in candidate order.
-struct Task {
+// (A cache line or more each: two lanes work on neighbouring tasks, and each writes its own.)
+struct alignas(64) Task {
   std::size_t pair = 0;
   BvhNodePair start;
   std::vector<std::uint64_t> candidates;
@@ -209,8 +210,13 @@ struct World::Impl {
   std::vector<BvhNodePair> split;
   std::vector<std::size_t> to_copy;     // copy_paired(): the bodies (ids) copied this frame
   std::vector<std::uint32_t> pairs_of;  // plan_tasks(): per body of the frame (ids), its pairs with others
-  std::vector<std::vector<BvhStackEntry>> stacks;  // per lane
-  std::vector<std::vector<BvhNodePair>> self_stacks;  // per lane
+  // Per lane, each on its own cache line (a traversal writes its stack's size at every push).
+  template <class T>
+  struct alignas(64) LaneStack {
+    std::vector<T> v;
+  };
+  std::vector<LaneStack<BvhStackEntry>> stacks;
+  std::vector<LaneStack<BvhNodePair>> self_stacks;
   struct LaneScratch {
     ContactCull cull;
     BoxScratch boxes;
