@@ -290,6 +290,11 @@ void World::Impl::route_pairs(const DetectOptions& opt, std::size_t used, FrameR
     r.candidates = n;
     if (r.object_a == r.object_b) {  // self: the exact path always (docs/design.md)
       r.exact_stage = true;
+      // Not routed; predicted by the World's model from the couples its traversal tested, as
+      // the frame API predicts its self pairs (docs/router.md).
+      std::size_t tested = 0;
+      for (std::size_t k = first_task[p]; k < first_task[p + 1]; ++k) tested += tasks[k].tested;
+      if (opt.stage == Stage::automatic) r.predicted_exact_ms = exact_cost.predict_ms(double(tested), 0.0);
       continue;
     }
     if (n == 0) continue;  // no couple of boxes overlaps: no contact, nothing to test

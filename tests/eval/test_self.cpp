@@ -233,6 +233,10 @@ TEST_CASE("the crumpled cloth: self pairs exist and the World finds exactly them
       for (const Contact& c : r.pairs[0].colliding) got.push_back(pack_pair(c.tri_a, c.tri_b));
       std::sort(got.begin(), got.end());
       CHECK(got == want);
+      // Not routed, but predicted by the World's model from the couples tested.
+      CHECK(r.pairs[0].candidates > want.size());
+      CHECK(r.pairs[0].predicted_exact_ms > 0.0);
+      CHECK(r.pairs[0].predicted_exact_ms == Approx(world_exact_cost().predict_ms(double(r.pairs[0].candidates), 0.0)));
     }
   }
 }
