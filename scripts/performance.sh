@@ -5,7 +5,7 @@
 # all with one thread per method; the default scene and the crowd again with one per core; the
 # scale scenes: crossing spheres of 330k and 1.3M triangles, rigid and waving, and a 1,000-ball
 # pile), and the plots. Needs a built ./build/peelcd and python3-matplotlib (Debian's /usr/bin/python3).
-# About half an hour on 2 cores; run it on a quiet machine: every number is a median of frames
+# About ten minutes on 2 cores; run it on a quiet machine: every number is a median of frames
 # measured side by side.
 set -euo pipefail
 cd "$(dirname "$0")/.."

@@ -200,8 +200,12 @@ TEST_CASE("triangles on an axis-aligned plane: the shortcuts give the exact answ
   std::mt19937_64 rng(20261126);
   const auto pick = [&](int n) { return int(rng() % std::uint64_t(n)); };
   const auto lattice = [&] { return double(pick(7) - 3); };
+  // 15,000 pairs; PEELCD_ADVERSARIAL_CASES scales them as it scales the run above (the
+  // sanitizer build: 1,500).
+  const char* env = std::getenv("PEELCD_ADVERSARIAL_CASES");
+  const std::size_t n = env ? std::max<std::size_t>(1500, std::strtoull(env, nullptr, 10) * 15 / 100) : 15000;
   std::size_t cases = 0, apart = 0, hits = 0, wrong = 0, unsafe = 0;
-  for (int i = 0; i < 15000; ++i) {
+  for (std::size_t i = 0; i < n; ++i) {
     const int k = pick(3);
     const double c = lattice();
     const auto on_plane = [&] {
