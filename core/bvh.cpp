@@ -17,6 +17,7 @@ void Bvh::build(const std::vector<Vec3>& vertices, const std::vector<Tri>& trian
   nodes_.clear();
   leaves_.clear();
   leaf_node_.clear();
+  corners_.clear();
   parents_.clear();
   depth_ = 0;
   size_ = size_at_build_ = 0.0;
@@ -25,7 +26,7 @@ void Bvh::build(const std::vector<Vec3>& vertices, const std::vector<Tri>& trian
   lane_of_.resize(n);
   box_ = Aabb{};
   std::iota(order_.begin(), order_.end(), 0u);
-  vertex_boxes_.resize(vertices.size());
+  points_.resize(vertices.size());
   unused_.clear();
   if (n == 0) return;
   std::vector<std::uint8_t> used(vertices.size(), 0);
@@ -47,7 +48,11 @@ void Bvh::build(const std::vector<Vec3>& vertices, const std::vector<Tri>& trian
   nodes_.reserve(2 * ((n + kBvhLeafSize - 1) / kBvhLeafSize));
   parents_.reserve(nodes_.capacity());
   leaves_.reserve(nodes_.capacity() / 2 + 1);
+  leaf_first_.clear();
+  leaf_first_.reserve(leaves_.capacity());
   build_node(0, std::uint32_t(n), 0, 1, centroids, boxes);
+  corners_.resize(n);
+  for (std::size_t k = 0; k < n; ++k) corners_[k] = triangles[order_[k]];
   dirty_.assign(nodes_.size(), 0);
   size_ = 0.0;
   for (const BvhNode& node : nodes_)
@@ -79,13 +84,16 @@ std::uint32_t Bvh::build_node(std::uint32_t begin, std::uint32_t end, std::uint3
     nodes_[index].first = std::uint32_t(leaves_.size() - 1);
     nodes_[index].count = end - begin;
     leaf_node_.push_back(index);
+    leaf_first_.push_back(begin);
     return index;
   }
   Aabb cbox;
   for (std::uint32_t i = begin; i < end; ++i) cbox.extend(centroids[order_[i]]);
   int axis = 0;
   cbox.extent().maxCoeff(&axis);
-  const std::uint32_t mid = begin + (end - begin) / 2;
+  // Full leaves: the left child takes half of the leaves a count needs, kBvhLeafSize triangles each.
+  const std::uint32_t leaves = (end - begin + kBvhLeafSize - 1) / kBvhLeafSize;
+  const std::uint32_t mid = begin + (leaves + 1) / 2 * kBvhLeafSize;
   // Ties broken by index: the same tree on every machine.
   std::nth_element(order_.begin() + begin, order_.begin() + mid, order_.begin() + end,
                    [&](std::uint32_t a, std::uint32_t b) {
@@ -115,38 +123,72 @@ void Bvh::refit_node(std::uint32_t i) {
   node.box = box;
 }
 
-void Bvh::refit(const std::vector<Vec3>& vertices, const std::vector<Tri>& triangles) {
+void Bvh::refit(const std::vector<Vec3>& vertices, const std::vector<Tri>&) {
   const Aabb exact = refit_vertices(vertices, 0, vertices.size());
-  refit_leaves(triangles, 0, leaves_.size());
+  refit_leaves(vertices, 0, leaves_.size());
   refit_nodes(exact);
 }
 
-// Each vertex rounded outward to floats once (a vertex is a corner of about six triangles),
-// and the exact box of the vertices [begin, end) that the triangles use. With SSE2 a vertex's
-// three coordinates are rounded together by FBox::down()'s and up()'s formula, the same bits; a
-// coordinate at or past 1e37 (or infinite) takes their scalar path.
-Aabb Bvh::refit_vertices(const std::vector<Vec3>& vertices, std::size_t begin, std::size_t end) {
+// Each vertex rounded to the nearest floats once (a vertex is a corner of about six triangles;
+// 16 bytes a vertex, half of a rounded-out box's: the refit of a large body is bound by memory),
+// and the exact box of the vertices [begin, end) that the triangles use. Loading (`Load`): each
+// vertex checked finite first (the first that is not: `bad`, and the pass stops there) and
+// copied to `copy` (when not null).
+template <bool Load>
+Aabb Bvh::round_vertices(const std::vector<Vec3>& vertices, Vec3* copy, std::size_t begin, std::size_t end,
+                         std::size_t& bad) {
   Aabb exact;
+  bad = end;
 #if defined(__SSE2__)
-  const __m128 rel = _mm_set1_ps(2.4e-7f), tiny = _mm_set1_ps(1.2e-38f), big = _mm_set1_ps(1e37f);
-  const __m128 magnitude = _mm_castsi128_ps(_mm_set1_epi32(0x7fffffff));
   __m128d lo_xy = _mm_set1_pd(INFINITY), lo_z = lo_xy, hi_xy = _mm_set1_pd(-INFINITY), hi_z = hi_xy;
   const bool all_used = unused_.empty();
+  const __m128 rel = _mm_set1_ps(2.4e-7f), tiny = _mm_set1_ps(1.2e-38f), big = _mm_set1_ps(1e37f);
+  const __m128 magnitude = _mm_castsi128_ps(_mm_set1_epi32(0x7fffffff));
+  // Past the second-level cache, a copy and the floats are streamed to memory (no line read
+  // first), a copy two vertices (48 bytes, three aligned stores) at a time.
+  const bool stream = Load && points_.size() >= 65536 && reinterpret_cast<std::uintptr_t>(copy) % 16 == 0;
+  __m128d even_xy = _mm_setzero_pd(), even_z = even_xy;  // an even vertex's, waiting for its odd one
   for (std::size_t v = begin; v < end; ++v) {
     const double* p = vertices[v].data();
     const __m128d xy = _mm_loadu_pd(p), z = _mm_load_sd(p + 2);
     const __m128 f = _mm_movelh_ps(_mm_cvtpd_ps(xy), _mm_cvtpd_ps(z));  // (x, y, z, 0), nearest
-    const __m128 a = _mm_and_ps(f, magnitude);
-    const __m128 e = _mm_add_ps(_mm_mul_ps(a, rel), tiny);
-    VertexBox& r = vertex_boxes_[v];
-    _mm_store_ps(r.lo, _mm_sub_ps(f, e));
-    _mm_store_ps(r.hi, _mm_add_ps(f, e));
-    if (__builtin_expect(_mm_movemask_ps(_mm_cmpge_ps(a, big)) != 0, 0))
-      for (int k = 0; k < 3; ++k) r.lo[k] = FBox::down(p[k]), r.hi[k] = FBox::up(p[k]);
+    if (Load) {
+      // x - x is 0 for a finite x, NaN for an infinite or NaN one.
+      const __m128d d = _mm_or_pd(_mm_sub_pd(xy, xy), _mm_sub_pd(z, z));
+      if (__builtin_expect(_mm_movemask_pd(_mm_cmpunord_pd(d, d)) != 0, 0)) {
+        bad = v;
+        break;
+      }
+      if (stream && copy && v % 2 == 0 && v + 1 < end) {
+        even_xy = xy, even_z = z;
+      } else if (stream && copy && v % 2 == 1 && v > begin) {
+        double* q = copy[v - 1].data();
+        _mm_stream_pd(q, even_xy);
+        _mm_stream_pd(q + 2, _mm_unpacklo_pd(even_z, xy));
+        _mm_stream_pd(q + 4, _mm_shuffle_pd(xy, z, 1));
+      } else if (copy) {
+        _mm_storeu_pd(copy[v].data(), xy);
+        _mm_store_sd(copy[v].data() + 2, z);
+      }
+    }
+    {
+      const __m128 a = _mm_and_ps(f, magnitude);
+      const __m128 e = _mm_add_ps(_mm_mul_ps(a, rel), tiny);
+      if (__builtin_expect(_mm_movemask_ps(_mm_cmpge_ps(a, big)) != 0, 0)) {
+        for (int k = 0; k < 3; ++k) points_[v].lo[k] = FBox::down(p[k]), points_[v].hi[k] = FBox::up(p[k]);
+      } else if (stream) {
+        _mm_stream_ps(points_[v].lo, _mm_sub_ps(f, e));
+        _mm_stream_ps(points_[v].hi, _mm_add_ps(f, e));
+      } else {
+        _mm_store_ps(points_[v].lo, _mm_sub_ps(f, e));
+        _mm_store_ps(points_[v].hi, _mm_add_ps(f, e));
+      }
+    }
     if (!all_used && unused_[v]) continue;
     lo_xy = _mm_min_pd(lo_xy, xy), hi_xy = _mm_max_pd(hi_xy, xy);
     lo_z = _mm_min_sd(lo_z, z), hi_z = _mm_max_sd(hi_z, z);
   }
+  if (stream) _mm_sfence();  // the streamed stores seen before the lanes join
   if (_mm_cvtsd_f64(lo_xy) <= _mm_cvtsd_f64(hi_xy)) {  // some vertex used
     alignas(16) double l[2], h[2];
     _mm_store_pd(l, lo_xy);
@@ -157,8 +199,15 @@ Aabb Bvh::refit_vertices(const std::vector<Vec3>& vertices, std::size_t begin, s
 #else
   for (std::size_t v = begin; v < end; ++v) {
     const Vec3& p = vertices[v];
-    VertexBox& r = vertex_boxes_[v];
-    for (int k = 0; k < 3; ++k) r.lo[k] = FBox::down(p[k]), r.hi[k] = FBox::up(p[k]);
+    if (Load) {
+      if (!p.allFinite()) {
+        bad = v;
+        break;
+      }
+      if (copy) copy[v] = p;
+    }
+    for (int k = 0; k < 3; ++k) points_[v].p[k] = float(p[k]);
+    points_[v].p[3] = 0.0f;
     if (!unused_.empty() && unused_[v]) continue;
     exact.lo = exact.lo.cwiseMin(p);
     exact.hi = exact.hi.cwiseMax(p);
@@ -167,45 +216,49 @@ Aabb Bvh::refit_vertices(const std::vector<Vec3>& vertices, std::size_t begin, s
   return exact;
 }
 
-// Each lane's box from its corners' rounded vertices (min and max of floats: no rounding), the
-// leaf's box their union. With SSE2, four lanes at a time: their boxes as rows, transposed into
-// the leaf's lanes (lanes past the count get the empty box).
-void Bvh::refit_leaves(const std::vector<Tri>& triangles, std::size_t begin, std::size_t end) {
+Aabb Bvh::refit_vertices(const std::vector<Vec3>& vertices, std::size_t begin, std::size_t end) {
+  std::size_t bad;
+  return round_vertices<false>(vertices, nullptr, begin, end, bad);
+}
+
+Aabb Bvh::load_vertices(const std::vector<Vec3>& vertices, Vec3* copy, std::size_t begin, std::size_t end,
+                        std::size_t& bad) {
+  return round_vertices<true>(vertices, copy, begin, end, bad);
+}
+
+// Each lane's box from its corners' floats, each moved out as FBox::down() and up() move it
+// (the same bits), the leaf's box their union. The corners are read in leaf order (corners_),
+// their floats from points_. With SSE2, four lanes at a time: their boxes as rows, transposed
+// into the leaf's lanes (lanes past the count get the empty box); a lane with a corner at or
+// past 1e37 (or infinite as a float) takes FBox's scalar path from the doubles.
+void Bvh::refit_leaves(const std::vector<Vec3>& vertices, std::size_t begin, std::size_t end) {
 #if defined(__SSE2__)
   const __m128 inf = _mm_set1_ps(INFINITY), ninf = _mm_set1_ps(-INFINITY);
-  // The triangles are read in leaf order, which the hardware cannot guess: those of the leaf
-  // kAhead on are asked for ahead (the default scene's bunny and dragon as deforming bodies,
-  // 6,398 triangles, after 64 MB of other work: the whole refit 0.075 -> 0.05 ms; 4 ahead 0.06,
-  // 16 and 32 0.055; the scalar refit before these vector paths took 0.113).
-  // Past the second-level cache (65,536 vertex boxes, 2 MB), the corners' boxes of the leaf
-  // kAhead / 2 on too, from its triangles asked for before (the waving 1.3M-triangle spheres'
-  // leaves 22.4 -> 20 ms a frame, one thread; on the bunny and dragon it cost 12%).
-  constexpr std::size_t kAhead = 8;
-  const bool far = vertex_boxes_.size() >= 65536;
+  // Past the second-level cache (65,536 vertices), the corners' floats of the leaf kAhead on
+  // are asked for ahead (the waving 1.3M-triangle spheres' leaves 22.4 -> 20 ms a frame, one
+  // thread, when they were boxes; on the bunny and dragon it cost 12%).
+  constexpr std::size_t kAhead = 4;
+  const bool far = points_.size() >= 65536;
   for (std::size_t l = begin; l < end; ++l) {
-    if (l + kAhead < end) {
-      const BvhLeaf& next = leaves_[l + kAhead];
-      for (std::uint32_t i = 0; i < kBvhLeafSize; ++i) __builtin_prefetch(&triangles[next.tri[i]]);
-    }
-    if (far && l + kAhead / 2 < end) {
-      const BvhLeaf& next = leaves_[l + kAhead / 2];
-      const std::uint32_t count = nodes_[leaf_node_[l + kAhead / 2]].count;
+    if (far && l + kAhead < end) {
+      const std::uint32_t first = leaf_first_[l + kAhead], count = nodes_[leaf_node_[l + kAhead]].count;
       for (std::uint32_t i = 0; i < count; ++i) {
-        const Tri& f = triangles[next.tri[i]];
-        __builtin_prefetch(&vertex_boxes_[f[0]]);
-        __builtin_prefetch(&vertex_boxes_[f[1]]);
-        __builtin_prefetch(&vertex_boxes_[f[2]]);
+        const Tri& f = corners_[first + i];
+        __builtin_prefetch(&points_[f[0]]);
+        __builtin_prefetch(&points_[f[1]]);
+        __builtin_prefetch(&points_[f[2]]);
       }
     }
     BvhLeaf& leaf = leaves_[l];
     BvhNode& node = nodes_[leaf_node_[l]];
+    const Tri* corners = corners_.data() + leaf_first_[l];
     __m128 box_lo = inf, box_hi = ninf;
     for (std::uint32_t h = 0; h < kBvhLeafSize; h += 4) {
       __m128 lo[4], hi[4];
       for (std::uint32_t i = 0; i < 4; ++i) {
         if (h + i < node.count) {
-          const Tri& f = triangles[leaf.tri[h + i]];
-          const VertexBox &p = vertex_boxes_[f[0]], &q = vertex_boxes_[f[1]], &r = vertex_boxes_[f[2]];
+          const Tri& f = corners[h + i];
+          const VertexBox &p = points_[f[0]], &q = points_[f[1]], &r = points_[f[2]];
           lo[i] = _mm_min_ps(_mm_min_ps(_mm_load_ps(p.lo), _mm_load_ps(q.lo)), _mm_load_ps(r.lo));
           hi[i] = _mm_max_ps(_mm_max_ps(_mm_load_ps(p.hi), _mm_load_ps(q.hi)), _mm_load_ps(r.hi));
           box_lo = _mm_min_ps(box_lo, lo[i]);
@@ -216,9 +269,16 @@ void Bvh::refit_leaves(const std::vector<Tri>& triangles, std::size_t begin, std
       }
       _MM_TRANSPOSE4_PS(lo[0], lo[1], lo[2], lo[3]);
       _MM_TRANSPOSE4_PS(hi[0], hi[1], hi[2], hi[3]);
-      for (int k = 0; k < 3; ++k) {
-        _mm_store_ps(leaf.lo[k] + h, lo[k]);
-        _mm_store_ps(leaf.hi[k] + h, hi[k]);
+      if (far) {
+        for (int k = 0; k < 3; ++k) {
+          _mm_stream_ps(leaf.lo[k] + h, lo[k]);
+          _mm_stream_ps(leaf.hi[k] + h, hi[k]);
+        }
+      } else {
+        for (int k = 0; k < 3; ++k) {
+          _mm_store_ps(leaf.lo[k] + h, lo[k]);
+          _mm_store_ps(leaf.hi[k] + h, hi[k]);
+        }
       }
     }
     alignas(16) float blo[4], bhi[4];
@@ -226,18 +286,18 @@ void Bvh::refit_leaves(const std::vector<Tri>& triangles, std::size_t begin, std
     _mm_store_ps(bhi, box_hi);
     for (int k = 0; k < 3; ++k) node.box.lo[k] = blo[k], node.box.hi[k] = bhi[k];
   }
+  if (far) _mm_sfence();  // the streamed boxes seen before the lanes join
 #else
   for (std::size_t l = begin; l < end; ++l) {
     BvhLeaf& leaf = leaves_[l];
     BvhNode& node = nodes_[leaf_node_[l]];
     FBox box;
     for (std::uint32_t lane = 0; lane < node.count; ++lane) {
-      const Tri& f = triangles[leaf.tri[lane]];
-      const VertexBox &p = vertex_boxes_[f[0]], &q = vertex_boxes_[f[1]], &r = vertex_boxes_[f[2]];
+      const Tri& f = corners_[leaf_first_[l] + lane];
       FBox b;
       for (int k = 0; k < 3; ++k) {
-        b.lo[k] = std::min(std::min(p.lo[k], q.lo[k]), r.lo[k]);
-        b.hi[k] = std::max(std::max(p.hi[k], q.hi[k]), r.hi[k]);
+        b.lo[k] = std::min({FBox::down(vertices[f[0]][k]), FBox::down(vertices[f[1]][k]), FBox::down(vertices[f[2]][k])});
+        b.hi[k] = std::max({FBox::up(vertices[f[0]][k]), FBox::up(vertices[f[1]][k]), FBox::up(vertices[f[2]][k])});
       }
       leaf.set(lane, b);
       box.merge(b);

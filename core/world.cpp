@@ -72,32 +72,42 @@ void World::set_pose(BodyId id, const Eigen::Affine3d& pose) {
 }
 
 namespace {
-// A body this large has its new vertices checked and copied in parts over the last frame's lanes
-// (two passes over memory: the waving 1.3M-triangle spheres' 650k vertices a body).
+// A body this large has its new vertices checked, rounded and copied in parts over the last
+// frame's lanes (the waving 1.3M-triangle spheres' 650k vertices a body).
 constexpr std::size_t kSplitVertices = 65536;
 
-// Throws unless `vertices` fit deforming body `b` (same count, finite): the first vertex that is
-// not, searched in `parts` parts over the World's lanes (w: World::Impl, in_parts()).
-template <class Lanes>
-void check_vertices(Lanes& w, const Body& b, const std::string& label, const std::vector<Vec3>& vertices,
-                    std::size_t parts) {
+// Throws unless `vertices` fit deforming body `b` (the same count).
+void check_count(const Body& b, const std::string& label, const std::vector<Vec3>& vertices) {
   if (b.is_rigid) throw std::invalid_argument("peelcd::World::set_vertices(): " + label + " is rigid (use set_pose)");
-  const std::size_t n = vertices.size();
-  if (n != b.mesh.vertices.size())
+  if (vertices.size() != b.mesh.vertices.size())
     throw std::invalid_argument("peelcd::World::set_vertices(): " + label + " has " + std::to_string(b.mesh.vertices.size()) +
-                                " vertices, given " + std::to_string(n) + " (a new topology: set_mesh)");
+                                " vertices, given " + std::to_string(vertices.size()) + " (a new topology: set_mesh)");
+}
+
+// Checks `vertices` finite and rounds them into b's tree in one pass (Bvh::load_vertices), in
+// `parts` parts over the World's lanes (w: World::Impl, in_parts()), copying them to `copy`
+// (when not null); throws at the first vertex that is not finite, the body's vertices and tree
+// as they were (its floats to be rounded again by the refit).
+template <class Lanes>
+void load_vertices(Lanes& w, Body& b, const std::string& label, const std::vector<Vec3>& vertices, Vec3* copy,
+                   std::size_t parts) {
+  const std::size_t n = vertices.size();
   std::vector<std::size_t> first_bad(parts, n);
+  std::vector<Aabb> boxes(parts);
   w.in_parts(parts, [&](std::size_t k) {
-    for (std::size_t v = n * k / parts, end = n * (k + 1) / parts; v < end; ++v)
-      if (!vertices[v].allFinite()) {
-        first_bad[k] = v;
-        return;
-      }
+    boxes[k] = b.tree.load_vertices(vertices, copy, n * k / parts, n * (k + 1) / parts, first_bad[k]);
   });
-  const std::size_t v = *std::min_element(first_bad.begin(), first_bad.end());
+  b.points_loaded = false;
+  std::size_t v = n;  // the first part's bad vertex (each part's is its end when it has none)
+  for (std::size_t k = parts; k-- > 0;)
+    if (first_bad[k] < n * (k + 1) / parts) v = first_bad[k];
   if (v < n)
     throw std::invalid_argument("peelcd::World::set_vertices(): " + label + ": vertex " + std::to_string(v) + " " +
                                 coordinate_problem(vertices[v], false));
+  Aabb box;
+  for (const Aabb& p : boxes) box.lo = box.lo.cwiseMin(p.lo), box.hi = box.hi.cwiseMax(p.hi);
+  b.loaded_box = box;
+  b.points_loaded = true;
 }
 }  // namespace
 
@@ -108,19 +118,20 @@ std::size_t World::Impl::vertex_parts(std::size_t n) const {
 void World::set_vertices(BodyId id, const std::vector<Vec3>& vertices) {
   const ExclusiveUse exclusive(impl_->owner, "peelcd::World");
   Body& b = impl_->body(id, "set_vertices");
-  const std::size_t n = vertices.size(), parts = impl_->vertex_parts(n);
-  check_vertices(*impl_, b, label_of(b.name, id), vertices, parts);
-  impl_->in_parts(parts, [&](std::size_t k) {  // into the body's storage
-    std::copy(vertices.begin() + std::ptrdiff_t(n * k / parts), vertices.begin() + std::ptrdiff_t(n * (k + 1) / parts),
-              b.mesh.vertices.begin() + std::ptrdiff_t(n * k / parts));
-  });
+  const std::string label = label_of(b.name, id);
+  check_count(b, label, vertices);
+  b.spare_vertices.resize(vertices.size());
+  load_vertices(*impl_, b, label, vertices, b.spare_vertices.data(), impl_->vertex_parts(vertices.size()));
+  b.mesh.vertices.swap(b.spare_vertices);
   b.refit_pending = true;
 }
 
 void World::set_vertices(BodyId id, std::vector<Vec3>&& vertices) {
   const ExclusiveUse exclusive(impl_->owner, "peelcd::World");
   Body& b = impl_->body(id, "set_vertices");
-  check_vertices(*impl_, b, label_of(b.name, id), vertices, impl_->vertex_parts(vertices.size()));
+  const std::string label = label_of(b.name, id);
+  check_count(b, label, vertices);
+  load_vertices(*impl_, b, label, vertices, nullptr, impl_->vertex_parts(vertices.size()));
   b.mesh.vertices = std::move(vertices);
   b.refit_pending = true;
 }
@@ -143,6 +154,7 @@ void World::move_vertices(BodyId id, const std::vector<std::uint32_t>& indices, 
                                   " " + coordinate_problem(positions[k], false));
   }
   for (std::size_t k = 0; k < indices.size(); ++k) b.mesh.vertices[indices[k]] = positions[k];
+  b.points_loaded = false;  // (a pending refit rounds them all again)
   // Many moved: one sweep over the tree is cheaper than the paths (a sweep already pending
   // covers these too).
   if (b.refit_pending || indices.size() * 8 > nv) {
@@ -178,7 +190,8 @@ void World::set_mesh(BodyId id, Mesh mesh) {
   b.vertex_tris.clear();
   b.topology_changed();
   b.tree.build(b.local().vertices, b.local().triangles);
-  b.refit_pending = false;
+  b.refit_pending = b.points_loaded = false;
+  b.spare_vertices = {};
   b.world_tree = Bvh{};
   b.world_copy = Mesh{};
   b.copy_valid = false;

@@ -18,20 +18,25 @@ void World::Impl::refit_pending(unsigned lanes) {
     const std::size_t parts = lanes > 1 && b.mesh.triangles.size() >= 32768 ? lanes : 1;
     const std::size_t nv = b.mesh.vertices.size(), nl = b.tree.leaves();
     refit_bodies.push_back({&b, refit_chunks.size(), refit_chunks.size() + parts, false});
-    for (std::size_t k = 0; k < parts; ++k)
-      refit_chunks.push_back(
-          {refit_bodies.size() - 1, nv * k / parts, nv * (k + 1) / parts, nl * k / parts, nl * (k + 1) / parts, Aabb{}});
+    for (std::size_t k = 0; k < parts; ++k) {
+      if (b.points_loaded)  // rounded by set_vertices(): no vertex range
+        refit_chunks.push_back({refit_bodies.size() - 1, 0, 0, nl * k / parts, nl * (k + 1) / parts,
+                                k == 0 ? b.loaded_box : Aabb{}});
+      else
+        refit_chunks.push_back(
+            {refit_bodies.size() - 1, nv * k / parts, nv * (k + 1) / parts, nl * k / parts, nl * (k + 1) / parts, Aabb{}});
+    }
   }
   if (refit_bodies.empty()) return;
   parallel(refit_chunks.size(), lanes, [&](std::size_t k, unsigned) {  // the vertices rounded
     RefitChunk& c = refit_chunks[k];
     Body& b = *refit_bodies[c.body].body;
-    c.exact = b.tree.refit_vertices(b.mesh.vertices, c.vertex_begin, c.vertex_end);
+    if (c.vertex_begin < c.vertex_end) c.exact = b.tree.refit_vertices(b.mesh.vertices, c.vertex_begin, c.vertex_end);
   });
   parallel(refit_chunks.size(), lanes, [&](std::size_t k, unsigned) {  // the leaves from them
     const RefitChunk& c = refit_chunks[k];
     Body& b = *refit_bodies[c.body].body;
-    b.tree.refit_leaves(b.mesh.triangles, c.leaf_begin, c.leaf_end);
+    b.tree.refit_leaves(b.mesh.vertices, c.leaf_begin, c.leaf_end);
   });
   parallel(refit_bodies.size(), lanes, [&](std::size_t k, unsigned) {  // the nodes (or a build)
     RefitBody& r = refit_bodies[k];
@@ -40,7 +45,7 @@ void World::Impl::refit_pending(unsigned lanes) {
       exact.lo = exact.lo.cwiseMin(refit_chunks[c].exact.lo), exact.hi = exact.hi.cwiseMax(refit_chunks[c].exact.hi);
     Bvh& tree = r.body->tree;
     tree.refit_nodes(exact);
-    r.body->refit_pending = false;
+    r.body->refit_pending = r.body->points_loaded = false;
     if (tree.growth() > kBvhRebuildGrowth) {
       tree.build(r.body->mesh.vertices, r.body->mesh.triangles);
       r.rebuilt = true;

@@ -67,6 +67,13 @@ struct Body {
   // Deforming: its tree is refitted whole at the next collide() (set_vertices, many moved
   // vertices), every such body's triangles split over the frame's lanes.
   bool refit_pending = false;
+  // Deforming: set_vertices() checked, rounded (Bvh::load_vertices) and copied the vertices in
+  // one pass: the pending refit starts from those floats (`loaded_box`: the exact box of the
+  // used vertices). The copy goes to `spare_vertices`, swapped with the mesh's once all are
+  // checked (a refused call leaves the body as it was).
+  bool points_loaded = false;
+  Aabb loaded_box;
+  std::vector<Vec3> spare_vertices;
   // Deforming: the triangles using each vertex (CSR), built on the first move_vertices().
   std::vector<std::uint32_t> vertex_first, vertex_tris;
   // Self-collision (World::set_self): the vertex representatives of the adjacency in use
@@ -300,7 +307,7 @@ struct World::Impl {
   void refit_now(Body& b) {
     if (!b.refit_pending) return;
     b.tree.refit(b.mesh.vertices, b.mesh.triangles);
-    b.refit_pending = false;
+    b.refit_pending = b.points_loaded = false;
     ++stats.full_refits;
     if (b.tree.growth() > kBvhRebuildGrowth) {  // as refit_pending()
       b.tree.build(b.mesh.vertices, b.mesh.triangles);

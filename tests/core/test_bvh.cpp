@@ -138,7 +138,7 @@ TEST_CASE("Bvh: a refit in ranges (as the World splits it over threads) equals a
     exact.extend(part.lo);
     exact.extend(part.hi);
   }
-  for (std::size_t k = 0; k < 3; ++k) split.refit_leaves(m.triangles, nl * k / 3, nl * (k + 1) / 3);
+  for (std::size_t k = 0; k < 3; ++k) split.refit_leaves(m.vertices, nl * k / 3, nl * (k + 1) / 3);
   split.refit_nodes(exact);
   whole.refit(m.vertices, m.triangles);
   for (std::size_t i = 0; i < whole.nodes().size(); ++i) {
@@ -149,6 +149,51 @@ TEST_CASE("Bvh: a refit in ranges (as the World splits it over threads) equals a
   CHECK(split.box().hi == bounds(m).hi);
   for (std::uint32_t t = 0; t < m.triangles.size(); ++t) {  // every triangle's box the new one
     const FBox want = FBox::enclosing(triangle_bounds(m, t)), got = split.triangle_box(t);
+    for (int k = 0; k < 3; ++k) REQUIRE((got.lo[k] == want.lo[k] && got.hi[k] == want.hi[k]));
+  }
+}
+
+TEST_CASE("Bvh: vertices loaded in ranges (checked, rounded, copied: the World's set_vertices) refit as a whole refit does", "[bvh]") {
+  // Large enough (past 65,536 vertices) for the streamed stores and the prefetches.
+  Mesh m = make_uv_sphere(Vec3(0, 0, 0), 1.0, 200, 400);
+  REQUIRE(m.vertices.size() >= 65536);
+  Bvh loaded, whole;
+  loaded.build(m.vertices, m.triangles);
+  whole.build(m.vertices, m.triangles);
+  CHECK(loaded.leaves() == (m.triangles.size() + kBvhLeafSize - 1) / kBvhLeafSize);  // full leaves
+  for (Vec3& v : m.vertices) v = 0.8 * v + Vec3(0.3 * v.y(), 0.1, -0.2 * v.x() * v.x());
+  const std::size_t nv = m.vertices.size(), nl = loaded.leaves();
+  std::vector<Vec3> copy(nv, Vec3::Zero());
+  {  // a bad vertex stops its range there and is named
+    std::vector<Vec3> bad = m.vertices;
+    bad[nv / 2 + 7].y() = -INFINITY;
+    std::size_t at = 0;
+    loaded.load_vertices(bad, copy.data(), nv / 2, nv, at);
+    CHECK(at == nv / 2 + 7);
+    loaded.load_vertices(bad, copy.data(), 0, nv / 2, at);
+    CHECK(at == nv / 2);  // none in this range: its end
+  }
+  Aabb exact;
+  for (std::size_t k = 0; k < 3; ++k) {  // odd and even range starts: the paired stores' edges
+    std::size_t at = 0;
+    const std::size_t begin = nv * k / 3 + (k == 1), end = k == 2 ? nv : nv * (k + 1) / 3 + 1;
+    const Aabb part = loaded.load_vertices(m.vertices, copy.data(), begin, end, at);
+    CHECK(at == end);
+    exact.extend(part.lo);
+    exact.extend(part.hi);
+  }
+  CHECK(copy == m.vertices);  // every vertex copied, bit for bit
+  for (std::size_t k = 0; k < 2; ++k) loaded.refit_leaves(m.vertices, nl * k / 2, nl * (k + 1) / 2);
+  loaded.refit_nodes(exact);
+  whole.refit(m.vertices, m.triangles);
+  for (std::size_t i = 0; i < whole.nodes().size(); ++i) {
+    REQUIRE(loaded.nodes()[i].box.aabb().lo == whole.nodes()[i].box.aabb().lo);
+    REQUIRE(loaded.nodes()[i].box.aabb().hi == whole.nodes()[i].box.aabb().hi);
+  }
+  CHECK(loaded.box().lo == bounds(m).lo);
+  CHECK(loaded.box().hi == bounds(m).hi);
+  for (std::uint32_t t = 0; t < m.triangles.size(); ++t) {
+    const FBox want = FBox::enclosing(triangle_bounds(m, t)), got = loaded.triangle_box(t);
     for (int k = 0; k < 3; ++k) REQUIRE((got.lo[k] == want.lo[k] && got.hi[k] == want.hi[k]));
   }
 }

@@ -372,3 +372,50 @@ TEST_CASE("World: a large body's new vertices checked and copied in parts: the f
   moved.vertices = v;
   CHECK(world.tree(d).box().hi == bounds(moved).hi);
 }
+
+TEST_CASE("World: vertices refused after accepted ones, or moved after them: the frame from the body's vertices", "[world]") {
+  const Mesh base = make_uv_sphere(Vec3::Zero(), 1.0, 200, 400);  // 79,602 vertices: loaded in parts
+  const Mesh other = make_uv_sphere(Vec3(1.5, 0.1, 0.0), 0.8, 40, 80);
+  for (const unsigned threads : {1u, 2u}) {
+    World world;
+    const BodyId d = world.add_deforming(base, "big");
+    world.add_deforming(other, "other");
+    DetectOptions opt;
+    opt.threads = threads;
+    world.collide(opt);
+    std::vector<Vec3> v = base.vertices;
+    for (Vec3& p : v) p = 1.1 * p + Vec3(0.05, 0.0, 0.0);
+    world.set_vertices(d, v);  // accepted: its floats rounded in the same pass
+    std::vector<Vec3> bad = v;
+    for (Vec3& p : bad) p *= 0.5;
+    bad[bad.size() - 3].x() = NAN;  // refused after most were rounded
+    CHECK_THROWS_WITH(world.set_vertices(d, bad), Catch::Contains("vertex " + std::to_string(bad.size() - 3)));
+    Mesh moved = base;
+    moved.vertices = v;
+    const FrameResult& r = world.collide(opt);
+    REQUIRE(r.pairs.size() == 1);
+    std::vector<std::uint64_t> got;
+    for (const Contact& c : r.pairs[0].colliding) got.push_back(pack_pair(c.tri_a, c.tri_b));
+    CHECK(got == exact_colliding_pairs(moved, other));
+    CHECK(world.tree(d).box().hi == bounds(moved).hi);
+    // Accepted, then a few moved before the frame: the frame has the moved ones.
+    for (Vec3& p : v) p.x() -= 0.02;
+    world.set_vertices(d, v);
+    std::vector<std::uint32_t> which;
+    std::vector<Vec3> where;
+    for (std::uint32_t k = 0; k < 50; ++k) {
+      which.push_back(k * 997);
+      where.push_back(v[k * 997] * 1.2);
+    }
+    world.move_vertices(d, which, where);
+    for (std::size_t k = 0; k < which.size(); ++k) v[which[k]] = where[k];
+    moved.vertices = v;
+    const FrameResult& s = world.collide(opt);
+    REQUIRE(s.pairs.size() == 1);
+    got.clear();
+    for (const Contact& c : s.pairs[0].colliding) got.push_back(pack_pair(c.tri_a, c.tri_b));
+    CHECK(got == exact_colliding_pairs(moved, other));
+    CHECK(world.tree(d).box().hi == bounds(moved).hi);
+    CHECK(world.tree(d).box().lo == bounds(moved).lo);
+  }
+}

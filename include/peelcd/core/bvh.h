@@ -106,7 +106,7 @@ struct BvhNode {
 // A leaf's triangles and their boxes, lane by lane (structure of arrays: one box is tested
 // against all of a leaf's at once); lanes past the leaf's count hold empty boxes, which overlap
 // nothing.
-struct alignas(32) BvhLeaf {
+struct alignas(64) BvhLeaf {  // (its boxes on three whole cache lines)
   float lo[3][kBvhLeafSize];
   float hi[3][kBvhLeafSize];
   std::uint32_t tri[kBvhLeafSize];
@@ -170,13 +170,22 @@ class Bvh {
   // Every box again from `vertices` (the same triangles, moved).
   void refit(const std::vector<Vec3>& vertices, const std::vector<Tri>& triangles);
   // The same in three steps, for callers that split the first two over threads (ranges of one
-  // step may run concurrently): each vertex of [begin, end) rounded outward to floats (returns
-  // the exact box of those the triangles use), then the leaves [begin, end) of leaves() from
-  // their corners' rounded vertices, then every internal node, with `exact` the union of the
-  // first step's boxes. The vertices and triangles are the tree's (the same count as at build).
+  // step may run concurrently): each vertex of [begin, end) rounded to the nearest floats
+  // (returns the exact box of those the triangles use), then the leaves [begin, end) of
+  // leaves() from their corners' floats, each widened outward as FBox::down() and up() do,
+  // then every internal node, with `exact` the union of the first step's boxes. The vertices
+  // are the tree's (the same count as at build; the triangles are the build's).
   Aabb refit_vertices(const std::vector<Vec3>& vertices, std::size_t begin, std::size_t end);
-  void refit_leaves(const std::vector<Tri>& triangles, std::size_t begin, std::size_t end);
+  void refit_leaves(const std::vector<Vec3>& vertices, std::size_t begin, std::size_t end);
   void refit_nodes(const Aabb& exact);
+  // The first step for vertices that are not yet the tree's (a caller that checks new vertices
+  // and keeps them in one pass over them): each vertex of [begin, end) of `vertices` checked
+  // finite, rounded as refit_vertices() rounds it and, with `copy`, copied to copy[v]; at the
+  // first vertex with a coordinate not finite the pass stops and `bad` is its index (else
+  // `end`). Returns the exact box of the vertices loaded that the triangles use. Until every
+  // range is loaded without a bad vertex, the next refit must start from refit_vertices().
+  Aabb load_vertices(const std::vector<Vec3>& vertices, Vec3* copy, std::size_t begin, std::size_t end,
+                     std::size_t& bad);
   // Only the boxes of `changed` triangles (any order, repeats allowed), their leaves and their
   // ancestors: O(changed * depth).
   void refit(const std::vector<Vec3>& vertices, const std::vector<Tri>& triangles,
@@ -213,13 +222,18 @@ class Bvh {
   std::uint32_t build_node(std::uint32_t begin, std::uint32_t end, std::uint32_t parent, std::size_t level,
                            std::vector<Vec3>& centroids, const std::vector<FBox>& boxes);
   void refit_node(std::uint32_t n);
+  template <bool Load>
+  Aabb round_vertices(const std::vector<Vec3>& vertices, Vec3* copy, std::size_t begin, std::size_t end,
+                      std::size_t& bad);
   std::vector<BvhNode> nodes_;
   std::vector<BvhLeaf> leaves_;
   std::vector<std::uint32_t> leaf_node_;  // leaf -> its node
-  struct alignas(16) VertexBox {  // (the fourth lanes unused: one SSE load a corner)
+  struct alignas(16) VertexBox {
     float lo[4], hi[4];
   };
-  std::vector<VertexBox> vertex_boxes_;  // vertex -> its coordinates rounded down and up (the refit's)
+  std::vector<VertexBox> points_;  // vertex -> its coordinates rounded to the nearest floats (the refit's)
+  std::vector<Tri> corners_;         // the triangles' corners in order_'s order: leaf by leaf, the refit's reads
+  std::vector<std::uint32_t> leaf_first_;  // leaf -> its first triangle's place in order_
   std::vector<std::uint8_t> unused_;     // vertex -> no triangle uses it (empty: all are used)
   std::vector<std::uint32_t> parents_;    // node -> its parent
   std::vector<std::uint32_t> order_;
