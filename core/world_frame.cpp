@@ -28,11 +28,12 @@ void World::Impl::refit_pending(unsigned lanes) {
     }
   }
   if (refit_bodies.empty()) return;
-  parallel(refit_chunks.size(), lanes, [&](std::size_t k, unsigned) {  // the vertices rounded
-    RefitChunk& c = refit_chunks[k];
-    Body& b = *refit_bodies[c.body].body;
-    if (c.vertex_begin < c.vertex_end) c.exact = b.tree.refit_vertices(b.mesh.vertices, c.vertex_begin, c.vertex_end);
-  });
+  if (std::any_of(refit_chunks.begin(), refit_chunks.end(), [](const RefitChunk& c) { return c.vertex_begin < c.vertex_end; }))
+    parallel(refit_chunks.size(), lanes, [&](std::size_t k, unsigned) {  // the vertices rounded (unless loaded)
+      RefitChunk& c = refit_chunks[k];
+      Body& b = *refit_bodies[c.body].body;
+      if (c.vertex_begin < c.vertex_end) c.exact = b.tree.refit_vertices(b.mesh.vertices, c.vertex_begin, c.vertex_end);
+    });
   parallel(refit_chunks.size(), lanes, [&](std::size_t k, unsigned) {  // the leaves from them
     const RefitChunk& c = refit_chunks[k];
     Body& b = *refit_bodies[c.body].body;
@@ -388,27 +389,30 @@ void World::Impl::test_task(const Body& a, const Body& b, const DetectOptions& o
 
 // Each exact pair's contacts from its tasks, sorted (self pairs through self_pair()).
 void World::Impl::gather_contacts(FrameResult& out) {
-  for (std::size_t p = 0; p < pairs.size(); ++p) {
+  for (std::size_t p = 0; p < pairs.size(); ++p) {  // the counts
+    const PairResult& r = out.pairs[p];
+    if (r.object_a != r.object_b && (r.candidates == 0 || to_image[p])) continue;
+    ++out.rois_exact;
+    if (r.object_a != r.object_b)
+      for (std::size_t k = first_task[p]; k < first_task[p + 1]; ++k) stats.vertices_transformed += tasks[k].transformed;
+  }
+  // The contacts, pair by pair over the lanes (each sorted: a pile's thousands of pairs).
+  parallel(pairs.size(), frame_lanes, [&](std::size_t p, unsigned) {
     PairResult& r = out.pairs[p];
     if (r.object_a == r.object_b) {
       self_pair(bodies[r.object_a], first_task[p], first_task[p + 1], r);
-      ++out.rois_exact;
-      continue;
+      return;
     }
-    if (r.candidates == 0 || to_image[p]) continue;
-    ++out.rois_exact;
+    if (r.candidates == 0 || to_image[p]) return;
     if (first_task[p + 1] - first_task[p] == 1 && r.colliding.empty()) {
       // One task: its contacts taken whole (the two vectors trade storage, no copy).
       r.colliding.swap(tasks[first_task[p]].contacts);
-      stats.vertices_transformed += tasks[first_task[p]].transformed;
     } else {
-      for (std::size_t k = first_task[p]; k < first_task[p + 1]; ++k) {
+      for (std::size_t k = first_task[p]; k < first_task[p + 1]; ++k)
         r.colliding.insert(r.colliding.end(), tasks[k].contacts.begin(), tasks[k].contacts.end());
-        stats.vertices_transformed += tasks[k].transformed;
-      }
     }
     sort_contacts(r.colliding);
-  }
+  });
 }
 
 // Relations (containment where no contact) and, asked for, volumes: world meshes made only for
