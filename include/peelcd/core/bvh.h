@@ -5,8 +5,9 @@
 // ancestors), rebuilt when the topology changes. peelcd::World keeps one per body.
 //
 // Binary, nodes in depth-first order (a node's left child follows it; its parent comes before
-// it), leaves of at most kBvhLeafSize triangles, split at the median centroid along the longest
-// axis of the centroids' box. Boxes are float, rounded outward from the corners' doubles
+// it), leaves of kBvhLeafSize triangles (all but one full), split along the longest axis of the
+// centroids' box where the left child gets half of the leaves the node needs (the median
+// centroid, rounded to whole leaves). Boxes are float, rounded outward from the corners' doubles
 // (FBox): half the memory of double boxes, and never smaller than the exact box, so a couple
 // whose exact boxes touch is always reported (a few more whose boxes are within float rounding
 // may be: the exact test decides them). The root's exact double box is kept too (box()).
