@@ -26,7 +26,7 @@ void Bvh::build(const std::vector<Vec3>& vertices, const std::vector<Tri>& trian
   lane_of_.resize(n);
   box_ = Aabb{};
   std::iota(order_.begin(), order_.end(), 0u);
-  points_.resize(vertices.size());
+  vertex_boxes_.resize(vertices.size());
   unused_.clear();
   if (n == 0) return;
   std::vector<std::uint8_t> used(vertices.size(), 0);
@@ -129,11 +129,12 @@ void Bvh::refit(const std::vector<Vec3>& vertices, const std::vector<Tri>&) {
   refit_nodes(exact);
 }
 
-// Each vertex rounded to the nearest floats once (a vertex is a corner of about six triangles;
-// 16 bytes a vertex, half of a rounded-out box's: the refit of a large body is bound by memory),
-// and the exact box of the vertices [begin, end) that the triangles use. Loading (`Load`): each
-// vertex checked finite first (the first that is not: `bad`, and the pass stops there) and
-// copied to `copy` (when not null).
+// Each vertex rounded outward to a float box once (a vertex is a corner of about six
+// triangles), and the exact box of the vertices [begin, end) that the triangles use. With SSE2
+// a vertex's three coordinates are rounded together by FBox::down()'s and up()'s formula, the
+// same bits; a coordinate at or past 1e37 (or infinite) takes their scalar path. Loading
+// (`Load`): each vertex checked finite first (the first that is not: `bad`, and the pass stops
+// there) and copied to `copy` (when not null).
 template <bool Load>
 Aabb Bvh::round_vertices(const std::vector<Vec3>& vertices, Vec3* copy, std::size_t begin, std::size_t end,
                          std::size_t& bad) {
@@ -146,7 +147,7 @@ Aabb Bvh::round_vertices(const std::vector<Vec3>& vertices, Vec3* copy, std::siz
   const __m128 magnitude = _mm_castsi128_ps(_mm_set1_epi32(0x7fffffff));
   // Past the second-level cache, a copy and the floats are streamed to memory (no line read
   // first), a copy two vertices (48 bytes, three aligned stores) at a time.
-  const bool stream = Load && points_.size() >= 65536 && reinterpret_cast<std::uintptr_t>(copy) % 16 == 0;
+  const bool stream = Load && vertex_boxes_.size() >= 65536 && reinterpret_cast<std::uintptr_t>(copy) % 16 == 0;
   __m128d even_xy = _mm_setzero_pd(), even_z = even_xy;  // an even vertex's, waiting for its odd one
   for (std::size_t v = begin; v < end; ++v) {
     const double* p = vertices[v].data();
@@ -175,13 +176,13 @@ Aabb Bvh::round_vertices(const std::vector<Vec3>& vertices, Vec3* copy, std::siz
       const __m128 a = _mm_and_ps(f, magnitude);
       const __m128 e = _mm_add_ps(_mm_mul_ps(a, rel), tiny);
       if (__builtin_expect(_mm_movemask_ps(_mm_cmpge_ps(a, big)) != 0, 0)) {
-        for (int k = 0; k < 3; ++k) points_[v].lo[k] = FBox::down(p[k]), points_[v].hi[k] = FBox::up(p[k]);
+        for (int k = 0; k < 3; ++k) vertex_boxes_[v].lo[k] = FBox::down(p[k]), vertex_boxes_[v].hi[k] = FBox::up(p[k]);
       } else if (stream) {
-        _mm_stream_ps(points_[v].lo, _mm_sub_ps(f, e));
-        _mm_stream_ps(points_[v].hi, _mm_add_ps(f, e));
+        _mm_stream_ps(vertex_boxes_[v].lo, _mm_sub_ps(f, e));
+        _mm_stream_ps(vertex_boxes_[v].hi, _mm_add_ps(f, e));
       } else {
-        _mm_store_ps(points_[v].lo, _mm_sub_ps(f, e));
-        _mm_store_ps(points_[v].hi, _mm_add_ps(f, e));
+        _mm_store_ps(vertex_boxes_[v].lo, _mm_sub_ps(f, e));
+        _mm_store_ps(vertex_boxes_[v].hi, _mm_add_ps(f, e));
       }
     }
     if (!all_used && unused_[v]) continue;
@@ -206,8 +207,7 @@ Aabb Bvh::round_vertices(const std::vector<Vec3>& vertices, Vec3* copy, std::siz
       }
       if (copy) copy[v] = p;
     }
-    for (int k = 0; k < 3; ++k) points_[v].p[k] = float(p[k]);
-    points_[v].p[3] = 0.0f;
+    for (int k = 0; k < 3; ++k) vertex_boxes_[v].lo[k] = FBox::down(p[k]), vertex_boxes_[v].hi[k] = FBox::up(p[k]);
     if (!unused_.empty() && unused_[v]) continue;
     exact.lo = exact.lo.cwiseMin(p);
     exact.hi = exact.hi.cwiseMax(p);
@@ -226,27 +226,26 @@ Aabb Bvh::load_vertices(const std::vector<Vec3>& vertices, Vec3* copy, std::size
   return round_vertices<true>(vertices, copy, begin, end, bad);
 }
 
-// Each lane's box from its corners' floats, each moved out as FBox::down() and up() move it
-// (the same bits), the leaf's box their union. The corners are read in leaf order (corners_),
-// their floats from points_. With SSE2, four lanes at a time: their boxes as rows, transposed
-// into the leaf's lanes (lanes past the count get the empty box); a lane with a corner at or
-// past 1e37 (or infinite as a float) takes FBox's scalar path from the doubles.
+// Each lane's box from its corners' vertex boxes (min and max of floats: no rounding), the
+// leaf's box their union; the corners read in leaf order (corners_). With SSE2, four lanes at a
+// time: their boxes as rows, transposed into the leaf's lanes (lanes past the count get the
+// empty box). Without it, from the doubles (`vertices`) by FBox::down() and up().
 void Bvh::refit_leaves(const std::vector<Vec3>& vertices, std::size_t begin, std::size_t end) {
 #if defined(__SSE2__)
   const __m128 inf = _mm_set1_ps(INFINITY), ninf = _mm_set1_ps(-INFINITY);
-  // Past the second-level cache (65,536 vertices), the corners' floats of the leaf kAhead on
+  // Past the second-level cache (65,536 vertices), the corners' boxes of the leaf kAhead on
   // are asked for ahead (the waving 1.3M-triangle spheres' leaves 22.4 -> 20 ms a frame, one
-  // thread, when they were boxes; on the bunny and dragon it cost 12%).
+  // thread; on the bunny and dragon it cost 12%).
   constexpr std::size_t kAhead = 4;
-  const bool far = points_.size() >= 65536;
+  const bool far = vertex_boxes_.size() >= 65536;
   for (std::size_t l = begin; l < end; ++l) {
     if (far && l + kAhead < end) {
       const std::uint32_t first = leaf_first_[l + kAhead], count = nodes_[leaf_node_[l + kAhead]].count;
       for (std::uint32_t i = 0; i < count; ++i) {
         const Tri& f = corners_[first + i];
-        __builtin_prefetch(&points_[f[0]]);
-        __builtin_prefetch(&points_[f[1]]);
-        __builtin_prefetch(&points_[f[2]]);
+        __builtin_prefetch(&vertex_boxes_[f[0]]);
+        __builtin_prefetch(&vertex_boxes_[f[1]]);
+        __builtin_prefetch(&vertex_boxes_[f[2]]);
       }
     }
     BvhLeaf& leaf = leaves_[l];
@@ -258,7 +257,7 @@ void Bvh::refit_leaves(const std::vector<Vec3>& vertices, std::size_t begin, std
       for (std::uint32_t i = 0; i < 4; ++i) {
         if (h + i < node.count) {
           const Tri& f = corners[h + i];
-          const VertexBox &p = points_[f[0]], &q = points_[f[1]], &r = points_[f[2]];
+          const VertexBox &p = vertex_boxes_[f[0]], &q = vertex_boxes_[f[1]], &r = vertex_boxes_[f[2]];
           lo[i] = _mm_min_ps(_mm_min_ps(_mm_load_ps(p.lo), _mm_load_ps(q.lo)), _mm_load_ps(r.lo));
           hi[i] = _mm_max_ps(_mm_max_ps(_mm_load_ps(p.hi), _mm_load_ps(q.hi)), _mm_load_ps(r.hi));
           box_lo = _mm_min_ps(box_lo, lo[i]);

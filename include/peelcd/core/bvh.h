@@ -171,10 +171,9 @@ class Bvh {
   // Every box again from `vertices` (the same triangles, moved).
   void refit(const std::vector<Vec3>& vertices, const std::vector<Tri>& triangles);
   // The same in three steps, for callers that split the first two over threads (ranges of one
-  // step may run concurrently): each vertex of [begin, end) rounded to the nearest floats
+  // step may run concurrently): each vertex of [begin, end) rounded outward to a float box
   // (returns the exact box of those the triangles use), then the leaves [begin, end) of
-  // leaves() from their corners' floats, each widened outward as FBox::down() and up() do,
-  // then every internal node, with `exact` the union of the first step's boxes. The vertices
+  // leaves() from their corners' boxes, then every internal node, with `exact` the union of the first step's boxes. The vertices
   // are the tree's (the same count as at build; the triangles are the build's).
   Aabb refit_vertices(const std::vector<Vec3>& vertices, std::size_t begin, std::size_t end);
   void refit_leaves(const std::vector<Vec3>& vertices, std::size_t begin, std::size_t end);
@@ -232,7 +231,7 @@ class Bvh {
   struct alignas(16) VertexBox {
     float lo[4], hi[4];
   };
-  std::vector<VertexBox> points_;  // vertex -> its coordinates rounded to the nearest floats (the refit's)
+  std::vector<VertexBox> vertex_boxes_;  // vertex -> its coordinates rounded down and up (the refit's)
   std::vector<Tri> corners_;         // the triangles' corners in order_'s order: leaf by leaf, the refit's reads
   std::vector<std::uint32_t> leaf_first_;  // leaf -> its first triangle's place in order_
   std::vector<std::uint8_t> unused_;     // vertex -> no triangle uses it (empty: all are used)
