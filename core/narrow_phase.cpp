@@ -11,6 +11,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <iterator>
 
 #include <variant>
 
@@ -470,10 +471,59 @@ bool test_triangle_pair(const TriangleCorners& ca, const TriangleCorners& cb, Co
   return true;
 }
 
+namespace {
+int bit_width(std::uint64_t v) {
+  int b = 0;
+  for (; v; v >>= 1) ++b;
+  return b;
+}
+}  // namespace
+
+void sort_contacts(std::vector<Contact>& contacts, ContactSortScratch& scratch) {
+  const std::size_t n = contacts.size();
+  std::uint32_t max_a = 0, max_b = 0;
+  if (n >= kRadixContacts)
+    for (const Contact& c : contacts) max_a = std::max(max_a, c.tri_a), max_b = std::max(max_b, c.tri_b);
+  // A key per contact: (tri_a, tri_b, its place) in one 64-bit word, when they fit.
+  const int place_bits = bit_width(n - 1), b_bits = bit_width(max_b), key_bits = bit_width(max_a) + b_bits;
+  if (n < kRadixContacts || place_bits + key_bits > 64) {
+    std::sort(contacts.begin(), contacts.end(), [](const Contact& x, const Contact& y) {
+      return x.tri_a < y.tri_a || (x.tri_a == y.tri_a && x.tri_b < y.tri_b);
+    });
+    return;
+  }
+  std::vector<std::uint64_t>& keys = scratch.keys;
+  std::vector<std::uint64_t>& spare = scratch.spare;
+  keys.resize(n);
+  spare.resize(n);
+  for (std::size_t i = 0; i < n; ++i)
+    keys[i] = (((std::uint64_t(contacts[i].tri_a) << b_bits) | contacts[i].tri_b) << place_bits) | i;
+  // Least significant digit first over the index bits (each pass stable): keys in order.
+  constexpr int kDigit = 11;
+  constexpr std::uint64_t kMask = (1u << kDigit) - 1;
+  std::uint32_t count[1u << kDigit];
+  for (int shift = place_bits; shift < place_bits + key_bits; shift += kDigit) {
+    std::fill(std::begin(count), std::end(count), 0u);
+    for (const std::uint64_t k : keys) ++count[(k >> shift) & kMask];
+    std::uint32_t sum = 0;
+    for (std::uint32_t& c : count) {
+      const std::uint32_t here = c;
+      c = sum;
+      sum += here;
+    }
+    for (const std::uint64_t k : keys) spare[count[(k >> shift) & kMask]++] = k;
+    keys.swap(spare);
+  }
+  std::vector<Contact>& sorted = scratch.sorted;
+  sorted.resize(n);
+  const std::uint64_t place = (std::uint64_t(1) << place_bits) - 1;
+  for (std::size_t i = 0; i < n; ++i) sorted[i] = contacts[keys[i] & place];
+  contacts.swap(sorted);
+}
+
 void sort_contacts(std::vector<Contact>& contacts) {
-  std::sort(contacts.begin(), contacts.end(), [](const Contact& x, const Contact& y) {
-    return x.tri_a < y.tri_a || (x.tri_a == y.tri_a && x.tri_b < y.tri_b);
-  });
+  ContactSortScratch scratch;
+  sort_contacts(contacts, scratch);
 }
 
 void narrow_phase(const Mesh& a, const Mesh& b, const std::vector<std::uint64_t>& candidates,

@@ -228,6 +228,7 @@ struct World::Impl {
     ContactCull cull;
     BoxScratch boxes;
     std::vector<std::uint64_t> sorted;
+    ContactSortScratch contacts;  // a pair's contacts sorted (gather_contacts())
   };
   std::vector<std::unique_ptr<LaneScratch>> lane_scratch;  // per lane: the small pairs' scan
   std::vector<std::uint64_t> candidates;
@@ -325,11 +326,13 @@ struct World::Impl {
   void route_pairs(const DetectOptions& opt, std::size_t used, FrameResult& out);
   void test_candidates(const DetectOptions& opt, std::size_t used, unsigned lanes);
   void test_task(const Body& a, const Body& b, const DetectOptions& opt, Task& t);
+  template <bool kKeep>  // a triangle's corners kept for the couples that follow (test_task())
+  void test_task_as(const Body& a, const Body& b, const DetectOptions& opt, Task& t);
   void gather_contacts(FrameResult& out);
   void relate(const DetectOptions& opt, FrameResult& out);
   // A self pair's contacts: its tasks' (in the body's frame), cached for a rigid body, moved to
   // world space.
-  void self_pair(Body& a, std::size_t first, std::size_t last, PairResult& r);
+  void self_pair(Body& a, std::size_t first, std::size_t last, PairResult& r, ContactSortScratch& scratch);
   // The image-routed pairs (or pair `only` alone) through the Detector in one frame.
   static constexpr std::size_t kAllPairs = std::size_t(-1);
   void image_pairs(const DetectOptions& opt, FrameResult& out, std::size_t only = kAllPairs);

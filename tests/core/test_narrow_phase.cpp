@@ -7,6 +7,7 @@
 
 #include <algorithm>
 #include <array>
+#include <random>
 
 using namespace peelcd;
 
@@ -99,4 +100,48 @@ TEST_CASE("narrow_phase keeps the colliding candidates in candidate order", "[na
   REQUIRE(out.size() == 1);
   CHECK(out[0].tri_a == 0);
   CHECK(out[0].tri_b == 0);
+}
+
+TEST_CASE("sort_contacts orders large sets by (tri_a, tri_b), each contact moved whole", "[narrow]") {
+  // Sizes on both sides of kRadixContacts; indices that fit one key word with the places (the
+  // radix path) and indices up to 2^32 - 1 (the comparison sort); repeated couples kept in
+  // their input order.
+  std::mt19937 rng(7);
+  for (const std::size_t n : {std::size_t(5), kRadixContacts - 1, kRadixContacts, std::size_t(5000), std::size_t(70000)}) {
+    for (const std::uint32_t range : {std::uint32_t(300), std::uint32_t(1) << 21, std::uint32_t(0xffffffffu)}) {
+      std::vector<Contact> contacts(n);
+      for (std::size_t i = 0; i < n; ++i) {
+        contacts[i].tri_a = std::uint32_t(rng() % (std::uint64_t(range) + 1));
+        contacts[i].tri_b = i % 7 == 3 && i > 0 ? contacts[i - 1].tri_b : std::uint32_t(rng() % (std::uint64_t(range) + 1));
+        if (i % 7 == 3 && i > 0) contacts[i].tri_a = contacts[i - 1].tri_a;  // a repeated couple
+        contacts[i].p = Vec3(double(i), 0, 0);  // its place in the input
+        contacts[i].q = Vec3(0, double(contacts[i].tri_a), double(contacts[i].tri_b));
+        contacts[i].kind = i % 2 ? ContactKind::touching : ContactKind::crossing;
+      }
+      std::vector<Contact> expected = contacts;
+      std::stable_sort(expected.begin(), expected.end(), [](const Contact& x, const Contact& y) {
+        return x.tri_a < y.tri_a || (x.tri_a == y.tri_a && x.tri_b < y.tri_b);
+      });
+      ContactSortScratch scratch;
+      for (int round = 0; round < 2; ++round) {  // the scratch reused
+        std::vector<Contact> got = contacts;
+        if (round == 0)
+          sort_contacts(got);
+        else
+          sort_contacts(got, scratch);
+        INFO("n " << n << ", indices up to " << range << ", round " << round);
+        REQUIRE(got.size() == n);
+        std::size_t wrong = 0;
+        for (std::size_t i = 0; i < n; ++i) {
+          const Contact& g = got[i];
+          const Contact& e = expected[i];
+          // Couples repeated in the input may come in either order from the comparison sort;
+          // the fields travel with their contact in any case.
+          wrong += g.tri_a != e.tri_a || g.tri_b != e.tri_b || g.q != Vec3(0, double(g.tri_a), double(g.tri_b)) ||
+                   (g.kind == ContactKind::touching) != (std::size_t(g.p.x()) % 2 == 1);
+        }
+        CHECK(wrong == 0);
+      }
+    }
+  }
 }
