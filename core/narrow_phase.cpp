@@ -157,8 +157,10 @@ int certain_orientation_2d(const Vec3& p, const Vec3& q, const Vec3& r, int u, i
 // determinant expanded about plane[0], det(q - p, r - p, d - p) = (d - p) . ((q - p) x (r - p)),
 // whose 2x2 minors (and their magnitudes) are computed once for the three corners. It is
 // Shewchuk's orient3d with p as the common point (three rounded differences, 2x2 products, one
-// 3-term sum: his error bound applies as it stands); where it cannot certify, CGAL decides.
-void plane_sides(const TriangleCorners& plane, const TriangleCorners& t, int side[3]) {
+// 3-term sum: his error bound applies as it stands). A plane along a coordinate axis decides
+// the rest exactly. Returns false when a sign is left at 0 uncertified (exact_plane_sides()
+// decides those).
+bool certain_plane_sides(const TriangleCorners& plane, const TriangleCorners& t, int side[3]) {
   const Vec3& p = plane[0];
   const double e1x = plane[1].x() - p.x(), e1y = plane[1].y() - p.y(), e1z = plane[1].z() - p.z();
   const double e2x = plane[2].x() - p.x(), e2y = plane[2].y() - p.y(), e2z = plane[2].z() - p.z();
@@ -166,7 +168,7 @@ void plane_sides(const TriangleCorners& plane, const TriangleCorners& t, int sid
   const double mx = std::fabs(e1y * e2z) + std::fabs(e1z * e2y), my = std::fabs(e1z * e2x) + std::fabs(e1x * e2z),
                mz = std::fabs(e1x * e2y) + std::fabs(e1y * e2x);
   // The certified signs without a branch on them (which side a corner lies on follows the
-  // geometry, which no branch predictor learns); CGAL only where a sign is uncertain (rare).
+  // geometry, which no branch predictor learns).
   int certain = 1;
   for (int i = 0; i < 3; ++i) {
     const double fx = t[i].x() - p.x(), fy = t[i].y() - p.y(), fz = t[i].z() - p.z();
@@ -176,24 +178,32 @@ void plane_sides(const TriangleCorners& plane, const TriangleCorners& t, int sid
     side[i] = above - below;
     certain &= above | below;
   }
-  if (__builtin_expect(!certain, 0)) {
-    // A plane of constant coordinate k (a flat sheet, a face resting on a floor): its normal is
-    // exactly along k, so a corner's side is the sign of its k offset (exact) times the sign of
-    // the triangle's orientation in the other two coordinates (certified in double when it can
-    // be). The corners exactly on such a plane, which every filter leaves to exact arithmetic,
-    // cost nothing then.
-    if (const int k = axis_plane(plane); k >= 0) {
-      const int turn = certain_orientation_2d(plane[0], plane[1], plane[2], (k + 1) % 3, (k + 2) % 3);
-      if (turn != 0) {
-        const double c = plane[0][k];
-        for (int i = 0; i < 3; ++i) side[i] = ((t[i][k] > c) - (t[i][k] < c)) * turn;
-        return;
-      }
+  if (__builtin_expect(certain, 1)) return true;
+  // A plane of constant coordinate k (a flat sheet, a face resting on a floor): its normal is
+  // exactly along k, so a corner's side is the sign of its k offset (exact) times the sign of
+  // the triangle's orientation in the other two coordinates (certified in double when it can
+  // be). The corners exactly on such a plane, which every filter leaves to exact arithmetic,
+  // cost nothing then.
+  if (const int k = axis_plane(plane); k >= 0) {
+    const int turn = certain_orientation_2d(plane[0], plane[1], plane[2], (k + 1) % 3, (k + 2) % 3);
+    if (turn != 0) {
+      const double c = plane[0][k];
+      for (int i = 0; i < 3; ++i) side[i] = ((t[i][k] > c) - (t[i][k] < c)) * turn;
+      return true;
     }
-    for (int i = 0; i < 3; ++i)
-      if (side[i] == 0)
-        side[i] = int(CGAL::orientation(to_cgal(plane[0]), to_cgal(plane[1]), to_cgal(plane[2]), to_cgal(t[i])));
   }
+  return false;
+}
+
+// The sides certain_plane_sides() left at 0, decided by CGAL (exact; rare, and slow).
+void exact_plane_sides(const TriangleCorners& plane, const TriangleCorners& t, int side[3]) {
+  for (int i = 0; i < 3; ++i)
+    if (side[i] == 0)
+      side[i] = int(CGAL::orientation(to_cgal(plane[0]), to_cgal(plane[1]), to_cgal(plane[2]), to_cgal(t[i])));
+}
+
+void plane_sides(const TriangleCorners& plane, const TriangleCorners& t, int side[3]) {
+  if (!certain_plane_sides(plane, t, side)) exact_plane_sides(plane, t, side);
 }
 
 bool all_zero(const int s[3]) { return s[0] == 0 && s[1] == 0 && s[2] == 0; }
@@ -414,8 +424,46 @@ bool coplanar_apart(const TriangleCorners& a, const TriangleCorners& b) {
   return separates(a, ta, b) || separates(b, tb, a);
 }
 
+// apart_across_an_edge(): the side of x of the plane through edge (p, q) of a triangle with
+// normal n, perpendicular to the triangle: the sign of (x - p) . ((q - p) x n), a polynomial of
+// degree 4 in rounded differences. Its rounding is at most about 12 eps times the same sum of
+// products over magnitudes (one eps for each difference, product and sum on the longest path);
+// the bound takes 32 eps. The absolute term covers underflow; an overflow gives inf or NaN,
+// which no comparison accepts (no side).
+constexpr double kEdgePlaneBound = 32.0 * 1.1102230246251565e-16;
+
+bool apart_across_an_edge(const TriangleCorners& a, const TriangleCorners& b) {
+  const auto beyond = [](const TriangleCorners& t, const TriangleCorners& o) {
+    const Vec3 f1 = t[1] - t[0], f2 = t[2] - t[0];
+    const Vec3 n = f1.cross(f2);
+    const Vec3 n_mag(std::fabs(f1.y() * f2.z()) + std::fabs(f1.z() * f2.y()),
+                     std::fabs(f1.z() * f2.x()) + std::fabs(f1.x() * f2.z()),
+                     std::fabs(f1.x() * f2.y()) + std::fabs(f1.y() * f2.x()));
+    for (int e = 0; e < 3; ++e) {
+      const Vec3& p = t[e];
+      const Vec3 d = t[(e + 1) % 3] - p;
+      const Vec3 m = d.cross(n);
+      const Vec3 m_mag(std::fabs(d.y()) * n_mag.z() + std::fabs(d.z()) * n_mag.y(),
+                       std::fabs(d.z()) * n_mag.x() + std::fabs(d.x()) * n_mag.z(),
+                       std::fabs(d.x()) * n_mag.y() + std::fabs(d.y()) * n_mag.x());
+      const auto side = [&](const Vec3& x) {
+        const Vec3 g = x - p;
+        const double v = g.dot(m);
+        const double bound = kEdgePlaneBound * g.cwiseAbs().dot(m_mag) + kUnderflowSlack;
+        return int(v > bound) - int(v < -bound);
+      };
+      const int inside = side(t[(e + 2) % 3]);  // the triangle's own side (0: too thin to tell)
+      if (inside != 0 && side(o[0]) == -inside && side(o[1]) == -inside && side(o[2]) == -inside) return true;
+    }
+    return false;
+  };
+  return beyond(a, b) || beyond(b, a);
+}
+
 bool triangles_intersect(const TriangleCorners& a, const TriangleCorners& b) {
-  if (coplanar_apart(a, b)) return false;  // a flat sheet's neighbours: no exact predicate needed
+  // A flat or smooth sheet's neighbours, nearly coplanar: no exact predicate needed where an
+  // edge's plane separates them.
+  if (coplanar_apart(a, b) || apart_across_an_edge(a, b)) return false;
   const Simplex sa = simplex(a), sb = simplex(b);
   return std::visit([](const auto& x, const auto& y) { return intersect(x, y); }, sa, sb);
 }
@@ -437,10 +485,20 @@ std::pair<Vec3, Vec3> intersection_segment(const TriangleCorners& a, const Trian
 bool test_triangle_pair(const TriangleCorners& ca, const TriangleCorners& cb, Contact& contact) {
   // The six corner/plane signs, each once (certified in double, exact where double cannot
   // tell); most candidates end here, one triangle strictly on one side of the other's plane.
+  // Where a sign is left to exact arithmetic (a corner on or within rounding of the other's
+  // plane: a smooth sheet's neighbours), a plane through an edge may separate the two first.
   int side_b[3], side_a[3];
-  plane_sides(ca, cb, side_b);
+  bool edge_planes_tried = false;
+  if (!certain_plane_sides(ca, cb, side_b)) {
+    if (apart_across_an_edge(ca, cb)) return false;
+    edge_planes_tried = true;
+    exact_plane_sides(ca, cb, side_b);
+  }
   if (one_open_side(side_b)) return false;
-  plane_sides(cb, ca, side_a);
+  if (!certain_plane_sides(cb, ca, side_a)) {
+    if (!edge_planes_tried && apart_across_an_edge(ca, cb)) return false;
+    exact_plane_sides(cb, ca, side_a);
+  }
   if (one_open_side(side_a)) return false;
   if (all_zero(side_a) || all_zero(side_b)) {
     // Coplanar, or a triangle without area: the general exact test and constructions.

@@ -255,6 +255,70 @@ TEST_CASE("triangles on an axis-aligned plane: the shortcuts give the exact answ
   CHECK(hits + apart < cases);     // some pairs apart are left to the exact predicates
 }
 
+TEST_CASE("nearly coplanar triangles on a general plane: the edge planes give the exact answer", "[narrow][adversarial]") {
+  // apart_across_an_edge() decides a smooth sheet's neighbours without exact arithmetic. Lattice
+  // points o + i u + j v with small integer u, v off every axis lie exactly on one plane in
+  // doubles; B's corners on it (apart, sharing a corner or an edge, overlapping) or moved off it
+  // along u x v (exactly, by lattice steps) or by a rounding-sized amount, then scaled and
+  // offset (exactly by powers of two, or rounded). "Apart" must never be said of a pair that
+  // meets, and every answer must equal the oracle's.
+  std::mt19937_64 rng(20261127);
+  const auto pick = [&](int n) { return int(rng() % std::uint64_t(n)); };
+  const char* env = std::getenv("PEELCD_ADVERSARIAL_CASES");
+  const std::size_t n = env ? std::max<std::size_t>(1500, std::strtoull(env, nullptr, 10) * 15 / 100) : 15000;
+  std::size_t cases = 0, apart = 0, hits = 0, wrong = 0, unsafe = 0;
+  for (std::size_t i = 0; i < n; ++i) {
+    const auto small = [&] { return double(pick(5) - 2); };
+    Vec3 u(small(), small(), small()), v(small(), small(), small());
+    if (u.cross(v).squaredNorm() == 0 || (u.cross(v).array() == 0).count() >= 2) continue;  // a plane off the axes
+    const Vec3 o(small(), small(), small());
+    const auto on_plane = [&] { return Vec3(o + double(pick(7) - 3) * u + double(pick(7) - 3) * v); };
+    TriangleCorners a = {on_plane(), on_plane(), on_plane()}, b = {on_plane(), on_plane(), on_plane()};
+    if (pick(3) == 0) b[pick(3)] = a[pick(3)];  // a shared corner
+    const Vec3 normal = u.cross(v);
+    const int off = pick(3);  // B's corners off the plane
+    for (int j = 0; j < off; ++j) b[j] += (pick(2) ? 1.0 : -1.0) * (pick(2) ? normal : 1e-13 * normal);
+    const double scales[] = {1.0, 0.1, std::ldexp(1.0, -20), std::ldexp(1.0, 20), 3.0};
+    const double offsets[] = {0.0, 0.0, 1e3, 0.3};
+    const double scale = scales[pick(5)], offset = offsets[pick(4)];
+    for (auto* t : {&a, &b})
+      for (Vec3& p : *t) p = p * scale + Vec3::Constant(offset);
+    const bool expected = oracle(a, b);
+    ++cases;
+    hits += expected;
+    if (apart_across_an_edge(a, b)) {
+      ++apart;
+      if (expected) ++unsafe;  // "apart" must be certain
+    }
+    Mesh ma, mb;
+    ma.triangles = mb.triangles = {{0, 1, 2}};
+    std::array<int, 3> pa = {0, 1, 2};
+    do {
+      std::array<int, 3> pb = {0, 1, 2};
+      do {
+        const TriangleCorners x = {a[pa[0]], a[pa[1]], a[pa[2]]}, y = {b[pb[0]], b[pb[1]], b[pb[2]]};
+        ma.vertices.assign(x.begin(), x.end());
+        mb.vertices.assign(y.begin(), y.end());
+        std::vector<Contact> contacts;
+        narrow_phase(ma, mb, {pack_pair(0, 0)}, contacts);
+        narrow_phase(mb, ma, {pack_pair(0, 0)}, contacts);
+        if (triangles_intersect(x, y) != expected || triangles_intersect(y, x) != expected ||
+            contacts.size() != (expected ? 2u : 0u))
+          ++wrong;
+        if (apart_across_an_edge(x, y) && expected) ++unsafe;
+      } while (std::next_permutation(pb.begin(), pb.end()));
+    } while (std::next_permutation(pa.begin(), pa.end()));
+  }
+  std::printf("general-plane pairs: %zu cases, %zu intersecting, %zu certified apart; %zu wrong answers, %zu unsafe\n",
+              cases, hits, apart, wrong, unsafe);
+  CHECK(wrong == 0);
+  CHECK(unsafe == 0);
+  CHECK(cases > n / 2);
+  CHECK(apart > cases / 5);    // the filter decides many
+  CHECK(hits > cases / 10);    // touching, crossing, overlapping cases are common
+  CHECK(hits + apart < cases); // some pairs apart are left to the exact predicates
+}
+
 TEST_CASE("contact kinds tell touching from penetrating", "[narrow]") {
   const TriangleCorners a = {Vec3(0, 0, 0), Vec3(2, 0, 0), Vec3(0, 2, 0)};
   CHECK(classify_contact(a, {Vec3(0.5, 0.5, -1), Vec3(0.5, 0.5, 1), Vec3(1.5, 0.2, 0.3)}) == ContactKind::crossing);

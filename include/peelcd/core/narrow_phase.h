@@ -38,6 +38,11 @@ bool triangles_intersect(const TriangleCorners& a, const TriangleCorners& b);
 // double; false otherwise (apart or not, the exact predicates decide). A flat sheet's
 // neighbours are all coplanar, where CGAL's filters fail and its exact arithmetic is slow.
 bool coplanar_apart(const TriangleCorners& a, const TriangleCorners& b);
+// True when a plane through an edge of either triangle, perpendicular to that triangle, has the
+// triangle on one side and the other triangle's three corners strictly on the other, every side
+// certified in double (a sufficient condition for disjoint triangles in any position; it decides
+// nearly coplanar neighbours, whose orientations the certified signs leave to exact arithmetic).
+bool apart_across_an_edge(const TriangleCorners& a, const TriangleCorners& b);
 
 // Kind of contact of two intersecting triangles (undefined if they are disjoint).
 ContactKind classify_contact(const TriangleCorners& a, const TriangleCorners& b);
