@@ -78,12 +78,6 @@ void self_candidates(const Mesh& mesh, const std::vector<std::uint32_t>& rep, st
 }
 
 bool test_self_couple(const TriangleCorners& a, const TriangleCorners& b, Contact& contact) {
-  // Nearly parallel planes (a smooth surface's neighbours): their signs are close to 0, where
-  // the certified double signs give up and the exact ones are slow; CGAL's filtered intersection
-  // test rejects such couples faster. Otherwise the signs first. Both answers are exact.
-  const Vec3 na = (a[1] - a[0]).cross(a[2] - a[0]), nb = (b[1] - b[0]).cross(b[2] - b[0]);
-  if (na.cross(nb).squaredNorm() <= 1e-6 * na.squaredNorm() * nb.squaredNorm())
-    return triangles_intersect(a, b) && test_triangle_pair(a, b, contact);
   return test_triangle_pair(a, b, contact);
 }
 
