@@ -27,9 +27,9 @@ scene=fixtures/scenes/bunny_dragon.json
 # stage, the peers, the floors: --short).
 ./build/peelcd bench spheres --frames 6 --threads 1 --short > "$out/bench_spheres.txt"
 ./build/peelcd bench spheres-wave --frames 6 --threads 1 --short > "$out/bench_spheres_wave.txt"
-./build/peelcd bench spheres --stacks 570 --frames 4 --threads 1 --short --scaling 2 > "$out/bench_spheres_1m.txt"
-./build/peelcd bench spheres-wave --stacks 570 --frames 4 --threads 1 --short --scaling 2 > "$out/bench_spheres_1m_wave.txt"
-./build/peelcd bench crowd --objects 1000 --frames 4 --threads 1 --short --scaling 2 > "$out/bench_pile1000.txt"
+./build/peelcd bench spheres --stacks 570 --frames 8 --threads 1 --short --scaling 2 > "$out/bench_spheres_1m.txt"
+./build/peelcd bench spheres-wave --stacks 570 --frames 8 --threads 1 --short --scaling 2 > "$out/bench_spheres_1m_wave.txt"
+./build/peelcd bench crowd --objects 1000 --frames 8 --threads 1 --short --scaling 2 > "$out/bench_pile1000.txt"
 # (--scaling 2: the World again with two threads, side by side with its one-thread row on the
 # same frames.) The large scenes again with one thread per core, for the peers' two-thread times.
 ./build/peelcd bench spheres --stacks 570 --frames 4 --short > "$out/bench_spheres_1m_2threads.txt"
