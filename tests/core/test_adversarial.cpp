@@ -166,6 +166,51 @@ Tally run_cases(std::uint64_t seed, std::size_t n) {
   return t;
 }
 
+// The answers of triangles_intersect() and narrow_phase() for (a, b) in all 36 corner orders and
+// both triangle orders that differ from `expected`; also(x, y) sees each order of the pair.
+template <class Also>
+std::size_t wrong_in_all_orders(const TriangleCorners& a, const TriangleCorners& b, bool expected, Also&& also) {
+  std::size_t wrong = 0;
+  Mesh ma, mb;
+  ma.triangles = mb.triangles = {{0, 1, 2}};
+  std::array<int, 3> pa = {0, 1, 2};
+  do {
+    std::array<int, 3> pb = {0, 1, 2};
+    do {
+      const TriangleCorners x = {a[pa[0]], a[pa[1]], a[pa[2]]}, y = {b[pb[0]], b[pb[1]], b[pb[2]]};
+      ma.vertices.assign(x.begin(), x.end());
+      mb.vertices.assign(y.begin(), y.end());
+      std::vector<Contact> contacts;
+      narrow_phase(ma, mb, {pack_pair(0, 0)}, contacts);
+      narrow_phase(mb, ma, {pack_pair(0, 0)}, contacts);
+      if (triangles_intersect(x, y) != expected || triangles_intersect(y, x) != expected ||
+          contacts.size() != (expected ? 2u : 0u))
+        ++wrong;
+      also(x, y);
+    } while (std::next_permutation(pb.begin(), pb.end()));
+  } while (std::next_permutation(pa.begin(), pa.end()));
+  return wrong;
+}
+
+// A shortcut that says "apart" (coplanar_apart(), apart_across_an_edge()) checked on pairs: a and
+// b scaled and offset (inexactly on purpose), the oracle's answer, the shortcut's in every order
+// (it must never say "apart" of a pair that meets), and every order's answers.
+struct ShortcutTally {
+  std::size_t cases = 0, apart = 0, hits = 0, wrong = 0, unsafe = 0;
+  void add(TriangleCorners a, TriangleCorners b, double scale, double offset,
+           bool (*said_apart)(const TriangleCorners&, const TriangleCorners&)) {
+    for (auto* t : {&a, &b})
+      for (Vec3& p : *t) p = p * scale + Vec3::Constant(offset);
+    const bool expected = oracle(a, b);
+    ++cases;
+    hits += expected;
+    apart += said_apart(a, b);
+    wrong += wrong_in_all_orders(a, b, expected, [&](const TriangleCorners& x, const TriangleCorners& y) {
+      if (expected && said_apart(x, y)) ++unsafe;
+    });
+  }
+};
+
 }  // namespace
 
 TEST_CASE("adversarial pairs: exact answers, order-invariant, segments on both triangles", "[narrow][adversarial]") {
@@ -204,7 +249,7 @@ TEST_CASE("triangles on an axis-aligned plane: the shortcuts give the exact answ
   // sanitizer build: 1,500).
   const char* env = std::getenv("PEELCD_ADVERSARIAL_CASES");
   const std::size_t n = env ? std::max<std::size_t>(1500, std::strtoull(env, nullptr, 10) * 15 / 100) : 15000;
-  std::size_t cases = 0, apart = 0, hits = 0, wrong = 0, unsafe = 0;
+  ShortcutTally t;
   for (std::size_t i = 0; i < n; ++i) {
     const int k = pick(3);
     const double c = lattice();
@@ -219,40 +264,15 @@ TEST_CASE("triangles on an axis-aligned plane: the shortcuts give the exact answ
     const double scales[] = {1.0, 0.1, 1e-6, 1e6, std::ldexp(1.0, -30)};
     const double offsets[] = {0.0, 0.0, 1e3, 0.3};
     const double scale = scales[pick(5)], offset = offsets[pick(4)];
-    for (auto* t : {&a, &b})
-      for (Vec3& p : *t) p = p * scale + Vec3::Constant(offset);
-    const bool expected = oracle(a, b);
-    ++cases;
-    hits += expected;
-    if (coplanar_apart(a, b)) {
-      ++apart;
-      if (expected) ++unsafe;  // "apart" must be certain
-    }
-    Mesh ma, mb;
-    ma.triangles = mb.triangles = {{0, 1, 2}};
-    std::array<int, 3> pa = {0, 1, 2};
-    do {
-      std::array<int, 3> pb = {0, 1, 2};
-      do {
-        const TriangleCorners x = {a[pa[0]], a[pa[1]], a[pa[2]]}, y = {b[pb[0]], b[pb[1]], b[pb[2]]};
-        ma.vertices.assign(x.begin(), x.end());
-        mb.vertices.assign(y.begin(), y.end());
-        std::vector<Contact> contacts;
-        narrow_phase(ma, mb, {pack_pair(0, 0)}, contacts);
-        narrow_phase(mb, ma, {pack_pair(0, 0)}, contacts);
-        if (triangles_intersect(x, y) != expected || triangles_intersect(y, x) != expected ||
-            contacts.size() != (expected ? 2u : 0u))
-          ++wrong;
-      } while (std::next_permutation(pb.begin(), pb.end()));
-    } while (std::next_permutation(pa.begin(), pa.end()));
+    t.add(a, b, scale, offset, coplanar_apart);
   }
-  std::printf("axis-plane pairs: %zu cases, %zu intersecting, %zu certified apart; %zu wrong answers, %zu unsafe\n", cases,
-              hits, apart, wrong, unsafe);
-  CHECK(wrong == 0);
-  CHECK(unsafe == 0);
-  CHECK(apart > cases / 20);       // the shortcut is taken (on about a fifth of the coplanar third)
-  CHECK(hits > cases / 10);        // and touching, crossing, overlapping cases are common
-  CHECK(hits + apart < cases);     // some pairs apart are left to the exact predicates
+  std::printf("axis-plane pairs: %zu cases, %zu intersecting, %zu certified apart; %zu wrong answers, %zu unsafe\n",
+              t.cases, t.hits, t.apart, t.wrong, t.unsafe);
+  CHECK(t.wrong == 0);
+  CHECK(t.unsafe == 0);
+  CHECK(t.apart > t.cases / 20);       // the shortcut is taken (on about a fifth of the coplanar third)
+  CHECK(t.hits > t.cases / 10);        // and touching, crossing, overlapping cases are common
+  CHECK(t.hits + t.apart < t.cases);   // some pairs apart are left to the exact predicates
 }
 
 TEST_CASE("nearly coplanar triangles on a general plane: the edge planes give the exact answer", "[narrow][adversarial]") {
@@ -266,7 +286,7 @@ TEST_CASE("nearly coplanar triangles on a general plane: the edge planes give th
   const auto pick = [&](int n) { return int(rng() % std::uint64_t(n)); };
   const char* env = std::getenv("PEELCD_ADVERSARIAL_CASES");
   const std::size_t n = env ? std::max<std::size_t>(1500, std::strtoull(env, nullptr, 10) * 15 / 100) : 15000;
-  std::size_t cases = 0, apart = 0, hits = 0, wrong = 0, unsafe = 0;
+  ShortcutTally t;
   for (std::size_t i = 0; i < n; ++i) {
     const auto small = [&] { return double(pick(5) - 2); };
     Vec3 u(small(), small(), small()), v(small(), small(), small());
@@ -281,42 +301,16 @@ TEST_CASE("nearly coplanar triangles on a general plane: the edge planes give th
     const double scales[] = {1.0, 0.1, std::ldexp(1.0, -20), std::ldexp(1.0, 20), 3.0};
     const double offsets[] = {0.0, 0.0, 1e3, 0.3};
     const double scale = scales[pick(5)], offset = offsets[pick(4)];
-    for (auto* t : {&a, &b})
-      for (Vec3& p : *t) p = p * scale + Vec3::Constant(offset);
-    const bool expected = oracle(a, b);
-    ++cases;
-    hits += expected;
-    if (apart_across_an_edge(a, b)) {
-      ++apart;
-      if (expected) ++unsafe;  // "apart" must be certain
-    }
-    Mesh ma, mb;
-    ma.triangles = mb.triangles = {{0, 1, 2}};
-    std::array<int, 3> pa = {0, 1, 2};
-    do {
-      std::array<int, 3> pb = {0, 1, 2};
-      do {
-        const TriangleCorners x = {a[pa[0]], a[pa[1]], a[pa[2]]}, y = {b[pb[0]], b[pb[1]], b[pb[2]]};
-        ma.vertices.assign(x.begin(), x.end());
-        mb.vertices.assign(y.begin(), y.end());
-        std::vector<Contact> contacts;
-        narrow_phase(ma, mb, {pack_pair(0, 0)}, contacts);
-        narrow_phase(mb, ma, {pack_pair(0, 0)}, contacts);
-        if (triangles_intersect(x, y) != expected || triangles_intersect(y, x) != expected ||
-            contacts.size() != (expected ? 2u : 0u))
-          ++wrong;
-        if (apart_across_an_edge(x, y) && expected) ++unsafe;
-      } while (std::next_permutation(pb.begin(), pb.end()));
-    } while (std::next_permutation(pa.begin(), pa.end()));
+    t.add(a, b, scale, offset, apart_across_an_edge);
   }
   std::printf("general-plane pairs: %zu cases, %zu intersecting, %zu certified apart; %zu wrong answers, %zu unsafe\n",
-              cases, hits, apart, wrong, unsafe);
-  CHECK(wrong == 0);
-  CHECK(unsafe == 0);
-  CHECK(cases > n / 2);
-  CHECK(apart > cases / 5);    // the filter decides many
-  CHECK(hits > cases / 10);    // touching, crossing, overlapping cases are common
-  CHECK(hits + apart < cases); // some pairs apart are left to the exact predicates
+              t.cases, t.hits, t.apart, t.wrong, t.unsafe);
+  CHECK(t.wrong == 0);
+  CHECK(t.unsafe == 0);
+  CHECK(t.cases > n / 2);
+  CHECK(t.apart > t.cases / 5);        // the filter decides many
+  CHECK(t.hits > t.cases / 10);        // touching, crossing, overlapping cases are common
+  CHECK(t.hits + t.apart < t.cases);   // some pairs apart are left to the exact predicates
 }
 
 TEST_CASE("contact kinds tell touching from penetrating", "[narrow]") {
