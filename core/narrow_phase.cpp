@@ -310,32 +310,59 @@ bool crossing_intersect(const TriangleCorners& a, const TriangleCorners& b, cons
 // each triangle's piece of the line from its edges' exact crossings of the other's plane (and
 // its corners on it), ordered along the line lexicographically (as simplex() orders collinear
 // points), then the two pieces' overlap.
-bool meet_in_one_point(const TriangleCorners& a, const TriangleCorners& b, const int sa[3], const int sb[3]) {
+// The exact piece of the planes' line that triangle `t` (its corners' signs `s` against the
+// other's plane, not all zero) covers: its corners on that plane and its edges' crossings of it,
+// the extreme two in lexicographic order (all lie on one line, so that order runs along it).
+std::pair<EK::Point_3, EK::Point_3> line_piece(const TriangleCorners& t, const int s[3], const TriangleCorners& other) {
   const CGAL::Cartesian_converter<K, EK> to_exact;
-  const auto piece = [&](const TriangleCorners& t, const int s[3], const TriangleCorners& other) {
-    const EK::Plane_3 plane(to_exact(to_cgal(other[0])), to_exact(to_cgal(other[1])), to_exact(to_cgal(other[2])));
-    std::vector<EK::Point_3> pts;
-    for (int i = 0; i < 3; ++i) {
-      const int j = (i + 1) % 3;
-      if (s[i] == 0) pts.push_back(to_exact(to_cgal(t[i])));
-      if (s[i] * s[j] < 0) {
-        const EK::Line_3 line(to_exact(to_cgal(t[i])), to_exact(to_cgal(t[j])));
-        if (auto r = CGAL::intersection(line, plane))
-          if (const auto* p = boost::get<EK::Point_3>(&*r)) pts.push_back(*p);
-      }
+  const EK::Plane_3 plane(to_exact(to_cgal(other[0])), to_exact(to_cgal(other[1])), to_exact(to_cgal(other[2])));
+  EK::Point_3 pts[4];
+  int count = 0;
+  for (int i = 0; i < 3; ++i) {
+    const int j = (i + 1) % 3;
+    if (s[i] == 0) pts[count++] = to_exact(to_cgal(t[i]));
+    if (s[i] * s[j] < 0) {
+      const EK::Line_3 line(to_exact(to_cgal(t[i])), to_exact(to_cgal(t[j])));
+      if (auto r = CGAL::intersection(line, plane))
+        if (const auto* p = boost::get<EK::Point_3>(&*r)) pts[count++] = *p;
     }
-    EK::Point_3 lo = pts.front(), hi = pts.front();
-    for (const EK::Point_3& p : pts) {
-      if (CGAL::compare_xyz(p, lo) == CGAL::SMALLER) lo = p;
-      if (CGAL::compare_xyz(p, hi) == CGAL::LARGER) hi = p;
-    }
-    return std::make_pair(lo, hi);
-  };
-  const auto [lo_a, hi_a] = piece(a, sa, b);
-  const auto [lo_b, hi_b] = piece(b, sb, a);
+  }
+  EK::Point_3 lo = pts[0], hi = pts[0];
+  for (int k = 1; k < count; ++k) {
+    if (CGAL::compare_xyz(pts[k], lo) == CGAL::SMALLER) lo = pts[k];
+    if (CGAL::compare_xyz(pts[k], hi) == CGAL::LARGER) hi = pts[k];
+  }
+  return {lo, hi};
+}
+
+// Two proper triangles in two planes, each with corners strictly on both sides of the other's
+// plane, meet in a piece of the planes' line: where it lies in both. That piece is one point when
+// the line leaves one triangle exactly where it enters the other (two side faces of offset boxes
+// meeting at a corner of each): the surfaces touch there, they do not cross. Decided exactly
+// from the two triangles' pieces of the line (line_piece()) and their overlap.
+bool meet_in_one_point(const TriangleCorners& a, const TriangleCorners& b, const int sa[3], const int sb[3]) {
+  const auto [lo_a, hi_a] = line_piece(a, sa, b);
+  const auto [lo_b, hi_b] = line_piece(b, sb, a);
   const EK::Point_3& lo = CGAL::compare_xyz(lo_a, lo_b) == CGAL::LARGER ? lo_a : lo_b;
   const EK::Point_3& hi = CGAL::compare_xyz(hi_a, hi_b) == CGAL::SMALLER ? hi_a : hi_b;
   return lo == hi;
+}
+
+// The segment of two proper triangles in two planes that meet (sa: A's corners against B's
+// plane, sb: B's against A's, neither all zero), constructed exactly and rounded once: the
+// overlap of their pieces of the planes' line. The points CGAL's triangle/triangle intersection
+// gives, without its general construction (the folded sheet's shallow crossings: about 20 us a
+// contact through it). False when the pieces do not overlap (the triangles do not meet).
+bool exact_crossing_segment(const TriangleCorners& a, const TriangleCorners& b, const int sa[3], const int sb[3],
+                            Vec3& p, Vec3& q) {
+  const auto [lo_a, hi_a] = line_piece(a, sa, b);
+  const auto [lo_b, hi_b] = line_piece(b, sb, a);
+  const EK::Point_3& lo = CGAL::compare_xyz(lo_a, lo_b) == CGAL::LARGER ? lo_a : lo_b;
+  const EK::Point_3& hi = CGAL::compare_xyz(hi_a, hi_b) == CGAL::SMALLER ? hi_a : hi_b;
+  if (CGAL::compare_xyz(lo, hi) == CGAL::LARGER) return false;
+  p = Collect::to_eigen(lo);
+  q = Collect::to_eigen(hi);
+  return true;
 }
 
 // The exact construction of the intersection of two simplices: its extreme points.
@@ -515,7 +542,8 @@ bool test_triangle_pair(const TriangleCorners& ca, const TriangleCorners& cb, Co
     return (s[0] < 0 || s[1] < 0 || s[2] < 0) && (s[0] > 0 || s[1] > 0 || s[2] > 0);
   };
   contact.kind = both(side_a) && both(side_b) ? ContactKind::crossing : ContactKind::touching;
-  if (!crossing_segment(ca, cb, side_a, side_b, contact.p, contact.q))
+  if (!crossing_segment(ca, cb, side_a, side_b, contact.p, contact.q) &&
+      !exact_crossing_segment(ca, cb, side_a, side_b, contact.p, contact.q))
     std::tie(contact.p, contact.q) = exact_segment(ca, cb, simplex(ca), simplex(cb));
   // A crossing whose segment is (near) a point may be two triangles meeting at one point of
   // their boundaries: decided exactly (meet_in_one_point()) only then, so crossings pay nothing.

@@ -313,6 +313,51 @@ TEST_CASE("nearly coplanar triangles on a general plane: the edge planes give th
   CHECK(t.hits + t.apart < t.cases);   // some pairs apart are left to the exact predicates
 }
 
+TEST_CASE("shallow crossings: the exact segment is CGAL's intersection rounded once", "[narrow][adversarial]") {
+  // Two triangles whose planes are within 1e-6 rad of parallel (a sheet sinking through another
+  // at a shallow angle), where the double construction is ill-conditioned and the segment is
+  // built exactly: its ends must be the ends of CGAL's exact intersection, each coordinate
+  // rounded to nearest.
+  std::mt19937_64 rng(20261128);
+  std::uniform_real_distribution<double> uni(-1.0, 1.0);
+  const auto round_exact = [](const EK::Point_3& p) {
+    return Vec3(CGAL::to_double(CGAL::exact(p.x())), CGAL::to_double(CGAL::exact(p.y())), CGAL::to_double(CGAL::exact(p.z())));
+  };
+  std::size_t cases = 0, crossing = 0, wrong = 0;
+  for (int i = 0; i < 3000; ++i) {
+    const double tilt = std::ldexp(1.0, -20 - int(rng() % 30));  // 1e-6 .. 1e-15 rad
+    TriangleCorners a = {Vec3(uni(rng), uni(rng), 0.0), Vec3(uni(rng), uni(rng), 0.0), Vec3(uni(rng), uni(rng), 0.0)};
+    TriangleCorners b;
+    for (Vec3& p : b) {
+      p = Vec3(uni(rng), uni(rng), 0.0);
+      p.z() = tilt * p.x() + 1e-3 * tilt * uni(rng) * 0.5;  // a plane through about z = 0, tilted about y
+    }
+    const Vec3 turn(uni(rng), uni(rng), uni(rng));  // off the axes, rounded: nearly parallel, not exactly
+    const Eigen::Matrix3d r = Eigen::AngleAxisd(1.0, turn.normalized()).toRotationMatrix();
+    for (auto* t : {&a, &b})
+      for (Vec3& p : *t) p = r * p + Vec3(0.25, -3.0, 7.0);
+    ++cases;
+    Contact c;
+    if (!test_triangle_pair(a, b, c)) {
+      wrong += oracle(a, b);
+      continue;
+    }
+    if (c.kind != ContactKind::crossing) continue;
+    ++crossing;
+    const EK::Triangle_3 ta(exact(a[0]), exact(a[1]), exact(a[2])), tb(exact(b[0]), exact(b[1]), exact(b[2]));
+    const auto r3 = CGAL::intersection(ta, tb);
+    REQUIRE(bool(r3));
+    const auto* seg = boost::get<EK::Segment_3>(&*r3);
+    const auto* pt = boost::get<EK::Point_3>(&*r3);
+    REQUIRE((seg || pt));
+    const Vec3 e0 = round_exact(seg ? seg->source() : *pt), e1 = round_exact(seg ? seg->target() : *pt);
+    if (!((c.p == e0 && c.q == e1) || (c.p == e1 && c.q == e0))) ++wrong;
+  }
+  std::printf("shallow crossings: %zu cases, %zu crossing; %zu wrong\n", cases, crossing, wrong);
+  CHECK(wrong == 0);
+  CHECK(crossing > cases / 10);
+}
+
 TEST_CASE("contact kinds tell touching from penetrating", "[narrow]") {
   const TriangleCorners a = {Vec3(0, 0, 0), Vec3(2, 0, 0), Vec3(0, 2, 0)};
   CHECK(classify_contact(a, {Vec3(0.5, 0.5, -1), Vec3(0.5, 0.5, 1), Vec3(1.5, 0.2, 0.3)}) == ContactKind::crossing);
