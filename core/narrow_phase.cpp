@@ -350,9 +350,9 @@ bool meet_in_one_point(const TriangleCorners& a, const TriangleCorners& b, const
 
 // The segment of two proper triangles in two planes that meet (sa: A's corners against B's
 // plane, sb: B's against A's, neither all zero), constructed exactly and rounded once: the
-// overlap of their pieces of the planes' line. The points CGAL's triangle/triangle intersection
-// gives, without its general construction (the folded sheet's shallow crossings: about 20 us a
-// contact through it). False when the pieces do not overlap (the triangles do not meet).
+// overlap of their pieces of the planes' line: the points CGAL's triangle/triangle intersection
+// gives, without its general construction. False when the pieces do not overlap (the triangles
+// do not meet).
 bool exact_crossing_segment(const TriangleCorners& a, const TriangleCorners& b, const int sa[3], const int sb[3],
                             Vec3& p, Vec3& q) {
   const auto [lo_a, hi_a] = line_piece(a, sa, b);
@@ -522,12 +522,16 @@ bool test_triangle_pair(const TriangleCorners& ca, const TriangleCorners& cb, Co
     exact_plane_sides(ca, cb, side_b);
   }
   if (one_open_side(side_b)) return false;
-  if (!certain_plane_sides(cb, ca, side_a)) {
-    if (!edge_planes_tried && apart_across_an_edge(ca, cb)) return false;
-    exact_plane_sides(cb, ca, side_a);
+  // B in A's plane (or A without area): coplanar, whatever A's signs against B's plane are.
+  const bool coplanar_b = all_zero(side_b);
+  if (!coplanar_b) {
+    if (!certain_plane_sides(cb, ca, side_a)) {
+      if (!edge_planes_tried && apart_across_an_edge(ca, cb)) return false;
+      exact_plane_sides(cb, ca, side_a);
+    }
+    if (one_open_side(side_a)) return false;
   }
-  if (one_open_side(side_a)) return false;
-  if (all_zero(side_a) || all_zero(side_b)) {
+  if (coplanar_b || all_zero(side_a)) {
     // Coplanar, or a triangle without area: the general exact test and constructions.
     if (!triangles_intersect(ca, cb)) return false;
     std::tie(contact.p, contact.q) = intersection_segment(ca, cb);
