@@ -339,12 +339,18 @@ std::pair<EK::Point_3, EK::Point_3> line_piece(const TriangleCorners& t, const i
 // plane, meet in a piece of the planes' line: where it lies in both. That piece is one point when
 // the line leaves one triangle exactly where it enters the other (two side faces of offset boxes
 // meeting at a corner of each): the surfaces touch there, they do not cross. Decided exactly
-// from the two triangles' pieces of the line (line_piece()) and their overlap.
-bool meet_in_one_point(const TriangleCorners& a, const TriangleCorners& b, const int sa[3], const int sb[3]) {
+// from the two triangles' pieces of the line and their overlap (line_overlap()).
+// The overlap of the two triangles' pieces of the planes' line (empty when lo comes after hi).
+std::pair<EK::Point_3, EK::Point_3> line_overlap(const TriangleCorners& a, const TriangleCorners& b, const int sa[3],
+                                                 const int sb[3]) {
   const auto [lo_a, hi_a] = line_piece(a, sa, b);
   const auto [lo_b, hi_b] = line_piece(b, sb, a);
-  const EK::Point_3& lo = CGAL::compare_xyz(lo_a, lo_b) == CGAL::LARGER ? lo_a : lo_b;
-  const EK::Point_3& hi = CGAL::compare_xyz(hi_a, hi_b) == CGAL::SMALLER ? hi_a : hi_b;
+  return {CGAL::compare_xyz(lo_a, lo_b) == CGAL::LARGER ? lo_a : lo_b,
+          CGAL::compare_xyz(hi_a, hi_b) == CGAL::SMALLER ? hi_a : hi_b};
+}
+
+bool meet_in_one_point(const TriangleCorners& a, const TriangleCorners& b, const int sa[3], const int sb[3]) {
+  const auto [lo, hi] = line_overlap(a, b, sa, sb);
   return lo == hi;
 }
 
@@ -355,10 +361,7 @@ bool meet_in_one_point(const TriangleCorners& a, const TriangleCorners& b, const
 // do not meet).
 bool exact_crossing_segment(const TriangleCorners& a, const TriangleCorners& b, const int sa[3], const int sb[3],
                             Vec3& p, Vec3& q) {
-  const auto [lo_a, hi_a] = line_piece(a, sa, b);
-  const auto [lo_b, hi_b] = line_piece(b, sb, a);
-  const EK::Point_3& lo = CGAL::compare_xyz(lo_a, lo_b) == CGAL::LARGER ? lo_a : lo_b;
-  const EK::Point_3& hi = CGAL::compare_xyz(hi_a, hi_b) == CGAL::SMALLER ? hi_a : hi_b;
+  const auto [lo, hi] = line_overlap(a, b, sa, sb);
   if (CGAL::compare_xyz(lo, hi) == CGAL::LARGER) return false;
   p = Collect::to_eigen(lo);
   q = Collect::to_eigen(hi);

@@ -209,6 +209,10 @@ struct ShortcutTally {
       if (expected && said_apart(x, y)) ++unsafe;
     });
   }
+  void print(const char* what) const {
+    std::printf("%s pairs: %zu cases, %zu intersecting, %zu certified apart; %zu wrong answers, %zu unsafe\n", what,
+                cases, hits, apart, wrong, unsafe);
+  }
 };
 
 }  // namespace
@@ -266,8 +270,7 @@ TEST_CASE("triangles on an axis-aligned plane: the shortcuts give the exact answ
     const double scale = scales[pick(5)], offset = offsets[pick(4)];
     t.add(a, b, scale, offset, coplanar_apart);
   }
-  std::printf("axis-plane pairs: %zu cases, %zu intersecting, %zu certified apart; %zu wrong answers, %zu unsafe\n",
-              t.cases, t.hits, t.apart, t.wrong, t.unsafe);
+  t.print("axis-plane");
   CHECK(t.wrong == 0);
   CHECK(t.unsafe == 0);
   CHECK(t.apart > t.cases / 20);       // the shortcut is taken (on about a fifth of the coplanar third)
@@ -303,8 +306,7 @@ TEST_CASE("nearly coplanar triangles on a general plane: the edge planes give th
     const double scale = scales[pick(5)], offset = offsets[pick(4)];
     t.add(a, b, scale, offset, apart_across_an_edge);
   }
-  std::printf("general-plane pairs: %zu cases, %zu intersecting, %zu certified apart; %zu wrong answers, %zu unsafe\n",
-              t.cases, t.hits, t.apart, t.wrong, t.unsafe);
+  t.print("general-plane");
   CHECK(t.wrong == 0);
   CHECK(t.unsafe == 0);
   CHECK(t.cases > n / 2);
