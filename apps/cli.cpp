@@ -117,13 +117,15 @@ DetectOptions merged_options(const Scene& scene, const DetectArgs& a) {
 void write_output(const std::string& path, const std::string& text) { write_output_file(path, text + "\n", "peelcd: output"); }
 
 
-// detect's input: one scene file, or two or more mesh files (identity transforms, default options).
-Scene detect_input(const std::vector<std::string>& inputs, const std::string& command) {
+// detect's input: one scene file, or mesh files (identity transforms, default options): two or
+// more, or one with `self` (its self-collision).
+Scene detect_input(const std::vector<std::string>& inputs, const std::string& command, bool self) {
   const auto is_scene = [](const std::string& p) { return std::filesystem::path(p).extension() == ".json"; };
   if (inputs.size() == 1) {
     if (is_node_scene(inputs[0])) return scene_from_meshes(inputs);  // a glTF scene: one object per node
+    if (!is_scene(inputs[0]) && self) return scene_from_meshes(inputs);  // one mesh against itself
     if (!is_scene(inputs[0]))
-      throw InputError(command + ": '" + inputs[0] + "' is one mesh: give a scene file (.json), a glTF scene (.gltf, .glb) or two or more meshes");
+      throw InputError(command + ": '" + inputs[0] + "' is one mesh: give a scene file (.json), a glTF scene (.gltf, .glb), two or more meshes, or --self for its self-collision");
     return load_scene(inputs[0]);
   }
   for (const std::string& p : inputs)

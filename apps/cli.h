@@ -152,7 +152,7 @@ void add_frame_options(CLI::App* c, DetectArgs& d);
 void write_output(const std::string& path, const std::string& text);
 using bench::median;
 // detect's input (and dump's, explain's): one scene file, a glTF scene, or two or more meshes.
-Scene detect_input(const std::vector<std::string>& inputs, const std::string& command = "peelcd detect");
+Scene detect_input(const std::vector<std::string>& inputs, const std::string& command = "peelcd detect", bool self = false);
 // One frame with every layer captured (every ROI peeled, Stage::image).
 oracle::Dump capture_frame(const std::vector<Object>& objects, const DetectOptions& options, Runner& runner);
 // The broad phase's overlapping object pairs: the ROIs of a frame (before culling).

@@ -228,7 +228,7 @@ int run_detect(const DetectArgs& a) {
   if (!a.json_out.empty()) check_output_path(a.json_out, "peelcd detect: --json");
   const Progress progress;
   progress.phase("peelcd detect: loading the meshes...");
-  const Scene scene = detect_input(a.inputs);
+  const Scene scene = detect_input(a.inputs, "peelcd detect", a.flags_on.count("self") && a.flags_on.at("self"));
   refuse_overwriting_input(a.json_out, scene_inputs(scene), "peelcd detect: --json");
   const DetectOptions opt = merged_options(scene, a);
   const std::vector<Object> objects = load_objects(scene);

@@ -19,6 +19,9 @@ endif()
 # peelcd/backends.h offers "osmesa" where PEELCD_HAVE_OSMESA is defined (as peelcd::gl_osmesa's
 # CMake users get it). No -std: peelcd needs C++17 or later, and a consumer's own choice stands.
 set(_pc_defines "")
+if(TARGET peelcd_gl_egl)
+  string(APPEND _pc_defines " -DPEELCD_HAVE_EGL=1")
+endif()
 if(TARGET peelcd_gl_osmesa)
   string(APPEND _pc_requires " osmesa")
   string(APPEND _pc_defines " -DPEELCD_HAVE_OSMESA=1")

@@ -1,4 +1,5 @@
 #include "peelcd/core/collision.h"
+#include "peelcd/core/exclusive_use.h"
 
 #include "peelcd/core/world.h"
 
@@ -93,6 +94,7 @@ CollisionWorld::CollisionWorld(std::shared_ptr<Detector> detector) : detector_(s
 }
 
 void CollisionWorld::add(CollisionObject* object) {
+  const ExclusiveUse exclusive(owner_, "peelcd::CollisionWorld");
   if (!object) throw std::invalid_argument("peelcd::CollisionWorld::add(): a null object");
   objects_.push_back(object);
 }
@@ -100,12 +102,14 @@ void CollisionWorld::add(CollisionObject* object) {
 CollisionWorld::~CollisionWorld() = default;
 
 void CollisionWorld::clear() {
+  const ExclusiveUse exclusive(owner_, "peelcd::CollisionWorld");
   objects_.clear();
   bodies_.clear();
   world_.reset();
 }
 
 const FrameResult& CollisionWorld::detect(const DetectOptions& options) {
+  const ExclusiveUse exclusive(owner_, "peelcd::CollisionWorld");
   if (!world_) world_ = std::make_unique<World>(detector_->stage_ptr());
   for (std::size_t i = 0; i < objects_.size(); ++i) {
     const CollisionObject& o = *objects_[i];

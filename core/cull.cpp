@@ -30,13 +30,16 @@ Grid make_grid(const Aabb& box, std::size_t triangles) {
   g.lo = box.lo;
   const Vec3 e = box.extent();
   const double longest = e.maxCoeff();
-  if (!(longest > 0.0)) return g;  // a point: one cell
+  // A point, or a box whose extent overflows (coordinates near 1e308): one cell.
+  if (!(longest > 0.0) || !std::isfinite(longest)) return g;
   const double target = double(std::clamp<std::size_t>(triangles * kCullCellsPerTriangle, 1, kMaxCullCells));
-  // Cubic cells of side s with about `target` of them; a flat axis gets one cell.
+  // Cubic cells of side s with about `target` of them; a flat axis gets one cell. In units of the
+  // longest side (each in [0, 1], the volume in [1e-9, 1]): with coordinates near 1e-110 the
+  // volume itself underflows to 0, and 0 / 0 cells is no count.
   double volume = 1.0;
-  for (int i = 0; i < 3; ++i) volume *= std::max(e[i], 1e-3 * longest);
+  for (int i = 0; i < 3; ++i) volume *= std::max(e[i] / longest, 1e-3);
   const double s = std::cbrt(volume / target);
-  for (int i = 0; i < 3; ++i) g.dims[i] = int(std::clamp(std::floor(e[i] / s), 1.0, 1024.0));
+  for (int i = 0; i < 3; ++i) g.dims[i] = int(std::clamp(std::floor(e[i] / longest / s), 1.0, 1024.0));
   while (g.cells() > kMaxCullCells) *std::max_element(g.dims, g.dims + 3) /= 2;
   for (int i = 0; i < 3; ++i) g.inv[i] = e[i] > 0.0 ? double(g.dims[i]) / e[i] : 0.0;
   return g;

@@ -8,7 +8,7 @@
 #include "peelcd/core/options.h"
 #include "peelcd/core/reference.h"
 #include "peelcd/core/worker_pool.h"
-#include "exclusive_use.h"
+#include "peelcd/core/exclusive_use.h"
 
 #include <algorithm>
 #include <atomic>
@@ -129,8 +129,14 @@ Detector::Detector(std::shared_ptr<ImageStage> stage) : stage_(std::move(stage))
 }
 Detector::~Detector() = default;
 
-void Detector::capture_layers(std::vector<CapturedView>* sink) { impl_->capture = sink; }
-void Detector::only_pairs(const std::vector<std::pair<std::size_t, std::size_t>>* pairs) { impl_->only = pairs; }
+void Detector::capture_layers(std::vector<CapturedView>* sink) {
+  const ExclusiveUse exclusive(impl_->owner, "peelcd::Detector");
+  impl_->capture = sink;
+}
+void Detector::only_pairs(const std::vector<std::pair<std::size_t, std::size_t>>* pairs) {
+  const ExclusiveUse exclusive(impl_->owner, "peelcd::Detector");
+  impl_->only = pairs;
+}
 
 FrameResult Detector::detect(const std::vector<Object>& objects, const DetectOptions& opt) {
   FrameResult out;

@@ -1,5 +1,5 @@
 #include "world_impl.h"
-#include "exclusive_use.h"
+#include "peelcd/core/exclusive_use.h"
 #include "peelcd/core/cpu_stage.h"
 
 #include <algorithm>
@@ -43,7 +43,7 @@ BodyId World::add_rigid(std::shared_ptr<const Mesh> shape, const Eigen::Affine3d
   b.is_rigid = true;
   b.name = std::move(name);
   b.shape = std::move(shape);
-  b.pose = pose;
+  b.set_pose(pose);
   return impl_->add(std::move(b));
 }
 
@@ -59,6 +59,7 @@ BodyId World::add_deforming(Mesh mesh, std::string name) {
 void World::remove(BodyId id) {
   const ExclusiveUse exclusive(impl_->owner, "peelcd::World");
   Body& b = impl_->body(id, "remove");
+  if (!b.name.empty()) impl_->names.erase(b.name);
   b = Body{};
   --impl_->alive;
 }
@@ -68,7 +69,7 @@ void World::set_pose(BodyId id, const Eigen::Affine3d& pose) {
   Body& b = impl_->body(id, "set_pose");
   if (!b.is_rigid) throw std::invalid_argument("peelcd::World::set_pose(): " + label_of(b.name, id) + " is deforming");
   check_pose(pose, label_of(b.name, id));
-  b.pose = pose;
+  b.set_pose(pose);
 }
 
 namespace {
@@ -218,24 +219,60 @@ void World::set_self(BodyId id, bool self) {
   const ExclusiveUse exclusive(impl_->owner, "peelcd::World");
   impl_->body(id, "set_self").self = self;
 }
-bool World::self(BodyId id) const { return impl_->body(id).self; }
-
-bool World::contains(BodyId id) const { return id < impl_->bodies.size() && impl_->bodies[id].alive; }
-std::size_t World::size() const { return impl_->alive; }
-const std::string& World::name(BodyId id) const { return impl_->body(id).name; }
-bool World::rigid(BodyId id) const { return impl_->body(id).is_rigid; }
-const Mesh& World::mesh(BodyId id) const { return impl_->body(id).local(); }
+// Every public entry takes the guard, readers too: a reader running beside another thread's frame
+// or change would read a body or a result while it is rewritten.
+#define PEELCD_WORLD_GUARD const ExclusiveUse exclusive(impl_->owner, "peelcd::World")
+bool World::self(BodyId id) const {
+  PEELCD_WORLD_GUARD;
+  return impl_->body(id).self;
+}
+bool World::contains(BodyId id) const {
+  PEELCD_WORLD_GUARD;
+  return id < impl_->bodies.size() && impl_->bodies[id].alive;
+}
+std::size_t World::size() const {
+  PEELCD_WORLD_GUARD;
+  return impl_->alive;
+}
+std::optional<BodyId> World::find(const std::string& name) const {
+  PEELCD_WORLD_GUARD;
+  const auto it = impl_->names.find(name);
+  if (it == impl_->names.end()) return std::nullopt;
+  return it->second;
+}
+const std::string& World::name(BodyId id) const {
+  PEELCD_WORLD_GUARD;
+  return impl_->body(id).name;
+}
+bool World::rigid(BodyId id) const {
+  PEELCD_WORLD_GUARD;
+  return impl_->body(id).is_rigid;
+}
+const Mesh& World::mesh(BodyId id) const {
+  PEELCD_WORLD_GUARD;
+  return impl_->body(id).local();
+}
 const Bvh& World::tree(BodyId id) const {
-  const ExclusiveUse exclusive(impl_->owner, "peelcd::World");
+  PEELCD_WORLD_GUARD;
   Body& b = impl_->body(id, "tree");
   impl_->refit_now(b);
   return b.tree;
 }
-const WorldStats& World::stats() const { return impl_->stats; }
-ImageStage& World::stage() { return *impl_->stage; }
-void World::batch_image_pairs(std::optional<bool> together) { impl_->batch_pairs = together; }
+const WorldStats& World::stats() const {
+  PEELCD_WORLD_GUARD;
+  return impl_->stats;
+}
+ImageStage& World::stage() {
+  PEELCD_WORLD_GUARD;
+  return *impl_->stage;
+}
+void World::batch_image_pairs(std::optional<bool> together) {
+  PEELCD_WORLD_GUARD;
+  impl_->batch_pairs = together;
+}
 
 Mesh World::world_mesh(BodyId id) const {
+  PEELCD_WORLD_GUARD;
   const Body& b = impl_->body(id);
   Mesh m = b.local();
   if (b.is_rigid)
@@ -244,14 +281,16 @@ Mesh World::world_mesh(BodyId id) const {
 }
 
 const FrameResult& World::collide(const DetectOptions& options) {
+  PEELCD_WORLD_GUARD;
   impl_->collide(options, impl_->result);
   return impl_->result;
 }
 
 void World::collide(const DetectOptions& options, FrameResult& out) {
-  const ExclusiveUse exclusive(impl_->owner, "peelcd::World");
+  PEELCD_WORLD_GUARD;
   impl_->collide(options, out);
 }
+#undef PEELCD_WORLD_GUARD
 
 void sync_bodies(World& world, const std::vector<Object>& objects, std::vector<BodyId>& bodies) {
   if (bodies.empty()) {

@@ -153,14 +153,15 @@ void World::Impl::count_pairs() {
 // The small rigid bodies the broad phase paired whose copies are stale: copied into world
 // space when still (the copy serves the next frames too) or in kCopyPairs pairs or more (the
 // copy and its tree serve them all; the pairs whose exact boxes then do not overlap are
-// dropped), else traversed through their pose this frame. pairs_of: each body's pairs.
+// dropped), else traversed through their pose this frame (never an ill-conditioned pose:
+// kPosedConditionLimit). pairs_of: each body's pairs.
 void World::Impl::copy_paired(const DetectOptions& opt, unsigned lanes) {
   count_pairs();
   to_copy.clear();
   for (std::size_t k = 0; k < ids.size(); ++k) {
     Body& b = bodies[ids[k]];
     if (!b.world_frame || b.copy_valid || pairs_of[k] == 0) continue;
-    if (!b.still && pairs_of[k] < kCopyPairs)
+    if (!b.still && pairs_of[k] < kCopyPairs && !b.ill_conditioned)
       b.posed_this_frame();
     else
       to_copy.push_back(k);

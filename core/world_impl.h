@@ -11,8 +11,11 @@
 #include "peelcd/core/self.h"
 #include "peelcd/core/worker_pool.h"
 
+#include <Eigen/SVD>
+
 #include <atomic>
 #include <map>
+#include <unordered_map>
 #include <optional>
 #include <string>
 #include <thread>
@@ -39,6 +42,15 @@ constexpr std::size_t kWorldFrameTriangles = 8192;
 // without them).
 constexpr std::size_t kCopyPairs = 4;
 
+// A rigid body whose pose's linear part has a condition number (largest over smallest singular
+// value) above this is moved into world space every frame it is paired, whatever its size: the
+// posed traversal composes one pose's inverse with the other, whose error grows with the
+// condition number (about cond * 2^-53 relative), and its boxes are grown by 1e-9 of their
+// magnitudes; 1e4 keeps that error 500 times under the growth. (Anisotropic poses with
+// conditions 1e11 and more missed contacts through their pose; in world space a body's
+// triangles are its world mesh's, which is what the exact reference tests.)
+constexpr double kPosedConditionLimit = 1e4;
+
 // A pair of bodies with fewer triangles than this between them is one task, whatever the lanes
 // (a split's walk and tasks cost more than a second lane saves on it).
 constexpr std::size_t kSplitTriangles = 32768;
@@ -50,6 +62,12 @@ struct Body {
   std::shared_ptr<const Mesh> shape;  // rigid
   Mesh mesh;                          // deforming: world space
   Eigen::Affine3d pose = Eigen::Affine3d::Identity();
+  bool ill_conditioned = false;  // the pose's condition is over kPosedConditionLimit: world space
+  void set_pose(const Eigen::Affine3d& p) {
+    pose = p;
+    const Eigen::Vector3d sv = Eigen::JacobiSVD<Eigen::Matrix3d>(p.linear()).singularValues();
+    ill_conditioned = !(sv[0] <= kPosedConditionLimit * sv[2]);
+  }
   Bvh tree;
   // A small rigid body this frame: its world-space mesh, and its tree refitted over it when a
   // pair with a large body traverses it (world_tree_fresh).
@@ -128,7 +146,7 @@ struct Body {
   // kCopyPairs pairs in its own frame (posed_this_frame()); the tree only when a traversal needs it
   // (ensure_world_tree()).
   void enter_frame() {
-    world_frame = is_rigid && shape->triangles.size() < kWorldFrameTriangles;
+    world_frame = is_rigid && (shape->triangles.size() < kWorldFrameTriangles || ill_conditioned);
     moved = false;
     if (!world_frame) {
       copy_valid = world_tree_fresh = false;
@@ -248,13 +266,21 @@ struct World::Impl {
       throw std::invalid_argument("peelcd::World: no body " + std::to_string(id));
     return bodies[id];
   }
+  // Named bodies by name (World::find); a name is one body's while it lives.
+  std::unordered_map<std::string, BodyId> names;
+
   BodyId add(Body b) {
+    const BodyId id = BodyId(bodies.size());
+    if (!b.name.empty() && names.count(b.name))
+      throw std::invalid_argument("peelcd::World: " + label_of(b.name, id) + ": the name is taken by body " +
+                                  std::to_string(names.at(b.name)) + " (names identify bodies: give each its own)");
     b.alive = true;
     b.tree.build(b.local().vertices, b.local().triangles);
     ++stats.builds;
     ++alive;
+    if (!b.name.empty()) names.emplace(b.name, id);
     bodies.push_back(std::move(b));
-    return BodyId(bodies.size() - 1);
+    return id;
   }
 
   // The last frame's lanes: World::set_vertices() checks and copies a large body's vertices

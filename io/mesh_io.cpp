@@ -76,12 +76,23 @@ void mesh_nodes(const aiNode* node, const aiMatrix4x4& parent,
   for (unsigned c = 0; c < node->mNumChildren; ++c) mesh_nodes(node->mChildren[c], xf, out);
 }
 
+// Bytes of a PLY scalar type (the header checker has checked the name).
+std::size_t ply_type_size(const std::string& t) {
+  if (t == "char" || t == "uchar" || t == "int8" || t == "uint8") return 1;
+  if (t == "short" || t == "ushort" || t == "int16" || t == "uint16") return 2;
+  if (t == "double" || t == "float64") return 8;
+  return 4;  // int, uint, float, int32, uint32, float32
+}
+
 // Checks the header of an ASCII or binary PLY file line by line before assimp sees it: assimp
 // 5.2's PLY reader loops forever on some malformed headers (an unknown property type, found by
 // fuzzing), and on an ASCII body with a value that is not a number (`3 #include0 2 3` as a face
 // line, found by fuzzing: assimp spins in its reader), and on a control character in a header
-// line. Returns an empty string if the file is
-// well-formed so far, else the problem.
+// line. And a header's element counts are held against the body before anything is allocated
+// from them: assimp reserves what a count claims (a 198-byte ASCII file claiming 2e9 vertices
+// grew to 23 GB), so a body too short for its counts (a binary body: the bytes of each element
+// with empty lists; an ASCII body: one number per scalar property and per list) is refused.
+// Returns an empty string if the file is well-formed so far, else the problem.
 std::string ply_header_problem(const std::string& path) {
   std::ifstream in(path, std::ios::binary);
   std::string line;
@@ -91,6 +102,13 @@ std::string ply_header_problem(const std::string& path) {
   static const std::set<std::string> types = {"char",  "uchar", "short",  "ushort",  "int",     "uint",
                                               "float", "double", "int8",  "uint8",   "int16",   "uint16",
                                               "int32", "uint32", "float32", "float64"};
+  struct Element {
+    std::string name;
+    long double count = 0;           // as claimed (long double: a product with it cannot overflow)
+    std::size_t min_bytes = 0;       // binary: scalar sizes + list count sizes (empty lists)
+    std::size_t min_numbers = 0;     // ASCII: one per scalar property and per list
+  };
+  std::vector<Element> elements;
   bool ascii = false;
   for (int n = 0; n < 10000 && std::getline(in, line); ++n) {
     if (!line.empty() && line.back() == '\r') line.pop_back();
@@ -104,14 +122,33 @@ std::string ply_header_problem(const std::string& path) {
     std::string w;
     words >> w;
     if (w == "end_header") {
-      if (!ascii) return "";
+      long double need = 0;
+      for (const Element& e : elements) need += e.count * (ascii ? e.min_numbers : e.min_bytes);
+      const auto claimed = [&] {
+        std::string s;
+        for (const Element& e : elements) s += (s.empty() ? "" : ", ") + ("element " + e.name + " " + std::to_string((long long)e.count));
+        return s;
+      };
+      if (!ascii) {
+        const std::streamoff body_start = in.tellg();
+        in.seekg(0, std::ios::end);
+        const long double body = body_start < 0 ? 0.0L : (long double)(in.tellg() - body_start);
+        if (need > body)
+          return "malformed PLY: the header claims " + claimed() + ", at least " + std::to_string((unsigned long long)std::min(need, 1.8e19L)) +
+                 " bytes, but the body holds " + std::to_string((unsigned long long)body) + " bytes";
+        return "";
+      }
       // An ASCII body holds numbers only (comments belong to the header).
-      for (std::string value; in >> value;) {
+      long double numbers = 0;
+      for (std::string value; in >> value; numbers += 1) {
         char* end = nullptr;
         std::strtod(value.c_str(), &end);
         if (end != value.c_str() + value.size())
           return "malformed PLY body: '" + value.substr(0, 40) + "' is not a number";
       }
+      if (need > numbers)
+        return "malformed PLY: the header claims " + claimed() + ", at least " + std::to_string((unsigned long long)std::min(need, 1.8e19L)) +
+               " numbers, but the body holds " + std::to_string((unsigned long long)numbers) + " numbers";
       return "";
     }
     if (w == "comment" || w == "obj_info" || w.empty()) continue;
@@ -125,6 +162,7 @@ std::string ply_header_problem(const std::string& path) {
       std::string name;
       long long count = -1;
       if (!(words >> name >> count) || count < 0) return "malformed PLY header: bad element line '" + line + "'";
+      elements.push_back({name, (long double)count, 0, 0});
     } else if (w == "property") {
       std::string type, name;
       if (!(words >> type)) return "malformed PLY header: empty property line";
@@ -132,9 +170,13 @@ std::string ply_header_problem(const std::string& path) {
         std::string count_type, item_type;
         if (!(words >> count_type >> item_type >> name) || !types.count(count_type) || !types.count(item_type))
           return "malformed PLY header: bad property list line '" + line + "'";
+        type = count_type;  // an empty list: its count alone
       } else if (!types.count(type) || !(words >> name)) {
         return "malformed PLY header: bad property line '" + line + "'";
       }
+      if (elements.empty()) return "malformed PLY header: a property before any element: '" + line + "'";
+      elements.back().min_bytes += ply_type_size(type);
+      elements.back().min_numbers += 1;
     } else {
       return "malformed PLY header: unknown line '" + line + "'";
     }

@@ -5,6 +5,7 @@
 // a backend that cannot start); the GIL is released while a frame runs.
 #include "peelcd/backends.h"
 #include "peelcd/core/detector.h"
+#include "peelcd/core/exclusive_use.h"
 #include "peelcd/core/options.h"
 #include "peelcd/core/reference.h"
 #include "peelcd/core/world.h"
@@ -99,7 +100,7 @@ Eigen::Affine3d pose_from(const py::handle& obj) {
 }
 
 // Keyword options, named as in scene files (theta, stage, self, volume, ...), checked as there.
-DetectOptions options_from(const py::kwargs& kwargs) {
+DetectOptions options_from(const py::dict& kwargs) {
   DetectOptions o;
   for (const auto& [k, v] : kwargs) {
     const std::string key = py::str(k);
@@ -164,9 +165,17 @@ std::shared_ptr<ImageStage> stage_for(const std::string& backend, const gl::GlOp
   }
 }
 
-// A body id from Python: what add_rigid / add_deforming returned (a negative or too large one is
-// named; an unknown one the World names).
-BodyId body_id(long long id) {
+// A body from Python: the id add_rigid / add_deforming returned, or the name it was given (an
+// unknown one is named).
+BodyId body_of(const World& world, const py::handle& body) {
+  if (py::isinstance<py::str>(body)) {
+    const std::string name = body.cast<std::string>();
+    if (const std::optional<BodyId> id = world.find(name)) return *id;
+    throw py::value_error("body '" + name + "': no body has this name");
+  }
+  if (!py::isinstance<py::int_>(body) || py::isinstance<py::bool_>(body))
+    throw py::type_error("body: expected the id add_rigid or add_deforming returned (an int) or a body's name (a str)");
+  const long long id = body.cast<long long>();
   if (id < 0 || id > 0xffffffffLL)
     throw py::value_error("body " + std::to_string(id) + ": no such body (a body is what add_rigid or add_deforming returned)");
   return BodyId(id);
@@ -202,7 +211,9 @@ py::dict pair_dict(const PairResult& p, const std::function<std::string(std::siz
   d["relation"] = to_string(p.relation);
   d["relation_note"] = p.relation_note;
   d["is_collision"] = p.is_collision();
-  d["stage"] = p.exact_stage ? "exact" : "image";
+  // As the JSON result says it: exact, image, or none (culled before any view was drawn).
+  d["stage"] = p.exact_stage ? "exact" : std::strcmp(pair_path(p), "none") == 0 ? "none" : "image";
+  d["path"] = pair_path(p);
   d["candidates"] = p.candidates;
   if (p.volume.known) {
     d["volume"] = p.volume.volume;
@@ -285,6 +296,10 @@ struct PyWorld {
   }
   World world;
   std::optional<gl::GlOptions> gl;  // the GL stage's settings (none on the CPU stage)
+  // The thread inside a method, conversion of its result included: a second thread is refused
+  // (RuntimeError) before it reaches the World, and a result is converted from the caller's own
+  // FrameResult, never from one the next frame rewrites.
+  std::atomic<std::thread::id> owner{};
 };
 
 // The frame API on meshes given each call (peelcd::Detector).
@@ -294,8 +309,8 @@ struct PyDetector {
     if (backend != "cpu") gl = o;
   }
   Detector detector;
-  FrameResult result;
   std::optional<gl::GlOptions> gl;
+  std::atomic<std::thread::id> owner{};  // as PyWorld's
 };
 
 struct PyMesh {
@@ -351,6 +366,7 @@ void bind_meshes(py::module_& m) {
       });
 
   m.def("load_mesh", [](const std::string& path) {
+    py::gil_scoped_release release;  // a large file takes seconds: other Python threads run meanwhile
     return translate_errors([&] {
       if (is_node_scene(path)) {  // several nodes would be merged into one mesh: said, not done
         const std::size_t nodes = load_objects(scene_from_meshes({path})).size();
@@ -367,9 +383,14 @@ void bind_meshes(py::module_& m) {
   m.def("load_scene", [](const std::string& path) {
     return translate_errors([&] {
       // A glTF / GLB file is a scene of nodes, one object each (as the command line takes it).
-      const Scene scene = is_node_scene(path) ? scene_from_meshes({path}) : load_scene(path);
+      std::vector<Object> objects;
+      {
+        py::gil_scoped_release release;
+        const Scene scene = is_node_scene(path) ? scene_from_meshes({path}) : load_scene(path);
+        objects = load_objects(scene);
+      }
       py::list out;
-      for (Object& o : load_objects(scene)) {
+      for (Object& o : objects) {
         py::dict d;
         d["name"] = o.name;
         d["mesh"] = PyMesh{std::make_shared<const Mesh>(std::move(o.mesh))};
@@ -383,8 +404,11 @@ void bind_meshes(py::module_& m) {
         "name, mesh and self");
 }
 
-// The World: persistent bodies.
+// The World: persistent bodies. Every method holds the PyWorld's guard for its whole run, the
+// conversion of its result included (a second thread: RuntimeError); the GIL is released while
+// peelcd works without Python objects (a tree's build, a frame).
 void bind_world(py::module_& m) {
+  constexpr const char* kWorld = "peelcd::World";
   py::class_<PyWorld>(m, "World", "Persistent bodies kept across frames (peelcd::World): rigid ones move by their pose, "
                                   "deforming ones by their vertices")
       .def(py::init([](const std::string& backend, const py::kwargs& kwargs) {
@@ -394,48 +418,74 @@ void bind_world(py::module_& m) {
            "backend: cpu, osmesa or egl; GL backends take the GL options as keywords (peeler, resolve, batch, gpu_select); "
            "costs=FILE: the router's cost models (peelcd calibrate --write-costs; default $PEELCD_COSTS)")
       .def("add_rigid", [](PyWorld& w, const py::handle& m, const py::object& pose, const std::string& name, bool self) {
+        const ExclusiveUse guard(w.owner, kWorld);
         const PyMesh mesh = as_mesh(m, "mesh");
+        const Eigen::Affine3d p = pose_from(pose);
+        py::gil_scoped_release release;
         return translate_errors([&] {
-          const BodyId id = w.world.add_rigid(mesh.mesh, pose_from(pose), name);
+          const BodyId id = w.world.add_rigid(mesh.mesh, p, name);
           w.world.set_self(id, self);
           return id;
         });
       }, py::arg("mesh"), py::arg("pose") = py::none(), py::arg("name") = "", py::arg("self_collision") = false)
       .def("add_deforming", [](PyWorld& w, const py::handle& m, const std::string& name, bool self) {
+        const ExclusiveUse guard(w.owner, kWorld);
         const PyMesh mesh = as_mesh(m, "mesh");
+        py::gil_scoped_release release;
         return translate_errors([&] {
           const BodyId id = w.world.add_deforming(*mesh.mesh, name);
           w.world.set_self(id, self);
           return id;
         });
       }, py::arg("mesh"), py::arg("name") = "", py::arg("self_collision") = false)
-      .def("set_pose", [](PyWorld& w, long long body, const py::object& pose) {
-        const BodyId id = body_id(body);
+      .def("set_pose", [](PyWorld& w, const py::handle& body, const py::object& pose) {
+        const ExclusiveUse guard(w.owner, kWorld);
+        const BodyId id = body_of(w.world, body);
         translate_errors([&] { w.world.set_pose(id, pose_from(pose)); });
-      }, py::arg("body"), py::arg("pose"))
-      .def("set_vertices", [](PyWorld& w, long long body, const py::handle& V) {
-        const BodyId id = body_id(body);
+      }, py::arg("body"), py::arg("pose"), "body: its id or its name; pose: 4x4")
+      .def("set_vertices", [](PyWorld& w, const py::handle& body, const py::handle& V) {
+        const ExclusiveUse guard(w.owner, kWorld);
+        const BodyId id = body_of(w.world, body);
         std::vector<Vec3> v = vertices_from(V, "V");
+        py::gil_scoped_release release;
         translate_errors([&] { w.world.set_vertices(id, std::move(v)); });
       }, py::arg("body"), py::arg("V"))
-      .def("set_mesh", [](PyWorld& w, long long body, const py::handle& m) {
+      .def("set_mesh", [](PyWorld& w, const py::handle& body, const py::handle& m) {
+        const ExclusiveUse guard(w.owner, kWorld);
         const PyMesh mesh = as_mesh(m, "mesh");
-        const BodyId id = body_id(body);
+        const BodyId id = body_of(w.world, body);
+        py::gil_scoped_release release;
         translate_errors([&] { w.world.set_mesh(id, *mesh.mesh); });
       }, py::arg("body"), py::arg("mesh"), "A new mesh (topology) for the body: fracture, remeshing")
-      .def("set_self", [](PyWorld& w, long long body, bool self) { translate_errors([&] { w.world.set_self(body_id(body), self); }); },
-           py::arg("body"), py::arg("on"))
-      .def("remove", [](PyWorld& w, long long body) { translate_errors([&] { w.world.remove(body_id(body)); }); }, py::arg("body"))
-      .def("__len__", [](const PyWorld& w) { return w.world.size(); })
-      .def("collide", [](PyWorld& w, const py::kwargs& kwargs) {
-        const DetectOptions opt = options_from(kwargs);
-        const FrameResult* r = nullptr;
+      .def("set_self", [](PyWorld& w, const py::handle& body, bool self) {
+        const ExclusiveUse guard(w.owner, kWorld);
+        translate_errors([&] { w.world.set_self(body_of(w.world, body), self); });
+      }, py::arg("body"), py::arg("on"))
+      .def("remove", [](PyWorld& w, const py::handle& body) {
+        const ExclusiveUse guard(w.owner, kWorld);
+        translate_errors([&] { w.world.remove(body_of(w.world, body)); });
+      }, py::arg("body"))
+      .def("find", [](PyWorld& w, const std::string& name) -> py::object {
+        const ExclusiveUse guard(w.owner, kWorld);
+        const std::optional<BodyId> id = w.world.find(name);
+        return id ? py::object(py::int_(*id)) : py::object(py::none());
+      }, py::arg("name"), "The id of the body named `name`, or None")
+      .def("__len__", [](PyWorld& w) {
+        const ExclusiveUse guard(w.owner, kWorld);
+        return w.world.size();
+      })
+      // Options as one dict (the Python class World.collide(**options) passes them): a keyword
+      // named `self` cannot clash with the bound instance.
+      .def("_collide", [](PyWorld& w, const py::dict& options) {
+        const ExclusiveUse guard(w.owner, kWorld);
+        const DetectOptions opt = options_from(options);
+        FrameResult r;  // the caller's own: converted below while no other thread can enter
         {
           py::gil_scoped_release release;
-          r = &translate_errors([&]() -> const FrameResult& { return w.world.collide(opt); });
+          translate_errors([&] { w.world.collide(opt, r); });
         }
-        return result_dict(*r, [&](std::size_t i) { return w.world.name(BodyId(i)); }, w.gl);
-      }, "One frame: every pair of bodies whose boxes overlap. Keyword options as in scene files");
+        return result_dict(r, [&](std::size_t i) { return w.world.name(BodyId(i)); }, w.gl);
+      }, py::arg("options"), "One frame (World.collide(**options) is the documented entry)");
 }
 
 // The frame API: the Detector.
@@ -447,8 +497,9 @@ void bind_detector(py::module_& m) {
            py::arg("backend") = "cpu",
            "backend: cpu, osmesa or egl; GL backends take the GL options as keywords (peeler, resolve, batch, gpu_select); "
            "costs=FILE: the router's cost models (peelcd calibrate --write-costs; default $PEELCD_COSTS)")
-      .def("detect", [](PyDetector& d, const py::list& objects, const py::kwargs& kwargs) {
-        const DetectOptions opt = options_from(kwargs);
+      .def("_detect", [](PyDetector& d, const py::list& objects, const py::dict& options) {
+        const ExclusiveUse guard(d.owner, "peelcd::Detector");
+        const DetectOptions opt = options_from(options);
         std::vector<Object> objs;
         for (const py::handle& h : objects) {
           Object o;
@@ -472,12 +523,13 @@ void bind_detector(py::module_& m) {
               if (other.name == o.name) throw py::value_error(where + ": the name '" + o.name + "' is taken by another object");
           objs.push_back(std::move(o));
         }
+        FrameResult r;
         {
           py::gil_scoped_release release;
-          translate_errors([&] { d.detector.detect(objs, opt, d.result); });
+          translate_errors([&] { d.detector.detect(objs, opt, r); });
         }
-        return result_dict(d.result, [&](std::size_t i) { return objs[i].name; }, d.gl);
-      }, py::arg("objects"), "One frame of the objects (Mesh, or dicts with mesh, name, self). Keyword options as in scene files");
+        return result_dict(r, [&](std::size_t i) { return objs[i].name; }, d.gl);
+      }, py::arg("objects"), py::arg("options"), "One frame (Detector.detect(objects, **options) is the documented entry)");
 }
 
 // The exact reference: every intersecting triangle pair.

@@ -35,6 +35,9 @@ while [ $# -gt 0 ]; do
 done
 
 bin="${PEELCD:-./build/peelcd}"
+# A prebuilt binary elsewhere finds its fixtures and scripts in this checkout (a binary built
+# here finds them from where it lies; one set by hand stands).
+export PEELCD_DATA_DIR="${PEELCD_DATA_DIR:-$PWD}"
 if [ ! -x "$bin" ]; then
   echo "device-check: no $bin: building the command line without OSMesa into build-device/"
   cmake -S . -B build-device -DCMAKE_BUILD_TYPE=Release -DPEELCD_WITH_OSMESA=OFF -DPEELCD_BUILD_TESTS=OFF >/dev/null &&

@@ -31,8 +31,6 @@
 #if __has_include("peelcd/gl_osmesa/osmesa_context.h") && PEELCD_HAVE_OSMESA
 #include "peelcd/gl_osmesa/osmesa_context.h"
 #endif
-// The image stage by backend name (make_image_stage("osmesa" | "egl" | "cpu")): where the EGL
-// context is installed (backends.h needs it; "osmesa" where PEELCD_HAVE_OSMESA is defined).
-#if __has_include("peelcd/gl_egl/egl_context.h")
+// The image stage by backend name (make_image_stage("osmesa" | "egl" | "cpu")): "cpu" with
+// peelcd::core alone, "egl" and "osmesa" where the program links their components.
 #include "peelcd/backends.h"
-#endif

@@ -40,18 +40,28 @@ def _result(r):
 class World(_World):
     __doc__ = _World.__doc__
 
-    def collide(self, **options):
+    def collide(_world, /, **options):  # noqa: N805 - `self` is an option's name (self=True)
         """One frame: every pair of bodies whose boxes overlap (a Result). Keyword options as in
-        scene files; max_contacts=1 asks for a first contact per pair."""
-        return _result(super().collide(**options))
+        scene files (every key of options(), self included); max_contacts=1 asks for a first
+        contact per pair."""
+        return _result(_world._collide(options))
 
 
 class Detector(_Detector):
     __doc__ = _Detector.__doc__
 
-    def detect(self, objects, **options):
-        """One frame of the objects (Mesh, or dicts with mesh, name, self): a Result."""
-        return _result(super().detect(objects, **options))
+    def detect(_detector, /, *objects, **options):  # noqa: N805 - as World.collide
+        """detect(objects, **options): one frame of the objects (Mesh, or dicts with mesh, name,
+        self): a Result. Keyword options as in scene files, self included."""
+        if len(objects) > 1:
+            raise TypeError(f"detect() takes one list of objects, got {len(objects)} positional arguments")
+        if objects:
+            objects = objects[0]
+        elif "objects" in options:
+            objects = options.pop("objects")
+        else:
+            raise TypeError("detect() missing the list of objects")
+        return _result(_detector._detect(list(objects), options))
 
 
 def load_mesh(path):
@@ -67,15 +77,27 @@ def load_scene(path):
 def collide(a, b, pose_a=None, pose_b=None, backend="cpu", **options):
     """One pair: two meshes, each at its pose (4x4, default identity). Returns the pair's
     PairResult (a dict: triangles, kinds, segments, relation, is_collision; true when the pair
-    collides), or None when their boxes do not overlap. Options are the scene files' keys
-    (max_contacts=1: stop at the first contact); on a GL backend also the GL options
-    (gl_options()) and costs=FILE."""
+    collides), always: when the two boxes do not overlap it is a false result with no triangles
+    and relation "disjoint". Options are the scene files' keys (max_contacts=1: stop at the first
+    contact; self=True adds each mesh's own self pairs to a World frame, not to this pair's
+    result); on a GL backend also the GL options (gl_options()) and costs=FILE."""
     gl = {k: options.pop(k) for k in list(options) if k in gl_options() or k == "costs"}
     world = World(backend, **gl)
     world.add_rigid(a, pose_a)
     world.add_rigid(b, pose_b)
-    pairs = world.collide(**options)["pairs"]
-    return pairs[0] if pairs else None
+    for p in world.collide(**options)["pairs"]:
+        if (p["a"], p["b"]) == (0, 1):
+            return p
+    return _separate_pair()
+
+
+def _separate_pair():
+    """The result of a pair whose boxes do not overlap: nothing collides, nothing was tested."""
+    import numpy as np
+    return PairResult(a=0, b=1, name_a="", name_b="", triangles=np.zeros((0, 2), np.uint32), kinds=[],
+                      segments=np.zeros((0, 2, 3)), relation="disjoint",
+                      relation_note="the two boxes do not overlap", is_collision=False, stage="none",
+                      candidates=0, volume=None, distance=None, depth=None)
 
 
 __all__ = ["Detector", "Mesh", "PairResult", "Result", "World", "classes", "collide", "exact_pairs", "exact_self_pairs", "gl_options",

@@ -241,46 +241,191 @@ def test_threads_each_with_its_own_world_and_detector_finish_with_the_right_pair
     assert all(got == [exact] * 3 for got in results.values()) and len(results) == 6
 
 
-def test_one_world_shared_by_threads_raises_a_clear_error_never_corrupts():
-    """A World used from two threads at once: RuntimeError for the second, the frames stay right."""
+def shared_world_run(threads, with_changes, frames_each=40):
+    """One World of the default scene shared by `threads` threads that call collide() (and, with
+    `with_changes`, one more that calls set_pose / set_self with unchanged values): the counts
+    of completed frames with the exact pairs, with other pairs, and of refusals."""
     import threading
-    a, b = uv_sphere((0, 0, 0), 1.0, 40), uv_sphere((1.2, 0.1, 0.05), 1.0, 40)
-    exact = peelcd.exact_pairs(a, b).tolist()
+    objects = peelcd.load_scene(os.path.join(FIXTURES, "scenes", "bunny_dragon.json"))
+    exact = peelcd.exact_pairs(objects[0]["mesh"], objects[1]["mesh"]).tolist()
     w = peelcd.World()
-    ia = w.add_rigid(a)
-    w.add_rigid(b)
-    stop = threading.Event()
-    wrong, refused, crashed = [], [], []
+    ia = w.add_rigid(objects[0]["mesh"], name="bunny")
+    w.add_rigid(objects[1]["mesh"], name="dragon")
+    right, wrong, refused, other = [0], [], [], []
+    lock = threading.Lock()
+    start = threading.Barrier(threads + (1 if with_changes else 0))
 
     def frames():
-        while not stop.is_set():
+        start.wait()
+        for _ in range(frames_each):
             try:
                 got = w.collide()["pairs"]
-                if got and got[0]["triangles"].tolist() not in (exact, []):
-                    wrong.append(len(got[0]["triangles"]))
+                tris = got[0]["triangles"].tolist() if got else []
+                with lock:
+                    if tris == exact:
+                        right[0] += 1
+                    else:
+                        wrong.append(len(tris))
             except RuntimeError as e:
-                refused.append(str(e))
+                with lock:
+                    refused.append(str(e))
+            except Exception as e:  # noqa: BLE001 - reported below
+                with lock:
+                    other.append(repr(e))
 
     def changes():
-        for k in range(300):
+        start.wait()
+        for _ in range(frames_each * 4):
             try:
                 w.set_pose(ia, np.eye(4))  # the same pose: every frame's pairs stay the exact ones
-                w.set_self(ia, False)
+                w.set_self("bunny", False)
             except RuntimeError as e:
-                refused.append(str(e))
+                with lock:
+                    refused.append(str(e))
             except Exception as e:  # noqa: BLE001
-                crashed.append(repr(e))
+                with lock:
+                    other.append(repr(e))
 
-    t1, t2 = threading.Thread(target=frames), threading.Thread(target=changes)
-    t1.start()
-    t2.start()
-    t2.join(timeout=120)
-    stop.set()
-    t1.join(timeout=120)
-    assert not t1.is_alive() and not t2.is_alive()
-    assert wrong == [] and crashed == []
+    ts = [threading.Thread(target=frames) for _ in range(threads)]
+    if with_changes:
+        ts.append(threading.Thread(target=changes))
+    for t in ts:
+        t.start()
+    for t in ts:
+        t.join(timeout=300)
+    assert not any(t.is_alive() for t in ts), "a thread hung"
+    assert w.collide()["pairs"][0]["triangles"].tolist() == exact  # the World is intact
+    return len(exact), right[0], wrong, refused, other
+
+
+@pytest.mark.parametrize("threads,with_changes", [(2, False), (4, False), (2, True)])
+def test_one_world_shared_by_threads_refuses_the_second_and_every_frame_is_right(threads, with_changes):
+    """A World used from several threads at once: the second thread gets the documented
+    RuntimeError (at least one per run: the threads start together and a frame releases the GIL
+    while it runs), and every frame that completed has the exact pairs (228 on the default scene)."""
+    n, right, wrong, refused, other = shared_world_run(threads, with_changes)
+    assert n == 228
+    assert wrong == [] and other == []
+    assert right >= 1
+    assert len(refused) >= 1, "no call was refused: the threads never overlapped, or the guard is missing"
     assert all("peelcd::World: called from a second thread" in r for r in refused)
-    assert w.collide()["pairs"][0]["triangles"].tolist() == exact
+
+
+def test_every_option_is_a_keyword_of_every_entry_self_included():
+    """Every key of peelcd.options() passed by keyword (at its default, and self=True) to
+    World.collide, Detector.detect and peelcd.collide: no clash with the bound instance."""
+    a, b = uv_sphere((0, 0, 0), 1.0, 12), uv_sphere((1.2, 0.1, 0.05), 1.0, 12)
+    exact = peelcd.exact_pairs(a, b).tolist()
+    options = peelcd.options()
+    assert "self" in options
+    for key, default in options.items():
+        w = peelcd.World()
+        w.add_rigid(a)
+        w.add_rigid(b)
+        assert isinstance(w.collide(**{key: default}), peelcd.Result), key
+        assert isinstance(peelcd.Detector("cpu").detect([a, b], **{key: default}), peelcd.Result), key
+        assert isinstance(peelcd.collide(a, b, **{key: default}), peelcd.PairResult), key
+    w = peelcd.World()
+    w.add_rigid(a)
+    w.add_rigid(b)
+    r = w.collide(stage="exact", self=True)
+    assert [(p["a"], p["b"]) for p in r["pairs"]] == [(0, 0), (0, 1), (1, 1)]
+    assert r["pairs"][1]["triangles"].tolist() == exact
+    d = peelcd.Detector("cpu").detect([a, b], self=True)
+    assert d["pairs"][1]["triangles"].tolist() == exact
+    assert peelcd.Detector("cpu").detect(objects=[a, b], self=True)["pairs"][1]["triangles"].tolist() == exact
+    assert peelcd.collide(a, b, self=True)["triangles"].tolist() == exact
+
+
+def test_collide_always_returns_a_result():
+    a = uv_sphere((0, 0, 0), 1.0, 12)
+    far = peelcd.collide(a, uv_sphere((9, 0, 0), 1.0, 12))
+    assert isinstance(far, peelcd.PairResult) and not far
+    assert far["is_collision"] is False and far["relation"] == "disjoint" and far["triangles"].shape == (0, 2)
+
+
+def test_bodies_by_name_and_names_unique():
+    a, b = uv_sphere((0, 0, 0), 1.0, 12), uv_sphere((1.2, 0.1, 0.05), 1.0, 12)
+    w = peelcd.World()
+    ia = w.add_rigid(a, name="a")
+    w.add_rigid(b, name="b")
+    with pytest.raises(ValueError, match="the name is taken by body 0"):
+        w.add_rigid(b, name="a")
+    assert w.find("a") == ia and w.find("nobody") is None and len(w) == 2
+    far = np.eye(4)
+    far[0, 3] = 9.0
+    w.set_pose("a", far)
+    assert not w.collide()
+    w.set_pose(ia, np.eye(4))
+    assert w.collide()
+    with pytest.raises(ValueError, match="body 'c': no body has this name"):
+        w.set_pose("c", np.eye(4))
+    w.remove("a")
+    assert w.find("a") is None
+    w.add_rigid(a, name="a")  # the name is free again
+
+
+def rotation(axis, angle):
+    axis = np.asarray(axis, float) / np.linalg.norm(axis)
+    k = np.array([[0, -axis[2], axis[1]], [axis[2], 0, -axis[0]], [-axis[1], axis[0], 0]])
+    return np.eye(3) + np.sin(angle) * k + (1 - np.cos(angle)) * k @ k
+
+
+def posed_mesh(m, pose):
+    """The mesh's world vertices as the library computes pose * v (column by column, then the
+    translation; no fused multiply-add), so the exact reference sees the World's very doubles."""
+    L, t, V = pose[:3, :3], pose[:3, 3], m.V
+    W = ((V[:, 0:1] * L[:, 0] + V[:, 1:2] * L[:, 1]) + V[:, 2:3] * L[:, 2]) + t
+    return peelcd.Mesh(np.ascontiguousarray(W), m.F)
+
+
+@pytest.mark.parametrize("condition", [1e10, 1e11, 1e12, 1e13, 1e14, 1e15])
+def test_ill_conditioned_poses_are_exact(condition):
+    """Two bodies sharing one rotated, anisotropically scaled pose (axis scales sqrt(c) and
+    1/sqrt(c), determinant 1): the World's pairs equal the exact pairs of the world meshes, or the
+    pose is refused; never fewer pairs in silence. Large bodies (over 8,192 triangles) too, which
+    the World traverses through their poses when they are well conditioned."""
+    for segments in (12, 70):
+        a, b = uv_sphere((0, 0, 0), 1.0, segments), uv_sphere((1.2, 0.1, 0.05), 1.0, segments)
+        pose = np.eye(4)
+        pose[:3, :3] = rotation((1, 2, 3), 0.7) @ np.diag([np.sqrt(condition), 1.0, 1.0 / np.sqrt(condition)])
+        w = peelcd.World()
+        try:
+            w.add_rigid(a, pose)
+            w.add_rigid(b, pose)
+        except ValueError as e:  # a refusal names the condition
+            assert "condition" in str(e)
+            continue
+        wa, wb = posed_mesh(a, pose), posed_mesh(b, pose)
+        exact = peelcd.exact_pairs(wa, wb).tolist()
+        assert len(exact) > 0
+        for frame in range(2):  # a first frame, then one that keeps what it can
+            got = w.collide(stage="exact")["pairs"]
+            assert got and got[0]["triangles"].tolist() == exact, (segments, frame)
+
+
+@pytest.mark.parametrize("scale", [1e-110, 1e-300, 5e-320, 1e300])
+def test_flat_touch_at_tiny_and_huge_scales(scale):
+    """Two boxes meeting flat along an axis, all coordinates scaled: touching on every entry, no
+    signal (the culling grid once divided 0 by 0 below ~1e-107)."""
+    lo_a, hi_a = np.array([0.0, 0, 0]) * scale, np.array([1.0, 1, 1]) * scale
+    lo_b, hi_b = np.array([1.0, 0.25, 0.25]) * scale, np.array([2.0, 0.75, 0.75]) * scale
+    if scale < 1e-310:  # subnormal: the boxes' corners stay exact multiples of the unit
+        lo_b, hi_b = np.array([1.0, 0.0, 0.0]) * scale, np.array([2.0, 1.0, 1.0]) * scale
+    a, b = box(lo_a, hi_a), box(lo_b, hi_b)
+    # Beyond float range a frame that may use the image stage is refused, naming it; the exact
+    # path takes every finite double.
+    options = {"stage": "exact"} if scale > 1e38 else {}
+    if scale > 1e38:
+        with pytest.raises(ValueError, match="outside the float range"):
+            peelcd.collide(a, b)
+    w = peelcd.World()
+    w.add_rigid(a)
+    w.add_rigid(b)
+    r = w.collide(**options)
+    assert [p["relation"] for p in r["pairs"]] == ["touching"]
+    assert peelcd.collide(a, b, **options)["relation"] == "touching"
+    assert [p["relation"] for p in peelcd.Detector("cpu").detect([a, b], **options)["pairs"]] == ["touching"]
 
 
 def box(lo, hi):
@@ -296,7 +441,7 @@ def box(lo, hi):
 def test_results_are_true_exactly_when_something_collides():
     a, b, far = uv_sphere((0, 0, 0), 1.0, 16), uv_sphere((1.2, 0.1, 0.05), 1.0, 16), uv_sphere((1.0, 1.0, 0), 0.35, 16)
     assert peelcd.collide(a, b)                      # crossing
-    assert peelcd.collide(a, uv_sphere((9, 0, 0), 1.0)) is None  # boxes apart
+    assert not peelcd.collide(a, uv_sphere((9, 0, 0), 1.0))  # boxes apart: a false result
     near = peelcd.collide(a, far)                    # boxes overlap, surfaces apart: a result that is false
     assert near is not None and not near and near["relation"] == "disjoint"
     inside = peelcd.collide(box((-0.2,) * 3, (0.2,) * 3), box((-1,) * 3, (1,) * 3))

@@ -27,7 +27,9 @@ TEST_CASE("make_image_stage: an unknown backend is refused by name", "[contexts]
     CHECK(what.find("\"vulkan\"") != std::string::npos);
     CHECK(what.find("osmesa, egl or cpu") != std::string::npos);
   }
-#if !PEELCD_HAVE_OSMESA
+#if !PEELCD_HAVE_OSMESA && PEELCD_BUILT_WITH_OSMESA
+  CHECK_THROWS_WITH(make_image_stage("osmesa"), Catch::Contains("does not link peelcd::gl_osmesa"));
+#elif !PEELCD_HAVE_OSMESA
   CHECK_THROWS_WITH(make_image_stage("osmesa"), Catch::Contains("built without OSMesa"));
 #endif
 }

@@ -4,9 +4,13 @@
 
 #include <catch2/catch.hpp>
 
+#include <sys/resource.h>
 #include <sys/stat.h>
+#include <sys/wait.h>
+#include <unistd.h>
 
 #include <filesystem>
+#include <cstdlib>
 #include <fstream>
 
 using namespace peelcd;
@@ -171,4 +175,70 @@ TEST_CASE("inputs that once crashed the loader (fuzzing regressions) load or fai
     ++seen;
   }
   CHECK(seen >= 1);
+}
+
+namespace {
+
+// Resident-set peak of this process in kB (/proc/self/status VmHWM), or -1.
+long peak_rss_kb() {
+  std::ifstream in("/proc/self/status");
+  for (std::string line; std::getline(in, line);)
+    if (line.rfind("VmHWM:", 0) == 0) return std::stol(line.substr(6));
+  return -1;
+}
+
+}  // namespace
+
+TEST_CASE("a header's counts are held against the file: lying headers refused in bounded memory", "[io]") {
+  // fixtures/fuzz/mesh/regression_*lying*: a header (PLY ASCII or binary, binary STL, OFF) that
+  // claims up to 2e9 vertices or faces over a body of one triangle. Each is loaded in a child
+  // process whose address space is capped (no cap under ASan, which reserves terabytes of
+  // shadow); the child resets its resident peak (/proc/self/clear_refs), loads, and reports by
+  // its exit status: 0 refused with an InputError naming the file, growing the peak by under
+  // 100 MB; 1 loaded; 2 refused but over the ceiling; 3 another exception (bad_alloc).
+  int seen = 0;
+  for (const auto& entry : fs::directory_iterator(std::string(PEELCD_FIXTURES) + "/fuzz/mesh")) {
+    const std::string stem = entry.path().filename().string();
+    if (stem.find("lying") == std::string::npos) continue;
+    std::ifstream in(entry.path(), std::ios::binary);
+    const std::string bytes((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
+    const char* const ext[] = {".obj", ".ply", ".stl", ".off"};
+    const std::string path = write_temp(stem + ext[std::uint8_t(bytes[0]) % 4], bytes.substr(1));
+    INFO(path);
+    const pid_t child = ::fork();
+    REQUIRE(child >= 0);
+    if (child == 0) {
+#if !defined(__SANITIZE_ADDRESS__)
+      struct rlimit cap;
+      cap.rlim_cur = cap.rlim_max = rlim_t(8) << 30;  // a regression fails here, not the machine
+      ::setrlimit(RLIMIT_AS, &cap);
+#endif
+      std::ofstream("/proc/self/clear_refs") << "5";
+      const long before = peak_rss_kb();
+      int status = 1;
+      try {
+        load_mesh(path);
+      } catch (const InputError& e) {
+        status = std::string(e.what()).find(path) != std::string::npos && peak_rss_kb() - before < 100 * 1024 ? 0 : 2;
+      } catch (...) {
+        status = 3;
+      }
+      std::_Exit(status);
+    }
+    int status = -1;
+    REQUIRE(::waitpid(child, &status, 0) == child);
+    REQUIRE(WIFEXITED(status));
+    CHECK(WEXITSTATUS(status) == 0);
+    ++seen;
+  }
+  CHECK(seen >= 5);
+  // And the message says what the header claimed against what the body holds.
+  try {
+    std::ifstream in(std::string(PEELCD_FIXTURES) + "/fuzz/mesh/regression_ply_ascii_lying_vertex_count", std::ios::binary);
+    const std::string bytes((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
+    load_mesh(write_temp("lying.ply", bytes.substr(1)));
+    FAIL("the lying PLY header was accepted");
+  } catch (const InputError& e) {
+    CHECK_THAT(e.what(), Catch::Contains("element vertex 2000000000, element face 1") && Catch::Contains("the body holds 13 numbers"));
+  }
 }

@@ -16,8 +16,10 @@
 // detector; geometries may be shared read-only between threads).
 #include "peelcd/core/detector.h"
 
+#include <atomic>
 #include <memory>
 #include <string>
+#include <thread>
 #include <vector>
 
 namespace peelcd {
@@ -120,6 +122,7 @@ class CollisionWorld {
   std::unique_ptr<World> world_;
   std::vector<std::uint32_t> bodies_;
   FrameResult result_;
+  std::atomic<std::thread::id> owner_{};  // the thread inside add, clear or detect (ExclusiveUse)
 };
 
 }  // namespace peelcd

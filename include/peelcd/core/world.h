@@ -33,7 +33,12 @@
 // their world-space corners (the same doubles whichever path tested them).
 //
 // With DetectOptions::threads > 1 the object pairs and, inside a pair, the two trees' node pairs
-// are spread over a pool of threads. One thread calls a World at a time.
+// are spread over a pool of threads. One thread calls a World at a time: every public function,
+// readers included, takes a guard (peelcd/core/exclusive_use.h), so a second thread that enters
+// while another is inside gets std::logic_error and the first thread's call is unaffected. What
+// a reference returned by collide(options), name() or mesh() refers to belongs to the World: it
+// stays valid until the caller's next change or frame; a caller that shares a World between
+// threads under its own lock copies it (or uses collide(options, out)) before unlocking.
 #include "peelcd/core/bvh.h"
 #include "peelcd/core/detector.h"
 
@@ -98,6 +103,9 @@ class World {
   bool contains(BodyId body) const;
   std::size_t size() const;               // bodies held
   const std::string& name(BodyId body) const;
+  // The living body named `name` (names are unique: add_rigid / add_deforming refuse a name a
+  // living body has), or none.
+  std::optional<BodyId> find(const std::string& name) const;
   bool rigid(BodyId body) const;
   // The body's mesh in its own frame (a rigid body's shape; a deforming body's world mesh).
   const Mesh& mesh(BodyId body) const;
