@@ -32,6 +32,9 @@ class CMakeBuild(build_ext):
             build_dir = os.path.abspath(build_dir)
         else:
             build_dir = os.path.join(ROOT, "build", "pip")
+            # pip hides this output unless run with -v: say once what the wait is.
+            sys.stderr.write("peelcd: building the C++ library and the module with CMake (minutes; "
+                             "pip install -v . shows its progress)\n")
             subprocess.check_call(["cmake", "-S", ROOT, "-B", build_dir, "-DCMAKE_BUILD_TYPE=Release",
                                    "-DPEELCD_BUILD_APPS=OFF", "-DPEELCD_BUILD_TESTS=OFF", "-DPEELCD_PYTHON=ON",
                                    "-DPython3_EXECUTABLE=" + sys.executable])

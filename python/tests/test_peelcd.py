@@ -241,11 +241,14 @@ def test_threads_each_with_its_own_world_and_detector_finish_with_the_right_pair
     assert all(got == [exact] * 3 for got in results.values()) and len(results) == 6
 
 
-def shared_world_run(threads, with_changes, frames_each=40):
+def shared_world_run(threads, with_changes, frames=40, cap_s=60.0):
     """One World of the default scene shared by `threads` threads that call collide() (and, with
-    `with_changes`, one more that calls set_pose / set_self with unchanged values): the counts
-    of completed frames with the exact pairs, with other pairs, and of refusals."""
+    `with_changes`, one more that calls set_pose / set_self with unchanged values), until `frames`
+    frames completed and some call was refused (or `cap_s` seconds passed): the number of exact
+    pairs, the counts of completed frames with the exact pairs, with other pairs, the refusals
+    and any other exception."""
     import threading
+    import time
     objects = peelcd.load_scene(os.path.join(FIXTURES, "scenes", "bunny_dragon.json"))
     exact = peelcd.exact_pairs(objects[0]["mesh"], objects[1]["mesh"]).tolist()
     w = peelcd.World()
@@ -253,44 +256,48 @@ def shared_world_run(threads, with_changes, frames_each=40):
     w.add_rigid(objects[1]["mesh"], name="dragon")
     right, wrong, refused, other = [0], [], [], []
     lock = threading.Lock()
-    start = threading.Barrier(threads + (1 if with_changes else 0))
+    stop = threading.Event()
 
-    def frames():
-        start.wait()
-        for _ in range(frames_each):
+    def note(kind, value=None):
+        with lock:
+            if kind == "right":
+                right[0] += 1
+            else:
+                {"wrong": wrong, "refused": refused, "other": other}[kind].append(value)
+
+    def collide_loop():
+        while not stop.is_set():
             try:
                 got = w.collide()["pairs"]
                 tris = got[0]["triangles"].tolist() if got else []
-                with lock:
-                    if tris == exact:
-                        right[0] += 1
-                    else:
-                        wrong.append(len(tris))
+                note("right") if tris == exact else note("wrong", len(tris))
             except RuntimeError as e:
-                with lock:
-                    refused.append(str(e))
+                note("refused", str(e))
             except Exception as e:  # noqa: BLE001 - reported below
-                with lock:
-                    other.append(repr(e))
+                note("other", repr(e))
 
-    def changes():
-        start.wait()
-        for _ in range(frames_each * 4):
+    def change_loop():
+        while not stop.is_set():
             try:
                 w.set_pose(ia, np.eye(4))  # the same pose: every frame's pairs stay the exact ones
                 w.set_self("bunny", False)
             except RuntimeError as e:
-                with lock:
-                    refused.append(str(e))
+                note("refused", str(e))
             except Exception as e:  # noqa: BLE001
-                with lock:
-                    other.append(repr(e))
+                note("other", repr(e))
 
-    ts = [threading.Thread(target=frames) for _ in range(threads)]
+    ts = [threading.Thread(target=collide_loop) for _ in range(threads)]
     if with_changes:
-        ts.append(threading.Thread(target=changes))
+        ts.append(threading.Thread(target=change_loop))
     for t in ts:
         t.start()
+    start = time.monotonic()
+    while time.monotonic() - start < cap_s:
+        with lock:
+            if right[0] + len(wrong) >= frames and refused:
+                break
+        time.sleep(0.01)
+    stop.set()
     for t in ts:
         t.join(timeout=300)
     assert not any(t.is_alive() for t in ts), "a thread hung"
