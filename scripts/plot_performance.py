@@ -4,8 +4,9 @@
 Usage: python3 scripts/plot_performance.py OUT_DIR BENCH_CSV... [--simulate SIM_CSV...]
   time_vs_miss.png: median ms per frame against miss ratio, one panel per bench CSV, with the
                     CGAL and FCL points and the bare-draw floors as lines.
-  scaling.png:      per frame of each simulate CSV, total ms against the triangles drawn in the
-                    ROIs, and the CPU + readback ms against nCTP.
+  scaling.png:      per frame of each simulate CSV that peeled a ROI, total ms against the
+                    triangles drawn in the ROIs, and the CPU + readback ms against nCTP (not
+                    written when no frame peeled one).
 """
 import csv
 import os
@@ -95,10 +96,18 @@ def main():
     fig.savefig(os.path.join(out_dir, "time_vs_miss.png"), dpi=110)
     print("wrote", os.path.join(out_dir, "time_vs_miss.png"))
 
-    if sims:
+    # Only frames that peeled a ROI have points: where the router sent every ROI to the exact path
+    # (llvmpipe, no GPU) there are none, and no chart is written rather than an empty one.
+    peeled = {path: [r for r in csv.DictReader(open(path)) if int(r["rois_peeled"]) > 0] for path in sims}
+    if sims and not any(peeled.values()):
+        print("scaling.png: not written: no frame of", ", ".join(sims), "peeled a ROI (the router sent every ROI to "
+              "the exact path); run simulate with --stage image, or on a GPU")
+    if any(peeled.values()):
         fig, axes = plt.subplots(1, 2, figsize=(11, 4.5))
         for path in sims:
-            rows = [r for r in csv.DictReader(open(path)) if int(r["rois_peeled"]) > 0]
+            rows = peeled[path]
+            if not rows:
+                continue
             label = os.path.basename(path).replace(".csv", "")
             tris = [int(r["triangles_uploaded"]) + int(r["triangles_indexed"]) for r in rows]
             axes[0].scatter(tris, [float(r["total_ms"]) for r in rows], s=14, label=label)
