@@ -236,6 +236,7 @@ void Detector::Impl::start_pair(std::size_t pi, PairResult& r) const {
   r.epsilon = 0.0;
   r.a_first = false;
   r.exact_stage = p.route.exact;
+  r.margin_fallback = p.margin_fallback;
   r.predicted_image_ms = p.route.predicted_image_ms;
   r.predicted_exact_ms = p.route.predicted_exact_ms;
 }

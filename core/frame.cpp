@@ -2,6 +2,7 @@
 
 #include <cstdio>
 
+#include "peelcd/core/planner.h"
 #include "peelcd/core/view.h"
 
 #include <algorithm>
@@ -75,6 +76,13 @@ std::string pair_path_reason(const PairResult& p, const DetectOptions& o) {
   char buf[320];
   if (p.exact_stage) {
     if (o.stage == Stage::exact) return "--stage exact";
+    if (p.margin_fallback) {
+      std::snprintf(buf, sizeof buf,
+                    "the margin %g is wider than %g of the ROI's longest side (or its view leaves the float range): "
+                    "the image stage would grow every triangle over much of the view; tested on the exact CPU path",
+                    o.margin, kImageMarginShare);
+      return buf;
+    }
     if (p.object_a == p.object_b) {
       std::snprintf(buf, sizeof buf,
                     "a self pair: the exact CPU path under --stage auto (predicted at %.3f ms by its candidate couples)",

@@ -38,6 +38,7 @@ void FramePlan::reset(std::size_t i, const ObjectRefs& objects, int tile) {
   p.culled_out = false;
   p.tile = tile;
   p.route = Route{};
+  p.margin_fallback = false;
   p.kept_a.clear();
   p.kept_b.clear();
 }
@@ -177,10 +178,19 @@ void FramePlan::share_budget(const DetectOptions& opt) {
 // couples grow with its folds, not its triangles; the crumpled cloth: 59 ms predicted, 65
 // taken, where its triangles predicted 33).
 void FramePlan::route(const DetectOptions& opt) {
-  if (opt.stage == Stage::image) return;
   for (std::size_t i = 0; i < pairs.size(); ++i) {
     PairPlan& p = plans[i];
     if (p.culled_out) continue;
+    // A margin too wide for the image stage: the exact path, whatever the stage asked (its
+    // triangles are the culled ones: with Cull::box under Stage::image none are listed).
+    p.margin_fallback = p.a != p.b && opt.stage != Stage::exact && opt.cull == Cull::contact &&
+                        margin_too_wide_for_image(opt, p.roi);
+    if (p.margin_fallback) {
+      p.route = Route{};
+      p.route.exact = true;
+      continue;
+    }
+    if (opt.stage == Stage::image) continue;
     p.route = route_pair(opt, exact_cost, image_cost, double(p.scanned), double(p.kept_a.size() + p.kept_b.size()),
                          p.tile);
     if (p.a == p.b && opt.stage == Stage::automatic) {

@@ -35,6 +35,7 @@ struct PairPlan {
   bool culled_out = false;  // one object has nothing near the other: no contact, no image work
   int tile = 0;
   Route route;               // route.exact: to the exact CPU path
+  bool margin_fallback = false;  // route.exact because the margin is too wide for the image stage
   double median_edge = 0.0;  // of the kept triangles (edge_tile_resolution())
   std::vector<std::uint32_t> kept_a, kept_b;
   // A self pair (a == b): the object's vertex representatives (SelfAdjacency) and its self

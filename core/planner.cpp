@@ -1,6 +1,8 @@
 #include "peelcd/core/planner.h"
 
+#include <algorithm>
 #include <cmath>
+#include <limits>
 #include <stdexcept>
 
 namespace peelcd {
@@ -20,6 +22,14 @@ StageCost exact_path_cost() {
 }
 
 StageCost world_exact_cost() { return StageCost{0.0, kWorldCandidateUs, 0.0, 0.0}; }
+
+bool margin_too_wide_for_image(const DetectOptions& opt, const Aabb& roi) {
+  if (!(opt.margin > 0.0) || roi.empty()) return false;
+  const Aabb grown = roi.grown(opt.margin);
+  const double float_max = double(std::numeric_limits<float>::max());
+  if (!(grown.lo.cwiseAbs().maxCoeff() <= float_max && grown.hi.cwiseAbs().maxCoeff() <= float_max)) return true;
+  return opt.margin > kImageMarginShare * roi.extent().maxCoeff();
+}
 
 Route route_pair(const DetectOptions& opt, const StageCost& exact, const StageCost& image, double scanned, double work,
                  int tile) {

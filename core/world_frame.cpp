@@ -304,6 +304,11 @@ void World::Impl::route_pairs(const DetectOptions& opt, std::size_t used, FrameR
       if (opt.stage == Stage::automatic) r.predicted_exact_ms = exact_cost.predict_ms(double(tested), 0.0);
       continue;
     }
+    // A margin too wide for the image stage: the exact path, whatever the stage asked.
+    if (opt.stage != Stage::exact && margin_too_wide_for_image(opt, r.roi)) {
+      r.exact_stage = r.margin_fallback = true;
+      continue;
+    }
     if (n == 0) continue;  // no couple of boxes overlaps: no contact, nothing to test
     // The image stage draws at most the candidates' triangles: at most 2n, counted as n.
     const Route route = route_pair(opt, exact_cost, image_cost, 0.0, double(n), tile);

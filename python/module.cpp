@@ -214,6 +214,7 @@ py::dict pair_dict(const PairResult& p, const std::function<std::string(std::siz
   // As the JSON result says it: exact, image, or none (culled before any view was drawn).
   d["stage"] = p.exact_stage ? "exact" : std::strcmp(pair_path(p), "none") == 0 ? "none" : "image";
   d["path"] = pair_path(p);
+  d["margin_fallback"] = p.margin_fallback;  // the exact path, the margin being too wide for the image stage
   d["candidates"] = p.candidates;
   if (p.volume.known) {
     d["volume"] = p.volume.volume;

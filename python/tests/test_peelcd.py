@@ -521,3 +521,21 @@ def test_gltf_scenes_load_as_the_command_line_takes_them():
     assert [o["name"] for o in objects] == ["left", "right", "far"]
     with pytest.raises(ValueError, match="glTF scene of 3 mesh nodes: peelcd.load_scene"):
         peelcd.load_mesh(path)
+
+
+def test_a_margin_too_wide_for_the_image_stage_goes_to_the_exact_path():
+    """A forced image stage with a margin of many texels (or one beyond float range) tests the
+    pair on the exact path, says so, and gives the exact path's near pairs."""
+    a, b = box((0, 0, 0), (1, 1, 1)), box((1.5, 0.2, 0.2), (2.5, 0.8, 0.8))
+    for margin in (0.6, 1e160):
+        exact = peelcd.collide(a, b, stage="exact", margin=margin)
+        for backend in ("cpu", BACKEND):
+            r = peelcd.collide(a, b, backend=backend, stage="image", margin=margin)  # a World
+            d = peelcd.Detector(backend).detect([a, b], stage="image", margin=margin)["pairs"][0]
+            for got in (r, d):
+                assert got["margin_fallback"] and got["stage"] == "exact", (margin, backend)
+                assert got["near_triangles"].tolist() == exact["near_triangles"].tolist()
+    # A margin under an eighth of the ROI stays on the image stage.
+    c = box((1.04, 0.2, 0.2), (2.04, 0.8, 0.8))
+    r = peelcd.Detector("cpu").detect([a, c], stage="image", margin=0.05)["pairs"][0]
+    assert not r["margin_fallback"] and r["stage"] == "image"

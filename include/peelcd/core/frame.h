@@ -141,6 +141,8 @@ struct PairResult {
   std::vector<IdPair> pcs;                 // those pairs (ID of A, ID of B), sorted
   std::size_t candidates = 0;              // distinct triangle pairs tested on the CPU
   bool exact_stage = false;                // tested by the exact CPU path (no image work)
+  bool margin_fallback = false;            // ... because the margin is too wide for the image stage
+                                           // (kImageMarginShare, peelcd/core/planner.h)
   int views_peeled = 0;                    // ROI views given to the image stage
   int views_exhaustive = 0;                // of those, views the stage could not hold (a k-buffer
                                            // deeper or larger than the context allows): their

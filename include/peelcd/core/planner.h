@@ -34,6 +34,16 @@ struct Route {
 Route route_pair(const DetectOptions& options, const StageCost& exact, const StageCost& image, double scanned,
                  double work, int tile);
 
+// A margin wider than this share of a pair's ROI (its longest side) sends the pair to the exact
+// path whatever the stage asked: the image stage grows every triangle by half the margin, so
+// each fragment covers a growing share of the view and the PCS tend to every couple (the
+// default scene at a margin of 0.24 of its size: 1,467 layers, 1.9M PCS, 5.5-6.3 GB and twice
+// the exact path's time, which took 2.2 GB for the same near pairs), and a view grown beyond
+// float range (a margin near 1e154 and up) rasterizes nothing. The proximity tests' margins (2%
+// of the scene) stay under it. PairResult::margin_fallback says where it acted.
+constexpr double kImageMarginShare = 0.125;
+bool margin_too_wide_for_image(const DetectOptions& options, const Aabb& roi);
+
 constexpr double kConservativeEdgeTexels = 2.0;
 constexpr double kPointEdgeTexels = 12.0;
 // The texels per median edge `options` asks for: its edge_texels, or the mode's default.
