@@ -318,39 +318,82 @@ PenetrationDepth search(const Mesh& a, const Mesh& b, const std::vector<Contact>
     cands.push_back({Vec3::Unit(k), "axis"});
     cands.push_back({-Vec3::Unit(k), "axis"});
   }
-  double best = kInf, best_bound = 0.0;
-  Vec3 best_n = Vec3::UnitX();
-  for (const Candidate& c : cands) {
-    const Vec3 n = general(c.n);
+  // Every direction evaluated (d, its bound, n, the candidate it came from), sorted by d once the
+  // global stage is done.
+  struct Tried {
+    double d, bound;
+    Vec3 n;
+    const char* source;
+  };
+  std::vector<Tried> tried;
+  const auto evaluate = [&](const Vec3& n, const char* source) {
     double bnd = 0.0;
     const double d = depth_along(a, b, n, pa, pb, scratch, &bnd);
     ++r.directions;
-    if (d < best) best = d, best_n = n, best_bound = bnd, r.source = c.source;
-    if (best == 0.0) break;  // touching: nothing shorter
-  }
-  // The local search: neighbours at angle theta around the best, theta halved when none improves.
-  constexpr int kMaxEvaluations = 64;
-  double theta = 0.25;
-  while (best > 0.0 && theta > 1e-3 && r.directions < kMaxEvaluations) {
-    const Frame f(best_n);
-    bool improved = false;
-    for (int k = 0; k < 6 && r.directions < kMaxEvaluations; ++k) {
-      const double phi = k * (M_PI / 3.0);
-      const Vec3 n = (std::cos(theta) * best_n + std::sin(theta) * (std::cos(phi) * f.u + std::sin(phi) * f.v)).normalized();
-      double bnd = 0.0;
-      const double d = depth_along(a, b, n, pa, pb, scratch, &bnd);
-      ++r.directions;
-      if (d < best * (1.0 - 1e-9)) {
-        best = d, best_n = n, best_bound = bnd;
-        improved = true;
-        break;
-      }
+    tried.push_back({d, bnd, n, source});
+    return d;
+  };
+  bool touching = false;
+  for (const Candidate& c : cands)
+    if (evaluate(general(c.n), c.source) == 0.0) {
+      touching = true;  // nothing shorter
+      break;
     }
-    if (!improved) theta *= 0.5;
+  // The global stage: kDepthGlobalDirections spread evenly over the sphere (a Fibonacci
+  // lattice). The candidates alone can start the local search in another valley than the least
+  // one's (held-out poses of real meshes: up to 1.89x the least a 300-direction search found).
+  for (int i = 0; i < kDepthGlobalDirections && !touching; ++i) {
+    const double z = 1.0 - 2.0 * (i + 0.5) / kDepthGlobalDirections, rho = std::sqrt(std::max(0.0, 1.0 - z * z));
+    const double phi = i * 2.399963229728653;  // the golden angle
+    touching = evaluate(general(Vec3(rho * std::cos(phi), rho * std::sin(phi), z)), "global") == 0.0;
   }
+  std::stable_sort(tried.begin(), tried.end(), [](const Tried& x, const Tried& y) { return x.d < y.d; });
+  Tried best = tried.front();
+  // The local search from the kDepthStarts best directions at least a quarter radian apart: at
+  // each, neighbours at angle theta around it, theta halved when none improves, at most
+  // kDepthLocalEvaluations evaluations a start.
+  std::vector<Vec3> starts;
+  for (const Tried& t : tried) {
+    if (touching || int(starts.size()) == kDepthStarts) break;
+    bool apart = true;
+    for (const Vec3& s : starts) apart = apart && s.dot(t.n) < std::cos(0.25);
+    if (apart) starts.push_back(t.n);
+  }
+  for (std::size_t k = 0; k < starts.size() && best.d > 0.0; ++k) {
+    Tried local = *std::find_if(tried.begin(), tried.end(), [&](const Tried& t) { return t.n == starts[k]; });
+    double theta = 0.25;
+    int used = 0;
+    while (local.d > 0.0 && theta > 1e-3 && used < kDepthLocalEvaluations) {
+      const Frame f(local.n);
+      bool improved = false;
+      for (int j = 0; j < 6 && used < kDepthLocalEvaluations; ++j, ++used) {
+        const double phi = j * (M_PI / 3.0);
+        const Vec3 n = (std::cos(theta) * local.n + std::sin(theta) * (std::cos(phi) * f.u + std::sin(phi) * f.v)).normalized();
+        double bnd = 0.0;
+        const double d = depth_along(a, b, n, pa, pb, scratch, &bnd);
+        ++r.directions;
+        if (d < local.d * (1.0 - 1e-9)) {
+          local = {d, bnd, n, local.source};
+          improved = true;
+          ++used;
+          break;
+        }
+      }
+      if (!improved) theta *= 0.5;
+    }
+    if (local.d < best.d) best = local;
+  }
+  r.source = best.source;
+  double best_d = best.d;
+  const double best_bound = best.bound;
+  // Surfaces that cross share interior, however little: an overlap under the rounding bound
+  // (depth_along() then finds no meeting past it) is reported at the bound, not as 0, so that
+  // d still errs toward separating and a crossing pair never has depth 0 (touching has).
+  if (best_d == 0.0 && contact_relation(contacts) == Relation::crossing) best_d = best_bound;
+  const Vec3 best_n = best.n;
   r.known = true;
   r.direction = best_n;
-  r.depth = best;
+  r.depth = best_d;
   r.bound = best_bound;
   return r;
 }

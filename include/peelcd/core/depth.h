@@ -13,8 +13,13 @@
 // which neither object contains the other (exact point-in-mesh tests) begins at d.
 //
 // The direction: the least d among candidates (the contacts' area-weighted normals of B and of
-// A, the intersection volume's gradient, the centroids' difference, the six axes), then a local
-// search around the best (rotations of a quarter radian, halved when no neighbour improves).
+// A, the intersection volume's gradient, the centroids' difference, the six axes) and
+// kDepthGlobalDirections directions spread over the sphere, then a local search around each of
+// the kDepthStarts best of them (rotations of a quarter radian, halved when no neighbour
+// improves; at most kDepthLocalEvaluations a start). At most 12 + 48 + 3 x 64 = 252 directions:
+// the cost is bounded by that many one-direction evaluations (each over the couples whose
+// translations meet). The result is a least found, not a proven least: tests/eval/test_depth.cpp
+// holds it within 1.05x of a 300-direction search on real meshes at several poses.
 // The pair is computed in a canonical order of the two meshes, so that swapping A and B gives
 // (-n, d) exactly.
 #include "peelcd/core/mesh.h"
@@ -27,6 +32,10 @@ namespace peelcd {
 
 // How far a candidate direction is turned to put it in general position (radians).
 constexpr double kDepthPerturbation = 1e-7;
+// The search's budget (see above).
+constexpr int kDepthGlobalDirections = 48;
+constexpr int kDepthStarts = 3;
+constexpr int kDepthLocalEvaluations = 64;
 
 struct PenetrationDepth {
   bool known = false;
