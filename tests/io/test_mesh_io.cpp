@@ -189,13 +189,41 @@ long peak_rss_kb() {
 
 }  // namespace
 
+// Loads `path` in a child process whose address space is capped (no cap under ASan, which
+// reserves terabytes of shadow); the child resets its resident peak (/proc/self/clear_refs),
+// loads, and reports by its exit status: 0 refused with an InputError naming the file, growing
+// the peak by under 100 MB; 1 loaded; 2 refused but over the ceiling; 3 another exception
+// (bad_alloc). Returns that status.
+static int load_in_capped_child(const std::string& path) {
+  const pid_t child = ::fork();
+  REQUIRE(child >= 0);
+  if (child == 0) {
+#if !defined(__SANITIZE_ADDRESS__)
+    struct rlimit cap;
+    cap.rlim_cur = cap.rlim_max = rlim_t(8) << 30;  // a regression fails here, not the machine
+    ::setrlimit(RLIMIT_AS, &cap);
+#endif
+    std::ofstream("/proc/self/clear_refs") << "5";
+    const long before = peak_rss_kb();
+    int status = 1;
+    try {
+      load_mesh(path);
+    } catch (const InputError& e) {
+      status = std::string(e.what()).find(path) != std::string::npos && peak_rss_kb() - before < 100 * 1024 ? 0 : 2;
+    } catch (...) {
+      status = 3;
+    }
+    std::_Exit(status);
+  }
+  int status = -1;
+  REQUIRE(::waitpid(child, &status, 0) == child);
+  REQUIRE(WIFEXITED(status));
+  return WEXITSTATUS(status);
+}
+
 TEST_CASE("a header's counts are held against the file: lying headers refused in bounded memory", "[io]") {
   // fixtures/fuzz/mesh/regression_*lying*: a header (PLY ASCII or binary, binary STL, OFF) that
-  // claims up to 2e9 vertices or faces over a body of one triangle. Each is loaded in a child
-  // process whose address space is capped (no cap under ASan, which reserves terabytes of
-  // shadow); the child resets its resident peak (/proc/self/clear_refs), loads, and reports by
-  // its exit status: 0 refused with an InputError naming the file, growing the peak by under
-  // 100 MB; 1 loaded; 2 refused but over the ceiling; 3 another exception (bad_alloc).
+  // claims up to 2e9 vertices or faces over a body of one triangle.
   int seen = 0;
   for (const auto& entry : fs::directory_iterator(std::string(PEELCD_FIXTURES) + "/fuzz/mesh")) {
     const std::string stem = entry.path().filename().string();
@@ -205,33 +233,21 @@ TEST_CASE("a header's counts are held against the file: lying headers refused in
     const char* const ext[] = {".obj", ".ply", ".stl", ".off"};
     const std::string path = write_temp(stem + ext[std::uint8_t(bytes[0]) % 4], bytes.substr(1));
     INFO(path);
-    const pid_t child = ::fork();
-    REQUIRE(child >= 0);
-    if (child == 0) {
-#if !defined(__SANITIZE_ADDRESS__)
-      struct rlimit cap;
-      cap.rlim_cur = cap.rlim_max = rlim_t(8) << 30;  // a regression fails here, not the machine
-      ::setrlimit(RLIMIT_AS, &cap);
-#endif
-      std::ofstream("/proc/self/clear_refs") << "5";
-      const long before = peak_rss_kb();
-      int status = 1;
-      try {
-        load_mesh(path);
-      } catch (const InputError& e) {
-        status = std::string(e.what()).find(path) != std::string::npos && peak_rss_kb() - before < 100 * 1024 ? 0 : 2;
-      } catch (...) {
-        status = 3;
-      }
-      std::_Exit(status);
-    }
-    int status = -1;
-    REQUIRE(::waitpid(child, &status, 0) == child);
-    REQUIRE(WIFEXITED(status));
-    CHECK(WEXITSTATUS(status) == 0);
+    CHECK(load_in_capped_child(path) == 0);
     ++seen;
   }
   CHECK(seen >= 5);
+  // A glTF buffer whose byteLength (2e9) its file cannot hold, and an accessor of 1.7e8 vertices.
+  write_temp("lying.bin", std::string(44, '\0'));
+  const std::string gltf = write_temp(
+      "lying.gltf",
+      R"({"asset":{"version":"2.0"},"scene":0,"scenes":[{"nodes":[0]}],"nodes":[{"mesh":0}],)"
+      R"("meshes":[{"primitives":[{"attributes":{"POSITION":0},"indices":1}]}],)"
+      R"("buffers":[{"uri":"lying.bin","byteLength":2000000000}],)"
+      R"("bufferViews":[{"buffer":0,"byteOffset":0,"byteLength":1999999000},{"buffer":0,"byteOffset":36,"byteLength":6}],)"
+      R"("accessors":[{"bufferView":0,"componentType":5126,"count":166666583,"type":"VEC3","max":[1,1,0],"min":[0,0,0]},)"
+      R"({"bufferView":1,"componentType":5123,"count":3,"type":"SCALAR"}]})");
+  CHECK(load_in_capped_child(gltf) == 0);
   // And the message says what the header claimed against what the body holds.
   try {
     std::ifstream in(std::string(PEELCD_FIXTURES) + "/fuzz/mesh/regression_ply_ascii_lying_vertex_count", std::ios::binary);
