@@ -7,6 +7,7 @@
 #include <CGAL/Surface_mesh.h>
 
 #include <algorithm>
+#include <array>
 #include <cmath>
 #include <numeric>
 #include <stdexcept>
@@ -172,8 +173,38 @@ static bool within(const Aabb& x, const Aabb& y) {
   return !x.empty() && !y.empty() && (x.lo.array() >= y.lo.array()).all() && (x.hi.array() <= y.hi.array()).all();
 }
 
+namespace {
+
+// Every triangle of `x` is a triangle of `y` (the same three corner positions, in any order) and
+// the two have as many: one surface, as a mesh and its copy at the same pose.
+bool same_surface(const Mesh& x, const Mesh& y) {
+  if (x.triangles.size() != y.triangles.size()) return false;
+  const auto keys = [](const Mesh& m) {
+    std::vector<std::array<double, 9>> out;
+    out.reserve(m.triangles.size());
+    for (const Tri& t : m.triangles) {
+      std::array<Vec3, 3> c = {m.vertices[t[0]], m.vertices[t[1]], m.vertices[t[2]]};
+      std::sort(c.begin(), c.end(), [](const Vec3& p, const Vec3& q) {
+        return std::lexicographical_compare(p.data(), p.data() + 3, q.data(), q.data() + 3);
+      });
+      out.push_back({c[0].x(), c[0].y(), c[0].z(), c[1].x(), c[1].y(), c[1].z(), c[2].x(), c[2].y(), c[2].z()});
+    }
+    std::sort(out.begin(), out.end());
+    return out;
+  };
+  return keys(x) == keys(y);
+}
+
+}  // namespace
+
 Relation touching_relation(const Mesh& a, const Mesh& b, const Aabb& ba, const Aabb& bb,
                            const std::vector<Contact>& contacts, std::string& note) {
+  // One surface (a mesh and its copy): every triangle touches, none can say on which side the
+  // other lies, and the two closed interiors are one: A is inside B (and B inside A).
+  if (ba.lo == bb.lo && ba.hi == bb.hi && analyse_shape(b).closed && same_surface(a, b)) {
+    note = "A and B coincide (every triangle of one is a triangle of the other): one interior";
+    return Relation::a_inside_b;
+  }
   for (int side = 0; side < 2; ++side) {
     const Mesh& inner = side == 0 ? a : b;
     const Mesh& outer = side == 0 ? b : a;

@@ -8,6 +8,8 @@
 
 #include <catch2/catch.hpp>
 
+#include <algorithm>
+
 using namespace peelcd;
 
 namespace {
@@ -148,6 +150,22 @@ TEST_CASE("face, edge and corner contact of boxes is touching, and a box touchin
   CHECK(in.relation == Relation::b_inside_a);
   CHECK(in.relation_note.find("from inside") != std::string::npos);
   CHECK(frame(inner, big).relation == Relation::a_inside_b);
+  // A closed mesh and its copy at the same pose: one interior, so inside (not touching), from
+  // either side; the copy with its triangles in another order and turned corners too.
+  const Mesh ball = make_uv_sphere(Vec3(0.3, 0.2, 0.1), 1.0, 8, 16);
+  Mesh shuffled = ball;
+  std::reverse(shuffled.triangles.begin(), shuffled.triangles.end());
+  for (Tri& t : shuffled.triangles) t = {t[1], t[2], t[0]};
+  for (const Mesh* copy : std::initializer_list<const Mesh*>{&ball, &shuffled}) {
+    const PairResult same = frame(ball, *copy);
+    CHECK(same.relation == Relation::a_inside_b);
+    CHECK(same.relation_note.find("coincide") != std::string::npos);
+    CHECK(same.is_collision());
+  }
+  // One vertex of the copy moved off the surface: not one surface any more (not said to coincide).
+  Mesh dented = ball;
+  dented.vertices[5] *= 0.97;
+  CHECK(frame(ball, dented).relation_note.find("coincide") == std::string::npos);
   // Moved out through that face by half: crossing, as before.
   CHECK(frame(big, make_box(Vec3(1.5, 0.5, 0.5), Vec3(2.5, 1.5, 1.5))).relation == Relation::crossing);
 }

@@ -57,8 +57,9 @@ Relation contact_relation(const std::vector<Contact>& contacts);
 // another that touches its surface from inside (a box in a box sharing a face). Where one box
 // lies within the other and the outer mesh is closed, the centroid of a triangle of the inner
 // mesh in no contact (so off the outer surface) is tested exactly: inside, the relation is
-// containment (note: "touches ... from inside");
-// otherwise `touching` stays. The contacts must be complete (not cut by max_contacts).
+// containment (note: "touches ... from inside"). Two closed meshes of one surface (a mesh and
+// its copy at the same pose: every triangle of one is a triangle of the other) share their whole
+// interior: `a_inside_b` (note: "A and B coincide ..."). Otherwise `touching` stays. The contacts must be complete (not cut by max_contacts).
 Relation touching_relation(const Mesh& a, const Mesh& b, const Aabb& box_a, const Aabb& box_b,
                            const std::vector<Contact>& contacts, std::string& note);
 // The same with the meshes' boxes known (nothing read when no box lies within the other).
