@@ -205,7 +205,8 @@ py::dict pair_dict(const PairResult& p, const std::function<std::string(std::siz
   d["b"] = p.object_b;
   d["name_a"] = name_of(p.object_a);
   d["name_b"] = name_of(p.object_b);
-  d["triangles"] = tris;
+  d["colliding"] = tris;  // as C++'s PairResult::colliding and the JSON's "colliding"
+  d["triangles"] = tris;  // the same array under its 0.2 name, kept for the 0.3 release
   d["kinds"] = kinds;
   d["segments"] = seg;
   d["relation"] = to_string(p.relation);

@@ -18,5 +18,5 @@ for x in (0.0, 0.02, 0.04):
     pose[0, 3] = x                               # move the bunny along x
     world.set_pose(a, pose)
     for pair in world.collide()["pairs"]:
-        tris = pair["triangles"]                 # (k, 2): bunny's triangle, dragon's triangle
+        tris = pair["colliding"]                 # (k, 2): bunny's triangle, dragon's triangle
         print("x=%.2f: %d contacts, relation %s, first %s" % (x, len(tris), pair["relation"], tris[:1].tolist()))

@@ -21,5 +21,5 @@ body = world.add_deforming(peelcd.Mesh(cloth(0.0), F), name="cloth", self_collis
 for f in range(6):
     world.set_vertices(body, cloth(f / 5))       # new vertices every frame: the tree is refitted
     pairs = world.collide()["pairs"]
-    self_pairs = sum(len(p["triangles"]) for p in pairs if p["a"] == p["b"])
+    self_pairs = sum(len(p["colliding"]) for p in pairs if p["a"] == p["b"])
     print("frame %d: %d self pairs" % (f, self_pairs))

@@ -5,7 +5,7 @@
     a = world.add_rigid(peelcd.Mesh(V, F), pose=np.eye(4))
     r = world.collide()                        # options as in scene files: world.collide(stage="exact")
     if r:                                      # true when anything collides
-        for p in r["pairs"]: print(p["a"], p["b"], p["triangles"])
+        for p in r["pairs"]: print(p["a"], p["b"], p["colliding"])
 """
 import os as _os
 
@@ -76,7 +76,7 @@ def load_scene(path):
 
 def collide(a, b, pose_a=None, pose_b=None, backend="cpu", **options):
     """One pair: two meshes, each at its pose (4x4, default identity). Returns the pair's
-    PairResult (a dict: triangles, kinds, segments, relation, is_collision; true when the pair
+    PairResult (a dict: colliding, kinds, segments, relation, is_collision; true when the pair
     collides), always: when the two boxes do not overlap it is a false result with no triangles
     and relation "disjoint". Options are the scene files' keys (max_contacts=1: stop at the first
     contact; self=True adds each mesh's own self pairs to a World frame, not to this pair's
@@ -94,9 +94,11 @@ def collide(a, b, pose_a=None, pose_b=None, backend="cpu", **options):
 def _separate_pair():
     """The result of a pair whose boxes do not overlap: nothing collides, nothing was tested."""
     import numpy as np
-    return PairResult(a=0, b=1, name_a="", name_b="", triangles=np.zeros((0, 2), np.uint32), kinds=[],
+    none = np.zeros((0, 2), np.uint32)
+    return PairResult(a=0, b=1, name_a="", name_b="", colliding=none, triangles=none, kinds=[],
                       segments=np.zeros((0, 2, 3)), relation="disjoint",
-                      relation_note="the two boxes do not overlap", is_collision=False, stage="none",
+                      relation_note="the two boxes do not overlap", is_collision=False, stage="none", path="none",
+                      margin_fallback=False,
                       candidates=0, volume=None, distance=None, depth=None)
 
 

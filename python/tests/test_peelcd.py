@@ -25,7 +25,8 @@ def same_pairs(py_result, cli):
     assert len(py_result["pairs"]) == len(cli["pairs"])
     for p, c in zip(py_result["pairs"], cli["pairs"]):
         assert (p["a"], p["b"]) == (c["object_a"], c["object_b"])
-        assert p["triangles"].tolist() == [[x["tri_a"], x["tri_b"]] for x in c["colliding"]]
+        assert p["colliding"].tolist() == [[x["tri_a"], x["tri_b"]] for x in c["colliding"]]  # one name
+        assert p["triangles"] is p["colliding"]  # the 0.2 name, kept for 0.3
         assert p["kinds"] == [x["kind"] for x in c["colliding"]]
         assert p["relation"] == c["relation"]
         assert p["is_collision"] == c["is_collision"]
@@ -348,7 +349,9 @@ def test_collide_always_returns_a_result():
     a = uv_sphere((0, 0, 0), 1.0, 12)
     far = peelcd.collide(a, uv_sphere((9, 0, 0), 1.0, 12))
     assert isinstance(far, peelcd.PairResult) and not far
-    assert far["is_collision"] is False and far["relation"] == "disjoint" and far["triangles"].shape == (0, 2)
+    assert far["is_collision"] is False and far["relation"] == "disjoint" and far["colliding"].shape == (0, 2)
+    near = peelcd.collide(a, uv_sphere((1.2, 0.1, 0.05), 1.0, 12))
+    assert set(near) <= set(far) | {"segments", "volume_unknown", "depth_unknown"}  # the same keys where it matters
 
 
 def test_bodies_by_name_and_names_unique():
