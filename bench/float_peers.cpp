@@ -163,6 +163,49 @@ bool tri_tri_float(const std::array<float, 9>& t_in, const std::array<float, 9>&
   return !(i1b < i2a || i2b < i1a);
 }
 
+bool tri_tri_moller(const std::array<float, 9>& t, const std::array<float, 9>& u) {
+  // Moller's NoDivTriTriIsect as published (tritri.c), on the floats as given, with his
+  // USE_EPSILON_TEST: a plane distance under EPSILON = 1e-6 (absolute) counts as 0.
+  constexpr float kEpsilon = 1e-6f;
+  const float *v0 = &t[0], *v1 = &t[3], *v2 = &t[6], *u0 = &u[0], *u1 = &u[3], *u2 = &u[6];
+  const F3 n1 = cross(sub(v1, v0), sub(v2, v0));
+  const float d1 = -dot(n1, v0);
+  float du0 = dot(n1, u0) + d1, du1 = dot(n1, u1) + d1, du2 = dot(n1, u2) + d1;
+  if (std::abs(du0) < kEpsilon) du0 = 0.0f;
+  if (std::abs(du1) < kEpsilon) du1 = 0.0f;
+  if (std::abs(du2) < kEpsilon) du2 = 0.0f;
+  const float du0du1 = du0 * du1, du0du2 = du0 * du2;
+  if (du0du1 > 0.0f && du0du2 > 0.0f) return false;
+  const F3 n2 = cross(sub(u1, u0), sub(u2, u0));
+  const float d2 = -dot(n2, u0);
+  float dv0 = dot(n2, v0) + d2, dv1 = dot(n2, v1) + d2, dv2 = dot(n2, v2) + d2;
+  if (std::abs(dv0) < kEpsilon) dv0 = 0.0f;
+  if (std::abs(dv1) < kEpsilon) dv1 = 0.0f;
+  if (std::abs(dv2) < kEpsilon) dv2 = 0.0f;
+  const float dv0dv1 = dv0 * dv1, dv0dv2 = dv0 * dv2;
+  if (dv0dv1 > 0.0f && dv0dv2 > 0.0f) return false;
+  const F3 d = cross(n1, n2);
+  int index = 0;
+  float max = std::abs(d[0]);
+  if (std::abs(d[1]) > max) max = std::abs(d[1]), index = 1;
+  if (std::abs(d[2]) > max) index = 2;
+  float a, b, c, x0, x1, e, f, g, y0, y1;
+  if (!intervals(v0[index], v1[index], v2[index], dv0, dv1, dv2, dv0dv1, dv0dv2, a, b, c, x0, x1))
+    return coplanar_tri_tri(n1, v0, v1, v2, u0, u1, u2);
+  if (!intervals(u0[index], u1[index], u2[index], du0, du1, du2, du0du1, du0du2, e, f, g, y0, y1))
+    return coplanar_tri_tri(n1, v0, v1, v2, u0, u1, u2);
+  const float xx = x0 * x1, yy = y0 * y1, xxyy = xx * yy;
+  float tmp = a * xxyy;
+  float i1a = tmp + b * x1 * yy, i1b = tmp + c * x0 * yy;
+  tmp = e * xxyy;
+  float i2a = tmp + f * xx * y1, i2b = tmp + g * xx * y0;
+  if (i1a > i1b) std::swap(i1a, i1b);
+  if (i2a > i2b) std::swap(i2a, i2b);
+  return !(i1b < i2a || i2b < i1a);
+}
+
+const char* to_string(TriangleTest test) { return test == TriangleTest::moller ? "moller" : "scaled"; }
+
 namespace {
 
 // A body's float geometry: vertices (x, y, z), triangles (3 indices), self adjacency.
@@ -196,11 +239,15 @@ struct Collector {
   const std::vector<std::uint32_t>* rep = nullptr;
   bool move_b = false;  // B's corners mapped by `rel` (row-major 3 x 4) before the test
   float rel[12] = {};
+  TriangleTest which = TriangleTest::moller;
   std::vector<std::uint64_t> hits;
   std::mutex mutex;
   template <class Pairs>
   void test(const Pairs& pairs, std::size_t n) {
-    std::vector<std::uint64_t> local;
+    // A callback may run on any of the peer's threads: each keeps its buffer (no allocation per
+    // callback once it has grown; rtcCollide calls back once per small batch of couples).
+    thread_local std::vector<std::uint64_t> local;
+    local.clear();
     std::array<float, 9> ta, tb;
     for (std::size_t i = 0; i < n; ++i) {
       std::uint32_t x = pairs(i).first, y = pairs(i).second;
@@ -218,7 +265,7 @@ struct Collector {
           for (int r = 0; r < 3; ++r)
             tb[std::size_t(k + r)] = rel[4 * r] * x0 + rel[4 * r + 1] * x1 + rel[4 * r + 2] * x2 + rel[4 * r + 3];
         }
-      if (tri_tri_float(ta, tb)) local.push_back(pack_pair(x, y));
+      if (which == TriangleTest::moller ? tri_tri_moller(ta, tb) : tri_tri_float(ta, tb)) local.push_back(pack_pair(x, y));
     }
     if (local.empty()) return;
     std::lock_guard<std::mutex> lock(mutex);
@@ -247,12 +294,14 @@ struct EmbreePeer::Impl {
     bool in_a_frame = false;            // two rigid objects: B's vertices in A's frame
     std::vector<std::uint32_t> rep;     // self adjacency (Object::self)
     std::size_t triangles = 0;
+    bool dynamic = false;               // built for updates (refit or low-quality rebuild)
     ~Body() {
       if (scene) rtcReleaseScene(scene);
     }
   };
   Update update;
   unsigned threads;
+  TriangleTest test = TriangleTest::moller;
   RTCDevice device = nullptr;
   std::unique_ptr<WorkerPool> pool;
   std::vector<std::unique_ptr<Body>> bodies;
@@ -278,27 +327,39 @@ struct EmbreePeer::Impl {
         [c](std::size_t i) { return std::pair<std::uint32_t, std::uint32_t>(c[i].primID0, c[i].primID1); }, n);
   }
 
-  // A new scene over `b.mesh` (already filled).
-  void build(Body& b) {
+  // A new scene over `b.mesh` (already filled). Static (nothing will move it): Embree's
+  // defaults, a static scene of medium quality, as its documentation sets up geometry that is
+  // not updated. Dynamic: RTC_SCENE_FLAG_DYNAMIC under a low-quality scene, whose per-geometry
+  // quality Embree honours (rtcSetGeometryBuildQuality(3)): REFIT to refit, LOW to rebuild
+  // (Morton) at every commit, by the Update mode.
+  void build(Body& b, bool dynamic) {
     if (b.scene) rtcReleaseScene(b.scene);
     b.scene = rtcNewScene(device);
-    rtcSetSceneFlags(b.scene, RTC_SCENE_FLAG_DYNAMIC);
-    // The per-geometry quality (REFIT, LOW) is used only under a LOW scene (Embree's two-level
-    // structure: rtcSetGeometryBuildQuality(3)).
-    rtcSetSceneBuildQuality(b.scene, RTC_BUILD_QUALITY_LOW);
+    if (dynamic) {
+      rtcSetSceneFlags(b.scene, RTC_SCENE_FLAG_DYNAMIC);
+      rtcSetSceneBuildQuality(b.scene, RTC_BUILD_QUALITY_LOW);
+    }
     RTCGeometry g = rtcNewGeometry(device, RTC_GEOMETRY_TYPE_USER);
     rtcSetGeometryUserPrimitiveCount(g, unsigned(b.mesh.t.size() / 3));
     rtcSetGeometryUserData(g, &b.mesh);
     rtcSetGeometryBoundsFunction(g, &Impl::bounds, nullptr);
-    rtcSetGeometryBuildQuality(g, update == Update::refit ? RTC_BUILD_QUALITY_REFIT : RTC_BUILD_QUALITY_LOW);
+    if (dynamic)
+      rtcSetGeometryBuildQuality(g, update == Update::refit ? RTC_BUILD_QUALITY_REFIT : RTC_BUILD_QUALITY_LOW);
     rtcCommitGeometry(g);
     rtcAttachGeometry(b.scene, g);
     rtcReleaseGeometry(g);
     b.geometry = g;
+    b.dynamic = dynamic;
     rtcCommitScene(b.scene);
     ++builds;
   }
+  // A body whose vertices changed: a dynamic scene commits them (refit or rebuild); a static one
+  // (a rigid body that had not moved) is built again as dynamic, once.
   void commit_moved(Body& b) {
+    if (!b.dynamic) {
+      build(b, true);
+      return;
+    }
     rtcCommitGeometry(b.geometry);
     rtcCommitScene(b.scene);
     ++refits;
@@ -315,7 +376,7 @@ struct EmbreePeer::Impl {
         b.mesh.set_vertices(o.rigid->shape->vertices);
         b.mesh.set_triangles(o.rigid->shape->triangles);
         b.shape = o.rigid->shape, b.in_a_frame = true, b.triangles = o.mesh.triangles.size();
-        build(b);
+        build(b, false);  // never moved: A's frame is the frame
       }
     } else if (frame_of_a) {  // B mapped into A's frame every frame its relative pose changes
       const Eigen::Affine3d rel = frame_of_a->inverse() * o.rigid->pose;
@@ -326,7 +387,7 @@ struct EmbreePeer::Impl {
         if (topology) {
           b.mesh.set_triangles(o.mesh.triangles);
           b.triangles = o.mesh.triangles.size();
-          build(b);
+          build(b, true);  // B moves in A's frame whenever the relative pose changes
         } else {
           commit_moved(b);
         }
@@ -342,7 +403,7 @@ struct EmbreePeer::Impl {
         if (topology) {
           b.mesh.set_triangles(o.mesh.triangles);
           b.triangles = o.mesh.triangles.size();
-          build(b);
+          build(b, !o.rigid);  // a deforming object moves; a rigid one is static until it does
         } else {
           commit_moved(b);  // refitted, or rebuilt at the scene's low quality (Update)
         }
@@ -352,8 +413,9 @@ struct EmbreePeer::Impl {
   }
 };
 
-EmbreePeer::EmbreePeer(Update update, unsigned threads) : impl_(std::make_unique<Impl>()) {
+EmbreePeer::EmbreePeer(Update update, unsigned threads, TriangleTest test) : impl_(std::make_unique<Impl>()) {
   impl_->update = update;
+  impl_->test = test;
   impl_->threads = std::max(1u, threads);
   const std::string config = "threads=" + std::to_string(impl_->threads);
   impl_->device = rtcNewDevice(config.c_str());
@@ -365,6 +427,14 @@ EmbreePeer::~EmbreePeer() {
   if (impl_->device) rtcReleaseDevice(impl_->device);
 }
 std::size_t EmbreePeer::builds() const { return impl_->builds; }
+std::string EmbreePeer::setup() const {
+  return std::string("Embree ") + std::to_string(RTC_VERSION_MAJOR) + "." + std::to_string(RTC_VERSION_MINOR) + "." +
+         std::to_string(RTC_VERSION_PATCH) + " rtcCollide: one user geometry per object (a primitive per triangle); " +
+         "static objects: a static scene (default flags, medium quality); moving ones: a dynamic scene of low quality, " +
+         (impl_->update == Update::refit ? "geometry quality REFIT (refit)" : "geometry quality LOW (Morton rebuild)") +
+         "; a rigid pair: A's scene in A's frame, B mapped into it; test " + to_string(impl_->test) + "; threads " +
+         std::to_string(impl_->threads);
+}
 std::size_t EmbreePeer::refits() const { return impl_->refits; }
 
 PeerFrame EmbreePeer::frame(const std::vector<Object>& objects) {
@@ -392,6 +462,7 @@ PeerFrame EmbreePeer::frame(const std::vector<Object>& objects) {
   parallel_for(m.pool.get(), f.objects.size(), [&](std::size_t k) {
     const auto [a, b] = f.objects[k];
     Collector c;
+    c.which = m.test;
     c.a = &m.bodies[a]->mesh;
     c.b = &m.bodies[b]->mesh;
     if (a == b) c.self_mesh = &objects[a].mesh, c.rep = &m.bodies[a]->rep;
@@ -456,6 +527,7 @@ struct BulletPeer::Impl {
     Shape& shape() { return shared ? *shared : *own; }
   };
   unsigned threads;
+  TriangleTest test = TriangleTest::moller;
   std::unique_ptr<WorkerPool> pool;
   std::vector<Body> bodies;
   std::map<const Mesh*, std::pair<std::shared_ptr<const Mesh>, std::shared_ptr<Shape>>> shapes;
@@ -516,12 +588,20 @@ struct BulletPeer::Impl {
   }
 };
 
-BulletPeer::BulletPeer(unsigned threads) : impl_(std::make_unique<Impl>()) {
+BulletPeer::BulletPeer(unsigned threads, TriangleTest test) : impl_(std::make_unique<Impl>()) {
   impl_->threads = std::max(1u, threads);
+  impl_->test = test;
   if (impl_->threads > 1) impl_->pool = std::make_unique<WorkerPool>(impl_->threads);
 }
 BulletPeer::~BulletPeer() = default;
 std::size_t BulletPeer::builds() const { return impl_->builds; }
+std::string BulletPeer::setup() const {
+  return "Bullet " + std::to_string(BT_BULLET_VERSION) +
+         " GImpact: one btGImpactMeshShape per shape (quantized box set, margin 0), a rigid shape built once and moved "
+         "by its transform, a deforming one refitted (built again beyond its quantization range); "
+         "btGImpactQuantizedBvh::find_collision into a pair set kept per thread; test " + std::string(to_string(impl_->test)) +
+         "; threads " + std::to_string(impl_->threads);
+}
 std::size_t BulletPeer::refits() const { return impl_->refits; }
 
 PeerFrame BulletPeer::frame(const std::vector<Object>& objects) {
@@ -544,11 +624,13 @@ PeerFrame BulletPeer::frame(const std::vector<Object>& objects) {
     Impl::Body& bb = m.bodies[b];
     const btGImpactBoxSet* sa = ba.shape().shape->getMeshPart(0)->getBoxSet();
     const btGImpactBoxSet* sb = bb.shape().shape->getMeshPart(0)->getBoxSet();
-    btPairSet pairs;
+    thread_local btPairSet pairs;  // kept: its storage serves every pair and frame
+    pairs.resize(0);
     btGImpactQuantizedBvh::find_collision(sa, ba.transform, sb, bb.transform, pairs);
     // The float test in A's frame: each candidate triangle of B moved by A^-1 B (as GImpact's own
     // algorithm moves each candidate triangle; nothing when both are in world space).
     Collector c;
+    c.which = m.test;
     c.a = &ba.shape().mesh;
     c.b = &bb.shape().mesh;
     if (a != b && !(ba.identity && bb.identity)) {

@@ -103,8 +103,12 @@ TEST_CASE("FCL keeps a rigid shape's tree across frames", "[peers]") {
 // and a self pair (a folded sheet), with threads.
 TEST_CASE("the Embree and Bullet peers find the exact pairs on the crowd, a rigid pair and a self pair", "[peers]") {
   const auto crowd = make_crowd(30, 4);
-  bench::EmbreePeer embree_refit(bench::EmbreePeer::Update::refit, 2), embree_low(bench::EmbreePeer::Update::rebuild_low, 1);
-  bench::BulletPeer bullet(2);
+  // The scaled float test (tri_tri_float()): exact away from rounding on these scenes, so the
+  // peers' trees, updates and pair lists are what is checked here; the published test's own
+  // misses and false pairs are the bench's to count.
+  const auto sc = bench::TriangleTest::scaled;
+  bench::EmbreePeer embree_refit(bench::EmbreePeer::Update::refit, 2, sc), embree_low(bench::EmbreePeer::Update::rebuild_low, 1, sc);
+  bench::BulletPeer bullet(2, sc);
   std::vector<Object> objects;
   for (std::size_t f = 0; f < crowd->frames(); ++f) {
     crowd->frame(f, objects);
@@ -118,8 +122,8 @@ TEST_CASE("the Embree and Bullet peers find the exact pairs on the crowd, a rigi
   CHECK(bullet.refits() == 6 * (crowd->frames() - 1));
 
   auto shape = std::make_shared<const Mesh>(uv_sphere(Vec3::Zero(), 1.0, 16, 8));
-  bench::EmbreePeer e2(bench::EmbreePeer::Update::refit, 1);
-  bench::BulletPeer b2(1);
+  bench::EmbreePeer e2(bench::EmbreePeer::Update::refit, 1, sc);
+  bench::BulletPeer b2(1, sc);
   std::vector<Object> pair(2);
   for (int f = 0; f < 4; ++f) {
     for (int i = 0; i < 2; ++i) {
@@ -135,7 +139,7 @@ TEST_CASE("the Embree and Bullet peers find the exact pairs on the crowd, a rigi
     require_same(want, e2.frame(pair));
     require_same(want, b2.frame(pair));
   }
-  CHECK(e2.builds() == 2);  // A in its frame, B once; then B refitted as it moves
+  CHECK(e2.builds() == 2);  // A in its frame (a static scene), B once (dynamic); then B refitted as it moves
   CHECK(b2.builds() == 1);  // one shape for both
 
   // A self pair: one object made of two crossing spheres (a folded sheet's coplanar neighbours
@@ -151,8 +155,31 @@ TEST_CASE("the Embree and Bullet peers find the exact pairs on the crowd, a rigi
   want.objects = {{0, 0}};
   want.per_pair = {exact_self_pairs(sheet[0].mesh)};
   REQUIRE_FALSE(want.per_pair[0].empty());
-  require_same(want, bench::EmbreePeer(bench::EmbreePeer::Update::refit, 1).frame(sheet));
-  require_same(want, bench::BulletPeer(1).frame(sheet));
+  require_same(want, bench::EmbreePeer(bench::EmbreePeer::Update::refit, 1, sc).frame(sheet));
+  require_same(want, bench::BulletPeer(1, sc).frame(sheet));
+}
+
+TEST_CASE("Moller's published test: the same answers away from its epsilon, and its absolute epsilon", "[peers]") {
+  const std::array<float, 9> t = {0, 0, 0, 1, 0, 0, 0, 1, 0};
+  CHECK(bench::tri_tri_moller(t, {0.2f, 0.2f, -1, 0.2f, 0.2f, 1, 0.9f, 0.9f, 1}));   // pierces
+  CHECK_FALSE(bench::tri_tri_moller(t, {0.2f, 0.2f, 0.1f, 0.3f, 0.2f, 1, 0.2f, 0.3f, 1}));  // above
+  CHECK(bench::tri_tri_moller(t, {0.5f, 0.5f, 0, 2, 2, 0, 0.5f, 2, 0}));  // coplanar, overlapping
+  CHECK_FALSE(bench::tri_tri_moller(t, {2, 2, 0, 3, 2, 0, 2, 3, 0}));     // coplanar, apart
+  // A millimetre triangle 0.5 um above another: its plane distances (on an unnormalized normal
+  // of 1e-6) are under 1e-6, snapped to 0: the published test calls the pair coplanar and
+  // overlapping; the scaled one sees them apart.
+  const std::array<float, 9> small = {0, 0, 0, 1e-3f, 0, 0, 0, 1e-3f, 0};
+  const std::array<float, 9> above = {1e-4f, 1e-4f, 5e-7f, 9e-4f, 1e-4f, 5e-7f, 1e-4f, 9e-4f, 5e-7f};
+  CHECK(bench::tri_tri_moller(small, above));
+  CHECK_FALSE(bench::tri_tri_float(small, above));
+}
+
+TEST_CASE("each float peer says its setup", "[peers]") {
+  const std::string refit = bench::EmbreePeer(bench::EmbreePeer::Update::refit).setup();
+  CHECK_THAT(refit, Catch::Contains("static scene") && Catch::Contains("REFIT") && Catch::Contains("test moller"));
+  CHECK_THAT(bench::EmbreePeer(bench::EmbreePeer::Update::rebuild_low, 1, bench::TriangleTest::scaled).setup(),
+             Catch::Contains("Morton") && Catch::Contains("test scaled"));
+  CHECK_THAT(bench::BulletPeer().setup(), Catch::Contains("btGImpactMeshShape") && Catch::Contains("test moller"));
 }
 
 TEST_CASE("the float triangle test: crossing, touching at a vertex, coplanar overlapping, disjoint", "[peers]") {
@@ -166,8 +193,8 @@ TEST_CASE("the float triangle test: crossing, touching at a vertex, coplanar ove
 // A deforming object that travels: Bullet's quantized box set is refitted while its vertices stay
 // within the range fixed at its build, built again when they leave it; every frame exact.
 TEST_CASE("the Bullet peer follows a deforming object beyond its first bounds", "[peers]") {
-  bench::BulletPeer bullet(1);
-  bench::EmbreePeer embree(bench::EmbreePeer::Update::refit, 1);
+  bench::BulletPeer bullet(1, bench::TriangleTest::scaled);
+  bench::EmbreePeer embree(bench::EmbreePeer::Update::refit, 1, bench::TriangleTest::scaled);
   std::vector<Object> objects(2);
   objects[0].mesh = uv_sphere(Vec3::Zero(), 1.0, 24, 12);
   for (int f = 0; f < 10; ++f) {
