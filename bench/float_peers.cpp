@@ -165,23 +165,18 @@ bool tri_tri_float(const std::array<float, 9>& t_in, const std::array<float, 9>&
 
 bool tri_tri_moller(const std::array<float, 9>& t, const std::array<float, 9>& u) {
   // Moller's NoDivTriTriIsect as published (tritri.c), on the floats as given, with his
-  // USE_EPSILON_TEST: a plane distance under EPSILON = 1e-6 (absolute) counts as 0.
-  constexpr float kEpsilon = 1e-6f;
+  // USE_EPSILON_TEST switch off: a plane distance is 0 only when it is. (On, his absolute
+  // EPSILON of 1e-6 on unnormalized plane distances calls every pair of centimetre triangles
+  // within a centimetre coplanar: on the crumpled cloth 1.2M false pairs and 3.9x the time.)
   const float *v0 = &t[0], *v1 = &t[3], *v2 = &t[6], *u0 = &u[0], *u1 = &u[3], *u2 = &u[6];
   const F3 n1 = cross(sub(v1, v0), sub(v2, v0));
   const float d1 = -dot(n1, v0);
-  float du0 = dot(n1, u0) + d1, du1 = dot(n1, u1) + d1, du2 = dot(n1, u2) + d1;
-  if (std::abs(du0) < kEpsilon) du0 = 0.0f;
-  if (std::abs(du1) < kEpsilon) du1 = 0.0f;
-  if (std::abs(du2) < kEpsilon) du2 = 0.0f;
+  const float du0 = dot(n1, u0) + d1, du1 = dot(n1, u1) + d1, du2 = dot(n1, u2) + d1;
   const float du0du1 = du0 * du1, du0du2 = du0 * du2;
   if (du0du1 > 0.0f && du0du2 > 0.0f) return false;
   const F3 n2 = cross(sub(u1, u0), sub(u2, u0));
   const float d2 = -dot(n2, u0);
-  float dv0 = dot(n2, v0) + d2, dv1 = dot(n2, v1) + d2, dv2 = dot(n2, v2) + d2;
-  if (std::abs(dv0) < kEpsilon) dv0 = 0.0f;
-  if (std::abs(dv1) < kEpsilon) dv1 = 0.0f;
-  if (std::abs(dv2) < kEpsilon) dv2 = 0.0f;
+  const float dv0 = dot(n2, v0) + d2, dv1 = dot(n2, v1) + d2, dv2 = dot(n2, v2) + d2;
   const float dv0dv1 = dv0 * dv1, dv0dv2 = dv0 * dv2;
   if (dv0dv1 > 0.0f && dv0dv2 > 0.0f) return false;
   const F3 d = cross(n1, n2);

@@ -159,18 +159,17 @@ TEST_CASE("the Embree and Bullet peers find the exact pairs on the crowd, a rigi
   require_same(want, bench::BulletPeer(1, sc).frame(sheet));
 }
 
-TEST_CASE("Moller's published test: the same answers away from its epsilon, and its absolute epsilon", "[peers]") {
+TEST_CASE("Moller's published test: crossing, above, coplanar overlapping and apart, a micrometre gap", "[peers]") {
   const std::array<float, 9> t = {0, 0, 0, 1, 0, 0, 0, 1, 0};
   CHECK(bench::tri_tri_moller(t, {0.2f, 0.2f, -1, 0.2f, 0.2f, 1, 0.9f, 0.9f, 1}));   // pierces
   CHECK_FALSE(bench::tri_tri_moller(t, {0.2f, 0.2f, 0.1f, 0.3f, 0.2f, 1, 0.2f, 0.3f, 1}));  // above
   CHECK(bench::tri_tri_moller(t, {0.5f, 0.5f, 0, 2, 2, 0, 0.5f, 2, 0}));  // coplanar, overlapping
   CHECK_FALSE(bench::tri_tri_moller(t, {2, 2, 0, 3, 2, 0, 2, 3, 0}));     // coplanar, apart
-  // A millimetre triangle 0.5 um above another: its plane distances (on an unnormalized normal
-  // of 1e-6) are under 1e-6, snapped to 0: the published test calls the pair coplanar and
-  // overlapping; the scaled one sees them apart.
+  // A millimetre triangle half a micrometre above another: apart (no epsilon snaps it onto the
+  // other's plane), as the scaled variant says too.
   const std::array<float, 9> small = {0, 0, 0, 1e-3f, 0, 0, 0, 1e-3f, 0};
   const std::array<float, 9> above = {1e-4f, 1e-4f, 5e-7f, 9e-4f, 1e-4f, 5e-7f, 1e-4f, 9e-4f, 5e-7f};
-  CHECK(bench::tri_tri_moller(small, above));
+  CHECK_FALSE(bench::tri_tri_moller(small, above));
   CHECK_FALSE(bench::tri_tri_float(small, above));
 }
 

@@ -34,10 +34,10 @@ namespace peelcd::bench {
 // triangles), its plane-distance snap at the input's float rounding (not his absolute 1e-6):
 // true when the triangles meet.
 bool tri_tri_float(const std::array<float, 9>& t, const std::array<float, 9>& u);
-// Moller's test as published (tritri.c's NoDivTriTriIsect with USE_EPSILON_TEST, EPSILON 1e-6,
-// absolute), in float on the coordinates as given: the test Embree's and Bullet's users reach
-// for, and the peers' default. It snaps plane distances under 1e-6 to 0 whatever the scale, and
-// its products underflow for small triangles: its misses and false pairs are the peers' rows'.
+// Moller's test as published (tritri.c's NoDivTriTriIsect, its USE_EPSILON_TEST switch off), in
+// float on the coordinates as given: the test Embree's and Bullet's users reach for, and the
+// peers' default. Its products underflow for small triangles and its signs round: its misses
+// and false pairs are the peers' rows'.
 bool tri_tri_moller(const std::array<float, 9>& t, const std::array<float, 9>& u);
 
 // Which float test a peer runs on its candidate couples: Moller's as published (the default),
