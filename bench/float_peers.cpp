@@ -98,6 +98,34 @@ bool intervals(float vv0, float vv1, float vv2, float d0, float d1, float d2, fl
   return true;
 }
 
+// Moller's test past the two plane-side checks: the two triangles' intervals on the line of
+// their planes (or the coplanar 2D test), given both normals and the corners' plane distances.
+bool moller_intervals(const float* v0, const float* v1, const float* v2, const float* u0, const float* u1,
+                      const float* u2, const F3& n1, const F3& n2, float du0, float du1, float du2, float dv0, float dv1,
+                      float dv2) {
+  const float du0du1 = du0 * du1, du0du2 = du0 * du2;
+  const float dv0dv1 = dv0 * dv1, dv0dv2 = dv0 * dv2;
+  if (dv0dv1 > 0.0f && dv0dv2 > 0.0f) return false;
+  const F3 d = cross(n1, n2);
+  int index = 0;
+  float max = std::abs(d[0]);
+  if (std::abs(d[1]) > max) max = std::abs(d[1]), index = 1;
+  if (std::abs(d[2]) > max) index = 2;
+  float a, b, c, x0, x1, e, f, g, y0, y1;
+  if (!intervals(v0[index], v1[index], v2[index], dv0, dv1, dv2, dv0dv1, dv0dv2, a, b, c, x0, x1))
+    return coplanar_tri_tri(n1, v0, v1, v2, u0, u1, u2);
+  if (!intervals(u0[index], u1[index], u2[index], du0, du1, du2, du0du1, du0du2, e, f, g, y0, y1))
+    return coplanar_tri_tri(n1, v0, v1, v2, u0, u1, u2);
+  const float xx = x0 * x1, yy = y0 * y1, xxyy = xx * yy;
+  float tmp = a * xxyy;
+  float i1a = tmp + b * x1 * yy, i1b = tmp + c * x0 * yy;
+  tmp = e * xxyy;
+  float i2a = tmp + f * xx * y1, i2b = tmp + g * xx * y0;
+  if (i1a > i1b) std::swap(i1a, i1b);
+  if (i2a > i2b) std::swap(i2a, i2b);
+  return !(i1b < i2a || i2b < i1a);
+}
+
 }  // namespace
 
 bool tri_tri_float(const std::array<float, 9>& t_in, const std::array<float, 9>& u_in) {
@@ -141,26 +169,7 @@ bool tri_tri_float(const std::array<float, 9>& t_in, const std::array<float, 9>&
   if (dv0 * dv0 < kEps2) dv0 = 0.0f;
   if (dv1 * dv1 < kEps2) dv1 = 0.0f;
   if (dv2 * dv2 < kEps2) dv2 = 0.0f;
-  const float dv0dv1 = dv0 * dv1, dv0dv2 = dv0 * dv2;
-  if (dv0dv1 > 0.0f && dv0dv2 > 0.0f) return false;
-  const F3 d = cross(n1, n2);
-  int index = 0;
-  float max = std::abs(d[0]);
-  if (std::abs(d[1]) > max) max = std::abs(d[1]), index = 1;
-  if (std::abs(d[2]) > max) index = 2;
-  float a, b, c, x0, x1, e, f, g, y0, y1;
-  if (!intervals(v0[index], v1[index], v2[index], dv0, dv1, dv2, dv0dv1, dv0dv2, a, b, c, x0, x1))
-    return coplanar_tri_tri(n1, v0, v1, v2, u0, u1, u2);
-  if (!intervals(u0[index], u1[index], u2[index], du0, du1, du2, du0du1, du0du2, e, f, g, y0, y1))
-    return coplanar_tri_tri(n1, v0, v1, v2, u0, u1, u2);
-  const float xx = x0 * x1, yy = y0 * y1, xxyy = xx * yy;
-  float tmp = a * xxyy;
-  float i1a = tmp + b * x1 * yy, i1b = tmp + c * x0 * yy;
-  tmp = e * xxyy;
-  float i2a = tmp + f * xx * y1, i2b = tmp + g * xx * y0;
-  if (i1a > i1b) std::swap(i1a, i1b);
-  if (i2a > i2b) std::swap(i2a, i2b);
-  return !(i1b < i2a || i2b < i1a);
+  return moller_intervals(v0, v1, v2, u0, u1, u2, n1, n2, du0, du1, du2, dv0, dv1, dv2);
 }
 
 bool tri_tri_moller(const std::array<float, 9>& t, const std::array<float, 9>& u) {
@@ -177,26 +186,7 @@ bool tri_tri_moller(const std::array<float, 9>& t, const std::array<float, 9>& u
   const F3 n2 = cross(sub(u1, u0), sub(u2, u0));
   const float d2 = -dot(n2, u0);
   const float dv0 = dot(n2, v0) + d2, dv1 = dot(n2, v1) + d2, dv2 = dot(n2, v2) + d2;
-  const float dv0dv1 = dv0 * dv1, dv0dv2 = dv0 * dv2;
-  if (dv0dv1 > 0.0f && dv0dv2 > 0.0f) return false;
-  const F3 d = cross(n1, n2);
-  int index = 0;
-  float max = std::abs(d[0]);
-  if (std::abs(d[1]) > max) max = std::abs(d[1]), index = 1;
-  if (std::abs(d[2]) > max) index = 2;
-  float a, b, c, x0, x1, e, f, g, y0, y1;
-  if (!intervals(v0[index], v1[index], v2[index], dv0, dv1, dv2, dv0dv1, dv0dv2, a, b, c, x0, x1))
-    return coplanar_tri_tri(n1, v0, v1, v2, u0, u1, u2);
-  if (!intervals(u0[index], u1[index], u2[index], du0, du1, du2, du0du1, du0du2, e, f, g, y0, y1))
-    return coplanar_tri_tri(n1, v0, v1, v2, u0, u1, u2);
-  const float xx = x0 * x1, yy = y0 * y1, xxyy = xx * yy;
-  float tmp = a * xxyy;
-  float i1a = tmp + b * x1 * yy, i1b = tmp + c * x0 * yy;
-  tmp = e * xxyy;
-  float i2a = tmp + f * xx * y1, i2b = tmp + g * xx * y0;
-  if (i1a > i1b) std::swap(i1a, i1b);
-  if (i2a > i2b) std::swap(i2a, i2b);
-  return !(i1b < i2a || i2b < i1a);
+  return moller_intervals(v0, v1, v2, u0, u1, u2, n1, n2, du0, du1, du2, dv0, dv1, dv2);
 }
 
 const char* to_string(TriangleTest test) { return test == TriangleTest::moller ? "moller" : "scaled"; }

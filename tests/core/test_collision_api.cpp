@@ -6,6 +6,8 @@
 #include "peelcd/core/reference.h"
 #include "peelcd/core/world.h"
 
+#include "gated_stage.h"
+
 #include <catch2/catch.hpp>
 
 #include <condition_variable>
@@ -121,42 +123,7 @@ TEST_CASE("bad meshes and poses give exceptions that name the object and the pro
                     Catch::Contains("resolution") && Catch::Contains("1048576"));
 }
 
-namespace {
-
-// A CPU image stage whose first peel of a frame waits until released: holds a frame open on one
-// thread while another thread calls the same detector.
-class GatedStage : public ImageStage {
- public:
-  const std::string& backend() const override { return inner_.backend(); }
-  const std::string& renderer() const override { return inner_.renderer(); }
-  const std::string& version() const override { return inner_.version(); }
-  int max_resolution() const override { return inner_.max_resolution(); }
-  void begin_frame() override {  // only the first frame waits
-    std::unique_lock<std::mutex> lock(m_);
-    if (entered_) return;
-    entered_ = true;
-    cv_.notify_all();
-    cv_.wait(lock, [&] { return released_; });
-  }
-  void peel(const PeelJob& job, PeelResult& out, Timings& timings) override { inner_.peel(job, out, timings); }
-  void wait_entered() {
-    std::unique_lock<std::mutex> lock(m_);
-    cv_.wait(lock, [&] { return entered_; });
-  }
-  void release() {
-    std::lock_guard<std::mutex> lock(m_);
-    released_ = true;
-    cv_.notify_all();
-  }
-
- private:
-  CpuImageStage inner_;
-  std::mutex m_;
-  std::condition_variable cv_;
-  bool entered_ = false, released_ = false;
-};
-
-}  // namespace
+using test::GatedStage;
 
 TEST_CASE("one detector called from a second thread during a frame throws a clear error, no crash", "[api]") {
   auto stage = std::make_shared<GatedStage>();

@@ -8,53 +8,22 @@
 #include "peelcd/core/reference.h"
 #include "peelcd/core/world.h"
 
+#include "gated_stage.h"
+
 #include <catch2/catch.hpp>
 
-#include <condition_variable>
 #include <functional>
-#include <mutex>
 #include <thread>
 
 using namespace peelcd;
 
 namespace {
 
-// The CPU stage, held at its first begin_frame() until release().
-class GateStage final : public ImageStage {
- public:
-  const std::string& backend() const override { return inner_.backend(); }
-  const std::string& renderer() const override { return inner_.renderer(); }
-  const std::string& version() const override { return inner_.version(); }
-  int max_resolution() const override { return inner_.max_resolution(); }
-  void begin_frame() override {
-    std::unique_lock<std::mutex> lock(m_);
-    if (!held_) {
-      held_ = true;
-      cv_.notify_all();
-      cv_.wait(lock, [&] { return released_; });
-    }
-  }
-  void peel(const PeelJob& job, PeelResult& out, Timings& timings) override { inner_.peel(job, out, timings); }
-  void wait_until_inside() {
-    std::unique_lock<std::mutex> lock(m_);
-    cv_.wait(lock, [&] { return held_; });
-  }
-  void release() {
-    std::lock_guard<std::mutex> lock(m_);
-    released_ = true;
-    cv_.notify_all();
-  }
-
- private:
-  CpuImageStage inner_;
-  std::mutex m_;
-  std::condition_variable cv_;
-  bool held_ = false, released_ = false;
-};
+using test::GatedStage;
 
 // Runs `first` on a thread until it is inside the gate, calls each of `entries` from this
 // thread (each must throw std::logic_error naming `what`), releases the gate and joins.
-void refused_while_inside(GateStage& gate, const std::function<void()>& first,
+void refused_while_inside(GatedStage& gate, const std::function<void()>& first,
                           const std::vector<std::pair<const char*, std::function<void()>>>& entries, const char* what) {
   std::exception_ptr failed;
   std::thread t([&] {
@@ -64,7 +33,7 @@ void refused_while_inside(GateStage& gate, const std::function<void()>& first,
       failed = std::current_exception();
     }
   });
-  gate.wait_until_inside();
+  gate.wait_entered();
   for (const auto& [name, call] : entries) {
     INFO(name);
     CHECK_THROWS_WITH(call(), Catch::Contains(std::string(what) + ": called from a second thread"));
@@ -83,7 +52,7 @@ DetectOptions image_stage() {
 }  // namespace
 
 TEST_CASE("World: every public entry refuses a second thread while a frame runs", "[world][threads]") {
-  const auto gate = std::make_shared<GateStage>();
+  const auto gate = std::make_shared<GatedStage>();
   World world(gate);
   const auto ball = std::make_shared<const Mesh>(make_uv_sphere(Vec3::Zero(), 1.0, 12, 24));
   const Mesh other = make_uv_sphere(Vec3(1.2, 0.1, 0.05), 1.0, 12, 24);
@@ -136,7 +105,7 @@ TEST_CASE("Detector and CollisionWorld: every public entry refuses a second thre
   const std::vector<const Object*> ptrs = {&objects[0], &objects[1]};
   const DetectOptions opt = image_stage();
   {
-    const auto gate = std::make_shared<GateStage>();
+    const auto gate = std::make_shared<GatedStage>();
     Detector detector(gate);
     FrameResult first, out;
     std::vector<CapturedView> sink;
@@ -155,7 +124,7 @@ TEST_CASE("Detector and CollisionWorld: every public entry refuses a second thre
     CHECK(got == exact_colliding_pairs(ball, other));
   }
   {
-    const auto gate = std::make_shared<GateStage>();
+    const auto gate = std::make_shared<GatedStage>();
     CollisionWorld cw(std::make_shared<Detector>(gate));
     CollisionObject oa = CollisionObject::deforming(ball, "a"), ob = CollisionObject::deforming(other, "b");
     cw.add(&oa);
