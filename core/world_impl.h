@@ -11,8 +11,6 @@
 #include "peelcd/core/self.h"
 #include "peelcd/core/worker_pool.h"
 
-#include <Eigen/SVD>
-
 #include <atomic>
 #include <map>
 #include <unordered_map>
@@ -43,7 +41,7 @@ constexpr std::size_t kWorldFrameTriangles = 8192;
 constexpr std::size_t kCopyPairs = 4;
 
 // A rigid body whose pose's linear part has a condition number (largest over smallest singular
-// value) above this is moved into world space every frame it is paired, whatever its size: the
+// value; estimated, Body::set_pose()) above this is moved into world space every frame it is paired, whatever its size: the
 // posed traversal composes one pose's inverse with the other, whose error grows with the
 // condition number (about cond * 2^-53 relative), and its boxes are grown by 1e-9 of their
 // magnitudes; 1e4 keeps that error 500 times under the growth. (Anisotropic poses with
@@ -63,10 +61,12 @@ struct Body {
   Mesh mesh;                          // deforming: world space
   Eigen::Affine3d pose = Eigen::Affine3d::Identity();
   bool ill_conditioned = false;  // the pose's condition is over kPosedConditionLimit: world space
+  // The condition estimated as |L|_F |L^-1|_F (at least the 2-norm condition, at most 3x it;
+  // 3 for a rotation): a few dozen flops, paid by every set_pose() of a moving body.
   void set_pose(const Eigen::Affine3d& p) {
     pose = p;
-    const Eigen::Vector3d sv = Eigen::JacobiSVD<Eigen::Matrix3d>(p.linear()).singularValues();
-    ill_conditioned = !(sv[0] <= kPosedConditionLimit * sv[2]);
+    const Eigen::Matrix3d linear = p.linear();
+    ill_conditioned = !(linear.norm() * linear.inverse().norm() <= kPosedConditionLimit);
   }
   Bvh tree;
   // A small rigid body this frame: its world-space mesh, and its tree refitted over it when a
