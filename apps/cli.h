@@ -91,6 +91,7 @@ struct DetectArgs {
   double max_miss = NAN;  // percent; NaN = report only
   std::string json_out;
   int repeat = 1;
+  bool gpu_timers = false;  // time the image stage's GPU passes (timer queries)
   int views = 0;  // 0 = not given
   bool check = false;
   bool quiet = false;

@@ -23,6 +23,7 @@ struct BenchArgs {
   unsigned threads = 0;  // 0: the machine's (at most 8)
   unsigned scaling = 0;  // > 0: the default World row again with this many threads
   bool short_rows = false;
+  bool no_gpu_timers = false;
   bool return_memory = false;
   std::string csv;
 };
@@ -127,6 +128,7 @@ int run_bench(const BenchArgs& a) {
   suite.threads = threads;
   suite.scaling_threads = a.scaling;
   suite.short_rows = a.short_rows;
+  suite.gpu_timers = !a.no_gpu_timers;
   suite.keep_freed_memory = !a.return_memory;
   const Progress progress;
   suite.progress = [&](std::size_t done, std::size_t total) { progress(done, total); };
@@ -163,6 +165,9 @@ std::vector<Command> add_bench_commands(CLI::App& app) {
       ->check(CLI::Range(2, 2000));
   benchmark->add_flag("--short", be.short_rows, "Only the World rows, the frame API's router and image stage, the peers "
                                                  "and the floors (for the scale scenes)");
+  benchmark->add_flag("--no-gpu-timers", be.no_gpu_timers,
+                      "No GL timer queries around the image stage's passes (the image-work table's raster, compute "
+                      "and transfer columns; on by default)");
   benchmark->add_flag("--return-memory", be.return_memory,
                       "Leave glibc's allocator as it is (by default the bench keeps freed memory in the process, so "
                       "that one method's frees do not slow the next method's frame; docs/performance.md; "

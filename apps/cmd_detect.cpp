@@ -103,8 +103,14 @@ FrameResult run_frames(Runner& runner, const std::vector<Object>& objects, const
       for (const Timings& t : timings) v.push_back(t.*f);
       return median(v);
     };
-    result.timings = {med(&Timings::aabb), med(&Timings::upload), med(&Timings::gpu),
-                      med(&Timings::readback), med(&Timings::cpu), med(&Timings::total)};
+    Timings m;
+    for (double Timings::*f : {&Timings::aabb, &Timings::upload, &Timings::gpu, &Timings::readback, &Timings::cpu,
+                               &Timings::total, &Timings::gl_wait, &Timings::gpu_raster, &Timings::gpu_compute,
+                               &Timings::gpu_transfer})
+      m.*f = med(f);
+    m.gpu_timed = result.timings.gpu_timed;
+    m.gpu_passes_untimed = result.timings.gpu_passes_untimed;
+    result.timings = m;
   }
   return result;
 }
@@ -220,6 +226,14 @@ void print_summary(FILE* human, const DetectArgs& a, const Scene& scene, const s
   std::fprintf(human, "timings (ms%s): aabb %.3f  upload %.3f  gpu %.3f  readback %.3f  cpu %.3f  total %.3f\n",
                runs > 1 ? (", median of " + std::to_string(runs)).c_str() : "", t.aabb, t.upload, t.gpu, t.readback,
                t.cpu, t.total);
+  if (result.rois_peeled)
+    std::fprintf(human, "  host work %.3f (total - GL waits %.3f)\n", t.total - t.gl_wait, t.gl_wait);
+  if (t.gpu_timed)
+    std::fprintf(human, "  GPU passes (timer queries): raster %.3f  compute %.3f  transfer %.3f%s\n", t.gpu_raster,
+                 t.gpu_compute, t.gpu_transfer,
+                 t.gpu_passes_untimed
+                     ? ("  (" + std::to_string(t.gpu_passes_untimed) + " passes' results impossible: left out)").c_str()
+                     : "");
 }
 
 }  // namespace
@@ -234,6 +248,7 @@ int run_detect(const DetectArgs& a) {
   const std::vector<Object> objects = load_objects(scene);
   progress.phase("peelcd detect: running the frame...");
   Runner runner = make_runner(a.backend, merged_gl_options(scene, a.peeler, a.resolve, a.no_batch, a.cpu_select), a.costs);
+  runner.stage->set_pass_timing(a.gpu_timers);
   std::size_t runs = 0;
   const FrameResult result = run_frames(runner, objects, opt, a.repeat, runs);
   progress.clear();
@@ -325,6 +340,9 @@ std::vector<Command> add_detect_commands(CLI::App& app) {
                    "Exit status for scripts, as grep's: 0 when anything collides, 1 when nothing does (2 bad input, 3 --max-miss)");
   detect->add_option("--repeat", d.repeat, "Run the frame N times and report median timings")
       ->check(kPositive);
+  detect->add_flag("--gpu-timers", d.gpu_timers,
+                   "Time the image stage's GPU passes with GL timer queries: raster (draws), compute (dispatches) "
+                   "and transfer (uploads, clears, copies), printed with the timings and in the JSON");
   CLI::Option* check_flag =
       detect->add_flag("--check", d.check, "Also run the exact all-pairs reference and print the miss ratio");
   detect->add_option("--max-miss", d.max_miss,

@@ -627,12 +627,13 @@ PeerFrame BulletPeer::frame(const std::vector<Object>& objects) {
       }
     }
     if (a == b) c.self_mesh = &objects[a].mesh, c.rep = &ba.rep;
+    const btPairSet& found = pairs;  // this thread's
     c.test(
-        [&pairs](std::size_t i) {
-          return std::pair<std::uint32_t, std::uint32_t>(std::uint32_t(pairs[int(i)].m_index1),
-                                                         std::uint32_t(pairs[int(i)].m_index2));
+        [&found](std::size_t i) {
+          return std::pair<std::uint32_t, std::uint32_t>(std::uint32_t(found[int(i)].m_index1),
+                                                         std::uint32_t(found[int(i)].m_index2));
         },
-        std::size_t(pairs.size()));
+        std::size_t(found.size()));
     f.per_pair[k] = c.take();
   });
   for (const auto& p : f.per_pair) f.pairs += p.size();

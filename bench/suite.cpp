@@ -82,6 +82,15 @@ Score score_peer(const PeerFrame& exact, const PeerFrame& peer) {
 
 enum class Kind { world, frame, cgal, fcl_refit, fcl_rebuild, embree_refit, embree_rebuild, embree_scaled, bullet, floor_box, floor_culled };
 
+// Where one frame of a peelcd row went (the image-work table): host work (the frame less the
+// host's GL waits), the GPU passes by timer queries, the bytes uploaded, the candidates the host
+// tested exactly and the colliding pairs among them.
+struct Split {
+  double total = 0, wait = 0, raster = 0, compute = 0, transfer = 0;
+  double uploaded = 0, geometry = 0, candidates = 0, colliding = 0, rois_peeled = 0;
+  std::size_t untimed = 0;  // passes whose timer query gave an impossible time (left out)
+};
+
 struct Row {
   std::string name, column;
   Kind kind = Kind::frame;
@@ -91,6 +100,7 @@ struct Row {
   std::vector<BodyId> bodies;
   FrameResult result;
   std::vector<double> ms, stage_ms;
+  std::vector<Split> split;
   std::vector<std::vector<double>> phase_ms;
   Score score;
   bool peelcd() const { return kind == Kind::world || kind == Kind::frame; }
@@ -117,6 +127,24 @@ double median(std::vector<double> v) {
 }
 
 namespace {
+
+Split split_of(const FrameResult& r) {
+  Split s;
+  s.total = r.timings.total;
+  s.wait = r.timings.gl_wait;
+  s.raster = r.timings.gpu_raster;
+  s.compute = r.timings.gpu_compute;
+  s.transfer = r.timings.gpu_transfer;
+  s.uploaded = double(r.bytes_uploaded);
+  s.geometry = double(r.geometry_bytes);
+  s.rois_peeled = double(r.rois_peeled);
+  s.untimed = r.timings.gpu_passes_untimed;
+  for (const PairResult& p : r.pairs) {
+    s.candidates += double(p.candidates);
+    s.colliding += double(p.colliding.size());
+  }
+  return s;
+}
 
 bool keep_freed_memory() {
 #if defined(__GLIBC__)
@@ -153,6 +181,7 @@ class SuiteRun {
     for (std::size_t f = 0; f < suite_.frames; ++f) time_frame(f);
     for (const Object& o : objects_) triangles_ += o.mesh.triangles.size();
     print_table(heap_kept);
+    print_image_work();
     if (suite_.phases > 1) print_phases();
     return csv_;
   }
@@ -189,6 +218,7 @@ class SuiteRun {
   double time_row(Row& r, const PeerFrame& ref, Score& s, double& stage_ms);
   void time_frame(std::size_t f);
   void print_table(bool heap_kept) const;
+  void print_image_work() const;
   void print_phases() const;
 };
 
@@ -369,6 +399,7 @@ void SuiteRun::time_frame(std::size_t f) {
     const double ms = time_row(r, ref, s, stage_ms);
     r.ms.push_back(ms);
     r.stage_ms.push_back(stage_ms);
+    if (r.peelcd()) r.split.push_back(split_of(r.result));
     r.phase_ms[std::size_t(phase)].push_back(ms);
     add(r.score, s);
     char line[256];
@@ -447,6 +478,52 @@ void SuiteRun::print_table(bool heap_kept) const {
                 suite_.scaling_threads, threads_, med[scaling_] / med[0], med[scaling_], med[0]);
 }
 
+// The image stage's share of each peelcd row that peeled: what the host did outside GL, what the
+// GPU's passes took, what went up the bus, and how many candidates reached the host's exact test.
+void SuiteRun::print_image_work() const {
+  const auto med = [](const std::vector<Split>& v, double Split::*f) {
+    std::vector<double> x;
+    for (const Split& s : v) x.push_back(s.*f);
+    return median(x);
+  };
+  const double exact_ms = median(rows_[0].ms);
+  bool any = false;
+  for (const Row& r : rows_) {
+    if (!r.peelcd() || med(r.split, &Split::rois_peeled) == 0) continue;
+    if (!any) {
+      std::printf("\nimage work per frame (medians over the frames; the rows above, the same runs):\n");
+      std::printf("%-38s %8s %8s %8s %8s %8s %8s %6s %9s %9s %9s %9s %6s\n", "method", "frame", "host", "GL wait",
+                  "raster", "compute", "transfer", "x dflt", "KB up", "KB mesh", "cands", "colliding", "c/col");
+      any = true;
+    }
+    const double host = med(r.split, &Split::total) - med(r.split, &Split::wait);
+    const double colliding = med(r.split, &Split::colliding), candidates = med(r.split, &Split::candidates);
+    std::printf("%-38s %8.2f %8.2f %8.2f", r.name.c_str(), med(r.split, &Split::total), host, med(r.split, &Split::wait));
+    if (gl_stage_.pass_timing())
+      std::printf(" %8.2f %8.2f %8.2f", med(r.split, &Split::raster), med(r.split, &Split::compute),
+                  med(r.split, &Split::transfer));
+    else
+      std::printf(" %8s %8s %8s", "-", "-", "-");
+    std::printf(" %6.2f %9.1f %9.1f %9.0f %9.0f %6.2f\n", exact_ms > 0 ? host / exact_ms : 0.0,
+                med(r.split, &Split::uploaded) / 1024.0, med(r.split, &Split::geometry) / 1024.0, candidates, colliding,
+                colliding > 0 ? candidates / colliding : 0.0);
+  }
+  if (!any) return;
+  std::size_t untimed = 0;
+  for (const Row& r : rows_)
+    for (const Split& s : r.split) untimed += s.untimed;
+  if (untimed)
+    std::printf("%zu GPU passes over all frames gave an impossible time (longer than the stage call) and are left out\n",
+                untimed);
+  std::printf("(frame: the row's median ms; host: frame - GL wait, the host's work outside waits for the GPU (reads back,\n"
+              " maps, query results, and memory barriers, where a software renderer finishes its work); raster, compute,\n"
+              " transfer: GPU time of draws, dispatches and uploads/clears/copies by GL timer queries%s; x dflt: host\n"
+              " against the default World row's median frame (%.2f ms); KB up: bytes the host wrote into GL buffers, KB\n"
+              " mesh: of those, corners, indices and draw entries; cands: triangle couples the host tested exactly; c/col:\n"
+              " cands per colliding pair.)\n",
+              gl_stage_.pass_timing() ? "" : " (off: --no-gpu-timers)", exact_ms);
+}
+
 void SuiteRun::print_phases() const {
   std::printf("\nper phase, median ms:\n%-7s", "phase");
   for (const Row& r : rows_) std::printf(" %9s", r.column.c_str());
@@ -477,8 +554,11 @@ std::string run_suite(const Suite& suite) {
   // docs/performance.md, "Side by side"). Every method gets the same allocator; the library
   // itself never changes it.
   const bool heap_kept = suite.keep_freed_memory && keep_freed_memory();
+  gl_stage->set_pass_timing(suite.gpu_timers);
   SuiteRun run(suite, *gl_stage);
-  return run.run(heap_kept);
+  std::string csv = run.run(heap_kept);
+  gl_stage->set_pass_timing(false);
+  return csv;
 }
 
 }  // namespace peelcd::bench

@@ -232,6 +232,7 @@ Aabb Bvh::load_vertices(const std::vector<Vec3>& vertices, Vec3* copy, std::size
 // empty box). Without it, from the doubles (`vertices`) by FBox::down() and up().
 void Bvh::refit_leaves(const std::vector<Vec3>& vertices, std::size_t begin, std::size_t end) {
 #if defined(__SSE2__)
+  (void)vertices;  // the vertex boxes of refit_vertices() hold them
   const __m128 inf = _mm_set1_ps(INFINITY), ninf = _mm_set1_ps(-INFINITY);
   // Past the second-level cache (65,536 vertices), the corners' boxes of the leaf kAhead on
   // are asked for ahead (the waving 1.3M-triangle spheres' leaves 22.4 -> 20 ms a frame, one

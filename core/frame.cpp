@@ -208,6 +208,12 @@ void FrameResult::add_image_work(const FrameResult& o) {
   timings.gpu += o.timings.gpu;
   timings.readback += o.timings.readback;
   timings.cpu += o.timings.cpu;
+  timings.gl_wait += o.timings.gl_wait;
+  timings.gpu_raster += o.timings.gpu_raster;
+  timings.gpu_compute += o.timings.gpu_compute;
+  timings.gpu_transfer += o.timings.gpu_transfer;
+  timings.gpu_timed = timings.gpu_timed || o.timings.gpu_timed;
+  timings.gpu_passes_untimed += o.timings.gpu_passes_untimed;
 }
 
 }  // namespace peelcd

@@ -47,15 +47,14 @@ bool triangles_adjacent(const Mesh& mesh, const std::vector<std::uint32_t>& rep,
 
 bool SelfTree::update(const Mesh& mesh) {
   bool build = builds == 0 || tree.empty() != mesh.triangles.empty() || triangles != mesh.triangles;
-  if (!build) {
-    tree.refit(mesh.vertices, mesh.triangles);
-    build = tree.growth() > kBvhRebuildGrowth;
-  }
   if (build) {
     tree.build(mesh.vertices, mesh.triangles);
     if (triangles != mesh.triangles) triangles = mesh.triangles;
-    ++builds;
+  } else {
+    tree.refit(mesh.vertices, mesh.triangles);
+    build = tree.rebuild_if_grown(mesh.vertices, mesh.triangles);
   }
+  builds += build;
   return build;
 }
 

@@ -47,10 +47,7 @@ void World::Impl::refit_pending(unsigned lanes) {
     Bvh& tree = r.body->tree;
     tree.refit_nodes(exact);
     r.body->refit_pending = r.body->points_loaded = false;
-    if (tree.growth() > kBvhRebuildGrowth) {
-      tree.build(r.body->mesh.vertices, r.body->mesh.triangles);
-      r.rebuilt = true;
-    }
+    r.rebuilt = tree.rebuild_if_grown(r.body->mesh.vertices, r.body->mesh.triangles);
   });
   stats.full_refits += refit_bodies.size();
   for (const RefitBody& r : refit_bodies) stats.builds += r.rebuilt;

@@ -30,8 +30,8 @@ constexpr std::uint32_t kSelfPair = 0xfffffffeu;   // a task's start: a body's s
 // from a neighbour's frame overlaps far more of it). It is, when it stands still (the copy
 // serves later frames) or has kCopyPairs pairs or more. Larger rigid bodies are never touched
 // beyond what the traversal reaches.
-// 8,192: against 4,096, test1's 4,512-triangle balls moved into world space, its frame 1.08 ->
-// 0.65 ms (boxes carried through a pose cost a transform per node pair).
+// 8,192: test1's 4,512-triangle balls go to world space (boxes carried through a pose cost a
+// transform per node pair; docs/performance.md).
 constexpr std::size_t kWorldFrameTriangles = 8192;
 // A moving small rigid body paired with this many bodies or more is copied into world space;
 // with fewer it is traversed through its pose (World::Impl::copy_paired()).
@@ -336,10 +336,7 @@ struct World::Impl {
     b.tree.refit(b.mesh.vertices, b.mesh.triangles);
     b.refit_pending = b.points_loaded = false;
     ++stats.full_refits;
-    if (b.tree.growth() > kBvhRebuildGrowth) {  // as refit_pending()
-      b.tree.build(b.mesh.vertices, b.mesh.triangles);
-      ++stats.builds;
-    }
+    stats.builds += b.tree.rebuild_if_grown(b.mesh.vertices, b.mesh.triangles);
   }
 
   void collide(const DetectOptions& opt, FrameResult& out);
@@ -365,10 +362,7 @@ struct World::Impl {
   std::optional<bool> batch_pairs;  // World::batch_image_pairs()
   bool batched_image() const {
     if (batch_pairs) return *batch_pairs;
-    const std::string& r = stage->renderer();
-    for (const char* soft : {"llvmpipe", "softpipe", "swrast"})
-      if (r.find(soft) != std::string::npos) return false;
-    return stage->backend() != "cpu";
+    return !stage->runs_on_cpu();
   }
   // The image-routed pairs' objects (two a pair), their triangles' indices in the bodies, the
   // pair each came from, and the object pairs the Detector is asked for.

@@ -43,6 +43,7 @@ void GlImageStage::peel_batch(const PeelJob* jobs, std::size_t count, PeelResult
     }
     while (i < end) i += s.peel_batched_views(jobs + i, end - i, outs + i, timings);
   }
+  s.hand_clocks(timings);
 }
 
 namespace {
@@ -260,8 +261,7 @@ void GlImageStage::Impl::upload_batch_buffer(GLuint buffer, std::size_t& capacit
     gl.NamedBufferData(buffer, GLsizeiptr(capacity), nullptr, GL_STREAM_DRAW);
   }
   if (bytes == 0) return;
-  gl.NamedBufferSubData(buffer, 0, GLsizeiptr(bytes), data);
-  geometry ? count_geometry(bytes) : count_upload(bytes);
+  geometry ? upload_geometry(buffer, 0, GLsizeiptr(bytes), data) : upload_buffer(buffer, 0, GLsizeiptr(bytes), data);
 }
 
 // The batch's corners, view records, entries (the host's first, room after them for every
@@ -275,8 +275,7 @@ void GlImageStage::Impl::upload_batch(const BatchRun& run) {
                       (run.host_entries + run.invocations) * kEntry, true);
   upload_batch_buffer(batch.jobs, batch.jobs_capacity, batch.job_data.data(), batch.job_data.size() * kEntry, 0, false);
   const std::uint32_t command[4] = {std::uint32_t(3 * run.host_entries), 1u, 0u, 0u};
-  gl.NamedBufferSubData(batch.command, 0, sizeof command, command);
-  count_upload(sizeof command);
+  upload_buffer(batch.command, 0, sizeof command, command);
 }
 
 // The selection pass: rigid objects' triangles in each view's ROI box staged, their objects'
@@ -287,8 +286,7 @@ void GlImageStage::Impl::select_batch(const BatchRun& run) {
                       batch.region_data.size() * sizeof(std::uint32_t), 0, false);
   upload_batch_buffer(batch.staged, batch.staged_capacity, nullptr, 0, (run.invocations + 1) * kEntry, false);
   const std::uint32_t staged_header[4] = {0, 0, 0, 0};
-  gl.NamedBufferSubData(batch.staged, 0, sizeof staged_header, staged_header);
-  count_upload(sizeof staged_header);
+  upload_buffer(batch.staged, 0, sizeof staged_header, staged_header);
   gl.BindBufferBase(GL_SHADER_STORAGE_BUFFER, 9, batch.jobs);
   gl.BindBufferBase(GL_SHADER_STORAGE_BUFFER, 10, batch.command);
   gl.BindBufferBase(GL_SHADER_STORAGE_BUFFER, 13, batch.staged);
@@ -302,9 +300,8 @@ void GlImageStage::Impl::select_batch(const BatchRun& run) {
   gl.Uniform1i(select.conservative, run.point ? 0 : 1);
   for (int pass = 0; pass < 2; ++pass) {
     gl.Uniform1i(select.pass, pass);
-    gl.DispatchCompute(GLuint(gx), GLuint(gy), 1);
-    count_dispatch();
-    gl.MemoryBarrier(GL_SHADER_STORAGE_BARRIER_BIT | GL_COMMAND_BARRIER_BIT);
+    dispatch(GLuint(gx), GLuint(gy), 1);
+    barrier(GL_SHADER_STORAGE_BARRIER_BIT | GL_COMMAND_BARRIER_BIT);
   }
 }
 
@@ -314,9 +311,7 @@ void GlImageStage::Impl::select_batch(const BatchRun& run) {
 void GlImageStage::Impl::count_batch(BatchRun& run, Timings& t) {
   ensure_bare_fbo(std::max(run.largest, bare_size));
   ensure_kbuffer(run.texels, 1);  // the counts; the fragments are sized by the count pass
-  const GLuint zero = 0;
-  gl.ClearNamedBufferSubData(count_buffer, GL_R32UI, 0, GLsizeiptr(run.texels * 4), GL_RED_INTEGER, GL_UNSIGNED_INT,
-                             &zero);
+  clear_buffer(count_buffer, GLsizeiptr(run.texels * 4));
   gl.BindBufferBase(GL_SHADER_STORAGE_BUFFER, 2, count_buffer);
   gl.BindBufferBase(GL_SHADER_STORAGE_BUFFER, 3, batch.views);
   gl.BindBufferBase(GL_SHADER_STORAGE_BUFFER, 4, batch.entries);
@@ -335,9 +330,8 @@ void GlImageStage::Impl::count_batch(BatchRun& run, Timings& t) {
   for (int i = 0; i < 6; ++i) run.point ? gl.Enable(GL_CLIP_DISTANCE0 + i) : gl.Disable(GL_CLIP_DISTANCE0 + i);
   gl.BindVertexArray(batch.vao);
   gl.Uniform1i(run.point ? point_batch.count_only : cons_batch.count_only, 1);
-  gl.DrawArraysIndirect(GL_TRIANGLES, nullptr);
-  count_draw();
-  gl.MemoryBarrier(GL_BUFFER_UPDATE_BARRIER_BIT);
+  timed_draw([&] { gl.DrawArraysIndirect(GL_TRIANGLES, nullptr); });
+  barrier(GL_BUFFER_UPDATE_BARRIER_BIT);
   batch_offsets(run, t);
 }
 
@@ -360,7 +354,7 @@ void GlImageStage::Impl::batch_offsets(BatchRun& run, Timings& t) {
       batch.scan_blocks_capacity = std::max(blocks * 4, batch.scan_blocks_capacity * 3 / 2);
       gl.NamedBufferData(batch.scan_blocks, GLsizeiptr(batch.scan_blocks_capacity), nullptr, GL_DYNAMIC_COPY);
     }
-    gl.MemoryBarrier(GL_SHADER_STORAGE_BARRIER_BIT);
+    barrier(GL_SHADER_STORAGE_BARRIER_BIT);
     gl.BindBufferBase(GL_SHADER_STORAGE_BUFFER, 6, batch.offset_buffer);
     gl.BindBufferBase(GL_SHADER_STORAGE_BUFFER, 11, batch.scan_blocks);
     gl.BindBufferBase(GL_SHADER_STORAGE_BUFFER, 12, batch.scan_total);
@@ -369,16 +363,13 @@ void GlImageStage::Impl::batch_offsets(BatchRun& run, Timings& t) {
     gl.Uniform1ui(prefix_sum.blocks, GLuint(blocks));
     for (int pass = 0; pass < 3; ++pass) {
       gl.Uniform1i(prefix_sum.pass, pass);
-      gl.DispatchCompute(pass == 1 ? 1u : GLuint(blocks), 1, 1);
-      count_dispatch();
-      gl.MemoryBarrier(GL_SHADER_STORAGE_BARRIER_BIT | GL_BUFFER_UPDATE_BARRIER_BIT);
+      dispatch(pass == 1 ? 1u : GLuint(blocks), 1, 1);
+      barrier(GL_SHADER_STORAGE_BARRIER_BIT | GL_BUFFER_UPDATE_BARRIER_BIT);
     }
     const auto t_total = Clock::now();
     std::uint32_t sum = 0;
-    gl.GetNamedBufferSubData(batch.scan_total, 0, sizeof sum, &sum);
-    count_read(sizeof sum);
-    gl.GetNamedBufferSubData(batch.command, 0, sizeof drawn, drawn);
-    count_read(sizeof drawn);
+    read_buffer(batch.scan_total, 0, sizeof sum, &sum);
+    read_buffer(batch.command, 0, sizeof drawn, drawn);
     t.readback += ms_since(t_total);
     run.total = sum == 0xffffffffu ? std::numeric_limits<std::size_t>::max() : sum;
     gl.UseProgram(run.point ? point_batch.id : cons_batch.id);
@@ -386,8 +377,7 @@ void GlImageStage::Impl::batch_offsets(BatchRun& run, Timings& t) {
     run.total = read_batch_counts(run.texels, t);
     run.deepest = batch.deepest;
     const auto t_counts = Clock::now();
-    gl.GetNamedBufferSubData(batch.command, 0, sizeof drawn, drawn);
-    count_read(sizeof drawn);
+    read_buffer(batch.command, 0, sizeof drawn, drawn);
     t.readback += ms_since(t_counts);
   }
   run.selected = drawn[0] / 3 - run.host_entries;  // by the selection pass
@@ -396,22 +386,18 @@ void GlImageStage::Impl::batch_offsets(BatchRun& run, Timings& t) {
 // The fill pass: every fragment stored at its texel's offset (the counts count again).
 void GlImageStage::Impl::fill_batch(const BatchRun& run) {
   if (!run.gpu_sum) {
-    gl.NamedBufferSubData(batch.offset_buffer, 0, GLsizeiptr(run.texels * 4), batch.offsets.data());
-    count_upload(run.texels * 4);
+    upload_buffer(batch.offset_buffer, 0, GLsizeiptr(run.texels * 4), batch.offsets.data());
   }
   ensure_fragments(std::max<std::size_t>(run.total, 1));
-  const GLuint zero = 0;
-  gl.ClearNamedBufferSubData(count_buffer, GL_R32UI, 0, GLsizeiptr(run.texels * 4), GL_RED_INTEGER, GL_UNSIGNED_INT,
-                             &zero);
+  clear_buffer(count_buffer, GLsizeiptr(run.texels * 4));
   gl.BindBufferBase(GL_SHADER_STORAGE_BUFFER, 1, fragment_buffer);
   gl.BindBufferBase(GL_SHADER_STORAGE_BUFFER, 6, batch.offset_buffer);
   gl.Uniform1i(run.point ? point_batch.count_only : cons_batch.count_only, 0);
-  gl.DrawArraysIndirect(GL_TRIANGLES, nullptr);
-  count_draw();
+  timed_draw([&] { gl.DrawArraysIndirect(GL_TRIANGLES, nullptr); });
   gl.BindBuffer(GL_DRAW_INDIRECT_BUFFER, 0);
   gl.BindVertexArray(vao);
   gl.BindFramebuffer(GL_FRAMEBUFFER, 0);
-  gl.MemoryBarrier(GL_BUFFER_UPDATE_BARRIER_BIT | GL_TEXTURE_FETCH_BARRIER_BIT);
+  barrier(GL_BUFFER_UPDATE_BARRIER_BIT | GL_TEXTURE_FETCH_BARRIER_BIT);
   check("the batched draws");
 }
 
@@ -440,8 +426,8 @@ std::size_t GlImageStage::Impl::resident_base(const std::shared_ptr<const Mesh>&
     gl.NamedBufferData(grown, GLsizeiptr(capacity * sizeof(GpuVertex)), nullptr, GL_STATIC_DRAW);
     std::size_t at = 0;
     for (auto& [k, r] : resident) {
-      gl.CopyNamedBufferSubData(resident_buffer, grown, GLintptr(r.base * sizeof(GpuVertex)),
-                                GLintptr(at * sizeof(GpuVertex)), GLsizeiptr(r.corners * sizeof(GpuVertex)));
+      copy_buffer(resident_buffer, grown, GLintptr(r.base * sizeof(GpuVertex)), GLintptr(at * sizeof(GpuVertex)),
+                  GLsizeiptr(r.corners * sizeof(GpuVertex)));
       r.base = at;
       at += r.corners;
     }
@@ -451,8 +437,8 @@ std::size_t GlImageStage::Impl::resident_base(const std::shared_ptr<const Mesh>&
     resident_used = at;
   }
   if (corners)
-    gl.CopyNamedBufferSubData(cached.vbo, resident_buffer, 0, GLintptr(resident_used * sizeof(GpuVertex)),
-                              GLsizeiptr(corners * sizeof(GpuVertex)));
+    copy_buffer(cached.vbo, resident_buffer, 0, GLintptr(resident_used * sizeof(GpuVertex)),
+                GLsizeiptr(corners * sizeof(GpuVertex)));
   ResidentShape r;
   r.owner = shape;
   r.base = resident_used;

@@ -20,17 +20,15 @@ double GlImageStage::Impl::resolve_batch_on_host(const PeelJob* jobs, PeelResult
   if (run.selected) {
     const auto t_entries = Clock::now();
     batch.entry_data.resize(run.host_entries + run.selected);
-    gl.GetNamedBufferSubData(batch.entries, GLintptr(run.host_entries * kEntry), GLsizeiptr(run.selected * kEntry),
-                             batch.entry_data.data() + run.host_entries);
-    count_read(run.selected * kEntry);
+    read_buffer(batch.entries, GLintptr(run.host_entries * kEntry), GLsizeiptr(run.selected * kEntry),
+                batch.entry_data.data() + run.host_entries);
     t.readback += ms_since(t_entries);
     for (std::size_t k = run.host_entries; k < batch.entry_data.size(); ++k) batch.ids.push_back(batch.entry_data[k][2]);
   }
   const auto t_map = Clock::now();
-  const auto* fragments = static_cast<const KFragment*>(
-      gl.MapNamedBufferRange(fragment_buffer, 0, GLsizeiptr(run.total * sizeof(KFragment)), GL_MAP_READ_BIT));
+  const auto* fragments =
+      static_cast<const KFragment*>(map_for_reading(fragment_buffer, run.total * sizeof(KFragment)));
   const double map_ms = ms_since(t_map);
-  count_read(run.total * sizeof(KFragment));
   t.readback += map_ms;
   if (!fragments && run.total) {
     check("mapping the packed k-buffer");
@@ -72,8 +70,7 @@ double GlImageStage::Impl::resolve_batch_on_host(const PeelJob* jobs, PeelResult
 std::size_t GlImageStage::Impl::read_batch_counts(std::size_t texels, Timings& t) {
   const auto t_counts = Clock::now();
   batch.counts.resize(texels);
-  gl.GetNamedBufferSubData(count_buffer, 0, GLsizeiptr(texels * 4), batch.counts.data());
-  count_read(texels * 4);
+  read_buffer(count_buffer, 0, GLsizeiptr(texels * 4), batch.counts.data());
   t.readback += ms_since(t_counts);
   batch.offsets.resize(texels);
   std::size_t total = 0;
@@ -93,10 +90,9 @@ void GlImageStage::Impl::dispatch_deep_rows(const DeepHeader& deep, std::size_t 
   gl.Uniform1ui(cons_deep.texels, GLuint(texels));
   for (std::size_t base = 0; base < deep.row_count; base += 65535) {
     gl.Uniform1ui(cons_deep.row_base, GLuint(base));
-    gl.DispatchCompute(GLuint(std::min<std::size_t>(deep.row_count - base, 65535)), deep.max_blocks, 1);
-    count_dispatch();
+    dispatch(GLuint(std::min<std::size_t>(deep.row_count - base, 65535)), deep.max_blocks, 1);
   }
-  gl.MemoryBarrier(GL_BUFFER_UPDATE_BARRIER_BIT | GL_SHADER_STORAGE_BARRIER_BIT);
+  barrier(GL_BUFFER_UPDATE_BARRIER_BIT | GL_SHADER_STORAGE_BARRIER_BIT);
   gl.UseProgram(cons_batch_resolve.id);
 }
 
@@ -108,8 +104,7 @@ bool GlImageStage::Impl::resolve_batch_on_gpu(std::size_t take, std::size_t texe
     batch.layers_capacity = std::max(layer_bytes, batch.layers_capacity * 3 / 2);
     gl.NamedBufferData(batch.layers, GLsizeiptr(batch.layers_capacity), nullptr, GL_DYNAMIC_READ);
   }
-  const GLuint zero = 0;
-  gl.ClearNamedBufferSubData(batch.layers, GL_R32UI, 0, GLsizeiptr(layer_bytes), GL_RED_INTEGER, GL_UNSIGNED_INT, &zero);
+  clear_buffer(batch.layers, GLsizeiptr(layer_bytes));
   gl.BindBufferBase(GL_SHADER_STORAGE_BUFFER, 0, pcs_buffer);
   gl.BindBufferBase(GL_SHADER_STORAGE_BUFFER, 4, batch.entries);
   gl.BindBufferBase(GL_SHADER_STORAGE_BUFFER, 5, batch.layers);
@@ -127,27 +122,22 @@ bool GlImageStage::Impl::resolve_batch_on_gpu(std::size_t take, std::size_t texe
   DeepHeader deep{};
   for (;;) {  // the list's pairs are 16 bytes here (IDs and view): half as many fit
     const PcsHeader header{0, pcs_capacity / 2, 0, 0};
-    gl.NamedBufferSubData(pcs_buffer, 0, sizeof header, &header);
-    count_upload(sizeof header);
+    upload_buffer(pcs_buffer, 0, sizeof header, &header);
     if (!point) {
       const DeepHeader empty{0, std::uint32_t(batch.deep_rows_capacity), 0, 0};
-      gl.NamedBufferSubData(batch.deep_rows, 0, sizeof empty, &empty);
-      count_upload(sizeof empty);
+      upload_buffer(batch.deep_rows, 0, sizeof empty, &empty);
     }
-    gl.DispatchCompute(GLuint((texels + 63) / 64), 1, 1);
-    count_dispatch();
-    gl.MemoryBarrier(GL_BUFFER_UPDATE_BARRIER_BIT | GL_SHADER_STORAGE_BARRIER_BIT);
+    dispatch(GLuint((texels + 63) / 64), 1, 1);
+    barrier(GL_BUFFER_UPDATE_BARRIER_BIT | GL_SHADER_STORAGE_BARRIER_BIT);
     const auto t_read = Clock::now();
-    gl.GetNamedBufferSubData(pcs_buffer, 0, sizeof got, &got);
-    count_read(sizeof got);
+    read_buffer(pcs_buffer, 0, sizeof got, &got);
     t.readback += ms_since(t_read);
     if (got.max_fragments) return false;  // a texel deeper than this resolve takes
     // Conservative: texels deeper than PEELCD_GPU_RESOLVE_DEPTH left rows for the second program
     // (the deepest texel's count, max_layers, says whether any did: no read otherwise).
     if (!point && got.max_layers > PEELCD_GPU_RESOLVE_DEPTH) {
       const auto t_deep = Clock::now();
-      gl.GetNamedBufferSubData(batch.deep_rows, 0, sizeof deep, &deep);
-      count_read(sizeof deep);
+      read_buffer(batch.deep_rows, 0, sizeof deep, &deep);
       t.readback += ms_since(t_deep);
       if (deep.row_count > batch.deep_rows_capacity) {  // larger, and the dispatch again
         batch.deep_rows_capacity = std::size_t(deep.row_count) * 3 / 2;
@@ -158,8 +148,7 @@ bool GlImageStage::Impl::resolve_batch_on_gpu(std::size_t take, std::size_t texe
       }
       dispatch_deep_rows(deep, texels);
       const auto t_again = Clock::now();
-      gl.GetNamedBufferSubData(pcs_buffer, 0, sizeof got, &got);
-      count_read(sizeof got);
+      read_buffer(pcs_buffer, 0, sizeof got, &got);
       t.readback += ms_since(t_again);
     }
     if (got.count <= pcs_capacity / 2) break;
@@ -169,12 +158,10 @@ bool GlImageStage::Impl::resolve_batch_on_gpu(std::size_t take, std::size_t texe
   counters->deep_texels += deep.deep_texels;
   const auto t_read = Clock::now();
   batch.view_layers.resize(take);
-  gl.GetNamedBufferSubData(batch.layers, 0, GLsizeiptr(layer_bytes), batch.view_layers.data());
-  count_read(layer_bytes);
+  read_buffer(batch.layers, 0, GLsizeiptr(layer_bytes), batch.view_layers.data());
   batch.pairs.resize(std::size_t(got.count) * 4);
   if (got.count) {
-    gl.GetNamedBufferSubData(pcs_buffer, sizeof(PcsHeader), GLsizeiptr(got.count) * 16, batch.pairs.data());
-    count_read(std::size_t(got.count) * 16);
+    read_buffer(pcs_buffer, sizeof(PcsHeader), GLsizeiptr(got.count) * 16, batch.pairs.data());
   }
   t.readback += ms_since(t_read);
   check("the GPU resolve of the packed k-buffer");

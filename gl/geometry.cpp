@@ -61,8 +61,8 @@ const GlImageStage::Impl::CachedShape& GlImageStage::Impl::cached_shape(const st
   c.provoking_ids.reserve(c.corners / 3);
   for (std::size_t i = 2; i < corners_local.size(); i += 3) c.provoking_ids.push_back(corners_local[i].id);
   gl.CreateBuffers(1, &c.vbo);
-  gl.NamedBufferData(c.vbo, GLsizeiptr(corners_local.size() * sizeof(GpuVertex)), corners_local.data(), GL_STATIC_DRAW);
-  count_geometry(corners_local.size() * sizeof(GpuVertex));
+  gl.NamedBufferData(c.vbo, GLsizeiptr(corners_local.size() * sizeof(GpuVertex)), nullptr, GL_STATIC_DRAW);
+  upload_geometry(c.vbo, 0, GLsizeiptr(corners_local.size() * sizeof(GpuVertex)), corners_local.data());
   ++shape_uploads;
   return shapes.emplace(std::make_pair(shape.get(), ids), std::move(c)).first->second;
 }
@@ -84,15 +84,13 @@ void GlImageStage::Impl::draw(int slot, GLint u_model) {
   if (!slot_shape[slot]) {
     gl.UniformMatrix4fv(u_model, 1, GL_FALSE, identity);
     gl.VertexArrayVertexBuffer(vao, 0, vbo[slot], 0, sizeof(GpuVertex));
-    gl.DrawArrays(GL_TRIANGLES, 0, GLsizei(staging[slot].size()));
-    count_draw();
+    timed_draw([&] { gl.DrawArrays(GL_TRIANGLES, 0, GLsizei(staging[slot].size())); });
     return;
   }
   gl.UniformMatrix4fv(u_model, 1, GL_FALSE, slot_model[slot].data());
   gl.VertexArrayVertexBuffer(vao, 0, slot_shape[slot]->vbo, 0, sizeof(GpuVertex));
   gl.VertexArrayElementBuffer(vao, ibo[slot]);
-  gl.DrawElements(GL_TRIANGLES, GLsizei(indices[slot].size()), GL_UNSIGNED_INT, nullptr);
-  count_draw();
+  timed_draw([&] { gl.DrawElements(GL_TRIANGLES, GLsizei(indices[slot].size()), GL_UNSIGNED_INT, nullptr); });
 }
 
 void GlImageStage::Impl::upload(int slot) {
@@ -102,8 +100,7 @@ void GlImageStage::Impl::upload(int slot) {
       ibo_capacity[slot] = std::max<std::size_t>(n, ibo_capacity[slot] * 3 / 2);
       gl.NamedBufferData(ibo[slot], ibo_capacity[slot] * sizeof(std::uint32_t), nullptr, GL_STREAM_DRAW);
     }
-    gl.NamedBufferSubData(ibo[slot], 0, n * sizeof(std::uint32_t), indices[slot].data());
-    count_geometry(n * sizeof(std::uint32_t));
+    upload_geometry(ibo[slot], 0, n * sizeof(std::uint32_t), indices[slot].data());
     return;
   }
   const std::size_t n = staging[slot].size();
@@ -111,8 +108,7 @@ void GlImageStage::Impl::upload(int slot) {
     vbo_capacity[slot] = std::max<std::size_t>(n, vbo_capacity[slot] * 3 / 2);
     gl.NamedBufferData(vbo[slot], vbo_capacity[slot] * sizeof(GpuVertex), nullptr, GL_STREAM_DRAW);
   }
-  gl.NamedBufferSubData(vbo[slot], 0, n * sizeof(GpuVertex), staging[slot].data());
-  count_geometry(n * sizeof(GpuVertex));
+  upload_geometry(vbo[slot], 0, n * sizeof(GpuVertex), staging[slot].data());
 }
 
 }  // namespace peelcd::gl

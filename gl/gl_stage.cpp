@@ -31,6 +31,7 @@ const std::string& GlImageStage::backend() const { return impl_->backend; }
 const std::string& GlImageStage::renderer() const { return impl_->renderer; }
 const std::string& GlImageStage::version() const { return impl_->version; }
 int GlImageStage::max_resolution() const { return impl_->max_texture; }
+bool GlImageStage::runs_on_cpu() const { return impl_->software_renderer; }
 
 StageCost GlImageStage::cost() const {
   // llvmpipe: fitted by `peelcd calibrate --backend osmesa` on 2 cores (2026-11-25, after the
@@ -72,13 +73,18 @@ double GlImageStage::floor_draw_ms(const PeelJob& job) {
   for (int slot = 0; slot < 2; ++slot) s.draw(slot, s.floor_draw.model);
   s.gl.Finish();
   const double ms = ms_since(t0);
+  Timings untimed;  // the floor is no frame's: its timer queries (with pass timing) dropped
+  s.timers.collect(untimed);
   s.gl.BindFramebuffer(GL_FRAMEBUFFER, 0);
   s.check("the floor draw");
   return ms;
 }
 
 // The stage's one-view entry: the view's geometry uploaded, then peeled by the configured peeler.
-void GlImageStage::peel(const PeelJob& job, PeelResult& out, Timings& timings) { impl_->peel_one(job, out, timings); }
+void GlImageStage::peel(const PeelJob& job, PeelResult& out, Timings& timings) {
+  impl_->peel_one(job, out, timings);
+  impl_->hand_clocks(timings);
+}
 
 
 void GlImageStage::Impl::peel_one(const PeelJob& job, PeelResult& out, Timings& timings) {

@@ -11,8 +11,7 @@ bool GlImageStage::Impl::peel_multipass(const PeelJob& job, PeelResult& out, Tim
   const int n = view.resolution;
   ensure_layers(n);
   const PcsHeader header{0, pcs_capacity, 0, 0};
-  gl.NamedBufferSubData(pcs_buffer, 0, sizeof header, &header);
-  count_upload(sizeof header);
+  upload_buffer(pcs_buffer, 0, sizeof header, &header);
   gl.BindBufferBase(GL_SHADER_STORAGE_BUFFER, 0, pcs_buffer);
 
   gl.UseProgram(peel.id);
@@ -64,30 +63,30 @@ bool GlImageStage::Impl::peel_multipass(const PeelJob& job, PeelResult& out, Tim
     ++out.gl_passes;
     check("a peel pass");
     GLuint any = 0;
-    gl.GetQueryObjectuiv(query, GL_QUERY_RESULT, &any);
-    count_read(sizeof any);
+    {
+      const GlWait wait(wait_ms);
+      gl.GetQueryObjectuiv(query, GL_QUERY_RESULT, &any);
+      count_read(sizeof any);
+    }
     if (!any) break;  // the whole ROI ended
     ++out.layers;
     if (job.capture) {
       std::vector<std::uint32_t>& texels = out.captured.emplace_back(std::size_t(n) * n * 4);
-      gl.GetTextureImage(layer_tex[cur], 0, GL_RGBA_INTEGER, GL_UNSIGNED_INT,
-                         GLsizei(texels.size() * sizeof(std::uint32_t)), texels.data());
-      count_read(texels.size() * sizeof(std::uint32_t));
+      read_texture(layer_tex[cur], texels);
       check("layer capture");
     }
     if (k == 0) continue;
     gl.UseProgram(pcs.id);
     gl.BindTextureUnit(0, layer_tex[prev]);
     gl.BindTextureUnit(1, layer_tex[cur]);
-    gl.DispatchCompute(GLuint((n + 7) / 8), GLuint((n + 7) / 8), 1);
-    count_dispatch();
+    dispatch(GLuint((n + 7) / 8), GLuint((n + 7) / 8), 1);
     // The next dispatch reads run_start and appends to the same buffer.
-    gl.MemoryBarrier(GL_SHADER_IMAGE_ACCESS_BARRIER_BIT | GL_SHADER_STORAGE_BARRIER_BIT);
+    barrier(GL_SHADER_IMAGE_ACCESS_BARRIER_BIT | GL_SHADER_STORAGE_BARRIER_BIT);
     ++out.gl_passes;
     check("a PCS pass");
   }
   gl.BindFramebuffer(GL_FRAMEBUFFER, 0);
-  gl.MemoryBarrier(GL_BUFFER_UPDATE_BARRIER_BIT);
+  barrier(GL_BUFFER_UPDATE_BARRIER_BIT);
   t.gpu += ms_since(t_gpu);
   return read_pcs(out, t);
 }
@@ -98,8 +97,7 @@ bool GlImageStage::Impl::read_pcs(PeelResult& out, Timings& t, const PcsHeader* 
   if (header)
     got = *header;
   else {
-    gl.GetNamedBufferSubData(pcs_buffer, 0, sizeof got, &got);
-    count_read(sizeof got);
+    read_buffer(pcs_buffer, 0, sizeof got, &got);
   }
   if (got.count > pcs_capacity) {
     grow_pcs(got.count + got.count / 2);
@@ -108,8 +106,7 @@ bool GlImageStage::Impl::read_pcs(PeelResult& out, Timings& t, const PcsHeader* 
   }
   out.pcs.resize(got.count);
   if (got.count) {
-    gl.GetNamedBufferSubData(pcs_buffer, sizeof(PcsHeader), GLsizeiptr(got.count) * 8, out.pcs.data());
-    count_read(std::size_t(got.count) * 8);
+    read_buffer(pcs_buffer, sizeof(PcsHeader), GLsizeiptr(got.count) * 8, out.pcs.data());
     ++out.pcs_readbacks;
   }
   check("PCS readback");

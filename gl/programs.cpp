@@ -19,6 +19,7 @@ GlImageStage::Impl::Impl(std::shared_ptr<Context> ctx, const GlOptions& opt)
   if (version_loaded == 0 || GLAD_VERSION_MAJOR(version_loaded) * 10 + GLAD_VERSION_MINOR(version_loaded) < 45)
     throw GlError("peelcd::gl::GlImageStage: the " + context->backend() +
                   " context does not provide OpenGL 4.5 core");
+  timers.bind(gl);
   renderer = reinterpret_cast<const char*>(gl.GetString(GL_RENDERER));
   version = reinterpret_cast<const char*>(gl.GetString(GL_VERSION));
   for (const char* soft : {"llvmpipe", "softpipe", "swrast"})
@@ -190,6 +191,7 @@ GlImageStage::Impl::~Impl() {
   } catch (const GlError&) {
     return;  // the context is gone: its objects went with it
   }
+  timers.release();
   gl.DeleteProgram(peel.id);
   gl.DeleteProgram(pcs.id);
   gl.DeleteProgram(floor_draw.id);

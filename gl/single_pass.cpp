@@ -14,12 +14,9 @@ void GlImageStage::Impl::start_kbuffer(int n, std::uint32_t view_slots) {
   const std::size_t texels = std::size_t(n) * std::size_t(n);
   ensure_bare_fbo(n);
   ensure_kbuffer(texels, view_slots);
-  const GLuint zero = 0;
-  gl.ClearNamedBufferSubData(count_buffer, GL_R32UI, 0, GLsizeiptr(texels * 4), GL_RED_INTEGER, GL_UNSIGNED_INT,
-                             &zero);
+  clear_buffer(count_buffer, GLsizeiptr(texels * 4));
   const PcsHeader header{0, pcs_capacity, 0, 0};
-  gl.NamedBufferSubData(pcs_buffer, 0, sizeof header, &header);
-  count_upload(sizeof header);
+  upload_buffer(pcs_buffer, 0, sizeof header, &header);
   gl.BindBufferBase(GL_SHADER_STORAGE_BUFFER, 0, pcs_buffer);
   gl.BindBufferBase(GL_SHADER_STORAGE_BUFFER, 1, fragment_buffer);
   gl.BindBufferBase(GL_SHADER_STORAGE_BUFFER, 2, count_buffer);
@@ -45,13 +42,10 @@ void GlImageStage::Impl::capture_resolved(int n, int layers, GLint u_append, GLi
   for (int k = 0; k < layers; ++k) {
     gl.ClearTexImage(layer_tex[0], 0, GL_RGBA_INTEGER, GL_UNSIGNED_INT, zero4);
     gl.Uniform1i(u_emit, k);
-    gl.DispatchCompute(GLuint((n + 7) / 8), GLuint((n + 7) / 8), 1);
-    count_dispatch();
-    gl.MemoryBarrier(GL_TEXTURE_UPDATE_BARRIER_BIT | GL_SHADER_IMAGE_ACCESS_BARRIER_BIT);
+    dispatch(GLuint((n + 7) / 8), GLuint((n + 7) / 8), 1);
+    barrier(GL_TEXTURE_UPDATE_BARRIER_BIT | GL_SHADER_IMAGE_ACCESS_BARRIER_BIT);
     std::vector<std::uint32_t>& texels = out.captured.emplace_back(std::size_t(n) * n * 4);
-    gl.GetTextureImage(layer_tex[0], 0, GL_RGBA_INTEGER, GL_UNSIGNED_INT, GLsizei(texels.size() * sizeof(std::uint32_t)),
-                       texels.data());
-    count_read(texels.size() * sizeof(std::uint32_t));
+    read_texture(layer_tex[0], texels);
   }
   check("layer capture");
 }
@@ -92,7 +86,7 @@ bool GlImageStage::Impl::peel_single_pass(const PeelJob& job, PeelResult& out, T
   if (host_resolve())
     return resolve_on_host(job, fitting, view_slots, t_gpu, out, t);
   // The resolve reads what the draw stored through buffer textures (texture fetches).
-  gl.MemoryBarrier(GL_SHADER_STORAGE_BARRIER_BIT | GL_TEXTURE_FETCH_BARRIER_BIT);
+  barrier(GL_SHADER_STORAGE_BARRIER_BIT | GL_TEXTURE_FETCH_BARRIER_BIT);
   ++out.gl_passes;
   check("the k-buffer draw");
 
@@ -113,14 +107,12 @@ bool GlImageStage::Impl::dispatch_resolve(const PeelJob& job, std::size_t fittin
   const int n = job.view.resolution;
   gl.Uniform1i(u_append, 1);
   gl.Uniform1i(u_emit, -1);
-  gl.DispatchCompute(GLuint((n + 7) / 8), GLuint((n + 7) / 8), 1);
-  count_dispatch();
-  gl.MemoryBarrier(GL_BUFFER_UPDATE_BARRIER_BIT | GL_SHADER_STORAGE_BARRIER_BIT);
+  dispatch(GLuint((n + 7) / 8), GLuint((n + 7) / 8), 1);
+  barrier(GL_BUFFER_UPDATE_BARRIER_BIT | GL_SHADER_STORAGE_BARRIER_BIT);
   ++out.gl_passes;
   check(what);
   PcsHeader got{};
-  gl.GetNamedBufferSubData(pcs_buffer, 0, sizeof got, &got);
-  count_read(sizeof got);
+  read_buffer(pcs_buffer, 0, sizeof got, &got);
   if (got.max_fragments > view_slots) {
     t.gpu += ms_since(t_gpu);
     return regrow(got.max_fragments, fitting, job, out, t);
@@ -174,15 +166,12 @@ bool GlImageStage::Impl::resolve_on_host(const PeelJob& job, std::size_t fitting
     for (std::size_t i = 0; i < by_order.size(); ++i) by_order[i] = staging[slot][3 * i + 2].id;
     ids[slot] = by_order.data();
   }
-  gl.MemoryBarrier(GL_BUFFER_UPDATE_BARRIER_BIT);
+  barrier(GL_BUFFER_UPDATE_BARRIER_BIT);
   const auto t_map = Clock::now();
-  const auto* counts = static_cast<const std::uint32_t*>(
-      gl.MapNamedBufferRange(count_buffer, 0, GLsizeiptr(texels * 4), GL_MAP_READ_BIT));
-  const auto* fragments = static_cast<const KFragment*>(gl.MapNamedBufferRange(
-      fragment_buffer, 0, GLsizeiptr(texels * view_slots * sizeof(KFragment)), GL_MAP_READ_BIT));
+  const auto* counts = static_cast<const std::uint32_t*>(map_for_reading(count_buffer, texels * 4));
+  const auto* fragments =
+      static_cast<const KFragment*>(map_for_reading(fragment_buffer, texels * view_slots * sizeof(KFragment)));
   const double map_ms = ms_since(t_map);  // a wait for the draw, then (llvmpipe) no copy
-  count_read(texels * 4);
-  count_read(texels * view_slots * sizeof(KFragment));
   t.readback += map_ms;
   if (!counts || !fragments) {
     if (counts) gl.UnmapNamedBuffer(count_buffer);
@@ -260,7 +249,7 @@ bool GlImageStage::Impl::peel_conservative(const PeelJob& job, PeelResult& out, 
   out.slope = 0.0f;
   if (host_resolve())
     return resolve_on_host(job, fitting, view_slots, t_gpu, out, t);
-  gl.MemoryBarrier(GL_SHADER_STORAGE_BARRIER_BIT | GL_TEXTURE_FETCH_BARRIER_BIT);
+  barrier(GL_SHADER_STORAGE_BARRIER_BIT | GL_TEXTURE_FETCH_BARRIER_BIT);
   ++out.gl_passes;
   check("the conservative k-buffer draw");
 

@@ -7,6 +7,7 @@
 //   single_pass.cpp  the single-pass peeler (k-buffer), its GPU and host resolves
 //   batch.cpp        views packed into one k-buffer and one draw: gathered, uploaded, selected, drawn
 //   batch_resolve.cpp  a drawn batch resolved: on the host, or by one dispatch (deep texels' rows)
+//   pass_timers.cpp  the clocks: GPU timer queries per pass, the host's time blocked in GL reads
 //   gl_stage.cpp     the public class, its one-view entry (peel_one), the floor draw
 #include "peelcd/core/image_stage.h"
 #include "peelcd/core/clock.h"
@@ -48,6 +49,56 @@ struct PcsHeader {
 // Header of the deep texels' rows (DeepRows in shaders/conservative_batch_resolve.comp).
 struct DeepHeader {
   std::uint32_t row_count, row_capacity, max_blocks, deep_texels;
+};
+
+// The kinds of GPU pass the stage times (Timings::gpu_raster, gpu_compute, gpu_transfer).
+enum class GpuPass { raster, compute, transfer };
+
+// GL_TIME_ELAPSED queries around the stage's passes (pass_timers.cpp), when `on`: begin() before
+// a pass's GL call and end() after it (queries of one target do not nest, so a pass is one call
+// or a run of calls of one kind); collect() adds the finished ones to a Timings and reuses them.
+class PassTimers {
+ public:
+  bool on = false;
+  void bind(GladGLContext& gl) { gl_ = &gl; }
+  void begin(GpuPass kind);
+  void end();
+  void collect(Timings& t);
+  void release();
+
+ private:
+  GladGLContext* gl_ = nullptr;
+  std::vector<GLuint> pool_;
+  std::vector<GpuPass> kinds_;
+  std::size_t used_ = 0;
+  bool open_ = false;
+  Clock::time_point first_;  // the first begin() since the last collect()
+};
+
+// One timed pass, for a scope.
+class TimedPass {
+ public:
+  TimedPass(PassTimers& timers, GpuPass kind) : timers_(timers) { timers_.begin(kind); }
+  ~TimedPass() { timers_.end(); }
+  TimedPass(const TimedPass&) = delete;
+  TimedPass& operator=(const TimedPass&) = delete;
+
+ private:
+  PassTimers& timers_;
+};
+
+// Host time blocked in a GL read (a read back, a map, a query result), for a scope: added to
+// `ms` (the stage's wait_ms, handed to Timings::gl_wait).
+class GlWait {
+ public:
+  explicit GlWait(double& ms) : ms_(ms), t0_(Clock::now()) {}
+  ~GlWait() { ms_ += ms_since(t0_); }
+  GlWait(const GlWait&) = delete;
+  GlWait& operator=(const GlWait&) = delete;
+
+ private:
+  double& ms_;
+  Clock::time_point t0_;
 };
 
 // Peel passes per ROI before giving up; each pass strictly increases every live texel's depth,
@@ -175,6 +226,67 @@ struct GlImageStage::Impl {
   }
   void count_draw() { ++counters->draws; }
   void count_dispatch() { ++counters->dispatches; }
+  // The clocks (pass_timers.cpp): GPU passes, and the host's time blocked in GL reads; handed to
+  // the caller's Timings when a peel() or peel_batch() returns.
+  PassTimers timers;
+  double wait_ms = 0.0;
+  void hand_clocks(Timings& t);
+  // The stage's GL work goes through these: counted (StageCounters), and timed with pass timing
+  // (draws: raster; dispatches: compute; uploads, clears, copies: transfer); reads count the
+  // host's wait.
+  template <class Draw>
+  void timed_draw(const Draw& draw_call) {
+    const TimedPass pass(timers, GpuPass::raster);
+    draw_call();
+    count_draw();
+  }
+  void dispatch(GLuint x, GLuint y, GLuint z) {
+    const TimedPass pass(timers, GpuPass::compute);
+    gl.DispatchCompute(x, y, z);
+    count_dispatch();
+  }
+  void upload_buffer(GLuint buffer, GLintptr offset, GLsizeiptr bytes, const void* data) {
+    const TimedPass pass(timers, GpuPass::transfer);
+    gl.NamedBufferSubData(buffer, offset, bytes, data);
+    count_upload(std::size_t(bytes));
+  }
+  void upload_geometry(GLuint buffer, GLintptr offset, GLsizeiptr bytes, const void* data) {
+    const TimedPass pass(timers, GpuPass::transfer);
+    gl.NamedBufferSubData(buffer, offset, bytes, data);
+    count_geometry(std::size_t(bytes));
+  }
+  void clear_buffer(GLuint buffer, GLsizeiptr bytes) {  // the first `bytes` to zero words
+    const TimedPass pass(timers, GpuPass::transfer);
+    const GLuint zero = 0;
+    gl.ClearNamedBufferSubData(buffer, GL_R32UI, 0, bytes, GL_RED_INTEGER, GL_UNSIGNED_INT, &zero);
+  }
+  void copy_buffer(GLuint from, GLuint to, GLintptr read_offset, GLintptr write_offset, GLsizeiptr bytes) {
+    const TimedPass pass(timers, GpuPass::transfer);
+    gl.CopyNamedBufferSubData(from, to, read_offset, write_offset, bytes);
+  }
+  // A memory barrier: free on a GPU, but a software renderer (llvmpipe) finishes the work before
+  // it, so its time counts as a wait.
+  void barrier(GLbitfield bits) {
+    const GlWait wait(wait_ms);
+    gl.MemoryBarrier(bits);
+  }
+  void read_buffer(GLuint buffer, GLintptr offset, GLsizeiptr bytes, void* data) {
+    const GlWait wait(wait_ms);
+    gl.GetNamedBufferSubData(buffer, offset, bytes, data);
+    count_read(std::size_t(bytes));
+  }
+  void read_texture(GLuint texture, std::vector<std::uint32_t>& texels) {  // RGBA32UI, level 0
+    const GlWait wait(wait_ms);
+    gl.GetTextureImage(texture, 0, GL_RGBA_INTEGER, GL_UNSIGNED_INT, GLsizei(texels.size() * sizeof(std::uint32_t)),
+                       texels.data());
+    count_read(texels.size() * sizeof(std::uint32_t));
+  }
+  const void* map_for_reading(GLuint buffer, std::size_t bytes) {  // null: the map failed
+    const GlWait wait(wait_ms);
+    const void* data = gl.MapNamedBufferRange(buffer, 0, GLsizeiptr(bytes), GL_MAP_READ_BIT);
+    count_read(bytes);
+    return data;
+  }
 
   // Programs (one struct per family: its ID and uniforms).
   PeelProgram peel;

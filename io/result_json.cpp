@@ -104,7 +104,14 @@ nlohmann::json to_json(const FrameResult& r, const std::vector<Object>& objects,
             {"gpu", r.timings.gpu},
             {"readback", r.timings.readback},
             {"cpu", r.timings.cpu},
-            {"total", r.timings.total}}}};
+            {"total", r.timings.total},
+            {"gl_wait", r.timings.gl_wait}}}};
+  if (r.timings.gpu_timed) {
+    out["timings_ms"]["gpu_raster"] = r.timings.gpu_raster;
+    out["timings_ms"]["gpu_compute"] = r.timings.gpu_compute;
+    out["timings_ms"]["gpu_transfer"] = r.timings.gpu_transfer;
+    out["gpu_passes_untimed"] = r.timings.gpu_passes_untimed;
+  }
   if (check) out["check"] = score_json(sum);
   if (gl) out["gl_options"] = gl_options_to_json(*gl);
   return out;

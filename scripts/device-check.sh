@@ -6,9 +6,10 @@
 #      resolves, every PCS compared);
 #   3. run-to-run determinism: the same frames twice, batched with GPU selection and the GPU
 #      resolve, every PCS and pair compared (detect --pcs --list);
-#   4. peelcd bench on the default scene, the 400-ball pile and the 1.3M-triangle rigid spheres
-#      (--quick: the default scene only), one thread per method: the router's default rows and
-#      the image stage forced side by side with the CPU peers;
+#   4. peelcd bench on the default scene, the 400-ball pile, the 1.3M-triangle rigid and waving
+#      spheres and the 1,000-ball pile (--quick: the default scene only), one thread per method:
+#      the router's default rows and the image stage forced side by side with the CPU peers, and
+#      the image-work table (host work, GL waits, GPU passes by timer queries, bytes, candidates);
 #   5. peelcd calibrate --backend egl --write-costs (the router's cost models of this device, in
 #      the record as costs.json), then detect routing by them.
 # Each step is stopped after STEP_TIMEOUT seconds (default 600), and counted as failed.
@@ -93,8 +94,8 @@ step() {
 : >"$summary.steps"
 # A check that two outputs agree but for their timing and stage lines (the PCS, the pairs).
 same() {
-  local name="$1" x="$2" y="$3"
-  if diff <(grep -v '^timings\|^stage' "$x") <(grep -v '^timings\|^stage' "$y") >>"$log"; then
+  local name="$1" x="$2" y="$3" timing='^timings\|^stage\|^  host work\|^  GPU passes'
+  if diff <(grep -v "$timing" "$x") <(grep -v "$timing" "$y") >>"$log"; then
     printf '| %s | ok |  |\n' "$name" >>"$summary.steps"
   else
     say "$name: FAILED (the outputs differ: log.txt)"
@@ -138,6 +139,11 @@ else
   step "bench, default scene" "bench_default.txt" "$bin" bench fixtures/scenes/bunny_dragon.json --backend egl --frames 30 --threads 1
   step "bench, 400-ball pile" "bench_pile400.txt" "$bin" bench crowd --objects 400 --backend egl --frames 6 --threads 1
   step "bench, rigid spheres 1.3M" "bench_spheres_1m.txt" "$bin" bench spheres --stacks 570 --backend egl --frames 4 --threads 1 --short
+  # The deforming scenes, where the image stage should earn its place: the image-work table under
+  # each bench says where its frame goes (host work, GL waits, GPU raster/compute/transfer by timer
+  # queries, bytes uploaded, candidates to the host's exact test).
+  step "bench, waving spheres 1.3M" "bench_spheres_wave_1m.txt" "$bin" bench spheres-wave --stacks 570 --backend egl --frames 4 --threads 1 --short
+  step "bench, 1,000-ball pile" "bench_pile1000.txt" "$bin" bench crowd --objects 1000 --backend egl --frames 4 --threads 1 --short
 fi
 
 # 5. The router's cost models of this device, written where detect --costs, $PEELCD_COSTS and

@@ -153,3 +153,58 @@ TEST_CASE("GL counters: draws, dispatches and readbacks per frame do not depend 
     CHECK(few[2] == many[2]);  // readbacks
   }
 }
+
+// The stage's clocks (Timings::gl_wait, and with pass timing gpu_raster / gpu_compute /
+// gpu_transfer by GL timer queries): on when asked, zero when not, and never a change to what a
+// frame finds. Both peelers and the batched conservative path.
+TEST_CASE("GL clocks: pass timing measures the passes and leaves the results alone", "[gl][counters]") {
+  auto ball = std::make_shared<const Mesh>(make_uv_sphere(Vec3::Zero(), 1.0, 16, 24));
+  const std::vector<Object> objects = two_rigid_balls(ball, 1.5);
+  gl::GlImageStage& stage = test_pipeline().stage();
+  for (const bool conservative : {true, false}) {
+    for (const Peeler peeler : {Peeler::abuffer, Peeler::multipass}) {
+      if (conservative && peeler == Peeler::multipass) continue;  // conservative views use the k-buffer
+      DYNAMIC_SECTION((conservative ? "conservative" : "point sampled") << ", " << to_string(peeler)) {
+        DetectOptions opt;
+        opt.stage = Stage::image;
+        opt.conservative = conservative;
+        opt.views = conservative ? 3 : 1;
+        gl::GlOptions gl_opt;
+        gl_opt.peeler = peeler;
+        test_pipeline().set_gl_options(gl_opt);
+        stage.set_pass_timing(false);
+        const FrameResult plain = test_pipeline().detect(objects, opt);
+        stage.set_pass_timing(true);
+        CHECK(stage.pass_timing());
+        const FrameResult timed = test_pipeline().detect(objects, opt);
+        const FrameResult timed_again = test_pipeline().detect(objects, opt);
+        stage.set_pass_timing(false);
+        const FrameResult after = test_pipeline().detect(objects, opt);
+        test_pipeline().set_gl_options(gl::GlOptions{});
+        REQUIRE(plain.rois_peeled >= 1);
+        for (const FrameResult* t : {&plain, &after}) {  // nothing timed, nothing left over
+          CHECK_FALSE(t->timings.gpu_timed);
+          CHECK(t->timings.gpu_raster == 0.0);
+          CHECK(t->timings.gpu_compute == 0.0);
+          CHECK(t->timings.gpu_transfer == 0.0);
+        }
+        for (const FrameResult* t : {&timed, &timed_again}) {
+          CHECK(t->timings.gpu_timed);
+          CHECK(t->timings.gpu_raster > 0.0);  // every frame draws
+          CHECK(t->timings.gpu_compute >= 0.0);
+          CHECK(t->timings.gl_wait >= 0.0);
+          CHECK(t->timings.gl_wait <= t->timings.total);
+          // GPU passes in one stage call run one after the other: together no longer than the frame.
+          CHECK(t->timings.gpu_raster + t->timings.gpu_compute + t->timings.gpu_transfer <= t->timings.total);
+        }
+        REQUIRE(timed.pairs.size() == plain.pairs.size());
+        for (std::size_t i = 0; i < plain.pairs.size(); ++i) {
+          CHECK(timed.pairs[i].pcs == plain.pairs[i].pcs);
+          CHECK(timed.pairs[i].colliding.size() == plain.pairs[i].colliding.size());
+        }
+        CHECK(timed.gl_draws == plain.gl_draws);
+        CHECK(timed.gl_dispatches == plain.gl_dispatches);
+      }
+    }
+  }
+}

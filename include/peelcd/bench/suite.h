@@ -33,6 +33,9 @@ struct Suite {
   // others (its ratio to the default row, same frames, printed under the table).
   unsigned scaling_threads = 0;
   bool short_rows = false;
+  // The image stage's GPU passes timed by GL timer queries (the image-work table's raster,
+  // compute and transfer columns) in every peelcd row's frames.
+  bool gpu_timers = true;
   // Freed memory stays in the process while the suite runs (glibc: mallopt), so that one
   // method's frees do not slow the next method's frame; false leaves the allocator as it is.
   bool keep_freed_memory = true;

@@ -212,6 +212,13 @@ class Bvh {
   // partial refit leaves it). A tree built for a tangle stays as loose when it unfolds: the
   // measure is against its own build, not against a tree built now.
   double growth() const { return size_at_build_ > 0.0 ? size_ / size_at_build_ : 1.0; }
+  // After a whole refit: builds the tree again when refits grew it past kBvhRebuildGrowth (the
+  // one rule of every tree that refits keep); returns whether it did.
+  bool rebuild_if_grown(const std::vector<Vec3>& vertices, const std::vector<Tri>& triangles) {
+    if (growth() <= kBvhRebuildGrowth) return false;
+    build(vertices, triangles);
+    return true;
+  }
 
   // The triangles whose (float, outward-rounded) boxes touch `box` (closed, in the tree's frame),
   // ascending, into `out`: every triangle whose exact box touches it, and possibly some within
@@ -352,13 +359,8 @@ std::size_t bvh_traverse(const Bvh& a, const Bvh& b, const BvhRelation& rel, Bvh
         for (unsigned m = overlap_mask(a_in_b, lb); m;) fn(la.tri[u], lb.tri[take_lane(m)]);
       }
     } else if (y.leaf() || (!x.leaf() && double(x.box.max_extent()) >= e.b_in_a.extent().maxCoeff())) {
-      if (rel.identity) {
-        for (const std::uint32_t c : {e.a + 1, x.first})
-          if (na[c].box.overlaps(e.b_in_a)) stack.push_back({c, e.b, e.b_in_a});
-      } else {
-        for (const std::uint32_t c : {e.a + 1, x.first})
-          if (na[c].box.overlaps(e.b_in_a)) stack.push_back({c, e.b, e.b_in_a});
-      }
+      for (const std::uint32_t c : {e.a + 1, x.first})  // B's box is in A's frame either way
+        if (na[c].box.overlaps(e.b_in_a)) stack.push_back({c, e.b, e.b_in_a});
     } else if (rel.identity) {
       for (const std::uint32_t c : {e.b + 1, y.first})
         if (x.box.overlaps(nb[c].box)) stack.push_back({e.a, c, nb[c].box.aabb()});

@@ -31,6 +31,7 @@ class CpuImageStage final : public ImageStage {
   const std::string& renderer() const override { return renderer_; }
   const std::string& version() const override { return version_; }
   int max_resolution() const override { return 16384; }
+  bool runs_on_cpu() const override { return true; }
   StageCost cost() const override;
   void peel(const PeelJob& job, PeelResult& out, Timings& timings) override;
 

@@ -183,6 +183,19 @@ std::string pair_path_reason(const PairResult& pair, const DetectOptions& option
 
 struct Timings {  // milliseconds, as in the paper's tables
   double aabb = 0, upload = 0, gpu = 0, readback = 0, cpu = 0, total = 0;
+  // Host time blocked in GL calls that wait for the GPU (reads back, maps, query results): the
+  // frame's host work is total - gl_wait. 0 on the CPU stage and the exact path.
+  double gl_wait = 0;
+  // GPU time of the image stage's passes, measured by GL timer queries (GL_TIME_ELAPSED) when the
+  // stage times its passes (ImageStage::set_pass_timing; peelcd detect --timings, peelcd bench):
+  // raster (draws: peel passes, k-buffer draws, the batch's count and fill passes), compute
+  // (dispatches: selection, prefix sums, resolves, PCS tests) and transfer (buffer uploads,
+  // clears and copies on the GPU's timeline). All 0 when not timed.
+  double gpu_raster = 0, gpu_compute = 0, gpu_transfer = 0;
+  bool gpu_timed = false;  // the three above were measured this frame
+  // Passes whose query gave an impossible time (longer than the stage call that issued it: Mesa's
+  // llvmpipe reports such for a pass its threads had no work in), left out of the three above.
+  std::size_t gpu_passes_untimed = 0;
 };
 
 struct FrameResult {
@@ -215,8 +228,8 @@ struct FrameResult {
   // Every counter and timing to zero (the pairs and the renderer stay): a frame's start.
   void reset_counters();
   // Adds `other`'s image-stage work to this frame's: GL passes, views peeled, uploads, readbacks,
-  // exhaustive views, the GL calls and bytes, deep texels, and the upload, gpu, readback and cpu
-  // timings (the World's image-routed pairs, run as a frame of their own).
+  // exhaustive views, the GL calls and bytes, deep texels, and the upload, gpu, readback, cpu,
+  // GL wait and GPU pass timings (the World's image-routed pairs, run as a frame of their own).
   void add_image_work(const FrameResult& other);
 };
 

@@ -132,14 +132,24 @@ class ImageStage {
   virtual const std::string& renderer() const = 0;  // GL_RENDERER, or a description of the CPU model
   virtual const std::string& version() const = 0;   // GL_VERSION, or the CPU model's version
   virtual int max_resolution() const = 0;    // the largest N of an N x N view
+  // The stage's work runs on the host's cores (the CPU stage; GL on llvmpipe, softpipe, swrast):
+  // no GPU to overlap with, so batching and GPU-side work do not pay (the World peels its image
+  // pairs one at a time there; the GL stage resolves on the host).
+  virtual bool runs_on_cpu() const { return false; }
   // The router's model of this stage. The default (all zero) predicts it free: a stage that
   // does not model its cost always peels (as before the router existed).
   virtual StageCost cost() const { return StageCost{}; }
+  // GPU timer queries around each pass (Timings::gpu_raster, gpu_compute, gpu_transfer, and
+  // gpu_timed set), collected as each peel() or peel_batch() returns. Off by default: a stage
+  // without GPU passes (the CPU stage) ignores it.
+  virtual void set_pass_timing(bool on) { (void)on; }
+  virtual bool pass_timing() const { return false; }
   // Bracket the jobs of one frame (a GL stage makes its context current in begin_frame() and
   // gives the caller's current context back in end_frame()).
   virtual void begin_frame() {}
   virtual void end_frame() noexcept {}
-  // Peels `job` into `out` (cleared first). Adds its time to `timings` (upload, gpu, readback).
+  // Peels `job` into `out` (cleared first). Adds its time to `timings` (upload, gpu, readback,
+  // gl_wait; the GPU passes' with pass timing on).
   virtual void peel(const PeelJob& job, PeelResult& out, Timings& timings) = 0;
   // Peels `count` jobs (every ROI view of a frame) into outs[0..count): the same results as
   // peel() on each, in any order of work. A stage may draw them together (the GL stage packs

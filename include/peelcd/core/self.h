@@ -31,9 +31,9 @@ bool triangles_adjacent(const Mesh& mesh, const std::vector<std::uint32_t>& rep,
 
 // A mesh's tree for its self search, kept from frame to frame (the frame API keeps one per
 // object that asks for self-collision): refitted while the triangles stay the same, built again
-// when they change, and when the refitted tree's traversal visited more than twice the node
-// pairs it visited when built (a refit keeps the grouping of the first frame; a cloth that
-// crumples far from it overlaps more of itself).
+// when they change, and when refits have grown it past kBvhRebuildGrowth (Bvh::rebuild_if_grown:
+// a refit keeps the grouping of the first frame; a cloth that crumples far from it overlaps more
+// of itself).
 struct SelfTree {
   Bvh tree;
   std::vector<Tri> triangles;  // of the last build

@@ -19,7 +19,7 @@
 // triangles whose boxes overlap (the candidates, B's boxes seen from A's frame, grown by a
 // relative 1e-9 against rounding). A large rigid body's world vertices are computed (pose *
 // vertex) only for the candidates' corners; far triangles are never read. A small rigid body
-// (under 4,096 triangles) is moved into world space whole each frame instead (its vertices
+// (under kWorldFrameTriangles, 8,192 triangles) is moved into world space whole each frame instead (its vertices
 // transformed, a copy of its tree refitted: microseconds), since boxes carried through a
 // rotation are looser and a small body gains more from exact world boxes than it pays; a pair
 // of two such small world-space bodies is scanned as the frame API's exact path scans it (one

@@ -39,16 +39,22 @@ class GlImageStage final : public ImageStage {
   const std::string& renderer() const override;  // GL_RENDERER
   const std::string& version() const override;   // GL_VERSION
   int max_resolution() const override;           // GL_MAX_TEXTURE_SIZE
+  bool runs_on_cpu() const override;             // a software renderer (GL_RENDERER says which)
   // The router's model: one for GL on the CPU (llvmpipe, lavapipe), one for a GPU
   // (docs/router.md).
   StageCost cost() const override;
+  // GL_TIME_ELAPSED queries around every draw, dispatch and large transfer (Timings::gpu_raster,
+  // gpu_compute, gpu_transfer).
+  void set_pass_timing(bool on) override;
+  bool pass_timing() const override;
   void begin_frame() override;
   void end_frame() noexcept override;
   void peel(const PeelJob& job, PeelResult& out, Timings& timings) override;
-  // Conservative views resolved on the host (a software renderer, or Resolve::host) are packed
-  // into one k-buffer and drawn together: one draw for every view of the frame (more only when
-  // their texels times the slots exceed the largest storage block), the same layers and PCS as
-  // peel() on each. Other views, and views whose texels overflow the slots, are peeled one by one.
+  // With GlOptions::batch, a frame's conservative views (that capture no layers, or resolve on
+  // the host) and the single-pass peeler's point-sampled views that capture nothing are packed
+  // into one k-buffer and drawn together: a count and a fill draw for the views (more only when
+  // their fragments exceed the largest storage block), the same layers and PCS as peel() on
+  // each. Other views, and a view that fills a k-buffer alone, are peeled one by one.
   void peel_batch(const PeelJob* jobs, std::size_t count, PeelResult* outs, Timings& timings) override;
 
   // Benchmarks: the floor under any image-space method on this context. The job's triangles
