@@ -58,21 +58,41 @@ std::vector<std::string> scene_inputs(const Scene& scene) {
   return inputs;
 }
 
-// --peeler's value, or an InputError naming it.
-Peeler peeler_option(const std::string& text) {
-  return parsed(text, parse_peeler, "peelcd: --peeler: unknown peeler", "abuffer or multipass");
+// GL stage options: the scene file's, overridden by the command line's (gl_option_table()'s rows
+// by key, as add_gl_options() stored them); a bad value is an InputError naming the flag.
+gl::GlOptions merged_gl_options(const Scene& scene, const std::map<std::string, std::string>& given) {
+  gl::GlOptions o = scene.gl;
+  for (const gl::GlOptionSpec& spec : gl::gl_option_table()) {
+    const auto it = given.find(spec.key);
+    if (it == given.end()) continue;
+    const std::string problem = gl::set_gl_option(o, spec.key, it->second);
+    if (!problem.empty()) {
+      const std::size_t colon = problem.find(':');  // "KEY: unknown value ..." -> "--flag: unknown value ..."
+      throw InputError(std::string("peelcd: ") + spec.flag + problem.substr(colon == std::string::npos ? 0 : colon));
+    }
+  }
+  return o;
 }
 
-// GL stage options: the scene file's, overridden by the command line's.
-gl::GlOptions merged_gl_options(const Scene& scene, const std::string& peeler, const std::string& resolve,
-                               bool no_batch, bool cpu_select) {
-  gl::GlOptions o = scene.gl;
-  if (no_batch) o.batch = false;
-  if (cpu_select) o.gpu_select = false;
-  if (!peeler.empty()) o.peeler = peeler_option(peeler);
-  if (!resolve.empty())
-    o.resolve = parsed(resolve, parse_resolve, "peelcd: --resolve: unknown resolve", "auto, gpu or host");
-  return o;
+// One flag per row of gl_option_table() (all rows, or those in `keys`), its help the table's: a
+// choice's value stored by key in `values`; a boolean's flag turns the setting off ("false").
+void add_gl_options(CLI::App* c, std::map<std::string, std::string>& values, const std::set<std::string>& keys) {
+  const gl::GlOptions defaults;
+  for (const gl::GlOptionSpec& spec : gl::gl_option_table()) {
+    if (!keys.empty() && !keys.count(spec.key)) continue;
+    const std::string key = spec.key;
+    if (!*spec.choices) {
+      c->add_flag_callback(
+          spec.flag, [&values, key] { values[key] = "false"; },
+          "GL stage, sets " + key + " false (default " + spec.get(defaults) + "): " + spec.help);
+      continue;
+    }
+    std::string choices = spec.choices;
+    c->add_option_function<std::string>(
+         spec.flag, [&values, key](const std::string& v) { values[key] = v; },
+         "GL stage, " + key + " (default " + spec.get(defaults) + "): " + spec.help)
+        ->type_name("{" + choices + "}");
+  }
 }
 
 // Command-line values override the scene file's (each checked by the option table's rules, the
@@ -216,16 +236,7 @@ void add_frame_options(CLI::App* c, DetectArgs& d) {
          spec.flag, [&d, key = std::string(spec.key)](const std::string& v) { d.options[key] = v; }, spec.help)
         ->type_name(type);
   }
-  c->add_option("--peeler", d.peeler, "How layers are made: abuffer (one draw into a per-texel k-buffer of fragments; default) "
-                                      "or multipass (one draw per layer); the same layers either way");
-  c->add_option("--resolve", d.resolve, "Where the k-buffer becomes layers and PCS: auto (host on a software renderer such as "
-                                        "llvmpipe, else gpu; default), gpu (a compute pass) or host (mapped, resolved on the CPU)");
-  c->add_flag("--no-batch", d.no_batch, "GL stage: draw each ROI view on its own instead of packing the frame's views "
-                                        "(conservative, or point-sampled with the abuffer peeler) into one k-buffer and "
-                                        "one draw (the same results; for comparison)");
-  c->add_flag("--cpu-select", d.cpu_select, "GL stage: in a batch, draw the rigid objects' triangles the host's culling "
-                                            "kept instead of selecting them on the GPU from their resident buffers (fewer "
-                                            "triangles drawn, uploaded every frame; the same contacts when conservative)");
+  add_gl_options(c, d.gl);
   c->add_option("--costs", d.costs, "The stage router's cost models from FILE (written by peelcd calibrate "
                                     "--write-costs on this backend and renderer; default: $PEELCD_COSTS, else the "
                                     "built-in models)")->check(CLI::ExistingFile);

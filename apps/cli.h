@@ -23,6 +23,7 @@
 #include <algorithm>
 #include <array>
 #include <cmath>
+#include <set>
 #include <cstdio>
 #include <cstdlib>
 #include <filesystem>
@@ -86,8 +87,8 @@ struct DetectArgs {
   // (peelcd/core/options.h) with a flag, by key; a boolean's "--no-" form as "false".
   std::map<std::string, std::string> options;
   std::map<std::string, bool> flags_on, flags_off;  // boolean rows: --KEY, --no-KEY
-  std::string peeler, resolve;  // GL stage options (gl::GlOptions)
-  bool paper = false, no_batch = false, cpu_select = false;
+  std::map<std::string, std::string> gl;  // GL stage options by gl_option_table() key
+  bool paper = false;
   double max_miss = NAN;  // percent; NaN = report only
   std::string json_out;
   int repeat = 1;
@@ -138,11 +139,10 @@ auto parsed(const std::string& text, Parse parse, const std::string& unknown, co
 
 // A scene's input files: the scene file itself (when there is one) and every mesh it names.
 std::vector<std::string> scene_inputs(const Scene& scene);
-// --peeler's value, or an InputError naming it.
-Peeler peeler_option(const std::string& text);
 // GL stage options: the scene file's, overridden by the command line's.
-gl::GlOptions merged_gl_options(const Scene& scene, const std::string& peeler, const std::string& resolve,
-                               bool no_batch = false, bool cpu_select = false);
+gl::GlOptions merged_gl_options(const Scene& scene, const std::map<std::string, std::string>& given = {});
+// The GL stage's flags, generated from gl_option_table() (every row, or those in `keys`).
+void add_gl_options(CLI::App* c, std::map<std::string, std::string>& values, const std::set<std::string>& keys = {});
 // Command-line values override the scene file's (each checked by the option table's rules).
 DetectOptions merged_options(const Scene& scene, const DetectArgs& a);
 // --backend, one help text: every image stage, or (`gl_only`) the GL ones.

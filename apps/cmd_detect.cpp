@@ -247,7 +247,7 @@ int run_detect(const DetectArgs& a) {
   const DetectOptions opt = merged_options(scene, a);
   const std::vector<Object> objects = load_objects(scene);
   progress.phase("peelcd detect: running the frame...");
-  Runner runner = make_runner(a.backend, merged_gl_options(scene, a.peeler, a.resolve, a.no_batch, a.cpu_select), a.costs);
+  Runner runner = make_runner(a.backend, merged_gl_options(scene, a.gl), a.costs);
   runner.stage->set_pass_timing(a.gpu_timers);
   std::size_t runs = 0;
   const FrameResult result = run_frames(runner, objects, opt, a.repeat, runs);
@@ -307,7 +307,7 @@ int run_explain(const DetectArgs& a, const ExplainArgs& x) {
   const std::vector<Object> objects = load_objects(scene);
   const oracle::PairQuery query = oracle::parse_pair_query(x.pair, objects);
   progress.phase("peelcd explain: running the frame...");
-  Runner runner = make_runner(a.backend, merged_gl_options(scene, a.peeler, a.resolve, a.no_batch, a.cpu_select), a.costs);
+  Runner runner = make_runner(a.backend, merged_gl_options(scene, a.gl), a.costs);
   const oracle::FrameTrace trace(*runner.detector, objects, opt);
   const oracle::Explanation e = trace.explain(query);
   progress.clear();

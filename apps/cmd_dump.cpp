@@ -50,7 +50,7 @@ int run_dump(const DetectArgs& a, const DumpArgs& d) {
     two.push_back(objects[original[1]]);
     objects = std::move(two);
   }
-  Runner runner = make_runner(a.backend, merged_gl_options(scene, a.peeler, a.resolve, a.no_batch, a.cpu_select), a.costs);
+  Runner runner = make_runner(a.backend, merged_gl_options(scene, a.gl), a.costs);
   // The cap is checked on the broad phase's ROIs before any layer is captured.
   {
     const std::size_t rois = count_overlapping_pairs(objects);
@@ -87,8 +87,7 @@ struct GoldenArgs {
   std::string backend = kDefaultBackend;
   std::string tier = "auto";
   std::string report = "golden-report";
-  std::string peeler;  // empty: the case's (the default)
-  std::string resolve;  // empty: the default (auto)
+  std::map<std::string, std::string> gl;  // --peeler, --resolve (empty: the case's)
   std::string require_renderer;  // skip (exit 77) unless GL_RENDERER contains this
   bool one_view_only = false;    // skip the production path
   std::string shard;             // "K/N": every N-th case from the K-th
@@ -187,7 +186,7 @@ int run_golden_compare(const GoldenArgs& a) {
                   own.c_str());
       o.mesh_path = own;
     }
-    runner.use(merged_gl_options(scene, a.peeler, a.resolve));
+    runner.use(merged_gl_options(scene, a.gl));
     const std::vector<Object> objects = load_objects(scene);
     const oracle::Dump expected = oracle::read_dump(oracle::golden_case_expected(a.dir, name));
     bool case_ok = true;
@@ -207,10 +206,11 @@ int run_golden_compare(const GoldenArgs& a) {
     // The production path: what a GPU runs by default (views batched, GPU selection, the GPU
     // resolve unless --resolve host), no layer captured: its pairs against the golden's.
     if (!a.one_view_only && runner.gl) {  // the CPU stage has one path
-      gl::GlOptions production = merged_gl_options(scene, a.peeler, a.resolve);
+      gl::GlOptions production = merged_gl_options(scene, a.gl);
       production.batch = true;
       production.gpu_select = true;
-      if (a.resolve.empty() || a.resolve == "auto") production.resolve = Resolve::gpu;
+      const auto resolve = a.gl.find("resolve");
+      if (resolve == a.gl.end() || resolve->second == "auto") production.resolve = Resolve::gpu;
       runner.use(production);
       DetectOptions opt = scene.options;
       opt.stage = Stage::image;
@@ -299,8 +299,7 @@ std::vector<Command> add_golden_commands(CLI::App& app) {
   compare->add_option("--tier", gc.tier, "auto (exact on llvmpipe, hardware otherwise), exact or hardware")
       ->capture_default_str();
   compare->add_option("--report", gc.report, "Folder for the reports of differing cases")->check(kOutputPath)->capture_default_str();
-  compare->add_option("--peeler", gc.peeler, "abuffer or multipass (default: the default, abuffer)");
-  compare->add_option("--resolve", gc.resolve, "auto, gpu or host: where the k-buffer is resolved (default: auto)");
+  add_gl_options(compare, gc.gl, {"peeler", "resolve"});
   compare->add_option("--repeat", gc.repeat, "Run and compare each case N times in one process (determinism)")
       ->check(kPositive)->capture_default_str();
   compare->add_option("--shard", gc.shard, "Compare the K-th of N deterministic slices of the cases (K/N)");

@@ -34,7 +34,7 @@ int run_simulate(const SimArgs& a) {
   const auto seq = make_sequence(a.test, a.frames, !a.no_rigid, a.objects);
   Scene defaults;
   const DetectOptions opt = merged_options(defaults, a.detect);
-  Runner runner = make_runner(a.detect.backend, merged_gl_options(Scene{}, a.detect.peeler, a.detect.resolve, a.detect.no_batch, a.detect.cpu_select), a.detect.costs);
+  Runner runner = make_runner(a.detect.backend, merged_gl_options(Scene{}, a.detect.gl), a.detect.costs);
   std::vector<Object> objects;
   std::string csv = "frame,phase,triangles,rois,rois_exact,rois_peeled,triangles_uploaded,triangles_indexed,shape_uploads,gl_passes,pcs_readbacks,nctp,found,"
                     "false_contacts,aabb_ms,upload_ms,gpu_ms,readback_ms,cpu_ms,total_ms,gl_draws,gl_dispatches,gl_readbacks,"

@@ -1,5 +1,7 @@
 #include "peelcd/core/id_map.h"
 
+#include "radix_sort.h"
+
 #include <algorithm>
 #include <stdexcept>
 
@@ -58,18 +60,8 @@ void IdMap::rebuild(const Mesh& mesh, IdMode mode) {
   built_ = true;
 }
 
-namespace {
-int bits_for(std::uint32_t max_value) {
-  int bits = 0;
-  while (bits < 32 && (max_value >> bits) != 0u) ++bits;
-  return bits;
-}
-}  // namespace
-
 void sort_unique_pairs(std::vector<std::uint64_t>& keys, std::vector<std::uint64_t>& scratch) {
-  constexpr int kDigit = 11;
-  constexpr std::size_t kBuckets = std::size_t(1) << kDigit;
-  if (keys.size() < 512) {  // a radix pass costs a histogram of kBuckets: not worth it
+  if (keys.size() < 512) {  // a radix pass costs a histogram: not worth it
     std::sort(keys.begin(), keys.end());
     keys.erase(std::unique(keys.begin(), keys.end()), keys.end());
     return;
@@ -77,22 +69,9 @@ void sort_unique_pairs(std::vector<std::uint64_t>& keys, std::vector<std::uint64
   std::uint32_t max_a = 0, max_b = 0;
   for (const std::uint64_t k : keys) max_a = std::max(max_a, pair_a(k)), max_b = std::max(max_b, pair_b(k));
   // Compact keys: a << bits_b | b keeps the order of (a, b) in bits_a + bits_b bits.
-  const int bits_b = bits_for(max_b), bits = bits_for(max_a) + bits_b;
+  const int bits_b = detail::bit_width(max_b), bits = detail::bit_width(max_a) + bits_b;
   for (std::uint64_t& k : keys) k = (std::uint64_t(pair_a(k)) << bits_b) | pair_b(k);
-  scratch.resize(keys.size());
-  std::size_t count[kBuckets];
-  for (int shift = 0; shift < bits; shift += kDigit) {
-    std::fill(count, count + kBuckets, std::size_t(0));
-    for (const std::uint64_t k : keys) ++count[(k >> shift) & (kBuckets - 1)];
-    std::size_t sum = 0;
-    for (std::size_t& c : count) {
-      const std::size_t n = c;
-      c = sum;
-      sum += n;
-    }
-    for (const std::uint64_t k : keys) scratch[count[(k >> shift) & (kBuckets - 1)]++] = k;
-    keys.swap(scratch);
-  }
+  detail::radix_sort_bits(keys, scratch, 0, bits);
   // Back to pack_pair keys, dropping repeats (now adjacent).
   const std::uint64_t mask_b = bits_b == 0 ? 0 : (~std::uint64_t(0) >> (64 - bits_b));
   std::size_t n = 0;

@@ -15,7 +15,7 @@ void World::Impl::refit_pending(unsigned lanes) {
   refit_bodies.clear();
   for (Body& b : bodies) {
     if (!b.alive || !b.refit_pending) continue;
-    const std::size_t parts = lanes > 1 && b.mesh.triangles.size() >= 32768 ? lanes : 1;
+    const std::size_t parts = lanes > 1 && b.mesh.triangles.size() >= kSplitRefitTriangles ? lanes : 1;
     const std::size_t nv = b.mesh.vertices.size(), nl = b.tree.leaves();
     refit_bodies.push_back({&b, refit_chunks.size(), refit_chunks.size() + parts, false});
     for (std::size_t k = 0; k < parts; ++k) {
@@ -192,25 +192,24 @@ std::size_t World::Impl::plan_tasks(unsigned lanes) {
   for (std::size_t p = 0; p < pairs.size(); ++p) {
     Body& a = bodies[ids[pairs[p].first]];
     Body& b = bodies[ids[pairs[p].second]];
+    TaskKind kind = TaskKind::nodes;
     if (&a == &b) {
+      kind = TaskKind::self;
       split.clear();
-      if (!(a.is_rigid && a.self_cached)) split.assign(1, BvhNodePair{kSelfPair, kSelfPair});
+      if (!(a.is_rigid && a.self_cached)) split.assign(1, BvhNodePair{0u, 0u});
     } else if (a.small() && b.small() && a.world_mesh() && b.world_mesh() && (a.moved || b.moved) &&
                (!a.moved || pairs_of[pairs[p].first] == 1) && (!b.moved || pairs_of[pairs[p].second] == 1)) {
-      split.assign(1, BvhNodePair{kSmallPair, kSmallPair});
+      kind = TaskKind::small_pair;
+      split.assign(1, BvhNodePair{0u, 0u});
     } else {
       a.ensure_world_tree();
       b.ensure_world_tree();
-      // Few pairs: each split into node pairs for the lanes to share (32 a lane: the contact
-      // region of two crossing spheres sits in few of them; rigid 1.3M spheres at 2 threads
-      // 0.66 -> 0.61 of one); many pairs share the lanes as they are (a split costs a
-      // breadth-first walk and its tasks: the 1,000-ball pile at 2 threads 0.86 -> 0.56), and so
-      // does a small pair (under kSplitTriangles between its bodies: the default scene at 2
-      // threads took 1.3x its one-thread frame split).
-      if (lanes > 1 && pairs.size() < 8 * std::size_t(lanes) &&
+      // Few pairs each split into node pairs for the lanes (kSplitPairsPerLane); a small pair
+      // (under kSplitTriangles between its bodies) is one task whatever the lanes.
+      if (lanes > 1 && pairs.size() < kSplitPairsPerLane * std::size_t(lanes) &&
           a.local().triangles.size() + b.local().triangles.size() >= kSplitTriangles)
         bvh_split(a.frame_tree(), b.frame_tree(), BvhRelation::between(a.frame_pose(), b.frame_pose()),
-                  32 * std::size_t(lanes), split);
+                  kSplitNodePairsPerLane * std::size_t(lanes), split);
       else
         split.assign(1, BvhNodePair{0u, 0u});
     }
@@ -218,6 +217,7 @@ std::size_t World::Impl::plan_tasks(unsigned lanes) {
       if (used == tasks.size()) tasks.emplace_back();
       Task& t = tasks[used++];
       t.pair = p;
+      t.kind = kind;
       t.start = start;
     }
   }
@@ -235,7 +235,7 @@ void World::Impl::traverse(std::size_t used, unsigned lanes) {
     t.contacts.clear();
     t.transformed = 0;
     t.tested = 0;
-    if (t.start.first == kSelfPair) {  // in the body's own frame
+    if (t.kind == TaskKind::self) {  // in the body's own frame
       const Mesh& m = a.local();
       t.visited = bvh_self_traverse(a.tree, self_stacks[lane].v, [&](std::uint32_t x, std::uint32_t y) {
         if (triangles_adjacent(m, a.rep, x, y)) return;
@@ -247,7 +247,7 @@ void World::Impl::traverse(std::size_t used, unsigned lanes) {
       });
       return;
     }
-    if (t.start.first == kSmallPair) {  // as the frame API's exact path: one culling round, a sweep
+    if (t.kind == TaskKind::small_pair) {  // as the frame API's exact path: one culling round, a sweep
       const Mesh& ma = *a.world_mesh();
       const Mesh& mb = *b.world_mesh();
       LaneScratch& s = *lane_scratch[lane];
@@ -323,8 +323,8 @@ void World::Impl::test_candidates(const DetectOptions& opt, std::size_t used, un
     if (t.candidates.empty() || to_image[t.pair]) return;
     const Body& a = bodies[ids[pairs[t.pair].first]];
     const Body& b = bodies[ids[pairs[t.pair].second]];
-    if (t.start.first == kSelfPair) return;
-    if (t.start.first == kSmallPair) {  // the sweep's pairs: distinct, boxes overlapping, world meshes at hand
+    if (t.kind == TaskKind::self) return;
+    if (t.kind == TaskKind::small_pair) {  // the sweep's pairs: distinct, boxes overlapping, world meshes at hand
       sort_unique_pairs(t.candidates, lane_scratch[lane]->sorted);
       narrow_phase(*a.world_mesh(), *b.world_mesh(), t.candidates, t.contacts, /*boxes_overlap=*/true,
                    opt.max_contacts);

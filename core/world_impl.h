@@ -21,8 +21,9 @@
 namespace peelcd {
 namespace world_detail {
 
-constexpr std::uint32_t kSmallPair = 0xffffffffu;  // a task's start: scan two small world meshes
-constexpr std::uint32_t kSelfPair = 0xfffffffeu;   // a task's start: a body's self traversal
+// What a task does: traverse two trees from a node pair, scan two small world meshes (one culling
+// round and a sweep, as the frame API's exact path), or traverse a body's tree against itself.
+enum class TaskKind : std::uint8_t { nodes, small_pair, self };
 
 // A rigid body with fewer triangles than this may be copied into world space for a frame (its
 // vertices transformed, a copy of its tree refitted over them): O(its size), and its boxes are
@@ -52,6 +53,15 @@ constexpr double kPosedConditionLimit = 1e4;
 // A pair of bodies with fewer triangles than this between them is one task, whatever the lanes
 // (a split's walk and tasks cost more than a second lane saves on it).
 constexpr std::size_t kSplitTriangles = 32768;
+// Fewer pairs than this many a lane split their traversals into node pairs for the lanes to
+// share, kSplitNodePairsPerLane a lane (the contact region of two crossing spheres sits in few of
+// them: rigid 1.3M spheres at 2 threads 0.61 of one); more pairs share the lanes as they are (a
+// split costs a breadth-first walk and its tasks).
+constexpr std::size_t kSplitPairsPerLane = 8;
+constexpr std::size_t kSplitNodePairsPerLane = 32;
+// A deforming body with this many triangles or more is refitted in one chunk per lane (under it,
+// the chunks cost more than the lanes save).
+constexpr std::size_t kSplitRefitTriangles = 32768;
 
 struct Body {
   bool alive = false;
@@ -207,7 +217,8 @@ inline std::string label_of(const std::string& name, BodyId id) {
 // (A cache line or more each: two lanes work on neighbouring tasks, and each writes its own.)
 struct alignas(64) Task {
   std::size_t pair = 0;
-  BvhNodePair start;
+  TaskKind kind = TaskKind::nodes;
+  BvhNodePair start;  // TaskKind::nodes: the node pair it starts from
   std::vector<std::uint64_t> candidates;
   std::vector<Contact> contacts;
   std::size_t visited = 0, transformed = 0;

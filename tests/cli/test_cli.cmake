@@ -86,7 +86,7 @@ file(WRITE ${WORK}/badids.json "{\"objects\":[{\"mesh\":\"${FIXTURES}/meshes/bun
 expect("unknown ID mode in scene" 2 "badids.json': ids: unknown ID mode \"fancy\"" detect ${WORK}/badids.json)
 expect("unknown ID mode option" 2 "unknown ID mode \"fancy\"" detect ${scene} --ids fancy)
 expect("unknown culling option" 2 "--cull: unknown culling \"fancy\"" detect ${scene} --cull fancy)
-expect("unknown resolve option" 2 "--resolve: unknown resolve \"fancy\"" detect ${scene} --resolve fancy)
+expect("unknown resolve option" 2 "--resolve: unknown value \"fancy\" .expected auto/gpu/host." detect ${scene} --resolve fancy)
 file(WRITE ${WORK}/badcull.json "{\"objects\":[{\"mesh\":\"${FIXTURES}/meshes/bunny_3k.obj\"}],\"cull\":\"fancy\"}")
 expect("unknown culling in scene" 2 "cull: unknown culling \"fancy\"" detect ${WORK}/badcull.json)
 expect("box culling, host resolve" 0 "cull=box" detect ${scene} --res 64 --cull box --resolve host --check)
@@ -412,7 +412,7 @@ expect("bench --scaling" 0 "peelcd default, 2 threads +[0-9.]+ +[0-9.]+ +0.00% +
 expect("bench --scaling: not for self" 2 "--scaling times the World rows of the pair scenes, not cloth-self" bench cloth-self --scaling 2)
 expect("calibrate help" 0 "cost models" calibrate --help)
 expect("calibrate: large meshes" 0 "large meshes.*stacks +triangles.*\n +10 +720 .*\n +16 +1920 .*ratio: measured / predicted" calibrate --backend cpu --repeat 1 --budgets 16 --large 10 16)
-expect("bench: bad peeler" 2 "unknown peeler" detect ${scene} --peeler magic)
+expect("bench: bad peeler" 2 "--peeler: unknown value \"magic\"" detect ${scene} --peeler magic)
 
 # peelcd explain (docs/debugging.md): one pair's walk and verdict; detect --explain-misses.
 expect("explain: separated under the paper's configuration" 0
