@@ -412,6 +412,14 @@ EmbreePeer::~EmbreePeer() {
   if (impl_->device) rtcReleaseDevice(impl_->device);
 }
 std::size_t EmbreePeer::builds() const { return impl_->builds; }
+std::string EmbreePeer::name() const {
+  return std::string("Embree 3 rtcCollide, ") + (impl_->update == Update::refit ? "refit" : "rebuilt low") +
+         (variant() ? ", scaled test" : "");
+}
+std::string EmbreePeer::column() const {
+  return variant() ? "Embree sc" : impl_->update == Update::refit ? "Embree rf" : "Embree lo";
+}
+bool EmbreePeer::variant() const { return impl_->test != TriangleTest::moller; }
 std::string EmbreePeer::setup() const {
   return std::string("Embree ") + std::to_string(RTC_VERSION_MAJOR) + "." + std::to_string(RTC_VERSION_MINOR) + "." +
          std::to_string(RTC_VERSION_PATCH) + " rtcCollide: one user geometry per object (a primitive per triangle); " +
@@ -580,6 +588,9 @@ BulletPeer::BulletPeer(unsigned threads, TriangleTest test) : impl_(std::make_un
 }
 BulletPeer::~BulletPeer() = default;
 std::size_t BulletPeer::builds() const { return impl_->builds; }
+std::string BulletPeer::name() const { return std::string("Bullet 3 GImpact, refit") + (variant() ? ", scaled test" : ""); }
+std::string BulletPeer::column() const { return variant() ? "Bullet sc" : "Bullet"; }
+bool BulletPeer::variant() const { return impl_->test != TriangleTest::moller; }
 std::string BulletPeer::setup() const {
   return "Bullet " + std::to_string(BT_BULLET_VERSION) +
          " GImpact: one btGImpactMeshShape per shape (quantized box set, margin 0), a rigid shape built once and moved "

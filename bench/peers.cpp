@@ -261,6 +261,19 @@ FclPeer::~FclPeer() = default;
 std::size_t FclPeer::builds() const { return impl_->builds; }
 std::size_t FclPeer::refits() const { return impl_->refits; }
 std::size_t FclPeer::pair_builds() const { return impl_->pair_builds; }
+std::string FclPeer::name() const {
+  return impl_->deforming == Deforming::refit ? "FCL 0.7, deforming refit" : "FCL 0.7, deforming rebuilt cropped";
+}
+std::string FclPeer::column() const { return impl_->deforming == Deforming::refit ? "FCL refit" : "FCL build"; }
+std::string FclPeer::setup() const {
+  return std::string("FCL 0.7: object pairs from DynamicAABBTreeCollisionManager; two rigid objects: OBBRSS trees "
+                     "built once from their shapes, moved by their poses; a static object: its AABB tree built once; ") +
+         (impl_->deforming == Deforming::refit
+              ? "two deforming objects: AABB trees of the world meshes refitted every frame (beginUpdateModel)"
+              : "two deforming objects: AABB trees of the triangles touching the pair's overlap box, built per pair") +
+         "; otherwise cropped AABB trees built per pair; every contact (CollisionRequest num_max_contacts unbounded), FCL's own triangle test; threads " +
+         std::to_string(impl_->threads);
+}
 
 PeerFrame FclPeer::frame(const std::vector<Object>& objects) {
   Impl& s = *impl_;

@@ -80,7 +80,7 @@ Score score_peer(const PeerFrame& exact, const PeerFrame& peer) {
   return total;
 }
 
-enum class Kind { world, frame, cgal, fcl_refit, fcl_rebuild, embree_refit, embree_rebuild, embree_scaled, bullet, floor_box, floor_culled };
+enum class Kind { world, frame, cgal, peer, floor_box, floor_culled };
 
 // Where one frame of a peelcd row went (the image-work table): host work (the frame less the
 // host's GL waits), the GPU passes by timer queries, the bytes uploaded, the candidates the host
@@ -97,6 +97,7 @@ struct Row {
   DetectOptions opt;
   gl::GlOptions gl;
   std::unique_ptr<World> world;  // Kind::world: its bodies, kept from frame to frame
+  Peer* peer = nullptr;          // Kind::peer: SuiteRun::peers_'s
   std::vector<BodyId> bodies;
   FrameResult result;
   std::vector<double> ms, stage_ms;
@@ -127,6 +128,20 @@ double median(std::vector<double> v) {
 }
 
 namespace {
+
+// The peers of the suite, one line each (`all`: the labelled variants too).
+std::vector<std::unique_ptr<Peer>> make_peers(unsigned threads, bool all) {
+  std::vector<std::unique_ptr<Peer>> peers;
+  peers.push_back(std::make_unique<FclPeer>(FclPeer::Deforming::refit, threads));
+  peers.push_back(std::make_unique<FclPeer>(FclPeer::Deforming::rebuild, threads));
+  peers.push_back(std::make_unique<EmbreePeer>(EmbreePeer::Update::refit, threads));
+  peers.push_back(std::make_unique<EmbreePeer>(EmbreePeer::Update::rebuild_low, threads));
+  // A variant, labelled: Embree's refit row with tri_tri_float() (a frame at a corner, scaled)
+  // for Moller's published test; not a peer's default.
+  if (all) peers.push_back(std::make_unique<EmbreePeer>(EmbreePeer::Update::refit, threads, TriangleTest::scaled));
+  peers.push_back(std::make_unique<BulletPeer>(threads));
+  return peers;
+}
 
 Split split_of(const FrameResult& r) {
   Split s;
@@ -167,12 +182,7 @@ class SuiteRun {
         gl_stage_(gl_stage),
         detector_(suite.stage),
         threads_(std::max(1u, suite.threads)),
-        fcl_refit_(FclPeer::Deforming::refit, threads_),
-        fcl_rebuild_(FclPeer::Deforming::rebuild, threads_),
-        embree_refit_(EmbreePeer::Update::refit, threads_),
-        embree_rebuild_(EmbreePeer::Update::rebuild_low, threads_),
-        embree_scaled_(EmbreePeer::Update::refit, threads_, TriangleTest::scaled),
-        bullet_(threads_) {}
+        peers_(make_peers(threads_, !suite.short_rows)) {}
 
   std::string run(bool heap_kept) {
     add_rows();
@@ -191,12 +201,10 @@ class SuiteRun {
   gl::GlImageStage& gl_stage_;
   Detector detector_;
   unsigned threads_;
-  FclPeer fcl_refit_, fcl_rebuild_;
-  EmbreePeer embree_refit_, embree_rebuild_, embree_scaled_;
-  BulletPeer bullet_;
+  std::vector<std::unique_ptr<Peer>> peers_;
   std::vector<Row> rows_;
   DetectOptions base_;  // the default of detect: the router
-  std::size_t cg_ = 0, fr_ = 0, fb_ = 0, fl_ = 0, cfl_ = 0;  // the CGAL, FCL and floor rows
+  std::size_t cg_ = 0, fl_ = 0, cfl_ = 0;  // the CGAL row, the floor rows (the peers' between them)
   std::size_t scaling_ = 0;  // the default World row with Suite::scaling_threads (0: none)
   std::vector<Object> objects_;
   std::string csv_;
@@ -218,6 +226,15 @@ class SuiteRun {
   double time_row(Row& r, const PeerFrame& ref, Score& s, double& stage_ms);
   void time_frame(std::size_t f);
   void print_table(bool heap_kept) const;
+  // The row with the least time of those `which` accepts (the CGAL row when none does).
+  template <class Which>
+  std::size_t fastest(const std::vector<double>& ms, Which which) const {
+    std::size_t best = cg_;
+    bool found = false;
+    for (std::size_t m = 0; m < rows_.size(); ++m)
+      if (which(rows_[m]) && (!found || ms[m] < ms[best])) best = m, found = true;
+    return best;
+  }
   void print_image_work() const;
   void print_phases() const;
 };
@@ -244,17 +261,8 @@ void SuiteRun::add_rows() {
   point.views = 3;
   if (!suite_.short_rows) add_image_rows(image, point, gl_base);
   cg_ = rows_.size();
-  fr_ = cg_ + 1;
-  fb_ = cg_ + 2;
   row("CGAL, cropped to the overlap box", "CGAL", Kind::cgal);
-  row("FCL 0.7, deforming refit", "FCL refit", Kind::fcl_refit);
-  row("FCL 0.7, deforming rebuilt cropped", "FCL build", Kind::fcl_rebuild);
-  row("Embree 3 rtcCollide, refit", "Embree rf", Kind::embree_refit);
-  row("Embree 3 rtcCollide, rebuilt low", "Embree lo", Kind::embree_rebuild);
-  // A variant, labelled: the refit row with tri_tri_float() (a frame at a corner, scaled) for
-  // Moller's published test; not a peer's default.
-  if (!suite_.short_rows) row("Embree 3 rtcCollide, refit, scaled test", "Embree sc", Kind::embree_scaled);
-  row("Bullet 3 GImpact, refit", "Bullet", Kind::bullet);
+  for (const std::unique_ptr<Peer>& p : peers_) row(p->name(), p->column(), Kind::peer).peer = p.get();
   // The floors: one bare draw of every triangle touching the overlap box (the paper's ROI), and
   // of the triangles contact culling keeps (what the image-stage configurations draw).
   DetectOptions floor1 = point, cfloor1 = point;
@@ -341,12 +349,7 @@ void SuiteRun::warm_up() {
     suite_.frame(f, objects_);
     for (Row& r : rows_)
       if (r.peelcd()) run_peelcd(r);
-    fcl_refit_.frame(objects_);
-    fcl_rebuild_.frame(objects_);
-    embree_refit_.frame(objects_);
-    embree_rebuild_.frame(objects_);
-    if (!suite_.short_rows) embree_scaled_.frame(objects_);
-    bullet_.frame(objects_);
+    for (const std::unique_ptr<Peer>& p : peers_) p->frame(objects_);
   }
 }
 
@@ -364,18 +367,8 @@ double SuiteRun::time_row(Row& r, const PeerFrame& ref, Score& s, double& stage_
     case Kind::cgal:
       s = Score{ref.pairs, ref.pairs, 0, 0};
       return ref.ms;
-    case Kind::fcl_refit:
-    case Kind::fcl_rebuild:
-    case Kind::embree_refit:
-    case Kind::embree_rebuild:
-    case Kind::embree_scaled:
-    case Kind::bullet: {
-      const PeerFrame p = r.kind == Kind::fcl_refit        ? fcl_refit_.frame(objects_)
-                          : r.kind == Kind::fcl_rebuild    ? fcl_rebuild_.frame(objects_)
-                          : r.kind == Kind::embree_refit   ? embree_refit_.frame(objects_)
-                          : r.kind == Kind::embree_rebuild ? embree_rebuild_.frame(objects_)
-                          : r.kind == Kind::embree_scaled  ? embree_scaled_.frame(objects_)
-                                                           : bullet_.frame(objects_);
+    case Kind::peer: {
+      const PeerFrame p = r.peer->frame(objects_);
       s = score_peer(ref, p);
       return p.ms;
     }
@@ -417,12 +410,10 @@ void SuiteRun::time_frame(std::size_t f) {
 void SuiteRun::print_table(bool heap_kept) const {
   std::vector<double> med(rows_.size());
   for (std::size_t m = 0; m < rows_.size(); ++m) med[m] = median(rows_[m].ms);
-  // The FCL ratio is against the faster of its two ways with deforming objects.
-  const std::size_t fc = med[fr_] <= med[fb_] ? fr_ : fb_;
-  // The best peer: the fastest of CGAL, FCL, Embree and Bullet rows.
-  std::size_t best = cg_;
-  for (std::size_t m = cg_; m < fl_; ++m)
-    if (rows_[m].kind != Kind::embree_scaled && med[m] < med[best]) best = m;  // a variant is no peer's default
+  // The FCL ratio is against the faster of its ways with deforming objects; the best peer is
+  // the fastest of the CGAL and peer rows (a variant is no peer's default).
+  const std::size_t fc = fastest(med, [](const Row& r) { return r.peer && r.peer->library() == "FCL"; });
+  const std::size_t best = fastest(med, [](const Row& r) { return r.kind == Kind::cgal || (r.peer && !r.peer->variant()); });
   const int tile = suite_.res ? suite_.res : base_.budget;
   std::printf("peelcd bench: %s, %zu frames, %zu objects, %zu triangles, %s, %s (%s), medians per frame after an untimed pass\n",
               suite_.scene.c_str(), suite_.frames, objects_.size(), triangles_,
@@ -464,15 +455,15 @@ void SuiteRun::print_table(bool heap_kept) const {
               " stage ms: the image stage's GPU work, timed on the host to its end (0 on the exact path); the rest is host work.\n"
               " x CGAL: against the cropped CGAL peer; x FCL: against the faster FCL row (%s); x best: against the fastest\n"
               " peer row (%s); x floor: against one bare\n"
-              " draw of the triangles the configuration would draw, one view. FCL trees kept: %zu (refit row), %zu (rebuilt\n"
-              " row); refits %zu; cropped per-pair trees %zu and %zu, all frames. World rows: their bodies brought to each\n"
+              " draw of the triangles the configuration would draw, one view. World rows: their bodies brought to each\n"
               " frame inside the time (poses; a deforming body's vertices and refit; its topology kept while its counts stay,\n"
               " as the float peers keep theirs).)\n",
-              fc == fr_ ? "refit" : "rebuilt", rows_[best].name.c_str(), fcl_refit_.builds(), fcl_rebuild_.builds(),
-              fcl_refit_.refits(), fcl_refit_.pair_builds(), fcl_rebuild_.pair_builds());
-  // Each float peer's setup, in words (docs/performance.md, "The peers").
-  std::printf("peer setups:\n  %s\n  %s\n  %s\n", embree_refit_.setup().c_str(), embree_rebuild_.setup().c_str(),
-              bullet_.setup().c_str());
+              rows_[fc].name.c_str(), rows_[best].name.c_str());
+  // Each peer's setup, in words, and its trees or scenes built and refitted over all frames
+  // (docs/performance.md, "The peers").
+  std::printf("peer setups:\n");
+  for (const std::unique_ptr<Peer>& p : peers_)
+    std::printf("  %s: %s; %zu built, %zu refits\n", p->name().c_str(), p->setup().c_str(), p->builds(), p->refits());
   if (scaling_)
     std::printf("scaling: the default World with %u threads / with %u, the same frames side by side: %.2f (medians %.2f / %.2f ms)\n",
                 suite_.scaling_threads, threads_, med[scaling_] / med[0], med[scaling_], med[0]);
@@ -536,8 +527,9 @@ void SuiteRun::print_phases() const {
     }
     std::vector<double> pm(rows_.size());
     for (std::size_t m = 0; m < rows_.size(); ++m) std::printf(" %9.2f", pm[m] = median(rows_[m].phase_ms[std::size_t(p)]));
-    const double best_peer = *std::min_element(pm.begin() + std::ptrdiff_t(cg_), pm.begin() + std::ptrdiff_t(fl_));
-    std::printf(" %9.2f %9.2f %9.2f\n", pm[0] / pm[cg_], pm[0] / std::min(pm[fr_], pm[fb_]), pm[0] / best_peer);
+    const std::size_t fc = fastest(pm, [](const Row& r) { return r.peer && r.peer->library() == "FCL"; });
+    const std::size_t best = fastest(pm, [](const Row& r) { return r.kind == Kind::cgal || (r.peer && !r.peer->variant()); });
+    std::printf(" %9.2f %9.2f %9.2f\n", pm[0] / pm[cg_], pm[0] / pm[fc], pm[0] / pm[best]);
   }
 }
 

@@ -45,33 +45,41 @@ bool tri_tri_moller(const std::array<float, 9>& t, const std::array<float, 9>& u
 enum class TriangleTest { moller, scaled };
 const char* to_string(TriangleTest test);
 
-class EmbreePeer {
+class EmbreePeer : public Peer {
  public:
   enum class Update { refit, rebuild_low };
   EmbreePeer(Update update, unsigned threads = 1, TriangleTest test = TriangleTest::moller);
-  ~EmbreePeer();
+  ~EmbreePeer() override;
   EmbreePeer(const EmbreePeer&) = delete;
   EmbreePeer& operator=(const EmbreePeer&) = delete;
-  PeerFrame frame(const std::vector<Object>& objects);
-  std::size_t builds() const;  // scenes committed for the first time or rebuilt
-  std::size_t refits() const;  // commits of moved or deformed trees
-  std::string setup() const;   // the peer's settings, in words (bench prints them)
+  std::string name() const override;
+  std::string column() const override;
+  std::string library() const override { return "Embree"; }
+  bool variant() const override;  // the scaled test
+  PeerFrame frame(const std::vector<Object>& objects) override;
+  std::size_t builds() const override;  // scenes committed for the first time or rebuilt
+  std::size_t refits() const override;  // commits of moved or deformed trees
+  std::string setup() const override;
 
  private:
   struct Impl;
   std::unique_ptr<Impl> impl_;
 };
 
-class BulletPeer {
+class BulletPeer : public Peer {
  public:
   explicit BulletPeer(unsigned threads = 1, TriangleTest test = TriangleTest::moller);
-  ~BulletPeer();
+  ~BulletPeer() override;
   BulletPeer(const BulletPeer&) = delete;
   BulletPeer& operator=(const BulletPeer&) = delete;
-  PeerFrame frame(const std::vector<Object>& objects);
-  std::size_t builds() const;
-  std::size_t refits() const;
-  std::string setup() const;
+  std::string name() const override;
+  std::string column() const override;
+  std::string library() const override { return "Bullet"; }
+  bool variant() const override;  // the scaled test
+  PeerFrame frame(const std::vector<Object>& objects) override;
+  std::size_t builds() const override;
+  std::size_t refits() const override;
+  std::string setup() const override;
 
  private:
   struct Impl;

@@ -19,6 +19,7 @@
 
 #include <cstdint>
 #include <memory>
+#include <string>
 #include <vector>
 
 namespace peelcd::bench {
@@ -35,22 +36,43 @@ struct PeerFrame {
 
 PeerFrame cgal_frame(const std::vector<Object>& objects, unsigned threads = 1);
 
-class FclPeer {
+// A peer of `peelcd bench`: one library set up one way, a row of the table. A new peer is a class
+// implementing this and one line in make_peers() (bench/suite.cpp).
+class Peer {
+ public:
+  virtual ~Peer() = default;
+  virtual std::string name() const = 0;    // the row: "Embree 3 rtcCollide, refit"
+  virtual std::string column() const = 0;  // its short name in the per-phase table
+  virtual std::string library() const = 0; // "FCL", "Embree", "Bullet": "x FCL" takes the faster FCL row
+  // A labelled variant of a peer (another test than its users'): printed, never the "best" peer.
+  virtual bool variant() const { return false; }
+  // One frame of all colliding triangle pairs; state may be kept from frame to frame.
+  virtual PeerFrame frame(const std::vector<Object>& objects) = 0;
+  virtual std::string setup() const = 0;   // its settings, in words (bench prints them)
+  virtual std::size_t builds() const = 0;  // trees or scenes built so far
+  virtual std::size_t refits() const = 0;  // refits so far
+};
+
+class FclPeer : public Peer {
  public:
   enum class Deforming { refit, rebuild };
   FclPeer(Deforming deforming, unsigned threads = 1);
-  ~FclPeer();
+  ~FclPeer() override;
   FclPeer(const FclPeer&) = delete;
   FclPeer& operator=(const FclPeer&) = delete;
 
+  std::string name() const override;
+  std::string column() const override;
+  std::string library() const override { return "FCL"; }
+  std::string setup() const override;
   // One frame. State kept from frame to frame: the trees (rigid shapes' once, deforming
   // objects' refitted when their topology is unchanged) and the broad-phase manager.
-  PeerFrame frame(const std::vector<Object>& objects);
+  PeerFrame frame(const std::vector<Object>& objects) override;
 
   // Trees built and kept (one per rigid shape, per static or refitted object), refits, and
   // cropped trees built for one pair and frame, so far.
-  std::size_t builds() const;
-  std::size_t refits() const;
+  std::size_t builds() const override;
+  std::size_t refits() const override;
   std::size_t pair_builds() const;
 
  private:
