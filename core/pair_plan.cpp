@@ -172,11 +172,9 @@ void FramePlan::share_budget(const DetectOptions& opt) {
 
 // Each ROI through the router (planner.h): the work is the triangles kept, the scan both
 // objects' triangles. A self pair takes the exact path, as in the World: the image model was
-// never fitted to a ROI peeled as both objects (predicted 153 ms on the 100k crumpled cloth,
-// 473 taken, against 78 for the exact path; the folded sheet: 460 against 131). Its exact
-// prediction is by its candidate couples, known from planning (the World's model: a cloth's
-// couples grow with its folds, not its triangles; the crumpled cloth: 59 ms predicted, 65
-// taken, where its triangles predicted 33).
+// never fitted to a ROI peeled as both objects, and underpredicts it about 3x (docs/router.md).
+// Its exact prediction is by its candidate couples, known from planning (the World's model: a
+// cloth's couples grow with its folds, not its triangles).
 void FramePlan::route(const DetectOptions& opt) {
   for (std::size_t i = 0; i < pairs.size(); ++i) {
     PairPlan& p = plans[i];

@@ -357,9 +357,9 @@ void World::Impl::test_task_as(const Body& a, const Body& b, const DetectOptions
   const Mesh& ma = a.local();
   const Mesh& mb = b.local();
   // The candidates' data is read in an order the hardware cannot guess: their triangles are
-  // asked for kAhead candidates ahead, their corners kAhead / 2 ahead (a frame whose data other
-  // work evicted, as in the bench where the methods take turns: the default scene's tests 0.16
-  // -> 0.11 ms after 64 MB of other work; no change on warm data).
+  // asked for kAhead candidates ahead, their corners kAhead / 2 ahead. It pays where other work
+  // evicted the data (as in the bench, where the methods take turns) and costs nothing on warm
+  // data.
   constexpr std::size_t kAhead = 32;
   const Vec3* va = a.world_vertices();
   const Vec3* vb = b.world_vertices();

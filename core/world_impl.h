@@ -31,14 +31,13 @@ enum class TaskKind : std::uint8_t { nodes, small_pair, self };
 // from a neighbour's frame overlaps far more of it). It is, when it stands still (the copy
 // serves later frames) or has kCopyPairs pairs or more. Larger rigid bodies are never touched
 // beyond what the traversal reaches.
-// 8,192: test1's 4,512-triangle balls go to world space (boxes carried through a pose cost a
-// transform per node pair; docs/performance.md).
+// 8,192 puts test1's 4,512-triangle balls in world space: boxes carried through a pose cost a
+// transform per node pair, which their traversal pays more than their copy.
 constexpr std::size_t kWorldFrameTriangles = 8192;
 // A moving small rigid body paired with this many bodies or more is copied into world space;
 // with fewer it is traversed through its pose (World::Impl::copy_paired()).
-// 4: test2's falling objects (one to three pairs) 1.38 -> 0.87 ms a frame traversed through
-// their poses; the 400-ball pile (about five pairs a ball) keeps its copies (25 ms; 53 ms
-// without them).
+// 4: a body in one to three pairs (test2's falling objects) is faster traversed through its
+// pose; one in about five (a ball of the 400-ball pile) pays for its copy twice over.
 constexpr std::size_t kCopyPairs = 4;
 
 // A rigid body whose pose's linear part has a condition number (largest over smallest singular
@@ -139,11 +138,10 @@ struct Body {
   // Small (under kWorldFrameTriangles) and in world space this frame: a pair of two such bodies,
   // one of them a rigid body that moved and in no other pair, is tested as the frame API tests
   // it (one culling round over both meshes, a sweep of the kept triangles' boxes): that scan
-  // costs less than refitting the moved body's world-space tree for one pair (test2: 1.69 vs
-  // 1.80 ms a frame). A moved body in several pairs refits its tree once for all of them (the
-  // 400-ball pile: 26.5 vs 36 ms a frame scanning every pair). Otherwise the trees are current
-  // (deforming bodies' refitted, a still rigid body's world tree kept): their traversal costs
-  // less than the scan (the default scene: 0.24 vs 0.35 ms a frame).
+  // costs less than refitting the moved body's world-space tree for one pair. A moved body in
+  // several pairs refits its tree once for all of them (cheaper than scanning every pair).
+  // Otherwise the trees are current (deforming bodies' refitted, a still rigid body's world tree
+  // kept): their traversal costs less than the scan.
   bool small() const { return local().triangles.size() < kWorldFrameTriangles; }
   const Mesh* world_mesh() const { return !is_rigid ? &mesh : world_frame && copy_valid ? &world_copy : nullptr; }
   // The tree the traversals use and the pose it is posed by: a small rigid body's world copy

@@ -181,8 +181,16 @@ expect("json: many ROIs" 0 "" detect ${FIXTURES}/golden/crowded_conservative_16/
 expect("json: depth, margin and volume" 0 "within 0.001: [0-9]+ triangle pairs; least distance 0.*depth [0-9.]+ .* along"
        detect ${FIXTURES}/scenes/bunny_dragon.json --depth --margin 0.001 --volume --json ${WORK}/queries.json)
 expect("--margin must be finite" 2 "--margin: \"inf\" is not a finite number" detect ${FIXTURES}/scenes/bunny_dragon.json --margin inf)
+# The image stage's clocks: its host work, and with --gpu-timers its GPU passes by timer queries.
+expect("gpu timers" 0 "host work [0-9.]+ .total - GL waits [0-9.]+.*GPU passes .timer queries.: raster [0-9.]+  compute"
+       detect ${FIXTURES}/scenes/bunny_dragon.json --stage image --gpu-timers --json ${WORK}/timers.json)
+file(READ ${WORK}/timers.json timers_json)
+string(JSON raster ERROR_VARIABLE raster_error GET "${timers_json}" timings_ms gpu_raster)
+if(raster_error OR NOT raster GREATER 0)
+  message(SEND_ERROR "gpu timers: timings_ms.gpu_raster '${raster}' ${raster_error}")
+endif()
 validate("json" result.schema.json ${WORK}/stdout.json ${WORK}/meshes.json ${WORK}/crowd.json ${WORK}/out.json
-         ${WORK}/outdir/target.json ${WORK}/queries.json)
+         ${WORK}/outdir/target.json ${WORK}/queries.json ${WORK}/timers.json)
 # Inputs: mesh files without a scene; scene validation.
 expect("detect A.obj B.obj" 0 "bunny_3k x dragon_3k" detect ${FIXTURES}/meshes/bunny_3k.obj ${FIXTURES}/meshes/dragon_3k.obj)
 # A glTF scene: one object per node, the node transforms applied ("far" is moved 10 away: no pair).

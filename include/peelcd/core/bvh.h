@@ -26,8 +26,8 @@
 
 namespace peelcd {
 
-// 8: against 4, the waving 330k spheres 20 -> 17.5 ms and the rigid ones 6.8 -> 6.0 ms a frame
-// (half the nodes to refit and to visit), the piles unchanged.
+// 8 triangles a leaf: half the nodes of 4 to refit and to visit (about an eighth off the large
+// spheres' frames), the piles unchanged.
 constexpr std::uint32_t kBvhLeafSize = 8;
 
 // A closed box of floats that encloses the double box it was made from (each bound moved
@@ -382,10 +382,9 @@ std::size_t bvh_traverse(const Bvh& a, const Bvh& b, const BvhRelation& rel, Bvh
 // The stack is stack[0, top); a child is written in any case and kept by moving top past it
 // (no branch on the overlap). A child pair of two leaves has its leaves' lines asked for, kept
 // or not (a kept one is popped soon: the stack is last in, first out; asking only for kept ones
-// branched on the overlap again: the folded sheet's self frame 119 -> 125 ms); a child's right
-// child (its left one is next to it) is asked for in any case, ahead of the child's own descent
-// (the default scene in the bench: 0.23 -> 0.22 ms; a leaf's `first` is a leaf index, which
-// only wastes the hint).
+// would branch on the overlap again); a child's right child (its left one is next to it) is
+// asked for in any case, ahead of the child's own descent (for a leaf, whose `first` is a leaf
+// index, the hint is wasted, which costs less than a branch).
 inline void descend_same_frame(const Bvh& a, const Bvh& b, std::uint32_t i, std::uint32_t j,
                                std::vector<BvhNodePair>& stack, std::size_t& top) {
   if (stack.size() < top + 2) stack.resize(2 * top + 64);

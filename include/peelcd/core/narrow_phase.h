@@ -57,8 +57,8 @@ std::pair<Vec3, Vec3> intersection_segment(const TriangleCorners& a, const Trian
 bool test_triangle_pair(const TriangleCorners& a, const TriangleCorners& b, Contact& contact);
 
 // Contacts by (tri_a, tri_b): a pair's contacts in the order every path gives them. Large sets
-// (kRadixContacts or more) are sorted by their indices' bits, radix 2^11, a contact moved once:
-// 4x faster than a comparison sort of the contacts on 5k and 60k contacts.
+// (kRadixContacts or more) are sorted by their indices' bits, radix 2^11, a contact moved once
+// (about 4x faster than a comparison sort of the contacts at thousands of contacts).
 constexpr std::size_t kRadixContacts = 1024;
 struct ContactSortScratch {  // kept by a caller that sorts every frame (no allocation once grown)
   std::vector<std::uint64_t> keys, spare;

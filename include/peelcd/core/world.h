@@ -123,10 +123,10 @@ class World {
   ImageStage& stage();
 
   // The pairs routed to the image stage go to it together, in one frame of the stage (one batch
-  // of views: on an NVIDIA H200, the 400-ball pile's image stage 84 ms a frame instead of 734),
-  // or one at a time (each pair's views alone: faster where GL runs on the CPU, llvmpipe 122 ms
-  // against 211). Unset: together on a GPU, one at a time on a software renderer (its
-  // GL_RENDERER names llvmpipe, softpipe or swrast) and on the CPU stage.
+  // of views and a sync, where one at a time costs a sync a pair: the faster on a GPU), or one
+  // at a time (each pair's views alone: the faster where GL runs on the CPU). Unset: together on
+  // a GPU, one at a time where the stage runs on the CPU (ImageStage::runs_on_cpu(): llvmpipe,
+  // softpipe, swrast, the CPU stage). docs/backends.md has the measurements.
   void batch_image_pairs(std::optional<bool> together);
 
  private:
