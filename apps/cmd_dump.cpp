@@ -11,6 +11,28 @@ struct DumpArgs {
   std::size_t max_rois = 64;  // refuse larger dumps unless raised
 };
 
+// Each pair's reference pairs the frame did not report, explained on the same frame (one more run
+// with every layer captured, only when something was missed): the viewer lists them with why.
+void explain_missed(oracle::Dump& dump, const std::vector<Object>& objects, const DetectOptions& opt, Runner& runner,
+                    const Progress& progress) {
+  std::unique_ptr<oracle::FrameTrace> trace;
+  for (oracle::DumpPair& p : dump.pairs) {
+    if (!p.has_reference) continue;
+    std::vector<std::array<std::uint32_t, 2>> missed;
+    std::set_difference(p.reference.begin(), p.reference.end(), p.colliding.begin(), p.colliding.end(),
+                        std::back_inserter(missed));
+    if (missed.size() > oracle::kMissedExplained) missed.resize(oracle::kMissedExplained);
+    for (const auto& m : missed) {
+      if (!trace) {
+        progress.phase("peelcd dump: explaining the missed pairs...");
+        trace = std::make_unique<oracle::FrameTrace>(*runner.detector, objects, opt);
+      }
+      const oracle::Explanation e = trace->explain(oracle::PairQuery{p.object_a, p.object_b, m[0], m[1]});
+      p.missed.push_back({m[0], m[1], oracle::to_string(e.verdict), e.verdict_line});
+    }
+  }
+}
+
 int run_dump(const DetectArgs& a, const DumpArgs& d) {
   const Progress progress;
   progress.phase("peelcd dump: loading the meshes...");
@@ -61,6 +83,7 @@ int run_dump(const DetectArgs& a, const DumpArgs& d) {
   }
   progress.phase("peelcd dump: peeling and reading every layer back...");
   oracle::Dump dump = capture_frame(objects, opt, runner);
+  explain_missed(dump, objects, opt, runner, progress);
   progress.phase("peelcd dump: writing the layers...");
   if (!original.empty())
     for (auto& p : dump.pairs) p.object_a = original[p.object_a], p.object_b = original[p.object_b];

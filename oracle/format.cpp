@@ -178,6 +178,12 @@ void write_dump(const Dump& d, const std::string& dir, bool previews) {
         for (const auto& r : p.reference) ref += std::to_string(r[0]) + " " + std::to_string(r[1]) + "\n";
         write_text(tmp / p.dir / "reference.txt", ref);
       }
+      if (!p.missed.empty()) {
+        std::string missed;
+        for (const DumpPair::Missed& m : p.missed)
+          missed += std::to_string(m.tri_a) + " " + std::to_string(m.tri_b) + " " + m.verdict + ": " + m.why + "\n";
+        write_text(tmp / p.dir / "missed.txt", missed);
+      }
       nlohmann::json views = nlohmann::json::array();
       for (const DumpView& v : p.views) {
         fs::create_directories(tmp / v.dir);
@@ -267,6 +273,26 @@ std::vector<std::array<std::uint32_t, 2>> parse_pairs(const fs::path& path, std:
   return out;
 }
 
+// missed.txt: "triA triB verdict: why" per line.
+std::vector<DumpPair::Missed> parse_missed(const fs::path& path) {
+  std::istringstream in(read_text(path));
+  std::vector<DumpPair::Missed> out;
+  std::string line;
+  while (std::getline(in, line)) {
+    if (line.empty()) continue;
+    std::istringstream l(line);
+    DumpPair::Missed m;
+    std::string verdict;
+    if (!(l >> m.tri_a >> m.tri_b >> verdict) || verdict.size() < 2 || verdict.back() != ':')
+      throw InputError("peelcd: '" + path.string() + "': malformed line \"" + line +
+                       "\" (expected \"triA triB verdict: why\")");
+    m.verdict = verdict.substr(0, verdict.size() - 1);
+    std::getline(l >> std::ws, m.why);
+    out.push_back(std::move(m));
+  }
+  return out;
+}
+
 void check_count(const nlohmann::json& j, const char* key, std::size_t actual, const fs::path& file,
                  const fs::path& meta) {
   if (j.contains(key) && j.at(key).get<std::size_t>() != actual)
@@ -320,6 +346,7 @@ Dump read_dump(const std::string& dir) {
         p.reference = parse_pairs(root / p.dir / "reference.txt", nullptr);
         check_count(jp, "reference", p.reference.size(), root / p.dir / "reference.txt", meta_path);
       }
+      if (fs::exists(root / p.dir / "missed.txt")) p.missed = parse_missed(root / p.dir / "missed.txt");
       for (const auto& jv : jp.at("views")) {
         DumpView v;
         v.dir = jv.at("dir").get<std::string>();

@@ -1,5 +1,7 @@
 #include "peelcd/oracle/viewer.h"
 
+#include <algorithm>
+#include <iterator>
 #include <sstream>
 
 namespace peelcd::oracle {
@@ -62,21 +64,26 @@ function readout(img,e,pin){var v=+img.dataset.view,k=+img.dataset.layer,n=peelc
   // The preview is depth | IDs side by side (2n x n): either half reads the same texel.
   var x=Math.min(2*n-1,Math.floor(e.offsetX*2*n/img.clientWidth))%n,y=Math.min(n-1,Math.floor(e.offsetY*n/img.clientHeight));
   var r=document.getElementById('readout');r.textContent=texelText(v,k,x,y)+(pin?' (pinned)':'');r.dataset.pinned=pin?'1':'';}
-// Search: a triangle index ("12", "a:12", "b:34") or an ID pair ("12,34"): the colliding pairs
-// that hold it are marked, the others hidden; texels of that ID are outlined on the layers.
+// Search: a triangle index ("12", "a:12", "b:34") or a triangle pair ("12,34"): the colliding
+// and missed pairs that hold it are shown, the others hidden (a missed pair with why it was
+// missed); texels of that ID are outlined on the layers.
 function search(q){q=q.trim().toLowerCase();var side=null,m;
   if((m=/^([ab]):(\d+)$/.exec(q))){side=m[1];q=m[2];}
-  var pair=/^(\d+)\s*,\s*(\d+)$/.exec(q),hits=0;
+  var pair=/^(\d+)\s*,\s*(\d+)$/.exec(q),hits=0,missed=0,why='';
   document.querySelectorAll('tr.pair').forEach(function(tr){var a=tr.dataset.a,b=tr.dataset.b;
     var hit=q===''||(pair?(a===pair[1]&&b===pair[2]):((side!=='b'&&a===q)||(side!=='a'&&b===q)));
-    tr.style.display=hit?'':'none';if(hit&&q!=='')hits++;});
+    tr.style.display=hit?'':'none';if(!hit||q==='')return;
+    if(tr.classList.contains('missed')){missed++;if(pair)why=tr.dataset.why||'not explained in this dump';}else hits++;});
   document.querySelectorAll('canvas.mark').forEach(function(c){var g=c.getContext('2d');g.clearRect(0,0,c.width,c.height);
     if(q===''||pair)return;var v=+c.dataset.view,k=+c.dataset.layer,n=peelcdViews[v].n,W=words(v,k);if(!W)return;
     g.fillStyle='rgba(0,255,0,0.8)';for(var t=0;t<n*n;++t){var id1=W[4*t+1]&0x7fffffff,obj=W[4*t+1]>>>31;
       if(id1===0||String(id1-1)!==q||(side==='a'&&obj)||(side==='b'&&!obj))continue;
       var x=t%n,y=n-1-Math.floor(t/n),w=Math.max(1,c.width/(2*n)),hh=Math.max(1,c.height/n);
       g.fillRect(x*c.width/(2*n),y*hh,w,hh);g.fillRect((x+n)*c.width/(2*n),y*hh,w,hh);}});
-  document.getElementById('hits').textContent=q===''?'':hits+' colliding pairs hold it';
+  var text=q===''?'':hits+' colliding pairs hold it';
+  if(q!==''&&missed)text+='; '+(pair?'missed: '+why:missed+' missed pairs hold it');
+  else if(q!==''&&pair&&!hits&&document.querySelector('section.roi[data-reference]'))text+='; not a pair of the exact reference (the triangles do not meet)';
+  document.getElementById('hits').textContent=text;
   document.querySelectorAll('details.pairs').forEach(function(d){if(q!=='')d.open=true;});}
 function collidingOnly(on){document.querySelectorAll('section.roi').forEach(function(s){s.style.display=on&&s.dataset.colliding==='0'?'none':'';});}
 window.addEventListener('load',function(){
@@ -104,6 +111,14 @@ window.addEventListener('load',function(){
 // Texel words embedded up to this many bytes per dump (base64 adds a third): beyond, the
 // readout says so and `peelcd explain` reads any pair.
 constexpr std::size_t kEmbedBytes = 24u << 20;
+
+// The reference pairs the frame did not report (both lists sorted).
+std::vector<std::array<std::uint32_t, 2>> missed_pairs(const DumpPair& p) {
+  std::vector<std::array<std::uint32_t, 2>> out;
+  std::set_difference(p.reference.begin(), p.reference.end(), p.colliding.begin(), p.colliding.end(),
+                      std::back_inserter(out));
+  return out;
+}
 
 }  // namespace
 
@@ -164,19 +179,26 @@ std::string viewer_html(const Dump& d) {
   if (d.pairs.empty()) h << "<p>No overlapping bounding boxes: nothing was peeled.</p>\n";
   // The index: every ROI pair, its views and counts, linked.
   if (!d.pairs.empty()) {
-    h << "<h2>Index</h2>\n<table><tr><th>pair</th><th>views</th><th>layers</th><th>PCS</th><th>colliding</th></tr>\n";
+    h << "<h2>Index</h2>\n<table><tr><th>pair</th><th>views</th><th>layers</th><th>PCS</th><th>colliding</th>"
+         "<th>missed (of the exact reference)</th></tr>\n";
     for (const DumpPair& p : d.pairs) {
       std::size_t layers = 0;
       for (const DumpView& v : p.views) layers += v.layers.size();
       h << "<tr><td><a href=\"#" << escape(p.dir) << "\">" << escape(p.name_a) << " &times; " << escape(p.name_b)
         << "</a></td><td>" << p.views.size() << "</td><td>" << layers << "</td><td>" << p.pcs.size() << "</td><td>"
-        << p.colliding.size() << "</td></tr>\n";
+        << p.colliding.size() << "</td><td>";
+      if (p.has_reference)
+        h << missed_pairs(p).size() << " of " << p.reference.size();
+      else
+        h << "-";
+      h << "</td></tr>\n";
     }
     h << "</table>\n";
   }
   view_index = 0;
   for (const DumpPair& p : d.pairs) {
-    h << "<section class=\"roi\" data-colliding=\"" << p.colliding.size() << "\" id=\"" << escape(p.dir) << "\">\n";
+    h << "<section class=\"roi\" data-colliding=\"" << p.colliding.size() << "\""
+      << (p.has_reference ? " data-reference=\"1\"" : "") << " id=\"" << escape(p.dir) << "\">\n";
     h << "<h2>" << escape(p.name_a) << " (A) &times; " << escape(p.name_b) << " (B)</h2>\n";
     h << "<p>epsilon " << p.epsilon << " &middot; PCS " << p.pcs.size() << " ID pairs &middot; "
       << p.colliding.size() << " colliding triangle pairs</p>\n";
@@ -207,6 +229,26 @@ std::string viewer_html(const Dump& d) {
       h << "</div>\n";
       ++view_index;
     }
+    if (p.has_reference) {
+      // The missed pairs first in line for debugging: each with why (peelcd explain's verdict on
+      // the same frame, where the dump holds it) and the command that shows it texel by texel.
+      const auto missed = missed_pairs(p);
+      h << "<details class=\"pairs\"" << (missed.empty() ? "" : " open") << "><summary>missed pairs (" << missed.size()
+        << " of " << p.reference.size() << " exact pairs)</summary><table><tr><th>triangle of A</th><th>triangle of B"
+           "</th><th>why missed (peelcd explain)</th><th>explain</th></tr>\n";
+      for (const auto& m : missed) {
+        const DumpPair::Missed* why = nullptr;
+        for (const DumpPair::Missed& x : p.missed)
+          if (x.tri_a == m[0] && x.tri_b == m[1]) why = &x;
+        const std::string line = why ? why->verdict + ": " + why->why : "";
+        h << "<tr class=\"pair missed\" data-a=\"" << m[0] << "\" data-b=\"" << m[1] << "\" data-why=\"" << escape(line)
+          << "\"><td>" << m[0] << "</td><td>" << m[1] << "</td><td>"
+          << (why ? "<b>" + escape(why->verdict) + "</b> " + escape(why->why) : std::string("(not explained in this dump)"))
+          << "</td><td><code>peelcd explain SCENE --pair " << escape(p.name_a) << ":" << m[0] << "," << escape(p.name_b)
+          << ":" << m[1] << " --out DIR</code></td></tr>\n";
+      }
+      h << "</table></details>\n";
+    }
     h << "<details class=\"pairs\"><summary>colliding pairs (" << p.colliding.size()
       << ")</summary><table><tr><th>triangle of A</th><th>triangle of B</th><th>kind</th><th>explain</th></tr>\n";
     for (std::size_t i = 0; i < p.colliding.size(); ++i)
@@ -214,7 +256,8 @@ std::string viewer_html(const Dump& d) {
         << p.colliding[i][0] << "</td><td>" << p.colliding[i][1] << "</td><td>" << escape(p.kinds[i])
         << "</td><td><code>peelcd explain SCENE --pair " << escape(p.name_a) << ":" << p.colliding[i][0] << ","
         << escape(p.name_b) << ":" << p.colliding[i][1] << "</code></td></tr>\n";
-    h << "</table></details>\n</section>\n";
+    h << "</table></details>\n";
+    h << "</section>\n";
   }
   h << "</body></html>\n";
   return h.str();

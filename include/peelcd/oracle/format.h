@@ -8,6 +8,9 @@
 //   DIR/<pair>/pcs.txt                     the pair's PCS over all views: "idA idB", sorted
 //   DIR/<pair>/colliding.txt               "triA triB kind", sorted
 //   DIR/<pair>/reference.txt               "triA triB": the exact reference of the two meshes, sorted
+//   DIR/<pair>/missed.txt                  (dumps only, where the frame missed reference pairs)
+//                                          "triA triB verdict: why", peelcd explain's verdict on
+//                                          the same frame, sorted; at most kMissedExplained
 //   DIR/<pair>/view<v>/pcs.txt             that view's PCS
 //   DIR/<pair>/view<v>/layer<kk>.exr       layer kk: Z (FLOAT, window depth), id (UINT, ID + 1,
 //                                          0 = empty), object (UINT, 0 = A, 1 = B), dzdx, dzdy (FLOAT)
@@ -31,6 +34,8 @@ namespace peelcd::oracle {
 
 // meta.json's "format": the version of the dump format this code writes and reads.
 inline constexpr const char* kDumpFormat = "peelcd.dump/1";
+// Missed pairs a dump explains (peelcd dump): each costs an explanation on the captured frame.
+inline constexpr std::size_t kMissedExplained = 500;
 
 struct DumpView {
   std::string dir;  // relative to the dump root, e.g. "pair0_bunny_dragon/view0"
@@ -60,6 +65,13 @@ struct DumpPair {
   // lossy configuration's misses are counted against. Absent (false) in a dump without it.
   bool has_reference = false;
   std::vector<std::array<std::uint32_t, 2>> reference;
+  // Reference pairs the frame did not report, with peelcd explain's verdict on the same frame
+  // (peelcd dump fills it, at most kMissedExplained; the viewer lists every missed pair).
+  struct Missed {
+    std::uint32_t tri_a = 0, tri_b = 0;
+    std::string verdict, why;  // to_string(Verdict), explain's one line
+  };
+  std::vector<Missed> missed;
   std::vector<DumpView> views;
 };
 
