@@ -166,6 +166,8 @@ void write_dump(const Dump& d, const std::string& dir, bool previews) {
                            {"shader_hash", d.shader_hash}, {"options", d.options}};
     if (!d.gl_options.is_null()) meta["gl_options"] = d.gl_options;
     nlohmann::json pairs = nlohmann::json::array();
+    const bool layer_scripts = previews && !viewer_embeds_layers(d);  // the viewer's data, a file a layer
+    std::size_t view_index = 0;
     for (const DumpPair& p : d.pairs) {
       fs::create_directories(tmp / p.dir);
       write_text(tmp / p.dir / "pcs.txt", pcs_text(p.pcs));
@@ -193,7 +195,10 @@ void write_dump(const Dump& d, const std::string& dir, bool previews) {
           if (previews)
             write_png((tmp / v.dir / (layer_name(k) + ".png")).string(),
                       layer_preview(v.layers[k], v.resolution, pcs_texels(v, k)));
+          if (layer_scripts)
+            write_text(tmp / v.dir / (layer_name(k) + ".js"), viewer_layer_script(view_index, k, v.layers[k]));
         }
+        ++view_index;
         views.push_back({{"dir", v.dir},
                          {"view", v.view},
                          {"resolution", v.resolution},

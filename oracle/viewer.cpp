@@ -45,14 +45,24 @@ const char* const kViewerScript = R"JS(
 window.peelcdErrors=[];
 window.addEventListener('error',function(e){window.peelcdErrors.push(String(e.message||e.type));},true);
 (function(){var ce=console.error;console.error=function(){window.peelcdErrors.push(Array.prototype.join.call(arguments,' '));ce.apply(console,arguments);};})();
-var peelcdWords={};
-function words(v,k){var key=v+'/'+k;if(peelcdWords[key])return peelcdWords[key];var V=peelcdViews[v];if(!V||!V.layers)return null;
+var peelcdWords={},peelcdPending={};
+// A large dump's layers come one file each (DIR/<view>/layerKK.js, loaded by a script tag when
+// first needed: file:// pages may load scripts, not fetch files); need() runs `then` once layer
+// k of view v is at hand.
+function layerName(k){return 'layer'+(k<10?'0':'')+k;}
+function peelcdLayerLoaded(v,k,b64){var V=peelcdViews[v];if(!V.layers)V.layers=[];V.layers[k]=b64;
+  var cbs=peelcdPending[v+'/'+k]||[];delete peelcdPending[v+'/'+k];cbs.forEach(function(f){f();});}
+function need(v,k,then){var V=peelcdViews[v];if(!V.external||(V.layers&&V.layers[k])){then();return;}
+  var key=v+'/'+k;if(peelcdPending[key]){peelcdPending[key].push(then);return;}peelcdPending[key]=[then];
+  var s=document.createElement('script');s.src=V.dir+'/'+layerName(k)+'.js';
+  s.onerror=function(){window.peelcdErrors.push('layer data not found: '+s.src);};document.head.appendChild(s);}
+function words(v,k){var key=v+'/'+k;if(peelcdWords[key])return peelcdWords[key];var V=peelcdViews[v];if(!V||!V.layers||!V.layers[k])return null;
   var bin=atob(V.layers[k]),u8=new Uint8Array(bin.length);for(var i=0;i<bin.length;++i)u8[i]=bin.charCodeAt(i);
   return peelcdWords[key]=new Uint32Array(u8.buffer);}
 function f32(w){var b=new ArrayBuffer(4);new Uint32Array(b)[0]=w;return new Float32Array(b)[0];}
 // The texel (x, y from the top) of layer k of view v, in words.
 function texelText(v,k,x,y){var V=peelcdViews[v],n=V.n,W=words(v,k);
-  if(!W)return V.dir+' layer '+k+' texel ('+x+', '+y+'): texel data not embedded (a large dump): peelcd explain reads any pair';
+  if(!W)return V.dir+' layer '+k+' texel ('+x+', '+y+'): '+(V.external?'loading the layer':'no texel data');
   var t=((n-1-y)*n+x)*4,id1=W[t+1]&0x7fffffff,obj=W[t+1]>>>31;
   var s=V.dir+' layer '+k+' texel ('+x+', '+y+'): ';
   if(id1===0)return s+'empty';
@@ -63,7 +73,8 @@ function texelText(v,k,x,y){var V=peelcdViews[v],n=V.n,W=words(v,k);
 function readout(img,e,pin){var v=+img.dataset.view,k=+img.dataset.layer,n=peelcdViews[v].n;
   // The preview is depth | IDs side by side (2n x n): either half reads the same texel.
   var x=Math.min(2*n-1,Math.floor(e.offsetX*2*n/img.clientWidth))%n,y=Math.min(n-1,Math.floor(e.offsetY*n/img.clientHeight));
-  var r=document.getElementById('readout');r.textContent=texelText(v,k,x,y)+(pin?' (pinned)':'');r.dataset.pinned=pin?'1':'';}
+  var r=document.getElementById('readout');r.dataset.pinned=pin?'1':'';
+  var show=function(){if(!r.dataset.pinned||pin)r.textContent=texelText(v,k,x,y)+(pin?' (pinned)':'');};show();need(v,k,show);}
 // Search: a triangle index ("12", "a:12", "b:34") or a triangle pair ("12,34"): the colliding
 // and missed pairs that hold it are shown, the others hidden (a missed pair with why it was
 // missed); texels of that ID are outlined on the layers.
@@ -75,42 +86,57 @@ function search(q){q=q.trim().toLowerCase();var side=null,m;
     tr.style.display=hit?'':'none';if(!hit||q==='')return;
     if(tr.classList.contains('missed')){missed++;if(pair)why=tr.dataset.why||'not explained in this dump';}else hits++;});
   document.querySelectorAll('canvas.mark').forEach(function(c){var g=c.getContext('2d');g.clearRect(0,0,c.width,c.height);
-    if(q===''||pair)return;var v=+c.dataset.view,k=+c.dataset.layer,n=peelcdViews[v].n,W=words(v,k);if(!W)return;
-    g.fillStyle='rgba(0,255,0,0.8)';for(var t=0;t<n*n;++t){var id1=W[4*t+1]&0x7fffffff,obj=W[4*t+1]>>>31;
-      if(id1===0||String(id1-1)!==q||(side==='a'&&obj)||(side==='b'&&!obj))continue;
-      var x=t%n,y=n-1-Math.floor(t/n),w=Math.max(1,c.width/(2*n)),hh=Math.max(1,c.height/n);
-      g.fillRect(x*c.width/(2*n),y*hh,w,hh);g.fillRect((x+n)*c.width/(2*n),y*hh,w,hh);}});
+    if(q===''||pair)return;var v=+c.dataset.view,k=+c.dataset.layer;need(v,k,function(){outline(c,g,v,k,q,side);});});
   var text=q===''?'':hits+' colliding pairs hold it';
+
   if(q!==''&&missed)text+='; '+(pair?'missed: '+why:missed+' missed pairs hold it');
   else if(q!==''&&pair&&!hits&&document.querySelector('section.roi[data-reference]'))text+='; not a pair of the exact reference (the triangles do not meet)';
   document.getElementById('hits').textContent=text;
   document.querySelectorAll('details.pairs').forEach(function(d){if(q!=='')d.open=true;});}
+// The texels of ID q (of A, B or either) outlined on layer k of view v's canvas.
+function outline(c,g,v,k,q,side){var n=peelcdViews[v].n,W=words(v,k);if(!W||document.getElementById('q').value.trim().toLowerCase().replace(/^[ab]:/,'')!==q)return;
+  g.fillStyle='rgba(0,255,0,0.8)';for(var t=0;t<n*n;++t){var id1=W[4*t+1]&0x7fffffff,obj=W[4*t+1]>>>31;
+    if(id1===0||String(id1-1)!==q||(side==='a'&&obj)||(side==='b'&&!obj))continue;
+    var x=t%n,y=n-1-Math.floor(t/n),w=Math.max(1,c.width/(2*n)),hh=Math.max(1,c.height/n);
+    g.fillRect(x*c.width/(2*n),y*hh,w,hh);g.fillRect((x+n)*c.width/(2*n),y*hh,w,hh);}}
 function collidingOnly(on){document.querySelectorAll('section.roi').forEach(function(s){s.style.display=on&&s.dataset.colliding==='0'?'none':'';});}
 window.addEventListener('load',function(){
   var imgs=document.querySelectorAll('img.layer'),bad=[];
   imgs.forEach(function(i){if(!i.complete||i.naturalWidth===0)bad.push(i.alt);
     i.addEventListener('mousemove',function(e){if(!document.getElementById('readout').dataset.pinned)readout(i,e,false);});
     i.addEventListener('click',function(e){readout(i,e,true);});});
-  // Self-check: the first layer's first non-empty texel read back through the readout.
-  var check='no layer';
-  if(imgs.length){var v=+imgs[0].dataset.view,n=peelcdViews[v].n,W=words(v,0);check='readout: texel data not embedded';
-    if(W)for(var t=0;t<n*n;++t)if((W[4*t+1]&0x7fffffff)!==0){var txt=texelText(v,0,t%n,n-1-Math.floor(t/n));
-      check=/ ID \d+, depth /.test(txt)?'readout ok':'readout wrong: '+txt;break;}}
   // #search=Q in the address: the search run on load, its hits in the status (and a test's).
   var m=/search=([^&]+)/.exec(location.hash),searched='';
   if(m){var q=decodeURIComponent(m[1]);document.getElementById('q').value=q;search(q);
     searched=', search "'+q+'": '+document.getElementById('hits').textContent;}
-  var s=document.getElementById('status');
-  var ok=imgs.length>0&&bad.length===0&&window.peelcdErrors.length===0&&(check==='readout ok'||check==='readout: texel data not embedded');
-  s.setAttribute('data-status',ok?'ok':'error');
-  s.textContent=(ok?'viewer ok: ':'viewer error: ')+imgs.length+' layer images loaded, '+check+
-    searched+(bad.length?', not loaded: '+bad.join(', '):'')+(window.peelcdErrors.length?', errors: '+window.peelcdErrors.join('; '):'');
+  // Self-check: the first layer's first non-empty texel read back through the readout (its data
+  // loaded first in a large dump: the time that took is in the status).
+  var finish=function(check,ms){var s=document.getElementById('status');
+    var ok=imgs.length>0&&bad.length===0&&window.peelcdErrors.length===0&&check==='readout ok';
+    s.setAttribute('data-status',ok?'ok':'error');
+    s.textContent=(ok?'viewer ok: ':'viewer error: ')+imgs.length+' layer images loaded, '+check+
+      (ms!==null?' (layer data loaded in '+ms+' ms)':'')+searched+(bad.length?', not loaded: '+bad.join(', '):'')+
+      (window.peelcdErrors.length?', errors: '+window.peelcdErrors.join('; '):'');};
+  if(!imgs.length){finish('no layer',null);return;}
+  var v=+imgs[0].dataset.view,t0=performance.now();
+  need(v,0,function(){var n=peelcdViews[v].n,W=words(v,0),check='readout: no texel data';
+    if(W)for(var t=0;t<n*n;++t)if((W[4*t+1]&0x7fffffff)!==0){var txt=texelText(v,0,t%n,n-1-Math.floor(t/n));
+      check=/ ID \d+, depth /.test(txt)?'readout ok':'readout wrong: '+txt;break;}
+    finish(check,peelcdViews[v].external?Math.round(performance.now()-t0):null);});
 });
 )JS";
 
-// Texel words embedded up to this many bytes per dump (base64 adds a third): beyond, the
-// readout says so and `peelcd explain` reads any pair.
+// Texel words embedded up to this many bytes per dump (base64 adds a third): beyond, one file a
+// layer beside its preview, loaded by the page when first needed (viewer_layer_script()).
 constexpr std::size_t kEmbedBytes = 24u << 20;
+
+// A layer's texel words as base64 of their little-endian bytes.
+std::string layer_base64(const std::vector<std::uint32_t>& layer) {
+  std::vector<std::uint8_t> bytes(layer.size() * 4);
+  for (std::size_t i = 0; i < layer.size(); ++i)
+    for (int b = 0; b < 4; ++b) bytes[4 * i + std::size_t(b)] = std::uint8_t(layer[i] >> (8 * b));
+  return base64(bytes);
+}
 
 // The reference pairs the frame did not report (both lists sorted).
 std::vector<std::array<std::uint32_t, 2>> missed_pairs(const DumpPair& p) {
@@ -121,6 +147,19 @@ std::vector<std::array<std::uint32_t, 2>> missed_pairs(const DumpPair& p) {
 }
 
 }  // namespace
+
+bool viewer_embeds_layers(const Dump& d) {
+  std::size_t bytes = 0;
+  for (const DumpPair& p : d.pairs)
+    for (const DumpView& v : p.views)
+      for (const auto& layer : v.layers) bytes += layer.size() * 4;
+  return bytes <= kEmbedBytes;
+}
+
+std::string viewer_layer_script(std::size_t view_index, std::size_t k, const std::vector<std::uint32_t>& layer) {
+  return "peelcdLayerLoaded(" + std::to_string(view_index) + "," + std::to_string(k) + ",\"" + layer_base64(layer) +
+         "\");\n";
+}
 
 std::string viewer_html(const Dump& d) {
   std::ostringstream h;
@@ -133,12 +172,8 @@ std::string viewer_html(const Dump& d) {
        ".pcs{color:#f0f}.meta{font-size:13px;color:#aaa}#tools{position:sticky;top:0;background:#15151c;"
        "padding:6px 0;border-bottom:1px solid #444;z-index:2}#readout{font-family:monospace;color:#9f9}"
        "code{color:#fc6}a{color:#8cf}</style>\n";
-  // The views' texel words, for the readout and the search.
-  std::size_t embedded = 0;
-  for (const DumpPair& p : d.pairs)
-    for (const DumpView& v : p.views)
-      for (const auto& layer : v.layers) embedded += layer.size() * 4;
-  const bool embed = embedded <= kEmbedBytes;
+  // The views' texel words, for the readout and the search: in the page, or one file a layer.
+  const bool embed = viewer_embeds_layers(d);
   h << "<script>\nvar peelcdViews=[";
   std::size_t view_index = 0;
   for (const DumpPair& p : d.pairs)
@@ -147,13 +182,10 @@ std::string viewer_html(const Dump& d) {
         << ",conservative:" << (v.conservative ? "true" : "false");
       if (embed) {
         h << ",layers:[";
-        for (std::size_t k = 0; k < v.layers.size(); ++k) {
-          std::vector<std::uint8_t> bytes(v.layers[k].size() * 4);
-          for (std::size_t i = 0; i < v.layers[k].size(); ++i)
-            for (int b = 0; b < 4; ++b) bytes[4 * i + std::size_t(b)] = std::uint8_t(v.layers[k][i] >> (8 * b));
-          h << (k ? "," : "") << "\"" << base64(bytes) << "\"";
-        }
+        for (std::size_t k = 0; k < v.layers.size(); ++k) h << (k ? "," : "") << "\"" << layer_base64(v.layers[k]) << "\"";
         h << "]";
+      } else {
+        h << ",external:true";
       }
       h << "}";
     }
@@ -174,7 +206,9 @@ std::string viewer_html(const Dump& d) {
        "recomputed from the layers: point sampling, this layer and the one before are of different objects and "
        "within epsilon; conservative, this layer's depth interval overlaps one of the other object's at the "
        "texel. The search outlines the texels of a triangle's ID in green (with unique IDs, the triangle).";
-  if (!embed) h << " Texel data is not embedded (a dump over " << (kEmbedBytes >> 20) << " MB): no readout or outline.";
+  if (!embed)
+    h << " The texel words (over " << (kEmbedBytes >> 20)
+      << " MB in all) are one file a layer beside its preview, loaded when a layer is first hovered or searched.";
   h << "</p>\n";
   if (d.pairs.empty()) h << "<p>No overlapping bounding boxes: nothing was peeled.</p>\n";
   // The index: every ROI pair, its views and counts, linked.
