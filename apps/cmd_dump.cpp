@@ -28,7 +28,9 @@ void explain_missed(oracle::Dump& dump, const std::vector<Object>& objects, cons
         trace = std::make_unique<oracle::FrameTrace>(*runner.detector, objects, opt);
       }
       const oracle::Explanation e = trace->explain(oracle::PairQuery{p.object_a, p.object_b, m[0], m[1]});
-      p.missed.push_back({m[0], m[1], oracle::to_string(e.verdict), e.verdict_line});
+      std::string why = e.verdict_line;
+      if (why.rfind("missed: ", 0) == 0) why.erase(0, 8);  // the file says it is missed
+      p.missed.push_back({m[0], m[1], oracle::to_string(e.verdict), why});
     }
   }
 }

@@ -2,6 +2,7 @@
 // contacts, a view's record and its layers, each texel judged by the tier's rule.
 #include "peelcd/oracle/compare.h"
 #include "peelcd/oracle/images.h"
+#include "peelcd/oracle/viewer.h"
 #include "text_file.h"
 
 #include <algorithm>
@@ -312,23 +313,27 @@ Comparison::LayerCount compare_layer(const TexelRule& r, const DumpView& ve, con
                                      std::size_t max_listed, Comparison& c) {
   const auto &le = ve.layers[k], &la = va.layers[k];
   const int n = ve.resolution;
-  Comparison::LayerCount count{ve.dir, k, 0, 0};
+  Comparison::LayerCount count{ve.dir, k, 0, 0, std::vector<std::uint8_t>(std::size_t(n) * n, 0)};
   for (int y = 0; y < n; ++y)
     for (int x = 0; x < n; ++x) {
       const int gl_row = n - 1 - y;
       const std::size_t t = std::size_t(gl_row) * n + x;
+      std::uint8_t& state = count.texels[std::size_t(y) * n + x];
       for (int ch = 0; ch < 4; ++ch) {
         const std::uint32_t we = le[4 * t + ch], wa = la[4 * t + ch];
         if (we == wa) continue;
         if (tolerated_word(r, le, la, n, k, x, gl_row, ch)) {
           ++count.tolerated;
+          state = 1;
           continue;
         }
         ++count.differing;
+        state = 2;
         if (c.first.size() < max_listed) c.first.push_back(describe_difference(ve.dir, k, x, y, ch, we, wa));
         break;
       }
     }
+  if (!count.differing && !count.tolerated) count.texels.clear();
   return count;
 }
 
@@ -337,16 +342,21 @@ Comparison::LayerCount compare_layer(const TexelRule& r, const DumpView& ve, con
 // rasterizer samples or not).
 Comparison::LayerCount compare_lone_layer(const TexelRule& r, const std::string& view_dir,
                                           const std::vector<std::uint32_t>& layer, int n, std::size_t k) {
-  Comparison::LayerCount count{view_dir, k, 0, 0};
+  Comparison::LayerCount count{view_dir, k, 0, 0, std::vector<std::uint8_t>(std::size_t(n) * n, 0)};
   for (int row = 0; row < n; ++row)
     for (int x = 0; x < n; ++x) {
       const std::size_t t = std::size_t(row) * n + x;
       if (texel_empty(layer, t)) continue;
-      if (r.tier == Tier::hardware && (k >= r.tie_from[t] || near_edge(layer, n, x, row, kIdSilhouetteTexels)))
+      std::uint8_t& state = count.texels[std::size_t(n - 1 - row) * n + x];
+      if (r.tier == Tier::hardware && (k >= r.tie_from[t] || near_edge(layer, n, x, row, kIdSilhouetteTexels))) {
         ++count.tolerated;
-      else
+        state = 1;
+      } else {
         ++count.differing;
+        state = 2;
+      }
     }
+  if (!count.differing && !count.tolerated) count.texels.clear();
   return count;
 }
 
@@ -413,14 +423,54 @@ std::string report_text(const Comparison& c, const std::string& case_name, Tier 
   return s.str();
 }
 
+namespace {
+
+// Two dumps' differing layers side by side (write_report()): expected | actual | error, and on
+// hover the texel's words in both; the status line counts the texels marked (a test reads it).
+std::string diff_page(const std::string& case_name, const std::string& report, const std::string& figures,
+                      const std::string& data) {
+  std::ostringstream h;
+  std::string safe_report;
+  for (char ch : report) safe_report += ch == '<' ? std::string("&lt;") : ch == '&' ? std::string("&amp;") : std::string(1, ch);
+  h << "<!DOCTYPE html>\n<html lang=\"en\"><head><meta charset=\"utf-8\"><title>peelcd: " << case_name
+    << ", two dumps</title>\n<style>body{font-family:sans-serif;background:#15151c;color:#ddd;margin:1em}"
+       ".row{display:flex;gap:10px}figure{margin:0}img{image-rendering:pixelated;width:384px;border:1px solid #333;"
+       "cursor:crosshair}#readout{font-family:monospace;color:#9f9;position:sticky;top:0;background:#15151c;"
+       "padding:6px 0}pre{font-size:12px;color:#aaa}</style>\n<script>\nvar layers=["
+    << data << "];\n" << R"JS(
+function bytes(b64){var s=atob(b64),u=new Uint8Array(s.length);for(var i=0;i<s.length;++i)u[i]=s.charCodeAt(i);return u;}
+function f32(w){var b=new ArrayBuffer(4);new Uint32Array(b)[0]=w;return new Float32Array(b)[0];}
+layers.forEach(function(L){L.e=new Uint32Array(bytes(L.expected).buffer);L.a=new Uint32Array(bytes(L.actual).buffer);L.m=bytes(L.mask);});
+function texel(W,t){var id1=W[4*t+1]&0x7fffffff;if(id1===0)return 'empty';
+  return ((W[4*t+1]>>>31)?'B':'A')+' ID '+(id1-1)+' depth '+f32(W[4*t]).toPrecision(9)+' ['+W[4*t+2]+', '+W[4*t+3]+']';}
+function readout(img,e){var L=layers[+img.dataset.layer],n=L.n;
+  var x=Math.min(n-1,Math.floor(e.offsetX*n/img.clientWidth)),y=Math.min(n-1,Math.floor(e.offsetY*n/img.clientHeight));
+  var t=(n-1-y)*n+x,s=['the same','within the tolerance','BEYOND the tolerance'][L.m[y*n+x]];
+  document.getElementById('readout').textContent=L.name+' texel ('+x+', '+y+'): '+s+'; expected '+texel(L.e,t)+'; actual '+texel(L.a,t);}
+window.addEventListener('load',function(){var beyond=0,within=0;
+  layers.forEach(function(L){for(var i=0;i<L.m.length;++i){if(L.m[i]===2)beyond++;else if(L.m[i]===1)within++;}});
+  document.querySelectorAll('img').forEach(function(i){i.addEventListener('mousemove',function(e){readout(i,e);});});
+  var s=document.getElementById('status');s.setAttribute('data-status','ok');
+  s.textContent='diff ok: '+layers.length+' layers, '+beyond+' texels beyond the tolerance, '+within+' within, marked';});
+)JS" << "</script></head><body>\n<h1>" << case_name << ": two dumps, texel by texel</h1>\n"
+    << "<p id=\"status\" data-status=\"pending\">loading</p>\n<p id=\"readout\">hover a layer for both dumps' words "
+       "there</p>\n<p>Error pictures: <span style=\"color:#f00\">red</span> beyond the tier's tolerance, <span "
+       "style=\"color:#fd0\">yellow</span> within it, grey the same, black empty.</p>\n"
+    << figures << "<pre>" << safe_report << "</pre>\n</body></html>\n";
+  return h.str();
+}
+
+}  // namespace
+
 std::string write_report(const Dump& e, const Dump& a, const Comparison& c, const std::string& case_name,
                          const std::string& dir, std::size_t max_layers) {
   const Tier tier = c.tolerated_texels ? Tier::hardware : Tier::exact;
   std::string text = report_text(c, case_name, tier);
   fs::create_directories(dir);
   std::size_t written = 0;
+  std::ostringstream figures, data;  // the page's figures and its layers' words and masks
   for (const auto& l : c.per_layer) {
-    if (written >= max_layers || !l.differing) continue;
+    if (written >= max_layers || (!l.differing && !l.tolerated) || l.texels.empty()) continue;
     const DumpView* ve = nullptr;
     const DumpView* va = nullptr;
     for (const DumpPair& p : e.pairs)
@@ -439,20 +489,37 @@ std::string write_report(const Dump& e, const Dump& a, const Comparison& c, cons
     const fs::path base = fs::path(dir) / stem;
     write_png(base.string() + "_expected.png", layer_preview(le, n, {}));
     write_png(base.string() + "_actual.png", layer_preview(la, n, {}));
+    // The error picture: red beyond the tier's tolerance, yellow within it, grey the same
+    // (a surface), black empty.
     Rgb mask(n, n);
     for (int y = 0; y < n; ++y)
       for (int x = 0; x < n; ++x) {
         const std::size_t t = std::size_t(n - 1 - y) * n + x;
-        const bool differs = !std::equal(le.begin() + 4 * t, le.begin() + 4 * t + 4, la.begin() + 4 * t);
-        mask.set(x, y, differs ? std::array<std::uint8_t, 3>{255, 0, 0}
-                               : (texel_empty(le, t) ? std::array<std::uint8_t, 3>{0, 0, 0}
-                                                     : std::array<std::uint8_t, 3>{70, 70, 70}));
+        const std::uint8_t state = l.texels[std::size_t(y) * n + x];
+        mask.set(x, y, state == 2   ? std::array<std::uint8_t, 3>{255, 0, 0}
+                       : state == 1 ? std::array<std::uint8_t, 3>{255, 210, 0}
+                       : texel_empty(le, t) && texel_empty(la, t) ? std::array<std::uint8_t, 3>{0, 0, 0}
+                                                                  : std::array<std::uint8_t, 3>{70, 70, 70});
       }
     write_png(base.string() + "_error.png", mask);
     text += "  wrote " + base.string() + "_{expected,actual,error}.png\n";
+    const std::string file = stem;  // the page lies beside the pictures
+    figures << "<h2>" << l.view_dir << " " << layer_name(l.layer) << ": " << l.differing << " beyond the tolerance, "
+            << l.tolerated << " within</h2>\n<div class=\"row\">";
+    for (const char* which : {"expected", "actual", "error"})
+      figures << "<figure><img data-layer=\"" << written << "\" src=\"" << file << "_" << which << ".png\" alt=\"" << which
+              << "\"><figcaption>" << which << "</figcaption></figure>";
+    figures << "</div>\n";
+    data << (written ? ",\n" : "\n") << "{name:\"" << l.view_dir << " " << layer_name(l.layer) << "\",n:" << n
+         << ",expected:\"" << layer_base64(le) << "\",actual:\"" << layer_base64(la) << "\",mask:\""
+         << base64_bytes(l.texels) << "\"}";
     ++written;
   }
   write_text(fs::path(dir) / "report.txt", text);
+  if (written) {
+    write_text(fs::path(dir) / "index.html", diff_page(case_name, text, figures.str(), data.str()));
+    text += "  page: " + (fs::path(dir) / "index.html").string() + "\n";
+  }
   return text;
 }
 

@@ -5,9 +5,8 @@
 #include <sstream>
 
 namespace peelcd::oracle {
-namespace {
 
-std::string base64(const std::vector<std::uint8_t>& bytes) {
+std::string base64_bytes(const std::vector<std::uint8_t>& bytes) {
   static const char* const k = "ABCDEFGHIJKLMNOPQRSTUVWXYZabcdefghijklmnopqrstuvwxyz0123456789+/";
   std::string out;
   out.reserve((bytes.size() + 2) / 3 * 4);
@@ -22,6 +21,10 @@ std::string base64(const std::vector<std::uint8_t>& bytes) {
   }
   return out;
 }
+
+namespace {
+
+std::string base64(const std::vector<std::uint8_t>& bytes) { return base64_bytes(bytes); }
 
 std::string escape(const std::string& s) {
   std::string out;
@@ -130,13 +133,6 @@ window.addEventListener('load',function(){
 // layer beside its preview, loaded by the page when first needed (viewer_layer_script()).
 constexpr std::size_t kEmbedBytes = 24u << 20;
 
-// A layer's texel words as base64 of their little-endian bytes.
-std::string layer_base64(const std::vector<std::uint32_t>& layer) {
-  std::vector<std::uint8_t> bytes(layer.size() * 4);
-  for (std::size_t i = 0; i < layer.size(); ++i)
-    for (int b = 0; b < 4; ++b) bytes[4 * i + std::size_t(b)] = std::uint8_t(layer[i] >> (8 * b));
-  return base64(bytes);
-}
 
 // The reference pairs the frame did not report (both lists sorted).
 std::vector<std::array<std::uint32_t, 2>> missed_pairs(const DumpPair& p) {
@@ -147,6 +143,13 @@ std::vector<std::array<std::uint32_t, 2>> missed_pairs(const DumpPair& p) {
 }
 
 }  // namespace
+
+std::string layer_base64(const std::vector<std::uint32_t>& layer) {
+  std::vector<std::uint8_t> bytes(layer.size() * 4);
+  for (std::size_t i = 0; i < layer.size(); ++i)
+    for (int b = 0; b < 4; ++b) bytes[4 * i + std::size_t(b)] = std::uint8_t(layer[i] >> (8 * b));
+  return base64_bytes(bytes);
+}
 
 bool viewer_embeds_layers(const Dump& d) {
   std::size_t bytes = 0;

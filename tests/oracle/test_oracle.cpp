@@ -4,6 +4,9 @@
 
 #include <catch2/catch.hpp>
 
+#include <fstream>
+#include <iterator>
+
 #include <cstring>
 #include <filesystem>
 #include <limits>
@@ -126,11 +129,44 @@ TEST_CASE("the exact tier finds one changed texel and names it in file coordinat
   const std::string text = report_text(c, "synthetic", Tier::exact);
   CHECK_THAT(text, Catch::Contains("layer01 x=5 y=5 Z"));
 
+  // The per-texel marks: exactly the changed texel, beyond the tolerance; the other layer none.
+  REQUIRE(c.per_layer.size() == 1);
+  const auto& marks = c.per_layer[0].texels;
+  REQUIRE(marks.size() == std::size_t(n) * n);
+  for (int yy = 0; yy < n; ++yy)
+    for (int xx = 0; xx < n; ++xx)
+      CHECK(int(marks[std::size_t(yy) * n + xx]) == (xx == x && yy == n - 1 - gl_row ? 2 : 0));
+
   const fs::path dir = fresh_dir("report");
-  write_report(golden, actual, c, "synthetic", dir.string());
+  const std::string report = write_report(golden, actual, c, "synthetic", dir.string());
   CHECK(fs::exists(dir / "report.txt"));
   CHECK(fs::exists(dir / "pair0_a_b_view0_layer01_error.png"));
+  // The page: the layer side by side, its marks embedded for the readout.
+  REQUIRE(fs::exists(dir / "index.html"));
+  CHECK_THAT(report, Catch::Contains("page: "));
+  std::ifstream page(dir / "index.html");
+  const std::string html((std::istreambuf_iterator<char>(page)), std::istreambuf_iterator<char>());
+  CHECK_THAT(html, Catch::Contains("pair0_a_b_view0_layer01_expected.png") && Catch::Contains("1 beyond the tolerance, 0 within"));
   fs::remove_all(dir);
+}
+
+TEST_CASE("the hardware tier marks a tolerated texel apart from one beyond the tolerance", "[oracle]") {
+  const Dump golden = synthetic();
+  Dump actual = golden;
+  const int n = 8;
+  auto& layer = actual.pairs[0].views[0].layers[1];
+  layer[4 * (std::size_t(3) * n + 3) + 1] = 0u << 31 | 5u;  // next to the ID boundary: tolerated
+  layer[4 * (std::size_t(3) * n + 2)] += 1000000;           // a depth far off: beyond
+  const Comparison c = compare_dumps(golden, actual, Tier::hardware);
+  REQUIRE(c.per_layer.size() == 1);
+  const auto& marks = c.per_layer[0].texels;
+  REQUIRE(marks.size() == std::size_t(n) * n);
+  std::size_t ones = 0, twos = 0;
+  for (const std::uint8_t m : marks) ones += m == 1, twos += m == 2;
+  CHECK(ones == 1);
+  CHECK(twos == 1);
+  CHECK(int(marks[std::size_t(n - 1 - 3) * n + 3]) == 1);  // image rows from the top
+  CHECK(int(marks[std::size_t(n - 1 - 3) * n + 2]) == 2);
 }
 
 TEST_CASE("PCS, colliding pairs and layer counts are part of the exact tier", "[oracle]") {

@@ -1,6 +1,7 @@
 # Opens a dump's index.html in headless Chromium (no network: the page is self-contained) and
 # checks the status the page's own script sets after loading: every layer image decoded, no
-# script error. Saves a screenshot beside the dump.
+# script error. Then a two-dump comparison's page and the --paper dump's missed pairs. Saves
+# screenshots in WORK (screenshot*.png: docs/images/viewer_*.png are copies).
 # Run by ctest as: cmake -DPEELCD=<exe> -DCHROMIUM=<exe> -DCASE=<scene> -DWORK=<dir> -P test_viewer.cmake
 if(NOT CHROMIUM OR NOT EXISTS "${CHROMIUM}")
   message(FATAL_ERROR "viewer: chromium not found (scripts/bootstrap.sh installs Debian's chromium)")
@@ -56,6 +57,32 @@ execute_process(COMMAND ${CHROMIUM} ${flags} --screenshot=${WORK}/screenshot.png
 if(NOT rc EQUAL 0 OR NOT EXISTS ${WORK}/screenshot.png)
   message(FATAL_ERROR "viewer: no screenshot (${rc}): ${log}")
 endif()
+# Two dumps texel by texel: a copy of the dump with its first view's layer 00 replaced by its layer
+# 01 (EXR files), compared on the exact tier; the report's page must mark as many texels beyond
+# the tolerance as the comparison counts, and none within (tests/oracle checks the marks texel
+# by texel on synthetic layers).
+file(GLOB first_views LIST_DIRECTORIES true ${WORK}/dump/*/view0)
+list(GET first_views 0 first_view)
+file(RELATIVE_PATH first_view_rel ${WORK}/dump ${first_view})
+file(COPY ${WORK}/dump/ DESTINATION ${WORK}/perturbed)
+file(COPY_FILE ${WORK}/dump/${first_view_rel}/layer01.exr ${WORK}/perturbed/${first_view_rel}/layer00.exr)
+execute_process(COMMAND ${PEELCD} golden compare-dumps ${WORK}/dump ${WORK}/perturbed --tier exact --report ${WORK}/diff
+                RESULT_VARIABLE rc OUTPUT_VARIABLE diff_out ERROR_VARIABLE diff_err)
+string(REGEX MATCH "differing texels: ([0-9]+)" counted "${diff_out}")
+set(counted "${CMAKE_MATCH_1}")
+if(NOT rc EQUAL 1 OR NOT counted OR NOT EXISTS ${WORK}/diff/index.html)
+  message(FATAL_ERROR "viewer: compare-dumps of a perturbed copy (${rc}) wrote no page:\n${diff_out}${diff_err}")
+endif()
+execute_process(COMMAND ${CHROMIUM} ${flags} --dump-dom file://${WORK}/diff/index.html
+                RESULT_VARIABLE rc OUTPUT_VARIABLE dom4 ERROR_VARIABLE log4 TIMEOUT 120)
+string(REGEX MATCH "data-status=\"([a-z]+)\"[^>]*>([^<]*)" status4 "${dom4}")
+set(text4 "${CMAKE_MATCH_2}")
+if(NOT CMAKE_MATCH_1 STREQUAL "ok" OR NOT text4 MATCHES "diff ok: 1 layers, ${counted} texels beyond the tolerance, 0 within")
+  message(FATAL_ERROR "viewer: the two-dump page marks other texels than the ${counted} compared: '${text4}'")
+endif()
+message(STATUS "viewer: two dumps: ${text4}")
+execute_process(COMMAND ${CHROMIUM} ${flags} --screenshot=${WORK}/screenshot_two_dumps.png file://${WORK}/diff/index.html
+                OUTPUT_QUIET ERROR_QUIET TIMEOUT 120)
 # Missed pairs: the README's walkthrough dump (--paper, 512^2) lists every reference pair the
 # frame missed (reference.txt less colliding.txt), and the search of a missed pair (351,1283 of
 # the default scene) shows why, from peelcd explain's verdict stored in missed.txt.
@@ -97,5 +124,7 @@ if(SCENE)
     message(FATAL_ERROR "viewer: the --paper page lists ${missed_listed} missed pairs; reference.txt less colliding.txt has ${missed_count}")
   endif()
   message(STATUS "viewer: --paper dump, ${missed_listed} missed pairs listed; ${text3}")
+  execute_process(COMMAND ${CHROMIUM} ${flags} --screenshot=${WORK}/screenshot_missed.png
+                          "file://${WORK}/paper/index.html#search=351,1283" OUTPUT_QUIET ERROR_QUIET TIMEOUT 120)
 endif()
 message(STATUS "viewer ok: ${text}; screenshot ${WORK}/screenshot.png")

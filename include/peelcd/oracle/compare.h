@@ -67,6 +67,9 @@ struct Comparison {
     std::string view_dir;
     std::size_t layer;
     std::size_t differing, tolerated;
+    // Per texel, image order (top row first): 0 the same, 1 different within the tier's
+    // tolerance, 2 beyond it. Kept for layers with a difference (empty otherwise).
+    std::vector<std::uint8_t> texels;
   };
   std::vector<LayerCount> per_layer;  // layers with any difference
   bool ok() const { return failures.empty() && differing_texels == 0; }
@@ -75,7 +78,9 @@ struct Comparison {
 Comparison compare_dumps(const Dump& expected, const Dump& actual, Tier tier, std::size_t max_listed = 10);
 
 // Human report (the same text compare prints) plus, for up to `max_layers` differing layers,
-// <view>_layer<kk>_{expected,actual,error}.png in `dir` (created). Returns the report text.
+// <view>_layer<kk>_{expected,actual,error}.png in `dir` (created; error: red beyond the tier's
+// tolerance, yellow within it) and index.html: those layers side by side with a readout of both
+// dumps' words at the hovered texel. Returns the report text.
 std::string write_report(const Dump& expected, const Dump& actual, const Comparison& comparison,
                          const std::string& case_name, const std::string& dir, std::size_t max_layers = 4);
 std::string report_text(const Comparison& comparison, const std::string& case_name, Tier tier);

@@ -14,6 +14,9 @@ std::string viewer_html(const Dump& dump);
 // each layer's are a script beside its preview, <view dir>/layerKK.js, written by write_dump()
 // from viewer_layer_script() (view_index: the view's place over all pairs, in order).
 bool viewer_embeds_layers(const Dump& dump);
+// Base64 of bytes, and of a layer's words (little-endian), as the pages embed them.
+std::string base64_bytes(const std::vector<std::uint8_t>& bytes);
+std::string layer_base64(const std::vector<std::uint32_t>& layer);
 std::string viewer_layer_script(std::size_t view_index, std::size_t k, const std::vector<std::uint32_t>& layer);
 
 }  // namespace peelcd::oracle
