@@ -17,10 +17,18 @@ void explain_missed(oracle::Dump& dump, const std::vector<Object>& objects, cons
                     const Progress& progress) {
   std::unique_ptr<oracle::FrameTrace> trace;
   for (oracle::DumpPair& p : dump.pairs) {
+    // The IDs the viewer outlines for a searched pair: those of every colliding and missed pair.
+    const auto id_of = [&](std::size_t object, std::uint32_t t) { return corner_id(objects[object].mesh, t, 2, opt.ids); };
+    const auto note_ids = [&](std::uint32_t ta, std::uint32_t tb) {
+      p.ids_a[ta] = id_of(p.object_a, ta);
+      p.ids_b[tb] = id_of(p.object_b, tb);
+    };
+    for (const auto& c : p.colliding) note_ids(c[0], c[1]);
     if (!p.has_reference) continue;
     std::vector<std::array<std::uint32_t, 2>> missed;
     std::set_difference(p.reference.begin(), p.reference.end(), p.colliding.begin(), p.colliding.end(),
                         std::back_inserter(missed));
+    for (const auto& m : missed) note_ids(m[0], m[1]);
     if (missed.size() > oracle::kMissedExplained) missed.resize(oracle::kMissedExplained);
     for (const auto& m : missed) {
       if (!trace) {

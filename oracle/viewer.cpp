@@ -81,12 +81,14 @@ function readout(img,e,pin){var v=+img.dataset.view,k=+img.dataset.layer,n=peelc
 // Search: a triangle index ("12", "a:12", "b:34") or a triangle pair ("12,34"): the colliding
 // and missed pairs that hold it are shown, the others hidden (a missed pair with why it was
 // missed); texels of that ID are outlined on the layers.
-function search(q){q=q.trim().toLowerCase();var side=null,m;
+// done() runs once the search's drawing is complete (a pair's layers loaded and marked).
+function search(q,done){q=q.trim().toLowerCase();var side=null,m;done=done||function(){};
   if((m=/^([ab]):(\d+)$/.exec(q))){side=m[1];q=m[2];}
-  var pair=/^(\d+)\s*,\s*(\d+)$/.exec(q),hits=0,missed=0,why='';
+  var pair=/^(\d+)\s*,\s*(\d+)$/.exec(q),hits=0,missed=0,why='',rows=[];
   document.querySelectorAll('tr.pair').forEach(function(tr){var a=tr.dataset.a,b=tr.dataset.b;
     var hit=q===''||(pair?(a===pair[1]&&b===pair[2]):((side!=='b'&&a===q)||(side!=='a'&&b===q)));
     tr.style.display=hit?'':'none';if(!hit||q==='')return;
+    if(pair&&tr.dataset.ia!==undefined)rows.push(tr);
     if(tr.classList.contains('missed')){missed++;if(pair)why=tr.dataset.why||'not explained in this dump';}else hits++;});
   document.querySelectorAll('canvas.mark').forEach(function(c){var g=c.getContext('2d');g.clearRect(0,0,c.width,c.height);
     if(q===''||pair)return;var v=+c.dataset.view,k=+c.dataset.layer;need(v,k,function(){outline(c,g,v,k,q,side);});});
@@ -95,7 +97,34 @@ function search(q){q=q.trim().toLowerCase();var side=null,m;
   if(q!==''&&missed)text+='; '+(pair?'missed: '+why:missed+' missed pairs hold it');
   else if(q!==''&&pair&&!hits&&document.querySelector('section.roi[data-reference]'))text+='; not a pair of the exact reference (the triangles do not meet)';
   document.getElementById('hits').textContent=text;
-  document.querySelectorAll('details.pairs').forEach(function(d){if(q!=='')d.open=true;});}
+  document.querySelectorAll('details.pairs').forEach(function(d){if(q!=='')d.open=true;});
+  if(!rows.length){done();return;}
+  pairCoverage(rows,function(t){document.getElementById('hits').textContent=text+'; in the layers: '+t;done();});}
+// A searched pair's two triangles in the layers of each ROI whose table holds it, by the IDs they
+// write (its row's data-ia, data-ib): A's texels green, B's cyan, white where the two meet in
+// depth (conservative: their depth intervals overlap; point sampled: within the view's epsilon).
+function pairCoverage(rows,done){var jobs=[];
+  rows.forEach(function(tr){var sec=tr.closest('section.roi');if(!sec)return;
+    sec.querySelectorAll('canvas.mark').forEach(function(c){jobs.push({c:c,ia:+tr.dataset.ia,ib:+tr.dataset.ib,v:+c.dataset.view,k:+c.dataset.layer});});});
+  var left=jobs.length;if(!left){done('no layers');return;}
+  jobs.forEach(function(j){need(j.v,j.k,function(){if(--left===0)mark();});});
+  function mark(){var views={},na=0,nb=0,nm=0;jobs.forEach(function(j){(views[j.v]=views[j.v]||[]).push(j);});
+    Object.keys(views).forEach(function(v){var js=views[v],V=peelcdViews[v],n=V.n,ia=js[0].ia,ib=js[0].ib;
+      var Ws=js.map(function(j){return words(j.v,j.k);}),meet=new Uint8Array(n*n);
+      for(var t=0;t<n*n;++t){var A=[],B=[];
+        for(var l=0;l<Ws.length;++l){var W=Ws[l];if(!W)continue;var w1=W[4*t+1],id1=w1&0x7fffffff;if(id1===0)continue;
+          var lo=f32(W[4*t]),hi=V.conservative?f32(W[4*t+2]):lo;
+          if((w1>>>31)===0&&id1-1===ia)A.push([lo,hi]);else if((w1>>>31)===1&&id1-1===ib)B.push([lo,hi]);}
+        if(A.length)na++;if(B.length)nb++;
+        for(var i=0;i<A.length&&!meet[t];++i)for(var j=0;j<B.length;++j){var a=A[i],b=B[j];
+          if(V.conservative?(a[0]<=b[1]&&b[0]<=a[1]):Math.abs(a[0]-b[0])<=V.eps){meet[t]=1;nm++;break;}}}
+      js.forEach(function(j,l){var W=Ws[l],c=j.c,g=c.getContext('2d');g.clearRect(0,0,c.width,c.height);if(!W)return;
+        var w=Math.max(1,c.width/(2*n)),hh=Math.max(1,c.height/n);
+        for(var t=0;t<n*n;++t){var w1=W[4*t+1],id1=w1&0x7fffffff,mine=meet[t]?'rgba(255,255,255,0.95)':
+            id1!==0&&(w1>>>31)===0&&id1-1===ia?'rgba(0,255,0,0.8)':id1!==0&&(w1>>>31)===1&&id1-1===ib?'rgba(0,220,255,0.8)':null;
+          if(!mine)continue;var x=t%n,y=n-1-Math.floor(t/n);g.fillStyle=mine;
+          g.fillRect(x*c.width/(2*n),y*hh,w,hh);g.fillRect((x+n)*c.width/(2*n),y*hh,w,hh);}});});
+    done("A's triangle (ID "+jobs[0].ia+') in '+na+" texels, B's (ID "+jobs[0].ib+') in '+nb+', meeting in depth at '+nm);}}
 // The texels of ID q (of A, B or either) outlined on layer k of view v's canvas.
 function outline(c,g,v,k,q,side){var n=peelcdViews[v].n,W=words(v,k);if(!W||document.getElementById('q').value.trim().toLowerCase().replace(/^[ab]:/,'')!==q)return;
   g.fillStyle='rgba(0,255,0,0.8)';for(var t=0;t<n*n;++t){var id1=W[4*t+1]&0x7fffffff,obj=W[4*t+1]>>>31;
@@ -110,10 +139,9 @@ window.addEventListener('load',function(){
     i.addEventListener('click',function(e){readout(i,e,true);});});
   // #search=Q in the address: the search run on load, its hits in the status (and a test's).
   var m=/search=([^&]+)/.exec(location.hash),searched='';
-  if(m){var q=decodeURIComponent(m[1]);document.getElementById('q').value=q;search(q);
-    searched=', search "'+q+'": '+document.getElementById('hits').textContent;}
   // Self-check: the first layer's first non-empty texel read back through the readout (its data
   // loaded first in a large dump: the time that took is in the status).
+  var selfCheck=function(){
   var finish=function(check,ms){var s=document.getElementById('status');
     var ok=imgs.length>0&&bad.length===0&&window.peelcdErrors.length===0&&check==='readout ok';
     s.setAttribute('data-status',ok?'ok':'error');
@@ -125,7 +153,10 @@ window.addEventListener('load',function(){
   need(v,0,function(){var n=peelcdViews[v].n,W=words(v,0),check='readout: no texel data';
     if(W)for(var t=0;t<n*n;++t)if((W[4*t+1]&0x7fffffff)!==0){var txt=texelText(v,0,t%n,n-1-Math.floor(t/n));
       check=/ ID \d+, depth /.test(txt)?'readout ok':'readout wrong: '+txt;break;}
-    finish(check,peelcdViews[v].external?Math.round(performance.now()-t0):null);});
+    finish(check,peelcdViews[v].external?Math.round(performance.now()-t0):null);});};
+  if(m){var q=decodeURIComponent(m[1]);document.getElementById('q').value=q;
+    search(q,function(){searched=', search "'+q+'": '+document.getElementById('hits').textContent;selfCheck();});}
+  else selfCheck();
 });
 )JS";
 
@@ -133,6 +164,13 @@ window.addEventListener('load',function(){
 // layer beside its preview, loaded by the page when first needed (viewer_layer_script()).
 constexpr std::size_t kEmbedBytes = 24u << 20;
 
+
+// A pair row's data-ia, data-ib: the IDs its triangles write, where the dump knows them.
+std::string row_ids(const DumpPair& p, std::uint32_t ta, std::uint32_t tb) {
+  const auto a = p.ids_a.find(ta), b = p.ids_b.find(tb);
+  if (a == p.ids_a.end() || b == p.ids_b.end()) return "";
+  return " data-ia=\"" + std::to_string(a->second) + "\" data-ib=\"" + std::to_string(b->second) + "\"";
+}
 
 // The reference pairs the frame did not report (both lists sorted).
 std::vector<std::array<std::uint32_t, 2>> missed_pairs(const DumpPair& p) {
@@ -182,7 +220,7 @@ std::string viewer_html(const Dump& d) {
   for (const DumpPair& p : d.pairs)
     for (const DumpView& v : p.views) {
       h << (view_index++ ? ",\n" : "\n") << "{dir:\"" << escape(v.dir) << "\",n:" << v.resolution
-        << ",conservative:" << (v.conservative ? "true" : "false");
+        << ",conservative:" << (v.conservative ? "true" : "false") << ",eps:" << v.epsilon_window;
       if (embed) {
         h << ",layers:[";
         for (std::size_t k = 0; k < v.layers.size(); ++k) h << (k ? "," : "") << "\"" << layer_base64(v.layers[k]) << "\"";
@@ -279,7 +317,7 @@ std::string viewer_html(const Dump& d) {
           if (x.tri_a == m[0] && x.tri_b == m[1]) why = &x;
         const std::string line = why ? why->verdict + ": " + why->why : "";
         h << "<tr class=\"pair missed\" data-a=\"" << m[0] << "\" data-b=\"" << m[1] << "\" data-why=\"" << escape(line)
-          << "\"><td>" << m[0] << "</td><td>" << m[1] << "</td><td>"
+          << "\"" << row_ids(p, m[0], m[1]) << "><td>" << m[0] << "</td><td>" << m[1] << "</td><td>"
           << (why ? "<b>" + escape(why->verdict) + "</b> " + escape(why->why) : std::string("(not explained in this dump)"))
           << "</td><td><code>peelcd explain SCENE --pair " << escape(p.name_a) << ":" << m[0] << "," << escape(p.name_b)
           << ":" << m[1] << " --out DIR</code></td></tr>\n";
@@ -289,7 +327,8 @@ std::string viewer_html(const Dump& d) {
     h << "<details class=\"pairs\"><summary>colliding pairs (" << p.colliding.size()
       << ")</summary><table><tr><th>triangle of A</th><th>triangle of B</th><th>kind</th><th>explain</th></tr>\n";
     for (std::size_t i = 0; i < p.colliding.size(); ++i)
-      h << "<tr class=\"pair\" data-a=\"" << p.colliding[i][0] << "\" data-b=\"" << p.colliding[i][1] << "\"><td>"
+      h << "<tr class=\"pair\" data-a=\"" << p.colliding[i][0] << "\" data-b=\"" << p.colliding[i][1] << "\""
+        << row_ids(p, p.colliding[i][0], p.colliding[i][1]) << "><td>"
         << p.colliding[i][0] << "</td><td>" << p.colliding[i][1] << "</td><td>" << escape(p.kinds[i])
         << "</td><td><code>peelcd explain SCENE --pair " << escape(p.name_a) << ":" << p.colliding[i][0] << ","
         << escape(p.name_b) << ":" << p.colliding[i][1] << "</code></td></tr>\n";

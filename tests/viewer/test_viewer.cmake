@@ -113,6 +113,10 @@ if(SCENE)
   if(NOT state3 STREQUAL "ok" OR NOT text3 MATCHES "search \"351,1283\": 0 colliding pairs hold it; missed: [a-z_]+: ")
     message(FATAL_ERROR "viewer: the missed pair 351,1283 of the --paper dump shows no verdict: '${text3}'")
   endif()
+  # The pair's two triangles found in the layers by the IDs they write, and where they meet.
+  if(NOT text3 MATCHES "in the layers: A's triangle .ID [0-9]+. in [1-9][0-9]* texels, B's .ID [0-9]+. in [1-9][0-9]*, meeting in depth at [0-9]+")
+    message(FATAL_ERROR "viewer: the missed pair 351,1283 is not drawn in the layers: '${text3}'")
+  endif()
   # Its texel words (29 MB) are one file a layer, loaded on demand: the readout works all the same.
   file(GLOB layer_scripts ${WORK}/paper/*/view0/layer*.js)
   if(NOT layer_scripts OR NOT text3 MATCHES "readout ok")

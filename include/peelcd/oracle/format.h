@@ -27,6 +27,7 @@
 
 #include <array>
 #include <cstdint>
+#include <map>
 #include <string>
 #include <vector>
 
@@ -72,6 +73,9 @@ struct DumpPair {
     std::string verdict, why;  // to_string(Verdict), explain's one line
   };
   std::vector<Missed> missed;
+  // For the viewer (peelcd dump; not in the files): the ID each triangle of a colliding or
+  // missed pair writes in the layers (corner_id() of its provoking corner), by triangle.
+  std::map<std::uint32_t, std::uint32_t> ids_a, ids_b;
   std::vector<DumpView> views;
 };
 
