@@ -323,15 +323,17 @@ Comparison::LayerCount compare_layer(const TexelRule& r, const DumpView& ve, con
         const std::uint32_t we = le[4 * t + ch], wa = la[4 * t + ch];
         if (we == wa) continue;
         if (tolerated_word(r, le, la, n, k, x, gl_row, ch)) {
-          ++count.tolerated;
           state = 1;
           continue;
         }
-        ++count.differing;
         state = 2;
         if (c.first.size() < max_listed) c.first.push_back(describe_difference(ve.dir, k, x, y, ch, we, wa));
         break;
       }
+      // One count per texel: beyond the tolerance if any word is, else within it if any word
+      // differs.
+      count.differing += state == 2;
+      count.tolerated += state == 1;
     }
   if (!count.differing && !count.tolerated) count.texels.clear();
   return count;

@@ -83,6 +83,28 @@ endif()
 message(STATUS "viewer: two dumps: ${text4}")
 execute_process(COMMAND ${CHROMIUM} ${flags} --screenshot=${WORK}/screenshot_two_dumps.png file://${WORK}/diff/index.html
                 OUTPUT_QUIET ERROR_QUIET TIMEOUT 120)
+# A real backend difference: this machine's dump of the torus and fish case against the NVIDIA
+# H100's (docs/backends/nvidia-h100-2026-11-27/dump_torus_fish_genus1): the hardware tier passes,
+# and the report's page marks its differing texels, all within the tolerance.
+set(h100_dump ${SOURCE}/docs/backends/nvidia-h100-2026-11-27/dump_torus_fish_genus1)
+if(SOURCE AND EXISTS ${h100_dump}/meta.json)
+  execute_process(COMMAND ${PEELCD} dump ${SOURCE}/fixtures/golden/torus_fish_genus1/case.json --out ${WORK}/torus
+                  RESULT_VARIABLE rc OUTPUT_QUIET ERROR_VARIABLE err)
+  execute_process(COMMAND ${PEELCD} golden compare-dumps ${WORK}/torus ${h100_dump} --tier hardware --report ${WORK}/h100
+                  RESULT_VARIABLE rc OUTPUT_VARIABLE h100_out ERROR_VARIABLE err)
+  string(REGEX MATCH "plus ([0-9]+) within tolerance" within "${h100_out}")
+  if(NOT rc EQUAL 0 OR NOT within OR NOT EXISTS ${WORK}/h100/index.html)
+    message(FATAL_ERROR "viewer: the H100 dump against this machine's (${rc}):\n${h100_out}${err}")
+  endif()
+  execute_process(COMMAND ${CHROMIUM} ${flags} --dump-dom file://${WORK}/h100/index.html
+                  RESULT_VARIABLE rc OUTPUT_VARIABLE dom5 ERROR_VARIABLE log5 TIMEOUT 120)
+  string(REGEX MATCH "data-status=\"([a-z]+)\"[^>]*>([^<]*)" status5 "${dom5}")
+  set(text5 "${CMAKE_MATCH_2}")
+  if(NOT CMAKE_MATCH_1 STREQUAL "ok" OR NOT text5 MATCHES "diff ok: [1-9][0-9]* layers, 0 texels beyond the tolerance, [1-9][0-9]* within")
+    message(FATAL_ERROR "viewer: the H100 difference page: '${text5}'")
+  endif()
+  message(STATUS "viewer: H100 against this machine: ${text5}")
+endif()
 # Missed pairs: the README's walkthrough dump (--paper, 512^2) lists every reference pair the
 # frame missed (reference.txt less colliding.txt), and the search of a missed pair (351,1283 of
 # the default scene) shows why, from peelcd explain's verdict stored in missed.txt.
