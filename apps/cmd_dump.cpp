@@ -25,9 +25,7 @@ void explain_missed(oracle::Dump& dump, const std::vector<Object>& objects, cons
     };
     for (const auto& c : p.colliding) note_ids(c[0], c[1]);
     if (!p.has_reference) continue;
-    std::vector<std::array<std::uint32_t, 2>> missed;
-    std::set_difference(p.reference.begin(), p.reference.end(), p.colliding.begin(), p.colliding.end(),
-                        std::back_inserter(missed));
+    std::vector<std::array<std::uint32_t, 2>> missed = oracle::missed_pairs(p);
     for (const auto& m : missed) note_ids(m[0], m[1]);
     if (missed.size() > oracle::kMissedExplained) missed.resize(oracle::kMissedExplained);
     for (const auto& m : missed) {

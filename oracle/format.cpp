@@ -11,6 +11,7 @@
 #include "peelcd/oracle/viewer.h"
 
 #include <algorithm>
+#include <iterator>
 #include <cmath>
 #include <cstdio>
 #include <cstring>
@@ -22,6 +23,13 @@
 namespace fs = std::filesystem;
 
 namespace peelcd::oracle {
+
+std::vector<std::array<std::uint32_t, 2>> missed_pairs(const DumpPair& p) {
+  std::vector<std::array<std::uint32_t, 2>> out;
+  std::set_difference(p.reference.begin(), p.reference.end(), p.colliding.begin(), p.colliding.end(),
+                      std::back_inserter(out));
+  return out;
+}
 
 std::string layer_name(std::size_t k) {
   char buf[32];

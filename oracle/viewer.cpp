@@ -172,14 +172,6 @@ std::string row_ids(const DumpPair& p, std::uint32_t ta, std::uint32_t tb) {
   return " data-ia=\"" + std::to_string(a->second) + "\" data-ib=\"" + std::to_string(b->second) + "\"";
 }
 
-// The reference pairs the frame did not report (both lists sorted).
-std::vector<std::array<std::uint32_t, 2>> missed_pairs(const DumpPair& p) {
-  std::vector<std::array<std::uint32_t, 2>> out;
-  std::set_difference(p.reference.begin(), p.reference.end(), p.colliding.begin(), p.colliding.end(),
-                      std::back_inserter(out));
-  return out;
-}
-
 }  // namespace
 
 std::string layer_base64(const std::vector<std::uint32_t>& layer) {

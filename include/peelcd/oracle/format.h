@@ -111,6 +111,8 @@ std::vector<bool> pcs_texels(const DumpView& view, std::size_t k);
 
 // A layer's file stem in a view's folder: layer<kk> (two digits at least).
 std::string layer_name(std::size_t k);
+// The pair's reference pairs the frame did not report (reference less colliding, sorted).
+std::vector<std::array<std::uint32_t, 2>> missed_pairs(const DumpPair& pair);
 
 // Layer word accessors: peelcd/core/texel.h's, by the names the oracle has used.
 inline bool texel_empty(const std::vector<std::uint32_t>& layer, std::size_t i) { return texel::empty(layer, i); }
