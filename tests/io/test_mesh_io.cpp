@@ -145,6 +145,12 @@ TEST_CASE("bad mesh files give an error that names the file and the problem", "[
                       "malformed PLY header");
   require_input_error(write_temp("bad_type.ply", "ply\nformat ascii 1.0\nelement vertex 1\nproperty flot x\nend_header\n0\n"),
                       "malformed PLY header");
+  // Found by fuzzing: assimp looks for the magic after a leading line end; so does the checker.
+  require_input_error(write_temp("leading_newline.ply", "\nply\nformat ascii 1.0\nel\x99ment vertex 2000000000\nend_header\n"),
+                      "malformed PLY header: unknown line");
+  require_input_error(write_temp("leading_nul.ply", std::string("\0x", 2) + "\nply\nformat ascii 1.0\nelement vertex 2000000000\n"
+                                                                "property float x\nend_header\n1\n"),
+                      "the header claims element vertex 2000000000");
   require_input_error(write_temp("zero_faces.off", "OFF\n3 0 0\n0 0 0\n1 0 0\n0 1 0\n"), "");
   // Found by fuzzing: assimp's reader spins on a non-numeric value in an ASCII PLY body.
   require_input_error(write_temp("word_in_face.ply",
