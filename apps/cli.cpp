@@ -1,8 +1,8 @@
 #include "cli.h"
 
 #include "peelcd/core/broad_phase.h"
-#include "peelcd/core/cpu_stage.h"
-#include "peelcd/core/reference.h"
+#include "peelcd/core/image/cpu_stage.h"
+#include "peelcd/core/exact/reference.h"
 
 namespace peelcd::cli {
 

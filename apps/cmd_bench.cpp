@@ -6,7 +6,7 @@
 #include "peelcd/bench/volume_bench.h"
 #include "peelcd/bench/query_bench.h"
 #include "peelcd/eval/classes.h"
-#include "peelcd/core/cpu_stage.h"
+#include "peelcd/core/image/cpu_stage.h"
 #include "peelcd/core/broad_phase.h"
 #include "peelcd/core/aabb.h"
 

@@ -1,5 +1,6 @@
 // peelcd detect and explain (the command line; shared parts in cli.h).
 #include "cli.h"
+#include "peelcd/core/exact/relation.h"
 #include "peelcd/io/result_json.h"
 #include "peelcd/oracle/explain.h"
 

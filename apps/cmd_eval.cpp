@@ -1,7 +1,7 @@
 // peelcd classes and calibrate (the command line; shared parts in cli.h).
 #include "cli.h"
 #include "peelcd/eval/calibrate.h"
-#include "peelcd/core/world.h"
+#include "peelcd/core/world/world.h"
 #include "peelcd/eval/classes.h"
 
 #include <ctime>

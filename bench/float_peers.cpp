@@ -3,8 +3,8 @@
 #include "peer_util.h"
 
 #include "peelcd/core/broad_phase.h"
-#include "peelcd/core/id_map.h"
-#include "peelcd/core/self.h"
+#include "peelcd/core/image/id_map.h"
+#include "peelcd/core/exact/self.h"
 #include "peelcd/core/worker_pool.h"
 
 #include <embree3/rtcore.h>

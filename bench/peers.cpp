@@ -3,9 +3,9 @@
 #include "peer_util.h"
 
 #include "peelcd/core/broad_phase.h"
-#include "peelcd/core/detector.h"
-#include "peelcd/core/id_map.h"
-#include "peelcd/core/reference.h"
+#include "peelcd/core/image/detector.h"
+#include "peelcd/core/image/id_map.h"
+#include "peelcd/core/exact/reference.h"
 #include "peelcd/core/worker_pool.h"
 
 #include <fcl/broadphase/broadphase_dynamic_AABB_tree.h>

@@ -2,11 +2,11 @@
 
 #include "peelcd/bench/suite.h"
 #include "peelcd/core/clock.h"
-#include "peelcd/core/cpu_stage.h"
-#include "peelcd/core/depth.h"
-#include "peelcd/core/detector.h"
-#include "peelcd/core/proximity.h"
-#include "peelcd/core/reference.h"
+#include "peelcd/core/image/cpu_stage.h"
+#include "peelcd/core/exact/depth.h"
+#include "peelcd/core/image/detector.h"
+#include "peelcd/core/exact/proximity.h"
+#include "peelcd/core/exact/reference.h"
 
 #include <fcl/geometry/bvh/BVH_model.h>
 #include <fcl/narrowphase/collision_object.h>

@@ -1,13 +1,14 @@
 #include "peelcd/bench/self_bench.h"
 #include "peelcd/core/clock.h"
 
+#include "exact/bvh_traverse.h"  // the library's own self traversal (core/ on the bench's path)
 #include "peelcd/bench/float_peers.h"
 #include "peelcd/bench/suite.h"
-#include "peelcd/core/bvh.h"
-#include "peelcd/core/detector.h"
-#include "peelcd/core/id_map.h"
-#include "peelcd/core/self.h"
-#include "peelcd/core/world.h"
+#include "peelcd/core/exact/bvh.h"
+#include "peelcd/core/image/detector.h"
+#include "peelcd/core/image/id_map.h"
+#include "peelcd/core/exact/self.h"
+#include "peelcd/core/world/world.h"
 #include "peelcd/core/primitives.h"
 
 #include <CGAL/Exact_predicates_inexact_constructions_kernel.h>

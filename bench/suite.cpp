@@ -4,9 +4,9 @@
 #include "peelcd/bench/float_peers.h"
 #include "peelcd/bench/floor.h"
 #include "peelcd/bench/peers.h"
-#include "peelcd/core/id_map.h"
-#include "peelcd/core/reference.h"
-#include "peelcd/core/world.h"
+#include "peelcd/core/image/id_map.h"
+#include "peelcd/core/exact/reference.h"
+#include "peelcd/core/world/world.h"
 #include "peelcd/gl/gl_stage.h"
 #include "peelcd/version.h"
 

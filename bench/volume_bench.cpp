@@ -4,7 +4,7 @@
 #include "peelcd/bench/suite.h"
 #include "peelcd/core/frame.h"
 #include "peelcd/core/primitives.h"
-#include "peelcd/core/relation.h"
+#include "peelcd/core/exact/relation.h"
 
 #include <chrono>
 #include <cstdio>

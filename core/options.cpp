@@ -1,5 +1,4 @@
 #include "peelcd/core/options.h"
-#include "peelcd/core/planner.h"
 
 #include <cmath>
 #include <cstdio>

@@ -1,12 +1,12 @@
 #include "peelcd/eval/calibrate.h"
 #include "peelcd/core/clock.h"
 
-#include "peelcd/core/world.h"
+#include "peelcd/core/world/world.h"
 #include "peelcd/eval/scenes.h"
 
 #include <chrono>
 
-#include "peelcd/core/cull.h"
+#include "peelcd/core/image/cull.h"
 #include "peelcd/eval/classes.h"
 #include "peelcd/io/mesh_io.h"
 

@@ -1,7 +1,7 @@
 #include "peelcd/eval/classes.h"
 
-#include "peelcd/core/id_map.h"
-#include "peelcd/core/narrow_phase.h"
+#include "peelcd/core/image/id_map.h"
+#include "peelcd/core/exact/narrow_phase.h"
 #include "peelcd/core/primitives.h"
 
 #include <cmath>
@@ -313,7 +313,7 @@ double intersection_length(const Mesh& a, const Mesh& b, const std::vector<std::
 
 }  // namespace peelcd
 
-#include "peelcd/core/reference.h"
+#include "peelcd/core/exact/reference.h"
 
 #include <algorithm>
 

@@ -1,7 +1,7 @@
 #include "peelcd/eval/sweep.h"
 
 #include "peelcd/core/broad_phase.h"
-#include "peelcd/core/reference.h"
+#include "peelcd/core/exact/reference.h"
 
 #include <algorithm>
 #include <map>

@@ -5,7 +5,7 @@
 // the selection passes (shaders/batch_select.comp), which append the triangles reaching the
 // ROI box and the view's contact region to the draw's entries; deforming objects' triangles
 // come from the host (their corners uploaded per frame). A count pass and a fill pass (indirect draws over the entries) fill the
-// k-buffer; each view's part is then resolved on the host (core/kbuffer.cpp) or by one dispatch
+// k-buffer; each view's part is then resolved on the host (core/image/kbuffer.cpp) or by one dispatch
 // (shaders/conservative_batch_resolve.comp, shaders/abuffer_resolve.comp). Per view, a buffer
 // holds its matrix, the objects' poses, its resolution, its first texel, its ROI box and, point
 // sampled, its PCS threshold, slope and peel mode (shaders/batch.inc). The arithmetic per texel is
@@ -13,8 +13,8 @@
 // capturing layers) a view gives the same layers and PCS either way (a point-sampled view smaller
 // than the batch's largest is placed by one more scaling: its samples may differ in the last bit).
 #include "stage_impl.h"
-#include "peelcd/core/conservative.h"
-#include "peelcd/core/texel.h"
+#include "peelcd/core/image/conservative.h"
+#include "peelcd/core/image/texel.h"
 
 #include <algorithm>
 #include <cstring>

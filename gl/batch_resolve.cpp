@@ -1,5 +1,5 @@
 // The resolve of a batch of views (batch.cpp): the counts read back, the host resolve of the
-// packed k-buffer (core/kbuffer.cpp), or the GPU resolve (shaders/conservative_batch_resolve.comp,
+// packed k-buffer (core/image/kbuffer.cpp), or the GPU resolve (shaders/conservative_batch_resolve.comp,
 // shaders/abuffer_resolve.comp with PEELCD_BATCH) with its deep texels' rows.
 #include "stage_impl.h"
 
@@ -13,7 +13,7 @@ constexpr std::size_t kEntry = 4 * sizeof(std::uint32_t);  // a draw entry
 }  // namespace
 
 // The host resolve of a filled batch: the selection's entries' IDs read back (by draw order),
-// the packed k-buffer mapped, each view's part resolved (core/kbuffer.cpp). Returns the
+// the packed k-buffer mapped, each view's part resolved (core/image/kbuffer.cpp). Returns the
 // milliseconds the map took (readback, not GPU time).
 double GlImageStage::Impl::resolve_batch_on_host(const PeelJob* jobs, PeelResult* outs, const BatchRun& run,
                                                  Timings& t) {

@@ -253,7 +253,7 @@ std::string shader_source(const char* src, const std::string& defines) {
   // The shared sources where a source asks for them (GLSL has no #include of its own): the PCS
   // tests (shared with C++) and the batched views' records (shaders/batch.inc).
   const std::pair<std::string, std::string> includes[] = {
-      {"#include \"peelcd/core/pcs_test.inc\"",
+      {"#include \"peelcd/core/image/pcs_test.inc\"",
        std::string("#define PEELCD_PCS_FN\n#define PEELCD_ABS abs\n") + shaders::pcs_test_inc},
       {"#include \"batch.inc\"", shaders::batch_inc}};
   for (const auto& [line, text] : includes)

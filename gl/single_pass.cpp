@@ -1,8 +1,8 @@
 // The single-pass peeler (Peeler::abuffer): both objects drawn once into a per-texel k-buffer
 // (shaders/abuffer.frag), then the layers and PCS recovered per texel, by a compute pass on the
-// GPU (shaders/abuffer_resolve.comp) or on the host (core/kbuffer.cpp) where GL runs on the CPU.
+// GPU (shaders/abuffer_resolve.comp) or on the host (core/image/kbuffer.cpp) where GL runs on the CPU.
 #include "stage_impl.h"
-#include "peelcd/core/conservative.h"
+#include "peelcd/core/image/conservative.h"
 
 #include <algorithm>
 
@@ -147,7 +147,7 @@ bool GlImageStage::Impl::regrow(std::uint32_t max_fragments, std::size_t fitting
 }
 
 // The second half of peel_single_pass() with Resolve::host: the k-buffer mapped (host memory on
-// a software renderer: no copy) and resolved by core/kbuffer.cpp into the PCS.
+// a software renderer: no copy) and resolved by core/image/kbuffer.cpp into the PCS.
 bool GlImageStage::Impl::resolve_on_host(const PeelJob& job, std::size_t fitting, std::uint32_t view_slots,
                                          Clock::time_point t_gpu, PeelResult& out, Timings& t) {
   const int n = job.view.resolution;

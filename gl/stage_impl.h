@@ -9,9 +9,9 @@
 //   batch_resolve.cpp  a drawn batch resolved: on the host, or by one dispatch (deep texels' rows)
 //   pass_timers.cpp  the clocks: GPU timer queries per pass, the host's time blocked in GL reads
 //   gl_stage.cpp     the public class, its one-view entry (peel_one), the floor draw
-#include "peelcd/core/image_stage.h"
+#include "peelcd/core/image/image_stage.h"
 #include "peelcd/core/clock.h"
-#include "peelcd/core/kbuffer.h"
+#include "peelcd/core/image/kbuffer.h"
 #include "peelcd/core/worker_pool.h"
 #include "peelcd/gl/gl_stage.h"
 
@@ -30,7 +30,7 @@
 namespace peelcd::gl {
 
 // A shader's source as compiled: `defines` after its #version line, and the shared PCS tests
-// (include/peelcd/core/pcs_test.inc) where it says #include "peelcd/core/pcs_test.inc".
+// (include/peelcd/core/image/pcs_test.inc) where it says #include "peelcd/core/image/pcs_test.inc".
 std::string shader_source(const char* src, const std::string& defines = "");
 
 // One corner of an uploaded triangle: ROI-local position and the corner's ID.

@@ -1,6 +1,6 @@
 #include "peelcd/io/mesh_io.h"
 
-#include "peelcd/core/detector.h"  // kFloatMax
+#include "peelcd/core/image/detector.h"  // kFloatMax
 #include "peelcd/io/error.h"
 
 #include <assimp/Importer.hpp>

@@ -1,5 +1,6 @@
 #include "peelcd/io/result_json.h"
 
+#include "peelcd/core/image/planner.h"
 #include "peelcd/io/options_json.h"
 #include "peelcd/version.h"
 

@@ -1,6 +1,6 @@
 #include "peelcd/io/scene.h"
 
-#include "peelcd/core/detector.h"
+#include "peelcd/core/image/detector.h"
 #include "peelcd/core/options.h"
 #include "peelcd/io/error.h"
 #include "peelcd/io/mesh_io.h"

@@ -5,11 +5,12 @@
 #include "explain_view.h"
 #include "explain_words.h"
 
-#include "peelcd/core/cpu_stage.h"
-#include "peelcd/core/cull.h"
-#include "peelcd/core/id_map.h"
-#include "peelcd/core/kbuffer.h"
-#include "peelcd/core/narrow_phase.h"
+#include "peelcd/core/image/cpu_stage.h"
+#include "peelcd/core/image/cull.h"
+#include "peelcd/core/image/id_map.h"
+#include "peelcd/core/image/kbuffer.h"
+#include "peelcd/core/exact/narrow_phase.h"
+#include "peelcd/core/exact/self.h"
 #include "peelcd/io/error.h"
 #include "peelcd/io/options_json.h"
 #include "peelcd/io/output.h"
@@ -144,7 +145,7 @@ void trace_roi(Explanation& e, const PairResult& pr, const Object& oa, const Obj
   const auto why = [&](const Mesh& m, std::uint32_t t, const std::string& other) -> std::string {
     if (!triangle_touches(m, t, pr.roi)) return "its box does not touch the ROI (the overlap of the two objects' boxes)";
     return "contact culling: its box touches no grid cell that a triangle of '" + other +
-           "' touches (peelcd/core/cull.h)";
+           "' touches (peelcd/core/image/cull.h)";
   };
   if (opt.cull == Cull::contact) {
     ContactCull cull;  // as the detector culled it: one round for the exact CPU path, all for the image stage

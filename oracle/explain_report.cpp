@@ -4,10 +4,10 @@
 
 #include "explain_words.h"
 
-#include "peelcd/core/cpu_stage.h"
-#include "peelcd/core/cull.h"
-#include "peelcd/core/id_map.h"
-#include "peelcd/core/narrow_phase.h"
+#include "peelcd/core/image/cpu_stage.h"
+#include "peelcd/core/image/cull.h"
+#include "peelcd/core/image/id_map.h"
+#include "peelcd/core/exact/narrow_phase.h"
 #include "peelcd/io/error.h"
 #include "peelcd/io/options_json.h"
 #include "peelcd/io/output.h"

@@ -3,11 +3,11 @@
 
 #include "explain_words.h"
 
-#include "peelcd/core/cpu_stage.h"
-#include "peelcd/core/cull.h"
-#include "peelcd/core/id_map.h"
-#include "peelcd/core/kbuffer.h"
-#include "peelcd/core/narrow_phase.h"
+#include "peelcd/core/image/cpu_stage.h"
+#include "peelcd/core/image/cull.h"
+#include "peelcd/core/image/id_map.h"
+#include "peelcd/core/image/kbuffer.h"
+#include "peelcd/core/exact/narrow_phase.h"
 #include "peelcd/io/error.h"
 #include "peelcd/io/options_json.h"
 #include "peelcd/io/output.h"
@@ -113,7 +113,7 @@ void explain_missing_layer(const ViewContext& c, TexelReport& r) {
 }
 
 // The stage's layers at texel t, with the tests between layers standing for the two triangles
-// (the same float operations as the stage's: peelcd/core/pcs_test.inc), and the texel's verdict.
+// (the same float operations as the stage's: peelcd/core/image/pcs_test.inc), and the texel's verdict.
 TexelReport analyse_texel(const ViewContext& c, std::size_t t) {
   const std::size_t n = std::size_t(c.n);
   TexelReport r;

@@ -1,11 +1,13 @@
 #include "peelcd/oracle/format.h"
+
+#include "peelcd/core/exact/relation.h"
 #include "peelcd/oracle/images.h"
 #include "text_file.h"
 
-#include "peelcd/core/kbuffer.h"
+#include "peelcd/core/image/kbuffer.h"
 
 #include "peelcd/io/error.h"
-#include "peelcd/core/reference.h"
+#include "peelcd/core/exact/reference.h"
 #include "peelcd/io/options_json.h"
 #include "peelcd/version.h"
 #include "peelcd/oracle/viewer.h"

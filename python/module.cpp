@@ -4,11 +4,11 @@
 // Python exceptions carrying the library's messages (ValueError for bad input, RuntimeError for
 // a backend that cannot start); the GIL is released while a frame runs.
 #include "peelcd/backends.h"
-#include "peelcd/core/detector.h"
+#include "peelcd/core/image/detector.h"
 #include "peelcd/core/exclusive_use.h"
 #include "peelcd/core/options.h"
-#include "peelcd/core/reference.h"
-#include "peelcd/core/world.h"
+#include "peelcd/core/exact/reference.h"
+#include "peelcd/core/world/world.h"
 #include "peelcd/eval/classes.h"
 #include "peelcd/io/costs.h"
 #include "peelcd/io/error.h"

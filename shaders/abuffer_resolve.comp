@@ -13,7 +13,7 @@
 // texel's view (its threshold, slope, peel mode) is its first fragment's entry's; a PCS is
 // written as the two triangles' IDs and the view (only this list comes back), and each view's
 // deepest texel is kept per view. No layer capture (views capturing layers are peeled alone).
-#include "peelcd/core/pcs_test.inc"  // pcs_within_epsilon, pcs_intervals_overlap (shared with C++)
+#include "peelcd/core/image/pcs_test.inc"  // pcs_within_epsilon, pcs_intervals_overlap (shared with C++)
 
 #ifdef PEELCD_BATCH
 layout(local_size_x = 64) in;

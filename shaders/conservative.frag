@@ -2,7 +2,7 @@
 // Conservative mode, step 2: keeps the texels the triangle (grown by its margin) really touches,
 // by separating axes, and stores the depth interval it spans over the texel in the k-buffer of
 // shaders/abuffer.frag: lower depth bits, object << 31 | draw order, upper depth bits, 0.
-// The arithmetic and the constants are peelcd/core/conservative.h's (texel_interval).
+// The arithmetic and the constants are peelcd/core/image/conservative.h's (texel_interval).
 flat in vec3 g_x;
 flat in vec3 g_y;
 flat in vec3 g_z;

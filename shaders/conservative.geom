@@ -4,7 +4,7 @@
 // fragment (GPU Gems 2, ch. 42, the bounding-box variant); shaders/conservative.frag then keeps
 // the texels the triangle really touches. The quad lies at mid depth: nothing is clipped in
 // depth, the fragment computes the triangle's depth interval itself.
-// The arithmetic and the constants are peelcd/core/conservative.h's.
+// The arithmetic and the constants are peelcd/core/image/conservative.h's.
 //
 // PEELCD_BATCH (shaders/conservative.vert): the view's matrix and resolution come from the views
 // buffer; window coordinates are the view's own (texel i of the view at [i, i + 1)), the quad is

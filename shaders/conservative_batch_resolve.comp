@@ -12,7 +12,7 @@
 // (row, block of D fragments): invocation i of row r tests fragment D * r.block + i against the
 // block's D fragments. No invocation loops more than D * D times in the first pass (its own
 // texel's couples, or its rows) or D times in the second, whatever a texel's depth.
-#include "peelcd/core/pcs_test.inc"  // pcs_intervals_overlap (shared with C++)
+#include "peelcd/core/image/pcs_test.inc"  // pcs_intervals_overlap (shared with C++)
 
 #ifdef PEELCD_DEEP
 layout(local_size_x = PEELCD_GPU_RESOLVE_DEPTH) in;

@@ -1,8 +1,8 @@
 #version 450 core
 // Conservative mode, step 3: per texel, every two fragments of different objects whose depth
 // intervals overlap are a PCS (not only adjacent layers); every fragment is a layer, in
-// (lower depth, object, draw order) order. The same set as core/kbuffer.cpp's host resolve.
-#include "peelcd/core/pcs_test.inc"  // pcs_within_epsilon, pcs_intervals_overlap (shared with C++)
+// (lower depth, object, draw order) order. The same set as core/image/kbuffer.cpp's host resolve.
+#include "peelcd/core/image/pcs_test.inc"  // pcs_within_epsilon, pcs_intervals_overlap (shared with C++)
 
 layout(local_size_x = 8, local_size_y = 8) in;
 

@@ -7,7 +7,7 @@
 // Full peeling also tests layer k+1 against the first surface of the run of same-object layers
 // that ends at layer k (`run_start`): alternate peeling pairs exactly those first surfaces
 // (A1 A2 B: alternate pairs A1-B, adjacency pairs A2-B), so full mode is a superset of it.
-#include "peelcd/core/pcs_test.inc"  // pcs_within_epsilon, pcs_intervals_overlap (shared with C++)
+#include "peelcd/core/image/pcs_test.inc"  // pcs_within_epsilon, pcs_intervals_overlap (shared with C++)
 
 layout(local_size_x = 8, local_size_y = 8) in;
 

@@ -14,7 +14,7 @@ uniform int viewport;
 flat out uint v_view;  // view << 1 | object
 #else
 layout(location = 0) in vec3 in_position;  // ROI-local, world units (or a rigid shape's local)
-layout(location = 1) in uint id;        // triangle ID of this corner (unique or paper, see core/id_map.h)
+layout(location = 1) in uint id;        // triangle ID of this corner (unique or paper, see core/image/id_map.h)
 
 uniform mat4 clip_from_local;
 uniform mat4 roi_from_object;  // identity, or a rigid object's pose (ROI-local from its shape)

@@ -7,7 +7,7 @@
 // peelcd::gl_egl defines PEELCD_HAVE_EGL, linking peelcd::gl_osmesa PEELCD_HAVE_OSMESA, for their
 // users; a backend whose component the program does not link is refused with a message that
 // says which (and whether this peelcd was built with it at all). "cpu" needs peelcd::core only.
-#include "peelcd/core/cpu_stage.h"
+#include "peelcd/core/image/cpu_stage.h"
 #include "peelcd/version.h"
 #if PEELCD_HAVE_EGL || PEELCD_HAVE_OSMESA
 #include "peelcd/gl/gl_stage.h"

@@ -5,16 +5,16 @@
 // Finer-grained headers live beside it (peelcd/core/..., peelcd/gl/..., peelcd/io/...).
 #include "peelcd/version.h"
 
-#include "peelcd/core/collision.h"
-#include "peelcd/core/cpu_stage.h"
-#include "peelcd/core/detector.h"
+#include "peelcd/core/world/collision.h"
+#include "peelcd/core/image/cpu_stage.h"
+#include "peelcd/core/image/detector.h"
 #include "peelcd/core/frame.h"
-#include "peelcd/core/image_stage.h"
+#include "peelcd/core/image/image_stage.h"
 #include "peelcd/core/mesh.h"
-#include "peelcd/core/narrow_phase.h"
+#include "peelcd/core/exact/narrow_phase.h"
 #include "peelcd/core/primitives.h"
-#include "peelcd/core/reference.h"
-#include "peelcd/core/world.h"
+#include "peelcd/core/exact/reference.h"
+#include "peelcd/core/world/world.h"
 
 #if __has_include("peelcd/io/mesh_io.h")
 #include "peelcd/io/mesh_io.h"

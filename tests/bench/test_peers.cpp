@@ -7,8 +7,8 @@
 #include "peelcd/bench/peers.h"
 #include "peelcd/core/broad_phase.h"
 #include "peelcd/core/primitives.h"
-#include "peelcd/core/self.h"
-#include "peelcd/core/reference.h"
+#include "peelcd/core/exact/self.h"
+#include "peelcd/core/exact/reference.h"
 #include "peelcd/eval/classes.h"
 #include "peelcd/eval/scenes.h"
 

@@ -3,7 +3,7 @@
 // give bit-identical results: the same PCS and the same contacts.
 #include "../gl/gl_fixture.h"
 #include "peelcd/core/primitives.h"
-#include "peelcd/core/world.h"
+#include "peelcd/core/world/world.h"
 #include "peelcd/io/scene.h"
 
 #include <catch2/catch.hpp>

@@ -3,7 +3,7 @@
 // floating-point tests go wrong. Coplanar and touching cases are built on an integer lattice,
 // so they are exactly what they claim before scaling; the scale and offset (powers of ten, not
 // exact) then turn some of them into near-coplanar or near-touching cases, which is the point.
-#include "peelcd/core/narrow_phase.h"
+#include "peelcd/core/exact/narrow_phase.h"
 
 #include <random>
 

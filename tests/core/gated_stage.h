@@ -2,7 +2,7 @@
 // A CPU image stage whose first frame waits in begin_frame() until released: holds a frame open
 // on one thread while the test calls the same Detector, World or CollisionWorld from another
 // (the one-thread-at-a-time guard's tests).
-#include "peelcd/core/cpu_stage.h"
+#include "peelcd/core/image/cpu_stage.h"
 
 #include <condition_variable>
 #include <mutex>

@@ -3,9 +3,9 @@
 // the depth classes, and near-but-apart pairs (boxes 1e-4 apart, a ball beside a box, two turned
 // boxes face to face). Each stage's pairs within the margin are checked against near_pairs()
 // (a tree search; tests/core/test_proximity.cpp checks it against CGAL's exact distances).
-#include "peelcd/core/detector.h"
+#include "peelcd/core/image/detector.h"
 #include "peelcd/core/primitives.h"
-#include "peelcd/core/proximity.h"
+#include "peelcd/core/exact/proximity.h"
 #include "peelcd/eval/classes.h"
 
 #include <catch2/catch.hpp>

@@ -2,9 +2,9 @@
 // geometry of peelcd/eval/classes.h at several resolutions, and on random intersecting pairs
 // (the property docs/accuracy.md proves). The GL stages run the same checks in
 // tests/gl/test_conservative.cpp.
-#include "peelcd/core/cpu_stage.h"
-#include "peelcd/core/detector.h"
-#include "peelcd/core/reference.h"
+#include "peelcd/core/image/cpu_stage.h"
+#include "peelcd/core/image/detector.h"
+#include "peelcd/core/exact/reference.h"
 #include "peelcd/eval/classes.h"
 #include "random_contacts.h"
 

@@ -2,10 +2,10 @@
 // reported inside (a collision without contact), no disjoint pair reported inside, volumes within
 // their stated error of CGAL's exact volume and within 1% on deep overlaps, 0 on touching boxes;
 // the World reports the same; an open mesh gets "unknown" and the reason.
-#include "peelcd/core/cpu_stage.h"
-#include "peelcd/core/detector.h"
-#include "peelcd/core/world.h"
-#include "peelcd/core/relation.h"
+#include "peelcd/core/image/cpu_stage.h"
+#include "peelcd/core/image/detector.h"
+#include "peelcd/core/world/world.h"
+#include "peelcd/core/exact/relation.h"
 #include "peelcd/eval/classes.h"
 #include "peelcd/io/mesh_io.h"
 

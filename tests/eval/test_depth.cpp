@@ -1,11 +1,11 @@
-// Penetration depth (peelcd/core/depth.h) on the depth classes (eval/classes.cpp): moving A by
+// Penetration depth (peelcd/core/exact/depth.h) on the depth classes (eval/classes.cpp): moving A by
 // (d + 1e-6 of the scene's size) n leaves no intersecting triangle pair and no containment
 // (exact), moving it by 0.97 d still overlaps, and the swapped pair gives (-n, d). Proximity
-// (peelcd/core/proximity.h) on the same classes against CGAL's exact distances.
-#include "peelcd/core/depth.h"
-#include "peelcd/core/proximity.h"
-#include "peelcd/core/reference.h"
-#include "peelcd/core/relation.h"
+// (peelcd/core/exact/proximity.h) on the same classes against CGAL's exact distances.
+#include "peelcd/core/exact/depth.h"
+#include "peelcd/core/exact/proximity.h"
+#include "peelcd/core/exact/reference.h"
+#include "peelcd/core/exact/relation.h"
 #include "peelcd/eval/classes.h"
 #include "peelcd/io/mesh_io.h"
 

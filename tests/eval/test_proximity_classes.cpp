@@ -2,7 +2,7 @@
 // (triangles grown by half the margin) and the exact path's grown boxes miss no pair within the
 // margin on the geometry classes, the depth classes and near-but-apart pairs.
 #include "../core/proximity_cases.h"
-#include "peelcd/core/cpu_stage.h"
+#include "peelcd/core/image/cpu_stage.h"
 
 #include <catch2/catch.hpp>
 

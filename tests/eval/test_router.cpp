@@ -1,9 +1,9 @@
 // The stage router (DetectOptions::stage): the exact CPU path finds exactly the exact contacts
 // on every class of geometry, whatever the image configuration; Stage::automatic follows the
 // stage's cost model ROI by ROI and never loses a contact.
-#include "peelcd/core/cpu_stage.h"
-#include "peelcd/core/detector.h"
-#include "peelcd/core/reference.h"
+#include "peelcd/core/image/cpu_stage.h"
+#include "peelcd/core/image/detector.h"
+#include "peelcd/core/exact/reference.h"
 #include "peelcd/eval/classes.h"
 #include "peelcd/eval/scenes.h"
 

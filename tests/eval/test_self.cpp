@@ -2,15 +2,15 @@
 // never pairs; by index or by position), the self search against the exact self reference, and
 // every self class of peelcd/eval/classes.h with no miss on the exact path and on the
 // conservative image stage at any tile; inter-object pairs unchanged beside self pairs.
-#include "peelcd/core/cpu_stage.h"
-#include "peelcd/core/detector.h"
+#include "peelcd/core/image/cpu_stage.h"
+#include "peelcd/core/image/detector.h"
 #include "peelcd/core/frame.h"
-#include "peelcd/core/id_map.h"
-#include "peelcd/core/planner.h"
+#include "peelcd/core/image/id_map.h"
+#include "peelcd/core/image/planner.h"
 #include "peelcd/core/primitives.h"
-#include "peelcd/core/reference.h"
-#include "peelcd/core/self.h"
-#include "peelcd/core/world.h"
+#include "peelcd/core/exact/reference.h"
+#include "peelcd/core/exact/self.h"
+#include "peelcd/core/world/world.h"
 #include "peelcd/eval/classes.h"
 
 #include <catch2/catch.hpp>

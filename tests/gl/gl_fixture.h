@@ -1,8 +1,8 @@
 #pragma once
 // One OSMesa context and pipeline per test process, reused by every test (as an application
 // would reuse them across frames).
-#include "peelcd/core/cpu_peel.h"
-#include "peelcd/core/reference.h"
+#include "peelcd/core/image/cpu_peel.h"
+#include "peelcd/core/exact/reference.h"
 #include "peelcd/gl/pipeline.h"
 #include "peelcd/gl_egl/egl_context.h"
 #include "peelcd/backends.h"

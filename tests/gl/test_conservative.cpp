@@ -7,7 +7,7 @@
 #include "peelcd/core/primitives.h"
 #include "peelcd/eval/classes.h"
 #include "peelcd/eval/scenes.h"
-#include "peelcd/core/world.h"
+#include "peelcd/core/world/world.h"
 
 #include <catch2/catch.hpp>
 

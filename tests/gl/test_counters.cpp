@@ -1,5 +1,5 @@
 // The GL counters of a frame (FrameResult::gl_draws, gl_dispatches, gl_readbacks, bytes_uploaded,
-// bytes_read; peelcd/core/image_stage.h StageCounters): what they count, checked against what the
+// bytes_read; peelcd/core/image/image_stage.h StageCounters): what they count, checked against what the
 // frame must have done. They are the measure of the GPU work's constancy (docs/backends.md).
 #include "gl_fixture.h"
 #include "peelcd/core/primitives.h"

@@ -1,5 +1,5 @@
 // Texels deeper than one GPU-resolve invocation takes (PEELCD_GPU_RESOLVE_DEPTH fragments,
-// peelcd/core/pcs_test.inc): the GPU resolve gives the host resolve's PCS and misses nothing,
+// peelcd/core/image/pcs_test.inc): the GPU resolve gives the host resolve's PCS and misses nothing,
 // batched (the deep texels split over invocations) and one view at a time (the view resolved on
 // the host, counted), in both image modes. A fan of 256 triangles pierced at its centre by the
 // tip of a 384-triangle cone puts every triangle of both in one texel; the default scene at a

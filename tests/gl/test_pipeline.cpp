@@ -1,4 +1,4 @@
-#include "peelcd/core/cull.h"
+#include "peelcd/core/image/cull.h"
 #include "peelcd/core/primitives.h"
 #include "gl_fixture.h"
 
@@ -75,7 +75,7 @@ TEST_CASE("two axis-aligned boxes crossing", "[gl]") {
     INFO("peeler " << to_string(peeler));
     const Run r = run(a, b, opt, peeler);
     // Two surfaces per ray inside the ROI, and near the rim a third: B's side just beyond A's
-    // face, in the ROI's padding (core/view.h, kRoiPadTexels).
+    // face, in the ROI's padding (core/image/view.h, kRoiPadTexels).
     CHECK(r.gpu.layers == 3);
     // Multi-pass: the layers and the empty pass that ends the ROI; A-buffer: one draw.
     CHECK(r.gpu.passes == (peeler == Peeler::multipass ? 4 : 1));

@@ -1,7 +1,7 @@
 // The image stages side by side, and the GL stage's contract with its context: shared
 // ownership, the caller's current context given back.
 #include "gl_fixture.h"
-#include "peelcd/core/cpu_stage.h"
+#include "peelcd/core/image/cpu_stage.h"
 #include "peelcd/core/primitives.h"
 #include "peelcd/io/scene.h"
 

@@ -11,7 +11,7 @@ function(run)
   set(last_output "${out}" PARENT_SCOPE)
 endfunction()
 run(${CMAKE_COMMAND} --install ${BUILD} --prefix ${prefix})
-foreach(f include/peelcd/peelcd.h include/peelcd/version.h include/peelcd/core/detector.h
+foreach(f include/peelcd/peelcd.h include/peelcd/version.h include/peelcd/core/image/detector.h
           lib/cmake/peelcd/peelcdConfig.cmake lib/cmake/peelcd/peelcdConfigVersion.cmake
           lib/pkgconfig/peelcd.pc share/doc/peelcd/LICENSE)
   if(NOT EXISTS ${prefix}/${f})

@@ -5,9 +5,9 @@
 // --backend cpu` of the same scene (tests/oracle/test_dumps.cmake).
 //
 //   independent_dump_writer SCENE OUT_DIR
-#include "peelcd/core/cpu_stage.h"
-#include "peelcd/core/detector.h"
-#include "peelcd/core/reference.h"
+#include "peelcd/core/image/cpu_stage.h"
+#include "peelcd/core/image/detector.h"
+#include "peelcd/core/exact/reference.h"
 #include "peelcd/io/scene.h"
 
 #include <nlohmann/json.hpp>

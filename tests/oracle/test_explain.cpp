@@ -1,8 +1,8 @@
 // peelcd explain's verdicts on small constructed scenes, through the CPU image stage (no GL):
 // each scene is built so that one verdict, and only it, is the right answer.
-#include "peelcd/core/cpu_stage.h"
-#include "peelcd/core/narrow_phase.h"
-#include "peelcd/core/reference.h"
+#include "peelcd/core/image/cpu_stage.h"
+#include "peelcd/core/exact/narrow_phase.h"
+#include "peelcd/core/exact/reference.h"
 #include "peelcd/io/error.h"
 #include "peelcd/oracle/explain.h"
 

@@ -2,7 +2,7 @@
 // The floor under any image-space method on a GL context (peelcd bench): every ROI view a frame
 // would peel (the same culling, tiles and triangles: Detector::for_each_view), its triangles
 // uploaded and then drawn once with depth testing and a fragment shader that does nothing.
-#include "peelcd/core/detector.h"
+#include "peelcd/core/image/detector.h"
 #include "peelcd/gl/gl_stage.h"
 
 #include <vector>

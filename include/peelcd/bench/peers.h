@@ -3,7 +3,7 @@
 // the same input and the optimisations a user of that library would apply:
 //   cgal: per object pair whose boxes overlap, only the triangles whose boxes touch the overlap
 //         box (the crop peelcd's ROI makes too), CGAL box_intersection_d over their boxes, then
-//         the exact triangle test (core/narrow_phase.h). No preprocessing; also the reference.
+//         the exact triangle test (core/exact/narrow_phase.h). No preprocessing; also the reference.
 //   fcl:  FCL 0.7 (FclPeer), object pairs from FCL's own broad phase
 //         (DynamicAABBTreeCollisionManager), then every colliding triangle pair:
 //         - two rigid objects: OBBRSS trees built once from their shapes and moved by their poses
@@ -29,7 +29,7 @@ struct PeerFrame {
   std::size_t pairs = 0;  // colliding triangle pairs reported (all object pairs summed)
   std::vector<std::pair<std::size_t, std::size_t>> objects;  // the object pairs tested (a < b; a == b: an
                                                              // object's self pairs, Object::self)
-  // Per entry of `objects`: the reported triangle pairs, packed as core/id_map.h pair keys
+  // Per entry of `objects`: the reported triangle pairs, packed as core/image/id_map.h pair keys
   // (tri_a << 32 | tri_b), sorted, distinct.
   std::vector<std::vector<std::uint64_t>> per_pair;
 };

@@ -1,6 +1,6 @@
 #pragma once
 // The query benchmarks of `peelcd bench depth` and `peelcd bench distance`:
-// - depth: penetration_depth() (peelcd/core/depth.h) per scene, timed, against a reference along
+// - depth: penetration_depth() (peelcd/core/exact/depth.h) per scene, timed, against a reference along
 //   the same direction: bisection on translations of A along n (60 halvings between 0 and a
 //   translation that clears B's extent), each step decided by the exact path (crossing or
 //   containment: overlapping); the relative difference of the two depths;

@@ -8,7 +8,7 @@
 // its tree kept and refitted (no World around it) and CGAL's
 // Polygon_mesh_processing::self_intersections; medians per frame after an untimed pass, misses
 // and false pairs against the exact self pairs.
-#include "peelcd/core/image_stage.h"
+#include "peelcd/core/image/image_stage.h"
 
 #include <memory>
 #include <string>

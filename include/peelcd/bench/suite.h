@@ -9,8 +9,8 @@
 // draw of the triangles a configuration would draw). `short_rows` keeps the World rows, the
 // frame API's router and image stage, the peers and the floors (the scale scenes).
 #include "peelcd/bench/peers.h"
-#include "peelcd/core/detector.h"
-#include "peelcd/core/reference.h"
+#include "peelcd/core/image/detector.h"
+#include "peelcd/core/exact/reference.h"
 
 #include <functional>
 #include <memory>

@@ -1,13 +1,8 @@
 #pragma once
-// Request and result of one frame of detection (peelcd/core/detector.h runs it).
+// Request and result of one frame of detection (peelcd/core/image/detector.h runs it).
 #include "peelcd/core/aabb.h"
-#include "peelcd/core/depth.h"
-#include "peelcd/core/proximity.h"
-#include "peelcd/core/id_map.h"
-#include "peelcd/core/narrow_phase.h"
-#include "peelcd/core/relation.h"
-#include "peelcd/core/self.h"
-#include "peelcd/core/view.h"
+#include "peelcd/core/pair_outcomes.h"
+#include "peelcd/core/pairs.h"
 
 #include <functional>
 #include <optional>
@@ -23,7 +18,7 @@ const char* to_string(PeelMode mode);
 std::optional<PeelMode> parse_peel_mode(const std::string& text);
 
 // Which triangles of a ROI are peeled. box: every triangle touching the ROI (the paper's way).
-// contact: contact-region culling (core/cull.h): only the triangles whose boxes share a grid cell
+// contact: contact-region culling (core/image/cull.h): only the triangles whose boxes share a grid cell
 // of the ROI with the other object's, the ROI shrunk to their boxes' overlap; conservative (no
 // colliding pair is dropped), fewer triangles drawn and a finer tile on the same budget.
 enum class Cull { box, contact };
@@ -39,6 +34,20 @@ std::optional<Cull> parse_cull(const std::string& text);
 enum class Stage { image, exact, automatic };
 const char* to_string(Stage stage);
 std::optional<Stage> parse_stage(const std::string& text);
+
+// Triangle IDs written into the peel layers (peelcd/core/image/id_map.h): unique (a triangle's
+// own index), paper (its last vertex, standing for every triangle whose last vertex it is) or
+// ring (its last vertex, standing for the vertex's whole one-ring).
+enum class IdMode { unique, paper, ring };
+
+const char* to_string(IdMode mode);
+std::optional<IdMode> parse_id_mode(const std::string& text);
+
+// Which triangles of one object are adjacent, never a self pair (peelcd/core/exact/self.h):
+// those sharing a vertex index, or a vertex position.
+enum class SelfAdjacency { index, position };
+const char* to_string(SelfAdjacency adjacency);
+std::optional<SelfAdjacency> parse_self_adjacency(const std::string& text);
 
 // Defaults chosen on the per-class accuracy measurements of docs/accuracy.md and the benchmarks
 // of docs/performance.md. The paper's own configuration (paper_options()) is conservative =
@@ -99,15 +108,15 @@ struct DetectOptions {
   bool self = false;
   SelfAdjacency self_adjacency = SelfAdjacency::index;  // which triangles of one object are adjacent
   // The intersection volume of each pair of closed objects whose boxes overlap
-  // (PairResult::volume; peelcd/core/relation.h), with resolution x resolution rays per axis
+  // (PairResult::volume; peelcd/core/exact/relation.h), with resolution x resolution rays per axis
   // (kVolumeResolution when resolution is 0). Off by default.
   bool volume = false;
   // A penetration direction and depth for each colliding or containing pair of closed objects
-  // (PairResult::depth; peelcd/core/depth.h). Off by default.
+  // (PairResult::depth; peelcd/core/exact/depth.h). Off by default.
   bool depth = false;
   // Proximity: with a margin m > 0, object pairs whose boxes are within m of each other are pairs
   // of the frame, and each gets its triangle pairs within m with their distances and its least
-  // distance (PairResult::near; peelcd/core/proximity.h). 0 (the default): off.
+  // distance (PairResult::near; peelcd/core/exact/proximity.h). 0 (the default): off.
   double margin = 0.0;
   // At most this many contacts per object pair (0: every one). The exact tests of a pair stop at
   // the N-th colliding triangle pair found (a first-contact query: 1), in candidate order; the
@@ -117,6 +126,14 @@ struct DetectOptions {
 };
 
 constexpr int kVolumeResolution = 256;
+
+// The texels per median edge of a ROI's kept triangles when its tile shares the budget
+// (DetectOptions::edge_texels unset): the conservative stage's and point sampling's defaults.
+constexpr double kConservativeEdgeTexels = 2.0;
+constexpr double kPointEdgeTexels = 12.0;
+// The texels per median edge `options` asks for: its edge_texels, or the mode's default.
+double edge_texels_of(const DetectOptions& options);
+
 
 // The paper's configuration (ISVC 2007): alternate peeling of every triangle in the ROI box,
 // constant epsilon of one texel, the paper's IDs, one view along world x, point sampling.
@@ -142,7 +159,7 @@ struct PairResult {
   std::size_t candidates = 0;              // distinct triangle pairs tested on the CPU
   bool exact_stage = false;                // tested by the exact CPU path (no image work)
   bool margin_fallback = false;            // ... because the margin is too wide for the image stage
-                                           // (kImageMarginShare, peelcd/core/planner.h)
+                                           // (kImageMarginShare, peelcd/core/image/planner.h)
   int views_peeled = 0;                    // ROI views given to the image stage
   int views_exhaustive = 0;                // of those, views the stage could not hold (a k-buffer
                                            // deeper or larger than the context allows): their
@@ -150,7 +167,7 @@ struct PairResult {
   // The stage router's predictions for this ROI, milliseconds (0 when it did not route).
   double predicted_image_ms = 0.0, predicted_exact_ms = 0.0;
   std::vector<Contact> colliding;          // sorted by (tri_a, tri_b)
-  // How the two objects relate (peelcd/core/relation.h): from the contacts, or, with none,
+  // How the two objects relate (peelcd/core/exact/relation.h): from the contacts, or, with none,
   // containment (a closed object wholly inside the other: a collision with no contact).
   // Self pairs: crossing, touching or disjoint. `relation_note`: why unknown, or a detail.
   Relation relation = Relation::disjoint;
@@ -166,20 +183,7 @@ struct PairResult {
   bool is_collision() const { return !colliding.empty() || colliding_relation(relation); }
 };
 
-// Fills each pair's relation (and with options.volume its volume) from its contacts and the
-// objects' meshes: `mesh_of(i)` gives object i's world mesh (called only when needed). With
-// options.margin, also each pair's `near` by a tree search, except for the pairs whose
-// `near_found[i]` is set (their stage found them from its candidates).
-void relate_pairs(std::vector<PairResult>& pairs, const std::function<const Mesh&(std::size_t)>& mesh_of,
-                  const std::vector<Aabb>& boxes, const DetectOptions& options,
-                  const std::vector<char>* near_found = nullptr);
 
-// Which path tested a pair, in one word: "exact" (the exact CPU path), "image" (the image
-// stage's PCS), "exhaustive" (every view fell back to box-overlap tests: no layer, no PCS) or
-// "image+exhaustive" (some views did); "none" when culling left no triangle of one object.
-const char* pair_path(const PairResult& pair);
-// Why, in a sentence (`options`: the frame's).
-std::string pair_path_reason(const PairResult& pair, const DetectOptions& options);
 
 struct Timings {  // milliseconds, as in the paper's tables
   double aabb = 0, upload = 0, gpu = 0, readback = 0, cpu = 0, total = 0;

@@ -3,7 +3,7 @@
 // files and in the JSON that records a frame, its command-line flag, its help, its kind and
 // range. The scene reader (peelcd/io/scene.h), the JSON writer and reader
 // (peelcd/io/options_json.h), the JSON Schema's list (docs/schema/result.schema.json, checked by
-// a test), the command line and validate_options() (peelcd/core/detector.h) all derive from
+// a test), the command line and validate_options() (peelcd/core/image/detector.h) all derive from
 // option_table(). Adding an option: a field in DetectOptions, a row here (docs/architecture.md).
 #include "peelcd/core/frame.h"
 

@@ -1,6 +1,6 @@
 #pragma once
 // A fixed set of threads that run one job at a time, split into lanes: the host resolve of the
-// k-buffer (core/kbuffer.h) runs on one per gl::Pipeline. Threads live as long as the pool;
+// k-buffer (core/image/kbuffer.h) runs on one per gl::Pipeline. Threads live as long as the pool;
 // running a job allocates nothing.
 #include <condition_variable>
 #include <cstdint>

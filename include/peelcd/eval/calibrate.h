@@ -2,7 +2,7 @@
 // Calibration of the stage router (Stage::automatic, docs/router.md):
 // one-ROI scenes of growing size and density timed through the image stage and through the
 // exact CPU path on the same detector, and the two linear cost models fitted to them.
-#include "peelcd/core/detector.h"
+#include "peelcd/core/image/detector.h"
 
 #include <string>
 #include <vector>

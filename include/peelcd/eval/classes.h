@@ -5,7 +5,7 @@
 // its exact contacts are what the construction says (axis-aligned faces, coincident surfaces,
 // zero-area triangles, features thinner than a texel).
 #include "peelcd/core/mesh.h"
-#include "peelcd/core/relation.h"
+#include "peelcd/core/exact/relation.h"
 
 #include <string>
 #include <vector>
@@ -62,7 +62,7 @@ double intersection_length(const Mesh& a, const Mesh& b, const std::vector<std::
 
 }  // namespace peelcd
 
-#include "peelcd/core/detector.h"
+#include "peelcd/core/image/detector.h"
 
 namespace peelcd {
 

@@ -2,7 +2,7 @@
 // Accuracy sweeps: every configuration x every view direction of a scene, each frame scored
 // against the exact all-pairs reference (every miss and every false contact counts).
 #include "peelcd/core/frame.h"
-#include "peelcd/core/detector.h"
+#include "peelcd/core/image/detector.h"
 
 #include <functional>
 #include <string>

@@ -7,8 +7,8 @@
 //
 // GL is called only through function pointers resolved from the context
 // (Context::proc_address), so several stages on different platforms live in one process.
-// Thread safety: one thread at a time per stage (see peelcd/core/detector.h).
-#include "peelcd/core/image_stage.h"
+// Thread safety: one thread at a time per stage (see peelcd/core/image/detector.h).
+#include "peelcd/core/image/image_stage.h"
 #include "peelcd/gl/context.h"
 #include "peelcd/gl/options.h"
 

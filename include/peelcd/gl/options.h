@@ -15,7 +15,7 @@ enum class Peeler { multipass, abuffer };
 
 // Where the single-pass peeler's k-buffer is resolved into layers and PCS: gpu (a compute pass,
 // shaders/abuffer_resolve.comp; the PCS list is read back), host (the k-buffer is mapped and
-// resolved by core/kbuffer.h: the same layers and PCS), or automatic: host where GL renders on
+// resolved by core/image/kbuffer.h: the same layers and PCS), or automatic: host where GL renders on
 // the CPU (llvmpipe, softpipe: the buffers are host memory already), gpu elsewhere.
 enum class Resolve { automatic, gpu, host };
 

@@ -1,7 +1,7 @@
 #pragma once
-// The usual way to run peelcd on GL: a Detector (peelcd/core/detector.h) over a GlImageStage
+// The usual way to run peelcd on GL: a Detector (peelcd/core/image/detector.h) over a GlImageStage
 // (peelcd/gl/gl_stage.h) on one context, in one object.
-#include "peelcd/core/detector.h"
+#include "peelcd/core/image/detector.h"
 #include "peelcd/gl/gl_stage.h"
 
 #include <memory>

@@ -4,7 +4,7 @@
 // hold); triangle order is the file's order (meshes of a file concatenated in
 // node order). Vertices with bit-identical positions are welded, so that formats that store
 // corners per face (STL, OBJ as assimp imports it) share vertices again: the paper's IDs
-// (core/id_map.h) need shared vertices.
+// (core/image/id_map.h) need shared vertices.
 #include "peelcd/core/mesh.h"
 
 #include <string>

@@ -2,7 +2,7 @@
 // The JSON report of `peelcd detect --json`.
 #include "peelcd/core/frame.h"
 #include "peelcd/core/mesh.h"
-#include "peelcd/core/reference.h"
+#include "peelcd/core/exact/reference.h"
 #include "peelcd/gl/options.h"
 
 #include <nlohmann/json.hpp>

@@ -6,7 +6,7 @@
 //   2. the ROI: do the objects' boxes overlap, was the ROI routed to the exact CPU path, did
 //      culling keep each triangle (and if not, which test dropped it);
 //   3. per ROI view: was each triangle drawn, where its own fragments land (a second, two-triangle
-//      run of the CPU image stage: the rasterization model of peelcd/core/cpu_stage.h), the
+//      run of the CPU image stage: the rasterization model of peelcd/core/image/cpu_stage.h), the
 //      texels the segment crosses, the layers the stage produced there (object, ID, depth or depth
 //      interval, in peel order), the PCS tests that involve the two triangles' IDs and their values
 //      against the threshold (epsilon window + slope term, or interval overlap);
@@ -14,7 +14,7 @@
 // The layers are the stage's own (GL or CPU); only "where would this triangle alone land" comes
 // from the model, so at a texel centre within rounding of an edge the two may disagree (said so in
 // the report as "model" versus "layers").
-#include "peelcd/core/detector.h"
+#include "peelcd/core/image/detector.h"
 
 #include <nlohmann/json.hpp>
 
@@ -128,7 +128,7 @@ struct Explanation {
   std::vector<ViewReport> views;
   Verdict verdict = Verdict::no_contact;
   std::string verdict_line;        // one line
-  // With the depth option: the object pair's penetration direction and depth (peelcd/core/depth.h).
+  // With the depth option: the object pair's penetration direction and depth (peelcd/core/exact/depth.h).
   bool depth_asked = false;
   PenetrationDepth depth;
 };

@@ -19,8 +19,8 @@
 // The format is specified for other writers in docs/dump-format.md (meta.json: the JSON Schema
 // docs/schema/dump-meta.schema.json); kDumpFormat names its version.
 #include "peelcd/core/frame.h"
-#include "peelcd/core/texel.h"
-#include "peelcd/core/detector.h"
+#include "peelcd/core/image/texel.h"
+#include "peelcd/core/image/detector.h"
 #include "peelcd/gl/gl_stage.h"
 
 #include <nlohmann/json.hpp>
@@ -49,7 +49,7 @@ struct DumpView {
   std::vector<std::vector<std::uint32_t>> layers;  // N*N*4 words each, GL row order (bottom first)
   std::vector<IdPair> pcs;
   // With the volume option (closed objects): per texel, the length along d where both objects
-  // are inside (overlap_lengths(), peelcd/core/relation.h), written as inside.png; or why not.
+  // are inside (overlap_lengths(), peelcd/core/exact/relation.h), written as inside.png; or why not.
   std::vector<float> inside;
   std::string inside_note;
 };
@@ -114,7 +114,7 @@ std::string layer_name(std::size_t k);
 // The pair's reference pairs the frame did not report (reference less colliding, sorted).
 std::vector<std::array<std::uint32_t, 2>> missed_pairs(const DumpPair& pair);
 
-// Layer word accessors: peelcd/core/texel.h's, by the names the oracle has used.
+// Layer word accessors: peelcd/core/image/texel.h's, by the names the oracle has used.
 inline bool texel_empty(const std::vector<std::uint32_t>& layer, std::size_t i) { return texel::empty(layer, i); }
 inline std::uint32_t texel_object(const std::vector<std::uint32_t>& layer, std::size_t i) { return texel::object(layer, i); }
 inline std::uint32_t texel_id1(const std::vector<std::uint32_t>& layer, std::size_t i) { return texel::id1(layer, i); }

@@ -1,2 +1,2 @@
-#include <peelcd/core/detector.h>
+#include <peelcd/core/image/detector.h>
 int main() { return 0; }

@@ -1,0 +1,146 @@
+// The exact triangle test (Guigue and Devillers on certified signs, CGAL's exact predicates where
+// they cannot tell), the contact sort and the narrow phase over a pair's candidates.
+#include "peelcd/core/exact/narrow_phase.h"
+
+#include "certified.h"
+#include "exact_kernel.h"
+#include "peelcd/core/aabb.h"
+
+#include <CGAL/intersections.h>
+
+#include <algorithm>
+#include <iterator>
+#include <tuple>
+
+namespace peelcd {
+namespace {
+
+using namespace exact_detail;
+
+bool intersect(const P3& a, const P3& b) { return a == b; }
+bool intersect(const S3& s, const P3& p) { return s.has_on(p); }
+bool intersect(const P3& p, const S3& s) { return s.has_on(p); }
+bool intersect(const T3& t, const P3& p) { return t.has_on(p); }
+bool intersect(const P3& p, const T3& t) { return t.has_on(p); }
+template <class A, class B>
+bool intersect(const A& a, const B& b) {
+  return CGAL::do_intersect(a, b);
+}
+
+// Guigue and Devillers' test (Fast and Robust Triangle-Triangle Overlap Test Using Orientation
+// Predicates, 2003), as CGAL's do_intersect(Triangle_3, Triangle_3) runs it, on the signs already
+// known: two proper triangles, not coplanar (neither sign triple all zero), neither strictly on one
+// side of the other's plane. Both triangles are turned so that their lone corner (the one on its
+// own side of the other's plane) comes first; they meet iff the two intervals they cut on the
+// common line overlap, two more orientation predicates.
+struct Cut {
+  int s_min, t_min, s_max, t_max;
+};
+Cut lone_corner(const int d[3]) {
+  const int p = d[0], q = d[1], r = d[2];
+  // The corner alone on the positive (closed negative) side gives (i, j, k, i) ((k, i, i, j)).
+  const auto pos = [](int i) { return Cut{i, (i + 1) % 3, (i + 2) % 3, i}; };
+  const auto neg = [](int i) { return Cut{(i + 2) % 3, i, i, (i + 1) % 3}; };
+  if (p > 0) {
+    if (q > 0) return neg(2);
+    return r > 0 ? neg(1) : pos(0);
+  }
+  if (p < 0) {
+    if (q < 0) return pos(2);
+    return r < 0 ? pos(1) : neg(0);
+  }
+  if (q > 0) return r > 0 ? neg(0) : pos(1);
+  if (q < 0) return r < 0 ? pos(0) : neg(1);
+  return r > 0 ? pos(2) : neg(2);
+}
+
+bool crossing_intersect(const TriangleCorners& a, const TriangleCorners& b, const int sa[3], const int sb[3]) {
+  const Cut c1 = lone_corner(sa), c2 = lone_corner(sb);
+  return orientation_sign(a[c1.s_min], a[c1.t_min], b[c2.s_min], b[c2.t_min]) <= 0 &&
+         orientation_sign(a[c1.s_max], a[c1.t_max], b[c2.t_max], b[c2.s_max]) <= 0;
+}
+
+}  // namespace
+
+
+bool triangles_intersect(const TriangleCorners& a, const TriangleCorners& b) {
+  // A flat or smooth sheet's neighbours, nearly coplanar: no exact predicate needed where an
+  // edge's plane separates them.
+  if (coplanar_apart(a, b) || apart_across_an_edge(a, b)) return false;
+  const Simplex sa = simplex(a), sb = simplex(b);
+  return std::visit([](const auto& x, const auto& y) { return intersect(x, y); }, sa, sb);
+}
+
+bool test_triangle_pair(const TriangleCorners& ca, const TriangleCorners& cb, Contact& contact) {
+  // The six corner/plane signs, each once (certified in double, exact where double cannot
+  // tell); most candidates end here, one triangle strictly on one side of the other's plane.
+  // Where a sign is left to exact arithmetic (a corner on or within rounding of the other's
+  // plane: a smooth sheet's neighbours), a plane through an edge may separate the two first.
+  int side_b[3], side_a[3];
+  bool edge_planes_tried = false;
+  if (!certain_plane_sides(ca, cb, side_b)) {
+    if (apart_across_an_edge(ca, cb)) return false;
+    edge_planes_tried = true;
+    exact_plane_sides(ca, cb, side_b);
+  }
+  if (one_open_side(side_b)) return false;
+  // B in A's plane (or A without area): coplanar, whatever A's signs against B's plane are.
+  const bool coplanar_b = all_zero(side_b);
+  if (!coplanar_b) {
+    if (!certain_plane_sides(cb, ca, side_a)) {
+      if (!edge_planes_tried && apart_across_an_edge(ca, cb)) return false;
+      exact_plane_sides(cb, ca, side_a);
+    }
+    if (one_open_side(side_a)) return false;
+  }
+  if (coplanar_b || all_zero(side_a)) {
+    // Coplanar, or a triangle without area: the general exact test and constructions.
+    if (!triangles_intersect(ca, cb)) return false;
+    std::tie(contact.p, contact.q) = intersection_segment(ca, cb);
+    contact.kind = classify_contact(ca, cb);
+    return true;
+  }
+  // Two proper triangles in two planes (a zero-area triangle has every sign 0 against its own
+  // plane): Guigue-Devillers on the signs, the kind from them, the segment in double where it
+  // is well conditioned.
+  if (!crossing_intersect(ca, cb, side_a, side_b)) return false;
+  const auto both = [](const int s[3]) {
+    return (s[0] < 0 || s[1] < 0 || s[2] < 0) && (s[0] > 0 || s[1] > 0 || s[2] > 0);
+  };
+  contact.kind = both(side_a) && both(side_b) ? ContactKind::crossing : ContactKind::touching;
+  if (!crossing_segment(ca, cb, side_a, side_b, contact.p, contact.q) &&
+      !exact_crossing_segment(ca, cb, side_a, side_b, contact.p, contact.q))
+    std::tie(contact.p, contact.q) = exact_segment(ca, cb, simplex(ca), simplex(cb));
+  // A crossing whose segment is (near) a point may be two triangles meeting at one point of
+  // their boundaries: decided exactly (meet_in_one_point()) only then, so crossings pay nothing.
+  if (contact.kind == ContactKind::crossing) {
+    const double scale = std::max({ca[0].cwiseAbs().maxCoeff(), ca[1].cwiseAbs().maxCoeff(), ca[2].cwiseAbs().maxCoeff(),
+                                   cb[0].cwiseAbs().maxCoeff(), cb[1].cwiseAbs().maxCoeff(), cb[2].cwiseAbs().maxCoeff()});
+    if ((contact.p - contact.q).cwiseAbs().maxCoeff() <= 1e-9 * scale + 1e-300 &&
+        meet_in_one_point(ca, cb, side_a, side_b))
+      contact.kind = ContactKind::touching;
+  }
+  return true;
+}
+
+
+void narrow_phase(const Mesh& a, const Mesh& b, const std::vector<std::uint64_t>& candidates,
+                  std::vector<Contact>& out, bool boxes_overlap, std::size_t max_contacts) {
+  const std::size_t limit = max_contacts ? out.size() + max_contacts : std::size_t(-1);
+  for (std::uint64_t c : candidates) {
+    const std::uint32_t ta = pair_a(c), tb = pair_b(c);
+    // A triangle lies in the box of its corners: disjoint boxes, no contact (exact: comparisons
+    // of doubles; boxes that only touch overlap). Skipped when the caller's candidates are
+    // pairs of overlapping boxes already.
+    if (!boxes_overlap && !triangle_bounds(a, ta).overlaps(triangle_bounds(b, tb))) continue;
+    Contact contact;
+    contact.tri_a = ta;
+    contact.tri_b = tb;
+    if (test_triangle_pair(corners(a, ta), corners(b, tb), contact)) {
+      out.push_back(contact);
+      if (out.size() >= limit) return;
+    }
+  }
+}
+
+}  // namespace peelcd

@@ -1,0 +1,551 @@
+// A frame of the World (World::collide()): the pending refits, the broad phase over the bodies'
+// boxes, the traversals (one task per pair, or its first node pairs over the lanes), the router,
+// the exact tests or the image stage, the relations.
+#include "world_impl.h"
+#include "../exact/bvh_traverse.h"
+#include "peelcd/core/exact/relation.h"
+#include "peelcd/core/clock.h"
+#include "peelcd/core/image/id_map.h"
+#include "peelcd/core/exact/narrow_phase.h"
+
+#include <algorithm>
+#include <stdexcept>
+
+namespace peelcd {
+void World::Impl::refit_pending(unsigned lanes) {
+  refit_chunks.clear();
+  refit_bodies.clear();
+  for (Body& b : bodies) {
+    if (!b.alive || !b.refit_pending) continue;
+    const std::size_t parts = lanes > 1 && b.mesh.triangles.size() >= kSplitRefitTriangles ? lanes : 1;
+    const std::size_t nv = b.mesh.vertices.size(), nl = b.tree.leaves();
+    refit_bodies.push_back({&b, refit_chunks.size(), refit_chunks.size() + parts, false});
+    for (std::size_t k = 0; k < parts; ++k) {
+      if (b.points_loaded)  // rounded by set_vertices(): no vertex range
+        refit_chunks.push_back({refit_bodies.size() - 1, 0, 0, nl * k / parts, nl * (k + 1) / parts,
+                                k == 0 ? b.loaded_box : Aabb{}});
+      else
+        refit_chunks.push_back(
+            {refit_bodies.size() - 1, nv * k / parts, nv * (k + 1) / parts, nl * k / parts, nl * (k + 1) / parts, Aabb{}});
+    }
+  }
+  if (refit_bodies.empty()) return;
+  if (std::any_of(refit_chunks.begin(), refit_chunks.end(), [](const RefitChunk& c) { return c.vertex_begin < c.vertex_end; }))
+    parallel(refit_chunks.size(), lanes, [&](std::size_t k, unsigned) {  // the vertices rounded (unless loaded)
+      RefitChunk& c = refit_chunks[k];
+      Body& b = *refit_bodies[c.body].body;
+      if (c.vertex_begin < c.vertex_end) c.exact = b.tree.refit_vertices(b.mesh.vertices, c.vertex_begin, c.vertex_end);
+    });
+  parallel(refit_chunks.size(), lanes, [&](std::size_t k, unsigned) {  // the leaves from them
+    const RefitChunk& c = refit_chunks[k];
+    Body& b = *refit_bodies[c.body].body;
+    b.tree.refit_leaves(b.mesh.vertices, c.leaf_begin, c.leaf_end);
+  });
+  parallel(refit_bodies.size(), lanes, [&](std::size_t k, unsigned) {  // the nodes (or a build)
+    RefitBody& r = refit_bodies[k];
+    Aabb exact;
+    for (std::size_t c = r.first; c < r.last; ++c)
+      exact.lo = exact.lo.cwiseMin(refit_chunks[c].exact.lo), exact.hi = exact.hi.cwiseMax(refit_chunks[c].exact.hi);
+    Bvh& tree = r.body->tree;
+    tree.refit_nodes(exact);
+    r.body->refit_pending = r.body->points_loaded = false;
+    r.rebuilt = tree.rebuild_if_grown(r.body->mesh.vertices, r.body->mesh.triangles);
+  });
+  stats.full_refits += refit_bodies.size();
+  for (const RefitBody& r : refit_bodies) stats.builds += r.rebuilt;
+}
+
+void World::Impl::self_pair(Body& a, std::size_t first, std::size_t last, PairResult& r, ContactSortScratch& scratch) {
+  if (!(a.is_rigid && a.self_cached)) {
+    a.self_contacts.clear();
+    std::size_t n = 0;
+    for (std::size_t k = first; k < last; ++k) {
+      a.self_contacts.insert(a.self_contacts.end(), tasks[k].contacts.begin(), tasks[k].contacts.end());
+      n += tasks[k].tested;
+    }
+    sort_contacts(a.self_contacts, scratch);
+    a.self_cached = a.is_rigid;
+    r.candidates = n;
+  } else {
+    r.candidates = 0;  // nothing tested this frame
+  }
+  r.colliding = a.self_contacts;
+  if (a.is_rigid)
+    for (Contact& c : r.colliding) {
+      c.p = a.pose * c.p;
+      c.q = a.pose * c.q;
+    }
+}
+
+void World::Impl::collide(const DetectOptions& opt, FrameResult& out) {
+  validate_options(opt, stage->max_resolution());
+  const auto t_total = Clock::now();
+  out.reset_counters();
+  stats.node_pairs = stats.candidates = stats.vertices_transformed = 0;
+  const unsigned lanes = lanes_for(opt);
+  frame_lanes = lanes;
+  refit_pending(lanes);
+
+  auto t0 = Clock::now();
+  find_pairs(opt, lanes);
+  const std::size_t used = plan_tasks(lanes);
+  traverse(used, lanes);
+  out.timings.aabb = ms_since(t0);
+
+  route_pairs(opt, used, out);
+  t0 = Clock::now();
+  test_candidates(opt, used, lanes);
+  gather_contacts(out);
+  out.timings.cpu = ms_since(t0);
+
+  if (batched_image()) {
+    image_pairs(opt, out);
+  } else {
+    for (std::size_t p = 0; p < pairs.size(); ++p)
+      if (to_image[p]) image_pairs(opt, out, p);
+  }
+  t0 = Clock::now();
+  relate(opt, out);
+  out.timings.cpu += ms_since(t0);
+  out.renderer = stage->renderer();
+  out.timings.total = ms_since(t_total);
+}
+
+// The broad phase: each body's box (its tree's root, moved by its pose; small rigid bodies
+// copied into world space first), the overlapping pairs (indices into ids, a < b), and the self
+// pairs (i, i) of the bodies asking for self-collision (set_self, DetectOptions::self).
+void World::Impl::find_pairs(const DetectOptions& opt, unsigned lanes) {
+  boxes.clear();
+  ids.clear();
+  for (BodyId id = 0; id < bodies.size(); ++id) {
+    if (!bodies[id].alive) continue;
+    bodies[id].enter_frame();
+    ids.push_back(id);
+    boxes.push_back(bodies[id].world_box());
+    const Aabb& w = boxes.back();
+    if (opt.stage != Stage::exact && !w.empty() &&
+        std::max(w.lo.cwiseAbs().maxCoeff(), w.hi.cwiseAbs().maxCoeff()) > kFloatMax)
+      throw std::invalid_argument("peelcd::World: " + label_of(bodies[id].name, id) +
+                                  " reaches outside the float range (|x| <= 3.4e38) the image stage works in");
+    boxes.back() = w.grown(0.5 * opt.margin);  // proximity: boxes within the margin of each other make a pair
+  }
+  overlapping_pairs(boxes, pairs, order);
+  copy_paired(opt, lanes);
+  bool any_self = false;
+  for (std::size_t i = 0; i < ids.size(); ++i) {
+    Body& b = bodies[ids[i]];
+    if (!(opt.self || b.self) || b.local().triangles.size() < 2) continue;
+    b.representatives(opt.self_adjacency);
+    pairs.emplace_back(i, i);
+    any_self = true;
+  }
+  if (any_self) std::sort(pairs.begin(), pairs.end());
+}
+
+// pairs_of: each body's pairs with other bodies.
+void World::Impl::count_pairs() {
+  pairs_of.assign(ids.size(), 0);
+  for (const auto& [i, j] : pairs)
+    if (i != j) ++pairs_of[i], ++pairs_of[j];
+}
+
+// The small rigid bodies the broad phase paired whose copies are stale: copied into world
+// space when still (the copy serves the next frames too) or in kCopyPairs pairs or more (the
+// copy and its tree serve them all; the pairs whose exact boxes then do not overlap are
+// dropped), else traversed through their pose this frame (never an ill-conditioned pose:
+// kPosedConditionLimit). pairs_of: each body's pairs.
+void World::Impl::copy_paired(const DetectOptions& opt, unsigned lanes) {
+  count_pairs();
+  to_copy.clear();
+  for (std::size_t k = 0; k < ids.size(); ++k) {
+    Body& b = bodies[ids[k]];
+    if (!b.world_frame || b.copy_valid || pairs_of[k] == 0) continue;
+    if (!b.still && pairs_of[k] < kCopyPairs && !b.ill_conditioned)
+      b.posed_this_frame();
+    else
+      to_copy.push_back(k);
+  }
+  if (to_copy.empty()) return;
+  // The copies over the lanes, and the trees of those a traversal will read (in two pairs or
+  // more: one pair of a body just copied is scanned, plan_tasks()).
+  parallel(to_copy.size(), lanes, [&](std::size_t c, unsigned) {
+    Body& b = bodies[ids[to_copy[c]]];
+    b.ensure_copy();
+    if (pairs_of[to_copy[c]] >= 2) b.ensure_world_tree();
+  });
+  for (const std::size_t k : to_copy) {
+    stats.vertices_transformed += bodies[ids[k]].world_copy.vertices.size();
+    boxes[k] = bodies[ids[k]].world_box().grown(0.5 * opt.margin);
+  }
+  pairs.erase(std::remove_if(pairs.begin(), pairs.end(),
+                             [&](const std::pair<std::size_t, std::size_t>& p) {
+                               return !boxes[p.first].overlaps(boxes[p.second]);
+                             }),
+              pairs.end());
+}
+
+// The traversals' tasks: per pair, one task, or (several lanes) the node pairs of its first
+// levels; a self pair one traversal of the body's own tree (none for a rigid body's cache); two
+// small world-space bodies, one of them moved, one scan when each moved one is in no other pair
+// (Body::small()). Returns the tasks used.
+std::size_t World::Impl::plan_tasks(unsigned lanes) {
+  std::size_t used = 0;
+  count_pairs();  // again, after copy_paired()'s drops
+  for (std::size_t p = 0; p < pairs.size(); ++p) {
+    Body& a = bodies[ids[pairs[p].first]];
+    Body& b = bodies[ids[pairs[p].second]];
+    TaskKind kind = TaskKind::nodes;
+    if (&a == &b) {
+      kind = TaskKind::self;
+      split.clear();
+      if (!(a.is_rigid && a.self_cached)) split.assign(1, BvhNodePair{0u, 0u});
+    } else if (a.small() && b.small() && a.world_mesh() && b.world_mesh() && (a.moved || b.moved) &&
+               (!a.moved || pairs_of[pairs[p].first] == 1) && (!b.moved || pairs_of[pairs[p].second] == 1)) {
+      kind = TaskKind::small_pair;
+      split.assign(1, BvhNodePair{0u, 0u});
+    } else {
+      a.ensure_world_tree();
+      b.ensure_world_tree();
+      // Few pairs each split into node pairs for the lanes (kSplitPairsPerLane); a small pair
+      // (under kSplitTriangles between its bodies) is one task whatever the lanes.
+      if (lanes > 1 && pairs.size() < kSplitPairsPerLane * std::size_t(lanes) &&
+          a.local().triangles.size() + b.local().triangles.size() >= kSplitTriangles)
+        bvh_split(a.frame_tree(), b.frame_tree(), BvhRelation::between(a.frame_pose(), b.frame_pose()),
+                  kSplitNodePairsPerLane * std::size_t(lanes), split);
+      else
+        split.assign(1, BvhNodePair{0u, 0u});
+    }
+    for (const BvhNodePair& start : split) {
+      if (used == tasks.size()) tasks.emplace_back();
+      Task& t = tasks[used++];
+      t.pair = p;
+      t.kind = kind;
+      t.start = start;
+    }
+  }
+  return used;
+}
+
+// Every task's candidates (self tasks: their contacts, each couple tested as the traversal
+// reaches it, adjacent couples dropped), over the lanes.
+void World::Impl::traverse(std::size_t used, unsigned lanes) {
+  parallel(used, lanes, [&](std::size_t k, unsigned lane) {
+    Task& t = tasks[k];
+    const Body& a = bodies[ids[pairs[t.pair].first]];
+    const Body& b = bodies[ids[pairs[t.pair].second]];
+    t.candidates.clear();
+    t.contacts.clear();
+    t.transformed = 0;
+    t.tested = 0;
+    if (t.kind == TaskKind::self) {  // in the body's own frame
+      const Mesh& m = a.local();
+      t.visited = bvh_self_traverse(a.tree, self_stacks[lane].v, [&](std::uint32_t x, std::uint32_t y) {
+        if (triangles_adjacent(m, a.rep, x, y)) return;
+        ++t.tested;
+        Contact contact;
+        contact.tri_a = std::min(x, y);
+        contact.tri_b = std::max(x, y);
+        if (test_self_couple(corners(m, contact.tri_a), corners(m, contact.tri_b), contact)) t.contacts.push_back(contact);
+      });
+      return;
+    }
+    if (t.kind == TaskKind::small_pair) {  // as the frame API's exact path: one culling round, a sweep
+      const Mesh& ma = *a.world_mesh();
+      const Mesh& mb = *b.world_mesh();
+      LaneScratch& s = *lane_scratch[lane];
+      cull_to_contact_region(ma, mb, intersection(boxes[pairs[t.pair].first], boxes[pairs[t.pair].second]), s.cull, 1);
+      if (!s.cull.box.empty()) box_overlap_pairs(ma, s.cull.kept_a, mb, s.cull.kept_b, t.candidates, &s.boxes);
+      t.visited = 0;
+      return;
+    }
+    const BvhRelation rel = BvhRelation::between(a.frame_pose(), b.frame_pose());
+    const auto take = [&](std::uint32_t ta, std::uint32_t tb) { t.candidates.push_back(pack_pair(ta, tb)); };
+    t.visited = rel.identity ? bvh_traverse_same_frame(a.frame_tree(), b.frame_tree(), t.start, self_stacks[lane].v, take)
+                             : bvh_traverse(a.frame_tree(), b.frame_tree(), rel, t.start, stacks[lane].v, take);
+  });
+}
+
+// Per pair: its result started, its tasks found (first_task), its route: self pairs and
+// Stage::exact to the exact path, Stage::image to the image stage, else the router with the
+// World's exact model (world_exact_cost(): per candidate couple) against the stage's.
+void World::Impl::route_pairs(const DetectOptions& opt, std::size_t used, FrameResult& out) {
+  out.pairs.resize(pairs.size());
+  first_task.assign(pairs.size() + 1, used);
+  for (std::size_t k = used; k-- > 0;) first_task[tasks[k].pair] = k;
+  for (std::size_t p = pairs.size(); p-- > 0;)
+    if (first_task[p] > first_task[p + 1]) first_task[p] = first_task[p + 1];
+  const StageCost image_cost = stage->router_image_cost();
+  const StageCost exact_cost = world_exact_cost();
+  const int tile = opt.resolution > 0 ? opt.resolution : opt.budget;
+  to_image.assign(pairs.size(), 0);
+  for (std::size_t p = 0; p < pairs.size(); ++p) {
+    PairResult& r = out.pairs[p];
+    std::vector<Contact> colliding = std::move(r.colliding);  // its storage reused frame to frame
+    colliding.clear();
+    r = PairResult{};
+    r.colliding = std::move(colliding);
+    r.object_a = ids[pairs[p].first];
+    r.object_b = ids[pairs[p].second];
+    r.roi = r.region = intersection(boxes[pairs[p].first], boxes[pairs[p].second]);
+    std::size_t n = 0;
+    for (std::size_t k = first_task[p]; k < first_task[p + 1]; ++k) {
+      n += tasks[k].candidates.size();
+      stats.node_pairs += tasks[k].visited;
+    }
+    stats.candidates += n;
+    r.candidates = n;
+    if (r.object_a == r.object_b) {  // self: the exact path always (docs/design.md)
+      r.exact_stage = true;
+      // Not routed; predicted by the World's model from the couples its traversal tested, as
+      // the frame API predicts its self pairs (docs/router.md).
+      std::size_t tested = 0;
+      for (std::size_t k = first_task[p]; k < first_task[p + 1]; ++k) tested += tasks[k].tested;
+      if (opt.stage == Stage::automatic) r.predicted_exact_ms = exact_cost.predict_ms(double(tested), 0.0);
+      continue;
+    }
+    // A margin too wide for the image stage: the exact path, whatever the stage asked.
+    if (opt.stage != Stage::exact && margin_too_wide_for_image(opt, r.roi)) {
+      r.exact_stage = r.margin_fallback = true;
+      continue;
+    }
+    if (n == 0) continue;  // no couple of boxes overlaps: no contact, nothing to test
+    // The image stage draws at most the candidates' triangles: at most 2n, counted as n.
+    const Route route = route_pair(opt, exact_cost, image_cost, 0.0, double(n), tile);
+    r.predicted_exact_ms = route.predicted_exact_ms;
+    r.predicted_image_ms = route.predicted_image_ms;
+    r.exact_stage = route.exact;
+    to_image[p] = !route.exact;
+  }
+}
+
+// The exact path's tests over the same tasks (a self task's during its traversal).
+void World::Impl::test_candidates(const DetectOptions& opt, std::size_t used, unsigned lanes) {
+  parallel(used, lanes, [&](std::size_t k, unsigned lane) {
+    Task& t = tasks[k];
+    if (t.candidates.empty() || to_image[t.pair]) return;
+    const Body& a = bodies[ids[pairs[t.pair].first]];
+    const Body& b = bodies[ids[pairs[t.pair].second]];
+    if (t.kind == TaskKind::self) return;
+    if (t.kind == TaskKind::small_pair) {  // the sweep's pairs: distinct, boxes overlapping, world meshes at hand
+      sort_unique_pairs(t.candidates, lane_scratch[lane]->sorted);
+      narrow_phase(*a.world_mesh(), *b.world_mesh(), t.candidates, t.contacts, /*boxes_overlap=*/true,
+                   opt.max_contacts);
+      return;
+    }
+    test_task(a, b, opt, t);
+  });
+}
+
+// A traversal task's candidates in traversal order (deterministic; the pair's contacts are
+// sorted after): sorting them first cost 2-12% of a frame and bought nothing. Each couple's world
+// boxes first (exact comparisons of the same doubles the test reads), then the exact test.
+// A posed body's corners cost a transform each: there a triangle's world corners and box are
+// computed once for the run of couples it is in (the traversal reports a triangle of A with
+// each of B's it meets in a row: A's kept from the previous couple; B's come back within a leaf
+// pair: kept in a small table by triangle index). On the rigid 1.3M-triangle spheres 57k couples
+// read 14k triangles of A and 13k of B, and the tests took 0.85x their time. Bodies in world
+// space read their corners as they are: there the branches on the kept triangles cost more than
+// the reads (the 1,000-ball pile's tests 1.07x their time kept).
+void World::Impl::test_task(const Body& a, const Body& b, const DetectOptions& opt, Task& t) {
+  const std::size_t moved_a = a.is_rigid && !a.world_frame ? 3 : 0, moved_b = b.is_rigid && !b.world_frame ? 3 : 0;
+  if (moved_a || moved_b)
+    test_task_as<true>(a, b, opt, t);
+  else
+    test_task_as<false>(a, b, opt, t);
+}
+
+template <bool kKeep>
+void World::Impl::test_task_as(const Body& a, const Body& b, const DetectOptions& opt, Task& t) {
+  const Mesh& ma = a.local();
+  const Mesh& mb = b.local();
+  // The candidates' data is read in an order the hardware cannot guess: their triangles are
+  // asked for kAhead candidates ahead, their corners kAhead / 2 ahead. It pays where other work
+  // evicted the data (as in the bench, where the methods take turns) and costs nothing on warm
+  // data.
+  constexpr std::size_t kAhead = 32;
+  const Vec3* va = a.world_vertices();
+  const Vec3* vb = b.world_vertices();
+  const std::size_t n = t.candidates.size();
+  const std::size_t moved_a = a.is_rigid && !a.world_frame ? 3 : 0, moved_b = b.is_rigid && !b.world_frame ? 3 : 0;
+  std::size_t transformed = 0;
+  struct Count {  // into the task once, also on the early return
+    Task& t;
+    const std::size_t& n;
+    ~Count() { t.transformed += n; }
+  } count{t, transformed};
+  struct Corners {  // a triangle's world corners and their box
+    std::uint32_t tri = std::uint32_t(-1);
+    TriangleCorners c;
+    Vec3 lo, hi;
+    void load(const Body& body, const Mesh& m, std::uint32_t k) {
+      const Tri& f = m.triangles[k];
+      c = {body.world(f[0]), body.world(f[1]), body.world(f[2])};
+      lo = c[0].cwiseMin(c[1]).cwiseMin(c[2]);
+      hi = c[0].cwiseMax(c[1]).cwiseMax(c[2]);
+      tri = k;
+    }
+  };
+  constexpr std::uint32_t kKeptB = kKeep ? 16 : 1;  // B's table: a leaf's eight triangles and the next leaf's
+  Corners x, kept_b[kKeptB];
+  for (std::size_t k = 0; k < n; ++k) {
+    if (k + kAhead < n) {
+      const std::uint64_t f = t.candidates[k + kAhead];
+      __builtin_prefetch(&ma.triangles[pair_a(f)]);
+      __builtin_prefetch(&mb.triangles[pair_b(f)]);
+    }
+    if (k + kAhead / 2 < n) {
+      const std::uint64_t f = t.candidates[k + kAhead / 2];
+      const Tri& pa = ma.triangles[pair_a(f)];
+      const Tri& pb = mb.triangles[pair_b(f)];
+      for (int i = 0; i < 3; ++i) {
+        __builtin_prefetch(&va[pa[i]]);
+        __builtin_prefetch(&vb[pb[i]]);
+      }
+    }
+    const std::uint64_t c = t.candidates[k];
+    const std::uint32_t ta = pair_a(c), tb = pair_b(c);
+    Corners& y = kept_b[tb % kKeptB];
+    if (!kKeep || x.tri != ta) {
+      x.load(a, ma, ta);
+      transformed += moved_a;
+    }
+    if (!kKeep || y.tri != tb) {
+      y.load(b, mb, tb);
+      transformed += moved_b;
+    }
+    if ((x.hi.array() < y.lo.array()).any() || (y.hi.array() < x.lo.array()).any()) continue;
+    Contact contact;
+    contact.tri_a = ta;
+    contact.tri_b = tb;
+    if (test_triangle_pair(x.c, y.c, contact)) {
+      t.contacts.push_back(contact);
+      if (opt.max_contacts && t.contacts.size() >= opt.max_contacts) return;  // enough for this task
+    }
+  }
+}
+
+// Each exact pair's contacts from its tasks, sorted (self pairs through self_pair()).
+void World::Impl::gather_contacts(FrameResult& out) {
+  for (std::size_t p = 0; p < pairs.size(); ++p) {  // the counts
+    const PairResult& r = out.pairs[p];
+    if (r.object_a != r.object_b && (r.candidates == 0 || to_image[p])) continue;
+    ++out.rois_exact;
+    if (r.object_a != r.object_b)
+      for (std::size_t k = first_task[p]; k < first_task[p + 1]; ++k) stats.vertices_transformed += tasks[k].transformed;
+  }
+  // The contacts, pair by pair over the lanes (each sorted: a pile's thousands of pairs).
+  parallel(pairs.size(), frame_lanes, [&](std::size_t p, unsigned lane) {
+    PairResult& r = out.pairs[p];
+    ContactSortScratch& scratch = lane_scratch[lane]->contacts;
+    if (r.object_a == r.object_b) {
+      self_pair(bodies[r.object_a], first_task[p], first_task[p + 1], r, scratch);
+      return;
+    }
+    if (r.candidates == 0 || to_image[p]) return;
+    if (first_task[p + 1] - first_task[p] == 1 && r.colliding.empty()) {
+      // One task: its contacts taken whole (the two vectors trade storage, no copy).
+      r.colliding.swap(tasks[first_task[p]].contacts);
+    } else {
+      for (std::size_t k = first_task[p]; k < first_task[p + 1]; ++k)
+        r.colliding.insert(r.colliding.end(), tasks[k].contacts.begin(), tasks[k].contacts.end());
+    }
+    sort_contacts(r.colliding, scratch);
+  });
+}
+
+// Relations (containment where no contact) and, asked for, volumes: world meshes made only for
+// the pairs that need them.
+void World::Impl::relate(const DetectOptions& opt, FrameResult& out) {
+  body_boxes.assign(bodies.size(), Aabb{});
+  for (std::size_t i = 0; i < ids.size(); ++i) body_boxes[ids[i]] = boxes[i];
+  world_meshes.clear();
+  relate_pairs(
+      out.pairs,
+      [&](std::size_t id) -> const Mesh& {
+        const Body& b = bodies[id];
+        if (const Mesh* m = b.world_mesh()) return *m;
+        auto it = world_meshes.find(id);
+        if (it == world_meshes.end()) {
+          Mesh m = *b.shape;
+          for (Vec3& v : m.vertices) v = b.pose * v;
+          it = world_meshes.emplace(id, std::move(m)).first;
+        }
+        return it->second;
+      },
+      body_boxes, opt);
+}
+
+// The image stage on every pair routed there, in one frame of the Detector (one batch of views
+// for all of them): per pair, the candidates' triangles of each body, in world space, as two
+// objects (triangle k of each is the k-th of its ascending list), the Detector asked for those
+// pairs alone (Detector::only_pairs()); the contacts mapped back to the bodies' triangles.
+void World::Impl::image_pairs(const DetectOptions& opt, FrameResult& out, std::size_t only) {
+  image_objects.clear();
+  image_kept.clear();
+  image_of.clear();
+  image_only.clear();
+  for (std::size_t p = 0; p < pairs.size(); ++p) {
+    if (!to_image[p] || (only != kAllPairs && p != only)) continue;
+    const Body* body[2] = {&bodies[ids[pairs[p].first]], &bodies[ids[pairs[p].second]]};
+    std::vector<std::uint32_t> kept[2];
+    for (std::size_t k = first_task[p]; k < first_task[p + 1]; ++k)
+      for (const std::uint64_t c : tasks[k].candidates) {
+        kept[0].push_back(pair_a(c));
+        kept[1].push_back(pair_b(c));
+      }
+    const std::size_t first = image_objects.size();
+    for (int s = 0; s < 2; ++s) {
+      std::sort(kept[s].begin(), kept[s].end());
+      kept[s].erase(std::unique(kept[s].begin(), kept[s].end()), kept[s].end());
+      Object o;
+      const Mesh& local = body[s]->local();
+      for (const std::uint32_t t : kept[s]) {
+        const std::uint32_t base = std::uint32_t(o.mesh.vertices.size());
+        for (const std::uint32_t v : local.triangles[t]) o.mesh.vertices.push_back(body[s]->world(v));
+        o.mesh.triangles.push_back(Tri{base, base + 1, base + 2});
+      }
+      o.name = body[s]->name;
+      image_objects.push_back(std::move(o));
+      image_kept.push_back(std::move(kept[s]));
+    }
+    image_only.emplace_back(first, first + 1);
+    image_of.push_back(p);
+  }
+  if (image_of.empty()) return;
+  if (!detector) detector = std::make_unique<Detector>(stage);
+  DetectOptions image = opt;
+  image.stage = Stage::image;
+  FrameResult inner;
+  struct Only {  // the Detector back to every pair, also on an exception
+    Detector& d;
+    ~Only() { d.only_pairs(nullptr); }
+  } reset_pairs{*detector};
+  detector->only_pairs(&image_only);
+  detector->detect(image_objects, image, inner);
+  for (const PairResult& ir : inner.pairs) {
+    const std::size_t i = ir.object_a / 2;
+    const std::vector<std::uint32_t>& ka = image_kept[2 * i];
+    const std::vector<std::uint32_t>& kb = image_kept[2 * i + 1];
+    PairResult& r = out.pairs[image_of[i]];
+    const double pe = r.predicted_exact_ms, pi = r.predicted_image_ms;
+    const std::size_t oa = r.object_a, ob = r.object_b;
+    const Aabb roi = r.roi;
+    r = ir;
+    r.object_a = oa;
+    r.object_b = ob;
+    r.roi = roi;
+    r.predicted_exact_ms = pe;
+    r.predicted_image_ms = pi;
+    r.triangles_in_roi_a = ka.size();
+    r.triangles_in_roi_b = kb.size();
+    r.pcs.clear();  // IDs of the peeled copies, not of the bodies: the count (pcs_count) stays
+    for (Contact& c : r.colliding) {
+      c.tri_a = ka[c.tri_a];
+      c.tri_b = kb[c.tri_b];
+    }
+    sort_contacts(r.colliding);
+  }
+  out.add_image_work(inner);
+}
+
+}  // namespace peelcd

@@ -1,0 +1,47 @@
+#pragma once
+// Exact triangle/triangle tests. The yes/no answer uses CGAL's exact predicates
+// (Exact_predicates_inexact_constructions_kernel), so it does not depend on vertex order,
+// triangle order or rounding. Degenerate triangles (collinear or repeated vertices) are tested
+// as the segment or point they are. The intersection segment is constructed in double.
+#include "peelcd/core/mesh.h"
+#include "peelcd/core/pairs.h"
+
+#include <array>
+#include <vector>
+
+namespace peelcd {
+
+bool triangles_intersect(const TriangleCorners& a, const TriangleCorners& b);
+// True when both triangles lie in one axis-aligned plane (one coordinate the same double in all
+// six corners) and an edge of either separates them in it, every orientation certified in
+// double; false otherwise (apart or not, the exact predicates decide). A flat sheet's
+// neighbours are all coplanar, where CGAL's filters fail and its exact arithmetic is slow.
+bool coplanar_apart(const TriangleCorners& a, const TriangleCorners& b);
+// True when a plane through an edge of either triangle, perpendicular to that triangle, has the
+// triangle on one side and the other triangle's three corners strictly on the other, every side
+// certified in double (a sufficient condition for disjoint triangles in any position; it decides
+// nearly coplanar neighbours, whose orientations the certified signs leave to exact arithmetic).
+bool apart_across_an_edge(const TriangleCorners& a, const TriangleCorners& b);
+
+// Kind of contact of two intersecting triangles (undefined if they are disjoint).
+ContactKind classify_contact(const TriangleCorners& a, const TriangleCorners& b);
+
+// Segment of the intersection of two intersecting triangles. For a coplanar overlap (a
+// polygon) it is the polygon's longest chord among its vertices. Undefined if they are disjoint.
+std::pair<Vec3, Vec3> intersection_segment(const TriangleCorners& a, const TriangleCorners& b);
+
+// The exact test of one couple of triangles (world corners): true when they share a point, with
+// the contact's segment and kind filled in (its triangle indices are the caller's). The same
+// test narrow_phase() runs on each candidate.
+bool test_triangle_pair(const TriangleCorners& a, const TriangleCorners& b, Contact& contact);
+
+
+// Tests every candidate pair (packed with pack_pair(triA, triB), peelcd/core/pairs.h) and appends
+// the colliding ones to `out` in candidate order. boxes_overlap: every candidate is known to be
+// a pair of overlapping triangle boxes (box_overlap_pairs()'s output), so that first test is
+// skipped; the answer is the same either way.
+// max_contacts > 0: stops once `out` has gained that many (DetectOptions::max_contacts).
+void narrow_phase(const Mesh& a, const Mesh& b, const std::vector<std::uint64_t>& candidates,
+                  std::vector<Contact>& out, bool boxes_overlap = false, std::size_t max_contacts = 0);
+
+}  // namespace peelcd

@@ -1,0 +1,145 @@
+#pragma once
+// Persistent objects: the bodies of a scene, kept from frame to frame, so that a frame's cost
+// follows the contact, not the meshes.
+//
+//   World world(stage);                           // any image stage; none: the exact CPU path
+//   BodyId ball = world.add_rigid(shape, pose);   // a rigid body: its shape and a pose
+//   BodyId cloth = world.add_deforming(mesh);     // a deforming body: world-space vertices
+//   ... each frame:
+//   world.set_pose(ball, pose);                   // a rigid body moves by its pose alone
+//   world.move_vertices(cloth, changed, where);   // or set_vertices(cloth, all) / set_mesh (fracture)
+//   const FrameResult& r = world.collide(options);
+//
+// Each body keeps a BVH of its triangles (peelcd/core/exact/bvh.h) in its own frame: a rigid body's
+// is built once from its shape and never touched again; a deforming body's is refitted where its
+// vertices moved (only the changed triangles' leaves and ancestors when it says which changed),
+// rebuilt when its topology changes (set_mesh). A frame then reads only what lies near contact:
+// the bodies' boxes (the broad phase: each tree's root box, moved by the pose), and per pair of
+// overlapping boxes the node pairs of the two trees that overlap, down to the couples of
+// triangles whose boxes overlap (the candidates, B's boxes seen from A's frame, grown by a
+// relative 1e-9 against rounding). A large rigid body's world vertices are computed (pose *
+// vertex) only for the candidates' corners; far triangles are never read. A small rigid body
+// (under kWorldFrameTriangles, 8,192 triangles) is moved into world space whole each frame instead (its vertices
+// transformed, a copy of its tree refitted: microseconds), since boxes carried through a
+// rotation are looser and a small body gains more from exact world boxes than it pays; a pair
+// of two such small world-space bodies is scanned as the frame API's exact path scans it (one
+// culling round, a sweep of the kept triangles' boxes), cheaper than two small trees.
+//
+// Each pair goes to the exact CPU path (every candidate through the exact triangle test,
+// peelcd/core/exact/narrow_phase.h), or to the image stage (Stage::image, or when the router predicts
+// it cheaper): then the candidates' triangles, in world space, are peeled as two objects through
+// a Detector on the World's stage, and its contacts mapped back to the bodies' triangles.
+// Results are exact either way: a contact is reported iff the two triangles share a point of
+// their world-space corners (the same doubles whichever path tested them).
+//
+// With DetectOptions::threads > 1 the object pairs and, inside a pair, the two trees' node pairs
+// are spread over a pool of threads. One thread calls a World at a time: every public function,
+// readers included, takes a guard (peelcd/core/exclusive_use.h), so a second thread that enters
+// while another is inside gets std::logic_error and the first thread's call is unaffected. What
+// a reference returned by collide(options), name() or mesh() refers to belongs to the World: it
+// stays valid until the caller's next change or frame; a caller that shares a World between
+// threads under its own lock copies it (or uses collide(options, out)) before unlocking.
+#include "peelcd/core/exact/bvh.h"
+#include "peelcd/core/image/detector.h"
+
+#include <memory>
+#include <optional>
+#include <string>
+#include <vector>
+
+namespace peelcd {
+
+using BodyId = std::uint32_t;
+
+// What the World did, cumulative since it was made (the counters a test or benchmark reads).
+struct WorldStats {
+  std::size_t builds = 0;           // trees built (add_*, set_mesh)
+  std::size_t full_refits = 0;      // whole-tree refits (set_vertices, many moved vertices)
+  std::size_t partial_refits = 0;   // refits of the changed triangles' paths only
+  std::size_t node_pairs = 0;       // node pairs visited by the traversals, last frame
+  std::size_t candidates = 0;       // triangle couples whose boxes overlap, last frame
+  std::size_t vertices_transformed = 0;  // rigid bodies' world vertices computed, last frame
+};
+
+class World {
+ public:
+  // `stage`: the image stage pairs routed to it are peeled on (nullptr: the CPU image stage).
+  explicit World(std::shared_ptr<ImageStage> stage = nullptr);
+  ~World();
+  World(const World&) = delete;
+  World& operator=(const World&) = delete;
+
+  // A rigid body: world = pose * shape. The shape is shared (several bodies may hold one), never
+  // copied. Throws std::invalid_argument naming the body (`name`, else its id) and the problem.
+  BodyId add_rigid(std::shared_ptr<const Mesh> shape, const Eigen::Affine3d& pose, std::string name = {});
+  // A deforming body: its world-space mesh, updated by set_vertices / move_vertices / set_mesh.
+  BodyId add_deforming(Mesh mesh, std::string name = {});
+  void remove(BodyId body);
+
+  void set_pose(BodyId body, const Eigen::Affine3d& pose);  // rigid bodies
+  // Every vertex of a deforming body moved (same count): its tree refitted whole at the next
+  // collide() (every such body's refit split over the frame's threads). The const& overload
+  // copies into the body's own storage (no allocation after the first frame); the rvalue
+  // overload takes the vector over.
+  void set_vertices(BodyId body, const std::vector<Vec3>& vertices);
+  void set_vertices(BodyId body, std::vector<Vec3>&& vertices);
+  // Only these vertices moved (indices into the body's vertices, `positions` parallel to them):
+  // only the triangles using them are refitted.
+  void move_vertices(BodyId body, const std::vector<std::uint32_t>& indices, const std::vector<Vec3>& positions);
+  // A new mesh for the body (fracture, remeshing): its tree rebuilt. A rigid body's becomes its
+  // new shape (the pose kept).
+  void set_mesh(BodyId body, Mesh mesh);
+  // A rigid body's new shape, shared (its tree rebuilt; the pose kept).
+  void set_shape(BodyId body, std::shared_ptr<const Mesh> shape);
+
+  // Self-collision of the body (docs/design.md, "Self-collision"; DetectOptions::self asks it
+  // for every body): its own tree traversed against itself, adjacent couples dropped, every
+  // remaining couple tested exactly (the World's self pairs take the exact path). A rigid
+  // body's self pairs are found once per shape (a rigid motion changes none) and moved by its
+  // pose; a deforming body's each frame, over its refitted tree.
+  void set_self(BodyId body, bool self);
+  bool self(BodyId body) const;
+
+  bool contains(BodyId body) const;
+  std::size_t size() const;               // bodies held
+  const std::string& name(BodyId body) const;
+  // The living body named `name` (names are unique: add_rigid / add_deforming refuse a name a
+  // living body has), or none.
+  std::optional<BodyId> find(const std::string& name) const;
+  bool rigid(BodyId body) const;
+  // The body's mesh in its own frame (a rigid body's shape; a deforming body's world mesh).
+  const Mesh& mesh(BodyId body) const;
+  // The body's world-space mesh, computed (for rigid bodies, O(vertices): for tools and tests).
+  Mesh world_mesh(BodyId body) const;
+  const Bvh& tree(BodyId body) const;
+
+  // One frame: every pair of bodies whose boxes overlap, as Detector::detect reports it
+  // (FrameResult::pairs' object_a / object_b are BodyIds, a < b; contacts sorted). Options are
+  // checked (validate_options); Stage::exact never touches the image stage.
+  const FrameResult& collide(const DetectOptions& options);
+  void collide(const DetectOptions& options, FrameResult& out);
+
+  const WorldStats& stats() const;
+  ImageStage& stage();
+
+  // The pairs routed to the image stage go to it together, in one frame of the stage (one batch
+  // of views and a sync, where one at a time costs a sync a pair: the faster on a GPU), or one
+  // at a time (each pair's views alone: the faster where GL runs on the CPU). Unset: together on
+  // a GPU, one at a time where the stage runs on the CPU (ImageStage::runs_on_cpu(): llvmpipe,
+  // softpipe, swrast, the CPU stage). docs/backends.md has the measurements.
+  void batch_image_pairs(std::optional<bool> together);
+
+ private:
+  struct Impl;
+  std::unique_ptr<Impl> impl_;
+};
+
+// Brings `world` to a frame given as the frame API's objects (peelcd/core/mesh.h), body
+// `bodies[i]` for objects[i] (added on the first call: `bodies` empty): a rigid object moves
+// its body by its pose (its world mesh is not read; a new shape pointer is a set_mesh), a
+// deforming one replaces its body's vertices (a new topology: set_mesh). A frame of world meshes
+// costs O(vertices) per deforming object here, as it does to produce. An object that changes
+// between rigid and deforming is refused (std::invalid_argument).
+void sync_bodies(World& world, const std::vector<Object>& objects, std::vector<BodyId>& bodies);
+
+}  // namespace peelcd

@@ -1,0 +1,332 @@
+// peelcd::Bvh (peelcd/core/exact/bvh.h): the tree's structure and float boxes, queries, refits (whole,
+// partial, in ranges), the two-tree traversal through a relative pose, its split into tasks, the
+// self traversal: each against a brute-force scan.
+#include "peelcd/core/exact/bvh.h"
+#include "exact/bvh_traverse.h"  // the library's own traversals (core/ is on this target's path)
+#include "peelcd/core/primitives.h"
+
+#include <catch2/catch.hpp>
+
+#include <algorithm>
+#include <random>
+#include <set>
+
+using namespace peelcd;
+
+namespace {
+
+Eigen::Affine3d pose(double angle, const Vec3& axis, const Vec3& t) {
+  Eigen::Affine3d p = Eigen::Affine3d::Identity();
+  p.translate(t);
+  p.rotate(Eigen::AngleAxisd(angle, axis.normalized()));
+  return p;
+}
+
+// The couples of a's and b's triangles whose exact boxes overlap (closed) both in A's frame and in
+// B's (the traversal separates boxes along either frame's axes).
+std::set<std::pair<std::uint32_t, std::uint32_t>> scan(const Mesh& a, const Eigen::Affine3d& pa, const Mesh& b,
+                                                       const Eigen::Affine3d& pb) {
+  const Eigen::Affine3d b_to_a = pa.inverse() * pb, a_to_b = b_to_a.inverse();
+  const auto box_of = [](const Mesh& m, const Eigen::Affine3d& p, std::uint32_t t) {
+    Aabb box;
+    for (const std::uint32_t v : m.triangles[t]) box.extend(p * m.vertices[v]);
+    return box;
+  };
+  std::set<std::pair<std::uint32_t, std::uint32_t>> out;
+  for (std::uint32_t x = 0; x < a.triangles.size(); ++x)
+    for (std::uint32_t y = 0; y < b.triangles.size(); ++y)
+      if (box_of(a, Eigen::Affine3d::Identity(), x).overlaps(box_of(b, b_to_a, y)) &&
+          box_of(b, Eigen::Affine3d::Identity(), y).overlaps(box_of(a, a_to_b, x)))
+        out.emplace(x, y);
+  return out;
+}
+
+}  // namespace
+
+TEST_CASE("Bvh: every triangle once, boxes enclose their children, queries equal a scan", "[bvh]") {
+  const Mesh m = make_uv_sphere(Vec3(0.1, -0.2, 0.3), 1.0, 23, 31);
+  Bvh t;
+  t.build(m.vertices, m.triangles);
+  std::vector<std::uint32_t> seen(t.order());
+  std::sort(seen.begin(), seen.end());
+  for (std::uint32_t i = 0; i < seen.size(); ++i) REQUIRE(seen[i] == i);
+  const auto& nodes = t.nodes();
+  for (std::size_t i = 0; i < nodes.size(); ++i) {
+    if (nodes[i].leaf()) {
+      CHECK(nodes[i].count <= kBvhLeafSize);
+      continue;
+    }
+    for (const std::size_t c : {i + 1, std::size_t(nodes[i].first)}) {
+      CHECK(t.parent(std::uint32_t(c)) == i);
+      CHECK((nodes[i].box.aabb().lo.array() <= nodes[c].box.aabb().lo.array()).all());
+      CHECK((nodes[i].box.aabb().hi.array() >= nodes[c].box.aabb().hi.array()).all());
+    }
+  }
+  // Float boxes enclose the exact ones; the root's exact box is the corners' box.
+  for (std::uint32_t f = 0; f < m.triangles.size(); ++f) {
+    const Aabb exact = triangle_bounds(m, f), got = t.triangle_box(f).aabb();
+    REQUIRE(((got.lo.array() <= exact.lo.array()).all() && (got.hi.array() >= exact.hi.array()).all()));
+    REQUIRE(((exact.lo - got.lo).cwiseAbs().maxCoeff() < 1e-6 && (got.hi - exact.hi).cwiseAbs().maxCoeff() < 1e-6));
+  }
+  // At every scale, and across zero, subnormals and float's limit.
+  for (const double d : {0.0, 1e-45, -1e-45, 1e-40, 0.1, -0.1, 1.0 / 3.0, -2.0 / 3.0, 1e10 + 0.3, -7e20, 1e36, 3e38, -3.4e38, 1e300, -1e300}) {
+    CHECK(double(FBox::down(d)) <= d);
+    CHECK(double(FBox::up(d)) >= d);
+  }
+  CHECK(t.box().lo == bounds(m).lo);
+  CHECK(t.box().hi == bounds(m).hi);
+  std::mt19937 rng(7);
+  std::uniform_real_distribution<double> u(-1.3, 1.3);
+  for (int q = 0; q < 50; ++q) {
+    Aabb box;
+    box.extend(Vec3(u(rng), u(rng), u(rng)));
+    box.extend(Vec3(u(rng), u(rng), u(rng)));
+    std::vector<std::uint32_t> got, want;
+    t.query(box, got);
+    for (std::uint32_t f = 0; f < m.triangles.size(); ++f)
+      if (triangle_bounds(m, f).overlaps(box)) want.push_back(f);
+    // Every exact answer; any other within float rounding of the box.
+    REQUIRE(std::includes(got.begin(), got.end(), want.begin(), want.end()));
+    for (const std::uint32_t f : got) {
+      Aabb grown = box;
+      grown.lo -= Vec3::Constant(1e-6);
+      grown.hi += Vec3::Constant(1e-6);
+      REQUIRE(triangle_bounds(m, f).overlaps(grown));
+    }
+  }
+}
+
+TEST_CASE("Bvh: a partial refit gives the boxes of a full one", "[bvh]") {
+  Mesh m = make_grid(Vec3(0, 0, 0), Vec3(2, 0, 0), Vec3(0, 2, 0), 40, 40);
+  Bvh partial, full;
+  partial.build(m.vertices, m.triangles);
+  full.build(m.vertices, m.triangles);
+  std::mt19937 rng(3);
+  std::uniform_int_distribution<std::uint32_t> pick(0, std::uint32_t(m.vertices.size() - 1));
+  for (int round = 0; round < 5; ++round) {
+    std::vector<std::uint32_t> changed;
+    for (int k = 0; k < 30; ++k) {
+      const std::uint32_t v = pick(rng);
+      m.vertices[v].z() += 0.05 * (k % 3 - 1) + 0.01 * round;
+      for (std::uint32_t t = 0; t < m.triangles.size(); ++t)
+        for (const std::uint32_t c : m.triangles[t])
+          if (c == v) changed.push_back(t);
+    }
+    partial.refit(m.vertices, m.triangles, changed);
+    full.refit(m.vertices, m.triangles);
+    for (std::size_t i = 0; i < full.nodes().size(); ++i) {
+      REQUIRE(partial.nodes()[i].box.aabb().lo == full.nodes()[i].box.aabb().lo);
+      REQUIRE(partial.nodes()[i].box.aabb().hi == full.nodes()[i].box.aabb().hi);
+    }
+    // The exact root box too (it shrinks when the outermost vertices move in).
+    REQUIRE(partial.box().lo == full.box().lo);
+    REQUIRE(partial.box().hi == full.box().hi);
+    REQUIRE(full.box().lo == bounds(m).lo);
+    REQUIRE(full.box().hi == bounds(m).hi);
+  }
+}
+
+TEST_CASE("Bvh: a refit in ranges (as the World splits it over threads) equals a whole refit", "[bvh]") {
+  Mesh m = make_uv_sphere(Vec3(0, 0, 0), 1.0, 20, 24);
+  Bvh split, whole;
+  split.build(m.vertices, m.triangles);
+  whole.build(m.vertices, m.triangles);
+  for (Vec3& v : m.vertices) v = 0.8 * v + Vec3(0.3 * v.y(), 0.1, -0.2 * v.x() * v.x());
+  const std::size_t nv = m.vertices.size(), nl = split.leaves();
+  Aabb exact;
+  for (std::size_t k = 0; k < 3; ++k) {
+    const Aabb part = split.refit_vertices(m.vertices, nv * k / 3, nv * (k + 1) / 3);
+    exact.extend(part.lo);
+    exact.extend(part.hi);
+  }
+  for (std::size_t k = 0; k < 3; ++k) split.refit_leaves(m.vertices, nl * k / 3, nl * (k + 1) / 3);
+  split.refit_nodes(exact);
+  whole.refit(m.vertices, m.triangles);
+  for (std::size_t i = 0; i < whole.nodes().size(); ++i) {
+    REQUIRE(split.nodes()[i].box.aabb().lo == whole.nodes()[i].box.aabb().lo);
+    REQUIRE(split.nodes()[i].box.aabb().hi == whole.nodes()[i].box.aabb().hi);
+  }
+  CHECK(split.box().lo == bounds(m).lo);
+  CHECK(split.box().hi == bounds(m).hi);
+  for (std::uint32_t t = 0; t < m.triangles.size(); ++t) {  // every triangle's box the new one
+    const FBox want = FBox::enclosing(triangle_bounds(m, t)), got = split.triangle_box(t);
+    for (int k = 0; k < 3; ++k) REQUIRE((got.lo[k] == want.lo[k] && got.hi[k] == want.hi[k]));
+  }
+}
+
+TEST_CASE("Bvh: vertices loaded in ranges (checked, rounded, copied: the World's set_vertices) refit as a whole refit does", "[bvh]") {
+  // Large enough (past 65,536 vertices) for the streamed stores and the prefetches.
+  Mesh m = make_uv_sphere(Vec3(0, 0, 0), 1.0, 200, 400);
+  REQUIRE(m.vertices.size() >= 65536);
+  Bvh loaded, whole;
+  loaded.build(m.vertices, m.triangles);
+  whole.build(m.vertices, m.triangles);
+  CHECK(loaded.leaves() == (m.triangles.size() + kBvhLeafSize - 1) / kBvhLeafSize);  // full leaves
+  for (Vec3& v : m.vertices) v = 0.8 * v + Vec3(0.3 * v.y(), 0.1, -0.2 * v.x() * v.x());
+  const std::size_t nv = m.vertices.size(), nl = loaded.leaves();
+  std::vector<Vec3> copy(nv, Vec3::Zero());
+  {  // a bad vertex stops its range there and is named
+    std::vector<Vec3> bad = m.vertices;
+    bad[nv / 2 + 7].y() = -INFINITY;
+    std::size_t at = 0;
+    loaded.load_vertices(bad, copy.data(), nv / 2, nv, at);
+    CHECK(at == nv / 2 + 7);
+    loaded.load_vertices(bad, copy.data(), 0, nv / 2, at);
+    CHECK(at == nv / 2);  // none in this range: its end
+  }
+  Aabb exact;
+  for (std::size_t k = 0; k < 3; ++k) {  // odd and even range starts: the paired stores' edges
+    std::size_t at = 0;
+    const std::size_t begin = nv * k / 3 + (k == 1), end = k == 2 ? nv : nv * (k + 1) / 3 + 1;
+    const Aabb part = loaded.load_vertices(m.vertices, copy.data(), begin, end, at);
+    CHECK(at == end);
+    exact.extend(part.lo);
+    exact.extend(part.hi);
+  }
+  CHECK(copy == m.vertices);  // every vertex copied, bit for bit
+  for (std::size_t k = 0; k < 2; ++k) loaded.refit_leaves(m.vertices, nl * k / 2, nl * (k + 1) / 2);
+  loaded.refit_nodes(exact);
+  whole.refit(m.vertices, m.triangles);
+  for (std::size_t i = 0; i < whole.nodes().size(); ++i) {
+    REQUIRE(loaded.nodes()[i].box.aabb().lo == whole.nodes()[i].box.aabb().lo);
+    REQUIRE(loaded.nodes()[i].box.aabb().hi == whole.nodes()[i].box.aabb().hi);
+  }
+  CHECK(loaded.box().lo == bounds(m).lo);
+  CHECK(loaded.box().hi == bounds(m).hi);
+  for (std::uint32_t t = 0; t < m.triangles.size(); ++t) {
+    const FBox want = FBox::enclosing(triangle_bounds(m, t)), got = loaded.triangle_box(t);
+    for (int k = 0; k < 3; ++k) REQUIRE((got.lo[k] == want.lo[k] && got.hi[k] == want.hi[k]));
+  }
+}
+
+TEST_CASE("Bvh: a refit rounds every corner outward at every scale, as a build does", "[bvh]") {
+  // A grid whose vertices are scaled through subnormals, float's limit and past it (infinite
+  // float boxes), so that the refit's vector path and its scalar fallback both run.
+  Mesh m = make_grid(Vec3(-1, -1, 0), Vec3(2, 0, 0), Vec3(0, 2, 0), 12, 12);
+  const double scales[] = {1e-44, 1e-39, 0.37, 3.3e36, 1e37, 2.9e38, 3.5e38, 1e300};
+  for (std::size_t v = 0; v < m.vertices.size(); ++v) {
+    const double s = scales[v % 8];
+    m.vertices[v] = Vec3(s * m.vertices[v].x() + 0.1 * s, -s * m.vertices[v].y(), s * (v % 3 == 0 ? -1.0 : 1.0) / 3.0);
+  }
+  Bvh built, refitted;
+  built.build(m.vertices, m.triangles);
+  const Mesh first = make_grid(Vec3(-1, -1, 0), Vec3(2, 0, 0), Vec3(0, 2, 0), 12, 12);
+  refitted.build(first.vertices, first.triangles);
+  refitted.refit(m.vertices, m.triangles);
+  for (std::uint32_t t = 0; t < m.triangles.size(); ++t) {
+    const Aabb exact = triangle_bounds(m, t);
+    const FBox want = FBox::enclosing(exact), got = refitted.triangle_box(t);
+    for (int k = 0; k < 3; ++k) {
+      REQUIRE((double(got.lo[k]) <= exact.lo[k] && double(got.hi[k]) >= exact.hi[k]));
+      REQUIRE((got.lo[k] == want.lo[k] && got.hi[k] == want.hi[k]));
+      REQUIRE((got.lo[k] == built.triangle_box(t).lo[k] && got.hi[k] == built.triangle_box(t).hi[k]));
+    }
+  }
+  CHECK(refitted.box().lo == bounds(m).lo);
+  CHECK(refitted.box().hi == bounds(m).hi);
+}
+
+TEST_CASE("Bvh: the traversal of two posed trees finds every couple of overlapping boxes", "[bvh]") {
+  const Mesh a = make_uv_sphere(Vec3(0, 0, 0), 1.0, 12, 16);
+  const Mesh b = make_box(Vec3(-0.4, -0.4, -0.4), Vec3(0.4, 0.4, 0.4));
+  const Mesh grid = make_grid(Vec3(-1, -1, 0), Vec3(2, 0, 0), Vec3(0, 2, 0), 9, 9);
+  Bvh ta, tb, tg;
+  ta.build(a.vertices, a.triangles);
+  tb.build(b.vertices, b.triangles);
+  tg.build(grid.vertices, grid.triangles);
+  std::vector<BvhStackEntry> stack;
+  for (int k = 0; k < 8; ++k) {
+    const Eigen::Affine3d pa = pose(0.3 * k, Vec3(1, 2, 3), Vec3(0.1 * k, 0, 0));
+    const Eigen::Affine3d pb = pose(-0.5 * k, Vec3(0, 1, 1), Vec3(0.9, 0.05 * k, 0.2));
+    for (const auto& [mesh, tree] : {std::pair<const Mesh*, const Bvh*>{&b, &tb}, {&grid, &tg}}) {
+      const BvhRelation rel = BvhRelation::between(pa, pb);
+      std::set<std::pair<std::uint32_t, std::uint32_t>> got;
+      bvh_traverse(ta, *tree, rel, BvhNodePair{0u, 0u}, stack,
+                   [&](std::uint32_t x, std::uint32_t y) { REQUIRE(got.emplace(x, y).second); });
+      const auto want = scan(a, pa, *mesh, pb);
+      // Every couple whose boxes overlap in both frames; boxes carried through the pose (a box of
+      // a box) may add some.
+      REQUIRE(std::includes(got.begin(), got.end(), want.begin(), want.end()));
+      CHECK(got.size() <= 4 * want.size() + 64);
+      // Split into tasks: the same couples, each once.
+      std::vector<BvhNodePair> tasks;
+      bvh_split(ta, *tree, rel, 6, tasks);
+      std::set<std::pair<std::uint32_t, std::uint32_t>> split;
+      for (const BvhNodePair& start : tasks)
+        bvh_traverse(ta, *tree, rel, start, stack,
+                     [&](std::uint32_t x, std::uint32_t y) { REQUIRE(split.emplace(x, y).second); });
+      CHECK(split == got);
+    }
+  }
+}
+
+TEST_CASE("Bvh: the self traversal gives every couple of distinct triangles whose boxes overlap, once", "[bvh]") {
+  const Mesh m = make_folded_sheet(12, 0.3, 0.2);
+  Bvh t;
+  t.build(m.vertices, m.triangles);
+  std::vector<BvhNodePair> stack;
+  std::set<std::pair<std::uint32_t, std::uint32_t>> got;
+  bvh_self_traverse(t, stack, [&](std::uint32_t x, std::uint32_t y) {
+    REQUIRE(x != y);
+    REQUIRE(got.emplace(std::min(x, y), std::max(x, y)).second);
+  });
+  std::set<std::pair<std::uint32_t, std::uint32_t>> want;
+  for (std::uint32_t x = 0; x < m.triangles.size(); ++x)
+    for (std::uint32_t y = x + 1; y < m.triangles.size(); ++y)
+      if (triangle_bounds(m, x).overlaps(triangle_bounds(m, y))) want.emplace(x, y);
+  REQUIRE(std::includes(got.begin(), got.end(), want.begin(), want.end()));
+  for (const auto& [x, y] : got) {  // any other couple: within float rounding of touching
+    Aabb grown = triangle_bounds(m, x);
+    grown.lo -= Vec3::Constant(1e-6);
+    grown.hi += Vec3::Constant(1e-6);
+    REQUIRE(grown.overlaps(triangle_bounds(m, y)));
+  }
+}
+
+TEST_CASE("Bvh: two trees in one frame, traversed on float boxes, give every couple of overlapping boxes", "[bvh]") {
+  // bvh_traverse_same_frame() (the World's pairs of world-space trees) against the scan and
+  // against the posed traversal at identity poses, from the roots and split into tasks.
+  const Mesh a = make_uv_sphere(Vec3(0, 0, 0), 1.0, 12, 16);
+  const Mesh grid = make_grid(Vec3(-1, -1, 0), Vec3(2, 0, 0), Vec3(0, 2, 0), 9, 9);
+  Bvh ta, tg;
+  ta.build(a.vertices, a.triangles);
+  tg.build(grid.vertices, grid.triangles);
+  const Eigen::Affine3d id = Eigen::Affine3d::Identity();
+  const BvhRelation rel = BvhRelation::between(id, id);
+  REQUIRE(rel.identity);
+  std::vector<BvhNodePair> stack;
+  std::vector<BvhStackEntry> posed_stack;
+  std::set<std::pair<std::uint32_t, std::uint32_t>> got, posed;
+  bvh_traverse_same_frame(ta, tg, BvhNodePair{0u, 0u}, stack,
+                          [&](std::uint32_t x, std::uint32_t y) { REQUIRE(got.emplace(x, y).second); });
+  bvh_traverse(ta, tg, rel, BvhNodePair{0u, 0u}, posed_stack, [&](std::uint32_t x, std::uint32_t y) { posed.emplace(x, y); });
+  const auto want = scan(a, id, grid, id);
+  CHECK(got == want);
+  CHECK(posed == want);
+  CHECK_FALSE(want.empty());
+  std::vector<BvhNodePair> tasks;
+  bvh_split(ta, tg, rel, 6, tasks);
+  std::set<std::pair<std::uint32_t, std::uint32_t>> split;
+  for (const BvhNodePair& start : tasks)
+    bvh_traverse_same_frame(ta, tg, start, stack, [&](std::uint32_t x, std::uint32_t y) { REQUIRE(split.emplace(x, y).second); });
+  CHECK(split == want);
+}
+
+TEST_CASE("Bvh: a vertex no triangle uses stays out of the box, built and refitted", "[bvh]") {
+  Mesh m = make_box(Vec3(0, 0, 0), Vec3(1, 1, 1));
+  const Aabb corners = [&] {
+    Aabb b;
+    for (const Tri& f : m.triangles)
+      for (const std::uint32_t v : f) b.extend(m.vertices[v]);
+    return b;
+  }();
+  m.vertices.push_back(Vec3(50, -50, 9));  // used by no triangle
+  Bvh t;
+  t.build(m.vertices, m.triangles);
+  CHECK(t.box().lo == corners.lo);
+  CHECK(t.box().hi == corners.hi);
+  for (Vec3& v : m.vertices) v += Vec3(0.5, 0.25, -1);
+  t.refit(m.vertices, m.triangles);
+  CHECK(t.box().lo == corners.lo + Vec3(0.5, 0.25, -1));
+  CHECK(t.box().hi == corners.hi + Vec3(0.5, 0.25, -1));
+}
