@@ -194,6 +194,77 @@ std::string viewer_layer_script(std::size_t view_index, std::size_t k, const std
          "\");\n";
 }
 
+namespace {
+
+// One ROI's section of the page: its views' layers (view_index counts the page's views), its
+// missed pairs (with a reference) and its colliding pairs.
+void write_roi_section(std::ostringstream& h, const DumpPair& p, std::size_t& view_index) {
+  h << "<section class=\"roi\" data-colliding=\"" << p.colliding.size() << "\""
+    << (p.has_reference ? " data-reference=\"1\"" : "") << " id=\"" << escape(p.dir) << "\">\n";
+  h << "<h2>" << escape(p.name_a) << " (A) &times; " << escape(p.name_b) << " (B)</h2>\n";
+  h << "<p>epsilon " << p.epsilon << " &middot; PCS " << p.pcs.size() << " ID pairs &middot; "
+    << p.colliding.size() << " colliding triangle pairs</p>\n";
+  for (const DumpView& v : p.views) {
+    h << "<h3>view " << v.view << " &middot; " << v.resolution << "&sup2; &middot; " << v.layers.size()
+      << " layers &middot; " << (v.a_first ? "A" : "B") << " peeled first &middot; view PCS "
+      << v.pcs.size() << "</h3>\n<div class=\"layers\">\n";
+    const std::size_t count = std::size_t(v.resolution) * v.resolution;
+    for (std::size_t k = 0; k < v.layers.size(); ++k) {
+      const auto marks = pcs_texels(v, k);
+      std::size_t filled = 0, marked = 0, a = 0;
+      for (std::size_t t = 0; t < count; ++t) {
+        filled += !texel_empty(v.layers[k], t);
+        a += !texel_empty(v.layers[k], t) && texel_object(v.layers[k], t) == 0;
+        marked += marks[t];
+      }
+      const std::string alt = v.dir + " layer " + std::to_string(k);
+      // The preview is depth | IDs side by side (2n x n texels on 512 x 256 pixels); the canvas
+      // over it takes the search's outlines.
+      h << "<figure><img class=\"layer\" data-view=\"" << view_index << "\" data-layer=\"" << k << "\" alt=\""
+        << escape(alt) << "\" src=\"data:image/png;base64,"
+        << base64(encode_png(layer_preview(v.layers[k], v.resolution, marks))) << "\">"
+        << "<canvas class=\"mark\" data-view=\"" << view_index << "\" data-layer=\"" << k
+        << "\" width=\"512\" height=\"256\"></canvas>"
+        << "<figcaption>layer " << k << ": " << filled << " texels (" << a << " A, " << filled - a
+        << " B), <span class=\"pcs\">" << marked << " PCS texels</span></figcaption></figure>\n";
+    }
+    h << "</div>\n";
+    ++view_index;
+  }
+  if (p.has_reference) {
+    // The missed pairs first in line for debugging: each with why (peelcd explain's verdict on
+    // the same frame, where the dump holds it) and the command that shows it texel by texel.
+    const auto missed = missed_pairs(p);
+    h << "<details class=\"pairs\"" << (missed.empty() ? "" : " open") << "><summary>missed pairs (" << missed.size()
+      << " of " << p.reference.size() << " exact pairs)</summary><table><tr><th>triangle of A</th><th>triangle of B"
+         "</th><th>why missed (peelcd explain)</th><th>explain</th></tr>\n";
+    for (const auto& m : missed) {
+      const DumpPair::Missed* why = nullptr;
+      for (const DumpPair::Missed& x : p.missed)
+        if (x.tri_a == m[0] && x.tri_b == m[1]) why = &x;
+      const std::string line = why ? why->verdict + ": " + why->why : "";
+      h << "<tr class=\"pair missed\" data-a=\"" << m[0] << "\" data-b=\"" << m[1] << "\" data-why=\"" << escape(line)
+        << "\"" << row_ids(p, m[0], m[1]) << "><td>" << m[0] << "</td><td>" << m[1] << "</td><td>"
+        << (why ? "<b>" + escape(why->verdict) + "</b> " + escape(why->why) : std::string("(not explained in this dump)"))
+        << "</td><td><code>peelcd explain SCENE --pair " << escape(p.name_a) << ":" << m[0] << "," << escape(p.name_b)
+        << ":" << m[1] << " --out DIR</code></td></tr>\n";
+    }
+    h << "</table></details>\n";
+  }
+  h << "<details class=\"pairs\"><summary>colliding pairs (" << p.colliding.size()
+    << ")</summary><table><tr><th>triangle of A</th><th>triangle of B</th><th>kind</th><th>explain</th></tr>\n";
+  for (std::size_t i = 0; i < p.colliding.size(); ++i)
+    h << "<tr class=\"pair\" data-a=\"" << p.colliding[i][0] << "\" data-b=\"" << p.colliding[i][1] << "\""
+      << row_ids(p, p.colliding[i][0], p.colliding[i][1]) << "><td>"
+      << p.colliding[i][0] << "</td><td>" << p.colliding[i][1] << "</td><td>" << escape(p.kinds[i])
+      << "</td><td><code>peelcd explain SCENE --pair " << escape(p.name_a) << ":" << p.colliding[i][0] << ","
+      << escape(p.name_b) << ":" << p.colliding[i][1] << "</code></td></tr>\n";
+  h << "</table></details>\n";
+  h << "</section>\n";
+}
+
+}  // namespace
+
 std::string viewer_html(const Dump& d) {
   std::ostringstream h;
   h << "<!DOCTYPE html>\n<html lang=\"en\"><head><meta charset=\"utf-8\"><title>peelcd layer dump</title>\n"
@@ -263,70 +334,7 @@ std::string viewer_html(const Dump& d) {
     h << "</table>\n";
   }
   view_index = 0;
-  for (const DumpPair& p : d.pairs) {
-    h << "<section class=\"roi\" data-colliding=\"" << p.colliding.size() << "\""
-      << (p.has_reference ? " data-reference=\"1\"" : "") << " id=\"" << escape(p.dir) << "\">\n";
-    h << "<h2>" << escape(p.name_a) << " (A) &times; " << escape(p.name_b) << " (B)</h2>\n";
-    h << "<p>epsilon " << p.epsilon << " &middot; PCS " << p.pcs.size() << " ID pairs &middot; "
-      << p.colliding.size() << " colliding triangle pairs</p>\n";
-    for (const DumpView& v : p.views) {
-      h << "<h3>view " << v.view << " &middot; " << v.resolution << "&sup2; &middot; " << v.layers.size()
-        << " layers &middot; " << (v.a_first ? "A" : "B") << " peeled first &middot; view PCS "
-        << v.pcs.size() << "</h3>\n<div class=\"layers\">\n";
-      const std::size_t count = std::size_t(v.resolution) * v.resolution;
-      for (std::size_t k = 0; k < v.layers.size(); ++k) {
-        const auto marks = pcs_texels(v, k);
-        std::size_t filled = 0, marked = 0, a = 0;
-        for (std::size_t t = 0; t < count; ++t) {
-          filled += !texel_empty(v.layers[k], t);
-          a += !texel_empty(v.layers[k], t) && texel_object(v.layers[k], t) == 0;
-          marked += marks[t];
-        }
-        const std::string alt = v.dir + " layer " + std::to_string(k);
-        // The preview is depth | IDs side by side (2n x n texels on 512 x 256 pixels); the canvas
-        // over it takes the search's outlines.
-        h << "<figure><img class=\"layer\" data-view=\"" << view_index << "\" data-layer=\"" << k << "\" alt=\""
-          << escape(alt) << "\" src=\"data:image/png;base64,"
-          << base64(encode_png(layer_preview(v.layers[k], v.resolution, marks))) << "\">"
-          << "<canvas class=\"mark\" data-view=\"" << view_index << "\" data-layer=\"" << k
-          << "\" width=\"512\" height=\"256\"></canvas>"
-          << "<figcaption>layer " << k << ": " << filled << " texels (" << a << " A, " << filled - a
-          << " B), <span class=\"pcs\">" << marked << " PCS texels</span></figcaption></figure>\n";
-      }
-      h << "</div>\n";
-      ++view_index;
-    }
-    if (p.has_reference) {
-      // The missed pairs first in line for debugging: each with why (peelcd explain's verdict on
-      // the same frame, where the dump holds it) and the command that shows it texel by texel.
-      const auto missed = missed_pairs(p);
-      h << "<details class=\"pairs\"" << (missed.empty() ? "" : " open") << "><summary>missed pairs (" << missed.size()
-        << " of " << p.reference.size() << " exact pairs)</summary><table><tr><th>triangle of A</th><th>triangle of B"
-           "</th><th>why missed (peelcd explain)</th><th>explain</th></tr>\n";
-      for (const auto& m : missed) {
-        const DumpPair::Missed* why = nullptr;
-        for (const DumpPair::Missed& x : p.missed)
-          if (x.tri_a == m[0] && x.tri_b == m[1]) why = &x;
-        const std::string line = why ? why->verdict + ": " + why->why : "";
-        h << "<tr class=\"pair missed\" data-a=\"" << m[0] << "\" data-b=\"" << m[1] << "\" data-why=\"" << escape(line)
-          << "\"" << row_ids(p, m[0], m[1]) << "><td>" << m[0] << "</td><td>" << m[1] << "</td><td>"
-          << (why ? "<b>" + escape(why->verdict) + "</b> " + escape(why->why) : std::string("(not explained in this dump)"))
-          << "</td><td><code>peelcd explain SCENE --pair " << escape(p.name_a) << ":" << m[0] << "," << escape(p.name_b)
-          << ":" << m[1] << " --out DIR</code></td></tr>\n";
-      }
-      h << "</table></details>\n";
-    }
-    h << "<details class=\"pairs\"><summary>colliding pairs (" << p.colliding.size()
-      << ")</summary><table><tr><th>triangle of A</th><th>triangle of B</th><th>kind</th><th>explain</th></tr>\n";
-    for (std::size_t i = 0; i < p.colliding.size(); ++i)
-      h << "<tr class=\"pair\" data-a=\"" << p.colliding[i][0] << "\" data-b=\"" << p.colliding[i][1] << "\""
-        << row_ids(p, p.colliding[i][0], p.colliding[i][1]) << "><td>"
-        << p.colliding[i][0] << "</td><td>" << p.colliding[i][1] << "</td><td>" << escape(p.kinds[i])
-        << "</td><td><code>peelcd explain SCENE --pair " << escape(p.name_a) << ":" << p.colliding[i][0] << ","
-        << escape(p.name_b) << ":" << p.colliding[i][1] << "</code></td></tr>\n";
-    h << "</table></details>\n";
-    h << "</section>\n";
-  }
+  for (const DumpPair& p : d.pairs) write_roi_section(h, p, view_index);
   h << "</body></html>\n";
   return h.str();
 }
