@@ -130,7 +130,7 @@ struct SameFrame {
   }
   // Invariant: the two nodes' boxes overlap (tested before the push).
   template <class Fn>
-  void leaves(const Entry& e, const BvhNode& x, const BvhNode& y, Fn& fn) const {
+  void leaves(const Entry& /*e*/, const BvhNode& x, const BvhNode& y, Fn& fn) const {
     const BvhLeaf& la = a.leaf(x);
     // (no test of A's box against B's node first: a branch)
     leaf_couples(la, x.count, b.leaf(y), [&](std::uint32_t u, FBox& box) { return box = la.box(u), ~0u; }, fn);

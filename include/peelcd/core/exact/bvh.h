@@ -20,6 +20,14 @@
 #include <limits>
 #include <vector>
 
+// A function every node pair of a traversal calls (the box transforms): inlined even where the
+// compiler would not (a shared library's call to it goes through the PLT otherwise).
+#if defined(__GNUC__)
+#define PEELCD_ALWAYS_INLINE inline __attribute__((always_inline))
+#else
+#define PEELCD_ALWAYS_INLINE inline
+#endif
+
 namespace peelcd {
 
 // 8 triangles a leaf: half the nodes of 4 to refit and to visit (about an eighth off the large
@@ -231,17 +239,17 @@ struct BvhRelation {
   // involved (the box's, and the poses' translations: `reach`) so that the rounding of the
   // transforms, here and in the world coordinates the exact test reads, never drops a pair whose
   // world-space triangles touch.
-  Aabb to_a(const Aabb& b) const { return identity ? b : moved(b, linear, abs_linear, translation, reach); }
+  PEELCD_ALWAYS_INLINE Aabb to_a(const Aabb& b) const { return identity ? b : moved(b, linear, abs_linear, translation, reach); }
   // A's box as seen from B, the same way.
-  Aabb to_b(const Aabb& a) const { return identity ? a : moved(a, inv_linear, inv_abs_linear, inv_translation, reach); }
+  PEELCD_ALWAYS_INLINE Aabb to_b(const Aabb& a) const { return identity ? a : moved(a, inv_linear, inv_abs_linear, inv_translation, reach); }
   // A's box `a` and B's box `b` (whose image in A's frame is `b_in_a`) may overlap: tested in
   // both frames (a separating axis among A's three or B's three).
-  bool overlap(const Aabb& a, const Aabb& b_in_a, const Aabb& b) const {
+  PEELCD_ALWAYS_INLINE bool overlap(const Aabb& a, const Aabb& b_in_a, const Aabb& b) const {
     return a.overlaps(b_in_a) && (identity || to_b(a).overlaps(b));
   }
   static BvhRelation between(const Eigen::Affine3d& pose_a, const Eigen::Affine3d& pose_b);
-  // Inline: the traversals call it at every node pair.
-  static Aabb moved(const Aabb& box, const Eigen::Matrix3d& linear, const Eigen::Matrix3d& abs_linear,
+  // Inlined: the traversals call it at every node pair.
+  PEELCD_ALWAYS_INLINE static Aabb moved(const Aabb& box, const Eigen::Matrix3d& linear, const Eigen::Matrix3d& abs_linear,
                     const Vec3& translation, double reach) {
     const Vec3 c = box.center(), e = 0.5 * box.extent();
     const Vec3 center = linear * c + translation;
