@@ -88,6 +88,7 @@ enum class Kind { world, frame, cgal, peer, floor_box, floor_culled };
 struct Split {
   double total = 0, wait = 0, raster = 0, compute = 0, transfer = 0;
   double uploaded = 0, geometry = 0, candidates = 0, colliding = 0, rois_peeled = 0;
+  double boxes = 0, views = 0, stage = 0, readback = 0, exact = 0;  // the host's steps (Timings)
   std::size_t untimed = 0;  // passes whose timer query gave an impossible time (left out)
 };
 
@@ -154,6 +155,11 @@ Split split_of(const FrameResult& r) {
   s.geometry = double(r.geometry_bytes);
   s.rois_peeled = double(r.rois_peeled);
   s.untimed = r.timings.gpu_passes_untimed;
+  s.boxes = r.timings.aabb;
+  s.views = r.timings.upload;
+  s.stage = r.timings.gpu;
+  s.readback = r.timings.readback;
+  s.exact = r.timings.cpu;
   for (const PairResult& p : r.pairs) {
     s.candidates += double(p.candidates);
     s.colliding += double(p.colliding.size());
@@ -236,6 +242,7 @@ class SuiteRun {
     return best;
   }
   void print_image_work() const;
+  void print_host_steps() const;
   void print_phases() const;
 };
 
@@ -469,14 +476,18 @@ void SuiteRun::print_table(bool heap_kept) const {
                 suite_.scaling_threads, threads_, med[scaling_] / med[0], med[scaling_], med[0]);
 }
 
+// The median of one field of a row's frames.
+double median_of(const std::vector<Split>& v, double Split::*f) {
+  std::vector<double> x;
+  for (const Split& s : v) x.push_back(s.*f);
+  return median(x);
+}
+
 // The image stage's share of each peelcd row that peeled: what the host did outside GL, what the
 // GPU's passes took, what went up the bus, and how many candidates reached the host's exact test.
+
 void SuiteRun::print_image_work() const {
-  const auto med = [](const std::vector<Split>& v, double Split::*f) {
-    std::vector<double> x;
-    for (const Split& s : v) x.push_back(s.*f);
-    return median(x);
-  };
+  const auto med = median_of;
   const double exact_ms = median(rows_[0].ms);
   bool any = false;
   for (const Row& r : rows_) {
@@ -513,6 +524,28 @@ void SuiteRun::print_image_work() const {
               " mesh: of those, corners, indices and draw entries; cands: triangle couples the host tested exactly; c/col:\n"
               " cands per colliding pair.)\n",
               gl_stage_.pass_timing() ? "" : " (off: --no-gpu-timers)", exact_ms);
+  print_host_steps();
+}
+
+// The same rows' frames by the host's steps (Timings), medians of each: where the host's work goes.
+void SuiteRun::print_host_steps() const {
+  const auto med = median_of;
+  std::printf("\nimage work per frame by step (medians, ms; the same runs):\n");
+  std::printf("%-38s %8s %8s %8s %8s %8s %8s %8s\n", "method", "frame", "boxes", "views", "stage", "readback", "exact",
+              "other");
+  for (const Row& r : rows_) {
+    if (!r.peelcd() || med(r.split, &Split::rois_peeled) == 0) continue;
+    const double frame = med(r.split, &Split::total), boxes = med(r.split, &Split::boxes),
+                 views = med(r.split, &Split::views), stage = med(r.split, &Split::stage),
+                 readback = med(r.split, &Split::readback), exact = med(r.split, &Split::exact);
+    std::printf("%-38s %8.2f %8.2f %8.2f %8.2f %8.2f %8.2f %8.2f\n", r.name.c_str(), frame, boxes, views, stage, readback,
+                exact, frame - boxes - views - stage - readback - exact);
+  }
+  std::printf("(boxes: bounds, broad phase, the World's tree traversals, culling, routing; views: the views and their\n"
+              " triangles gathered (the World's image route: the candidates' triangles copied first) and uploaded; stage:\n"
+              " the image stage's draw and dispatch calls on the host, GL waits included; readback: layers and PCS read\n"
+              " back; exact: the exact tests of the candidates, relations; other: the rest (refits, the World's\n"
+              " routing and result assembly). Medians of each column: the columns need not sum to the frame.)\n");
 }
 
 void SuiteRun::print_phases() const {

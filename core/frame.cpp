@@ -125,6 +125,7 @@ void FrameResult::add_image_work(const FrameResult& o) {
   geometry_bytes += o.geometry_bytes;
   gl_deep_texels += o.gl_deep_texels;
   views_host_resolved += o.views_host_resolved;
+  timings.aabb += o.timings.aabb;
   timings.upload += o.timings.upload;
   timings.gpu += o.timings.gpu;
   timings.readback += o.timings.readback;

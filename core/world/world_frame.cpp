@@ -480,6 +480,7 @@ void World::Impl::relate(const DetectOptions& opt, FrameResult& out) {
 // objects (triangle k of each is the k-th of its ascending list), the Detector asked for those
 // pairs alone (Detector::only_pairs()); the contacts mapped back to the bodies' triangles.
 void World::Impl::image_pairs(const DetectOptions& opt, FrameResult& out, std::size_t only) {
+  const auto t_copy = Clock::now();  // the candidates' triangles copied: part of `upload`
   image_objects.clear();
   image_kept.clear();
   image_of.clear();
@@ -511,6 +512,7 @@ void World::Impl::image_pairs(const DetectOptions& opt, FrameResult& out, std::s
     image_only.emplace_back(first, first + 1);
     image_of.push_back(p);
   }
+  out.timings.upload += ms_since(t_copy);
   if (image_of.empty()) return;
   if (!detector) detector = std::make_unique<Detector>(stage);
   DetectOptions image = opt;

@@ -183,9 +183,12 @@ struct PairResult {
   bool is_collision() const { return !colliding.empty() || colliding_relation(relation); }
 };
 
-
-
 struct Timings {  // milliseconds, as in the paper's tables
+  // aabb: bounds, the broad phase, the World's tree traversals, culling and routing; upload: the
+  // image stage's views and their triangles gathered (the World's image route: the candidates'
+  // triangles copied), uploads; gpu: the image stage's calls that draw and dispatch, timed on the
+  // host (its GL waits included); readback: reading layers and PCS back; cpu: the exact tests,
+  // relations and the rest of the narrow phase; total: the frame.
   double aabb = 0, upload = 0, gpu = 0, readback = 0, cpu = 0, total = 0;
   // Host time blocked in GL calls that wait for the GPU (reads back, maps, query results): the
   // frame's host work is total - gl_wait. 0 on the CPU stage and the exact path.
@@ -232,7 +235,7 @@ struct FrameResult {
   // Every counter and timing to zero (the pairs and the renderer stay): a frame's start.
   void reset_counters();
   // Adds `other`'s image-stage work to this frame's: GL passes, views peeled, uploads, readbacks,
-  // exhaustive views, the GL calls and bytes, deep texels, and the upload, gpu, readback, cpu,
+  // exhaustive views, the GL calls and bytes, deep texels, and the aabb, upload, gpu, readback, cpu,
   // GL wait and GPU pass timings (the World's image-routed pairs, run as a frame of their own).
   void add_image_work(const FrameResult& other);
 };
