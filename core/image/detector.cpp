@@ -378,10 +378,17 @@ void Detector::Impl::resolve_pair(const ObjectRefs& objects, const DetectOptions
   for (const std::uint64_t k : pcs_keys) pcs_all.push_back(IdPair{pair_a(k), pair_b(k)});
   r.pcs_count = pcs_all.size();
   r.pcs.assign(pcs_all.begin(), pcs_all.end());
-  map_a.rebuild(ma, opt.ids);
-  map_b.rebuild(mb, opt.ids);
   candidates.clear();
-  expand_pcs(pcs_all, map_a, map_b, candidates, candidate_scratch);
+  if (opt.ids == IdMode::unique) {  // an ID is its triangle: the couples are the sorted PCS keys
+    for (const std::uint64_t k : pcs_keys)
+      if (pair_a(k) >= ma.triangles.size() || pair_b(k) >= mb.triangles.size())
+        throw std::out_of_range("peelcd::Detector: triangle ID out of range");
+    candidates.assign(pcs_keys.begin(), pcs_keys.end());
+  } else {
+    map_a.rebuild(ma, opt.ids);
+    map_b.rebuild(mb, opt.ids);
+    expand_pcs(pcs_all, map_a, map_b, candidates, candidate_scratch);
+  }
   if (!direct.empty()) {
     candidates.insert(candidates.end(), direct.begin(), direct.end());
     sort_unique_pairs(candidates, candidate_scratch);

@@ -481,37 +481,48 @@ void World::Impl::relate(const DetectOptions& opt, FrameResult& out) {
 // pairs alone (Detector::only_pairs()); the contacts mapped back to the bodies' triangles.
 void World::Impl::image_pairs(const DetectOptions& opt, FrameResult& out, std::size_t only) {
   const auto t_copy = Clock::now();  // the candidates' triangles copied: part of `upload`
-  image_objects.clear();
-  image_kept.clear();
+  // The objects and triangle lists are kept from frame to frame, their storage reused (`used`:
+  // how many this frame fills).
+  std::size_t used = 0;
   image_of.clear();
   image_only.clear();
   for (std::size_t p = 0; p < pairs.size(); ++p) {
     if (!to_image[p] || (only != kAllPairs && p != only)) continue;
     const Body* body[2] = {&bodies[ids[pairs[p].first]], &bodies[ids[pairs[p].second]]};
-    std::vector<std::uint32_t> kept[2];
+    const std::size_t first = used;
+    used += 2;
+    if (image_objects.size() < used) image_objects.resize(used), image_kept.resize(used);
+    std::vector<std::uint32_t>* kept[2] = {&image_kept[first], &image_kept[first + 1]};
+    kept[0]->clear();
+    kept[1]->clear();
     for (std::size_t k = first_task[p]; k < first_task[p + 1]; ++k)
       for (const std::uint64_t c : tasks[k].candidates) {
-        kept[0].push_back(pair_a(c));
-        kept[1].push_back(pair_b(c));
+        kept[0]->push_back(pair_a(c));
+        kept[1]->push_back(pair_b(c));
       }
-    const std::size_t first = image_objects.size();
     for (int s = 0; s < 2; ++s) {
-      std::sort(kept[s].begin(), kept[s].end());
-      kept[s].erase(std::unique(kept[s].begin(), kept[s].end()), kept[s].end());
-      Object o;
+      std::vector<std::uint32_t>& ks = *kept[s];
+      std::sort(ks.begin(), ks.end());
+      ks.erase(std::unique(ks.begin(), ks.end()), ks.end());
+      Object& o = image_objects[first + s];
+      o.mesh.vertices.resize(3 * ks.size());
+      o.mesh.triangles.resize(ks.size());
       const Mesh& local = body[s]->local();
-      for (const std::uint32_t t : kept[s]) {
-        const std::uint32_t base = std::uint32_t(o.mesh.vertices.size());
-        for (const std::uint32_t v : local.triangles[t]) o.mesh.vertices.push_back(body[s]->world(v));
-        o.mesh.triangles.push_back(Tri{base, base + 1, base + 2});
+      for (std::size_t i = 0; i < ks.size(); ++i) {
+        const Tri& t = local.triangles[ks[i]];
+        const std::uint32_t base = std::uint32_t(3 * i);
+        for (int c = 0; c < 3; ++c) o.mesh.vertices[base + c] = body[s]->world(t[c]);
+        o.mesh.triangles[i] = Tri{base, base + 1, base + 2};
       }
       o.name = body[s]->name;
-      image_objects.push_back(std::move(o));
-      image_kept.push_back(std::move(kept[s]));
+      o.rigid.reset();
+      o.self = false;
     }
     image_only.emplace_back(first, first + 1);
     image_of.push_back(p);
   }
+  image_objects.resize(used);  // (objects beyond this frame's count: not the Detector's)
+  image_kept.resize(used);
   out.timings.upload += ms_since(t_copy);
   if (image_of.empty()) return;
   if (!detector) detector = std::make_unique<Detector>(stage);
