@@ -84,6 +84,13 @@ std::size_t ply_type_size(const std::string& t) {
   return 4;  // int, uint, float, int32, uint32, float32
 }
 
+// Whether `s` is a whole number in the C locale's syntax (a PLY version: "1.0").
+bool is_number(const std::string& s) {
+  char* end = nullptr;
+  std::strtod(s.c_str(), &end);
+  return !s.empty() && end == s.c_str() + s.size();
+}
+
 // Checks the header of an ASCII or binary PLY file line by line before assimp sees it: assimp
 // 5.2's PLY reader loops forever on some malformed headers (an unknown property type, found by
 // fuzzing), and on an ASCII body with a value that is not a number (`3 #include0 2 3` as a face
@@ -127,6 +134,8 @@ std::string ply_header_problem(const std::string& path) {
     std::string w;
     words >> w;
     if (w == "end_header") {
+      if (!elements.empty() && elements.back().count > 0 && elements.back().min_numbers == 0)
+        return "malformed PLY header: element '" + elements.back().name + "' has no properties";
       long double need = 0;
       for (const Element& e : elements) need += e.count * (ascii ? e.min_numbers : e.min_bytes);
       const auto claimed = [&] {
@@ -157,26 +166,37 @@ std::string ply_header_problem(const std::string& path) {
       return "";
     }
     if (w == "comment" || w == "obj_info" || w.empty()) continue;
+    // A line with words after the ones it takes is refused: `element vertex 2000000000<bytes>
+    // int ...` (found by fuzzing) read as a count and nothing else gave an element without
+    // properties that assimp looped over two billion times.
+    const auto ends = [&words] {
+      std::string extra;
+      return !(words >> extra);
+    };
     if (w == "format") {
       std::string kind, version;
-      if (!(words >> kind >> version) ||
-          (kind != "ascii" && kind != "binary_little_endian" && kind != "binary_big_endian"))
+      if (!(words >> kind >> version) || !ends() ||
+          (kind != "ascii" && kind != "binary_little_endian" && kind != "binary_big_endian") ||
+          !is_number(version))
         return "malformed PLY header: bad format line '" + line + "'";
       ascii = kind == "ascii";
     } else if (w == "element") {
       std::string name;
       long long count = -1;
-      if (!(words >> name >> count) || count < 0) return "malformed PLY header: bad element line '" + line + "'";
+      if (!(words >> name >> count) || count < 0 || !ends())
+        return "malformed PLY header: bad element line '" + line + "'";
+      if (!elements.empty() && elements.back().count > 0 && elements.back().min_numbers == 0)
+        return "malformed PLY header: element '" + elements.back().name + "' has no properties";
       elements.push_back({name, (long double)count, 0, 0});
     } else if (w == "property") {
       std::string type, name;
       if (!(words >> type)) return "malformed PLY header: empty property line";
       if (type == "list") {
         std::string count_type, item_type;
-        if (!(words >> count_type >> item_type >> name) || !types.count(count_type) || !types.count(item_type))
+        if (!(words >> count_type >> item_type >> name) || !ends() || !types.count(count_type) || !types.count(item_type))
           return "malformed PLY header: bad property list line '" + line + "'";
         type = count_type;  // an empty list: its count alone
-      } else if (!types.count(type) || !(words >> name)) {
+      } else if (!types.count(type) || !(words >> name) || !ends()) {
         return "malformed PLY header: bad property line '" + line + "'";
       }
       if (elements.empty()) return "malformed PLY header: a property before any element: '" + line + "'";

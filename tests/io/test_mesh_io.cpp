@@ -114,7 +114,7 @@ TEST_CASE("bad mesh files give an error that names the file and the problem", "[
   CHECK_THROWS_WITH(load_scene(fifo.string()), Catch::Contains("not a regular file"));
   fs::remove(fifo);
   require_input_error(write_temp("empty.obj", ""), "the file is empty");
-  require_input_error(write_temp("garbled.ply", "ply\nformat ascii 1.0\nelement vertex 3\nend_header\n0 0\n"), "cannot read");
+  require_input_error(write_temp("garbled.ply", "ply\nformat ascii 1.0\nelement vertex 3\nend_header\n0 0\n"), "element 'vertex' has no properties");
   require_input_error(write_temp("unknown.xyz123", "hello"), "cannot read");
   require_input_error(write_temp("lines.obj", "v 0 0 0\nv 1 0 0\nl 1 2\n"), "no triangles");
   require_input_error(write_temp("nan.obj", "v 0 0 0\nv nan 0 0\nv 0 1 0\nf 1 2 3\n"), "NaN or infinite");
@@ -151,6 +151,17 @@ TEST_CASE("bad mesh files give an error that names the file and the problem", "[
   require_input_error(write_temp("leading_nul.ply", std::string("\0x", 2) + "\nply\nformat ascii 1.0\nelement vertex 2000000000\n"
                                                                 "property float x\nend_header\n1\n"),
                       "the header claims element vertex 2000000000");
+  // Found by fuzzing: a count followed by other bytes read as an element without properties,
+  // which assimp looped over two billion times.
+  require_input_error(write_temp("element_garbage.ply", "ply\nformat ascii 1.0\nelement vertex 2000000000\xff\xff int x\n"
+                                                        "end_header\n0 0 0\n"),
+                      "malformed PLY header: bad element line");
+  require_input_error(write_temp("element_no_properties.ply", "ply\nformat ascii 1.0\nelement vertex 2000000000\n"
+                                                              "end_header\n0 0 0\n"),
+                      "element 'vertex' has no properties");
+  require_input_error(write_temp("bad_version.ply", "ply\nformat ascii 1$0\nelement vertex 1\nproperty float x\n"
+                                                    "end_header\n0\n"),
+                      "bad format line");
   require_input_error(write_temp("zero_faces.off", "OFF\n3 0 0\n0 0 0\n1 0 0\n0 1 0\n"), "");
   // Found by fuzzing: assimp's reader spins on a non-numeric value in an ASCII PLY body.
   require_input_error(write_temp("word_in_face.ply",
