@@ -26,6 +26,7 @@ struct BenchArgs {
   bool no_gpu_timers = false;
   bool return_memory = false;
   std::string csv;
+  std::map<std::string, std::string> gl;  // GL stage options (gl_option_table() rows by key)
 };
 
 // `bench depth` and `bench distance`: the queries' scenes and tables (peelcd/bench/query_bench.h).
@@ -111,7 +112,7 @@ int run_bench(const BenchArgs& a) {
   // thread is LP_NUM_THREADS=0: llvmpipe rasterizes on the calling thread (with 1 it hands every
   // draw to one worker thread and waits for it: still one thread working, plus the handoff).
   if (a.threads) setenv("LP_NUM_THREADS", std::to_string(a.threads == 1 ? 0 : a.threads).c_str(), 1);
-  gl::GlOptions gl_base;
+  gl::GlOptions gl_base = merged_gl_options(Scene{}, a.gl);
   gl_base.workers = threads;
   if (a.backend == "cpu") throw InputError("peelcd bench: --backend cpu: the benchmark times GL stages (use osmesa or egl)");
   suite.stage = make_image_stage(a.backend, gl_base);
@@ -186,6 +187,7 @@ std::vector<Command> add_bench_commands(CLI::App& app) {
                                          "tiles by need, as detect does")->capture_default_str()
       ->check(kNonNegative);
   add_backend_option(benchmark, be.backend, true);
+  add_gl_options(benchmark, be.gl, {"resolve", "gpu_filter"});
   benchmark->add_option("--csv", be.csv, "Write one row per (frame, method) to FILE, or - for stdout")->check(kOutputPath);
 
   return {{benchmark, [be_holder] { return run_bench(*be_holder); }}};

@@ -86,14 +86,15 @@ std::size_t GlImageStage::Impl::read_batch_counts(std::size_t texels, Timings& t
 // The deep texels' rows (shaders/conservative_batch_resolve.comp with PEELCD_DEEP): a work group
 // per row and block of fragments, rows in dispatches of at most 65535 work groups wide.
 void GlImageStage::Impl::dispatch_deep_rows(const DeepHeader& deep, std::size_t texels) {
-  gl.UseProgram(cons_deep.id);
-  gl.Uniform1ui(cons_deep.texels, GLuint(texels));
+  const int filter = options.gpu_filter ? 1 : 0;
+  gl.UseProgram(cons_deep[filter].id);
+  gl.Uniform1ui(cons_deep[filter].texels, GLuint(texels));
   for (std::size_t base = 0; base < deep.row_count; base += 65535) {
-    gl.Uniform1ui(cons_deep.row_base, GLuint(base));
+    gl.Uniform1ui(cons_deep[filter].row_base, GLuint(base));
     dispatch(GLuint(std::min<std::size_t>(deep.row_count - base, 65535)), deep.max_blocks, 1);
   }
   barrier(GL_BUFFER_UPDATE_BARRIER_BIT | GL_SHADER_STORAGE_BARRIER_BIT);
-  gl.UseProgram(cons_batch_resolve.id);
+  gl.UseProgram(cons_batch_resolve[filter].id);
 }
 
 bool GlImageStage::Impl::resolve_batch_on_gpu(std::size_t take, std::size_t texels, bool point, PeelResult* outs,
@@ -110,14 +111,18 @@ bool GlImageStage::Impl::resolve_batch_on_gpu(std::size_t take, std::size_t texe
   gl.BindBufferBase(GL_SHADER_STORAGE_BUFFER, 5, batch.layers);
   gl.BindTextureUnit(0, count_tex);
   gl.BindTextureUnit(1, fragment_tex);
-  gl.UseProgram(point ? point_batch_resolve.id : cons_batch_resolve.id);
-  gl.Uniform1ui(point ? point_batch_resolve.texels : cons_batch_resolve.texels, GLuint(texels));
+  // Conservative: the program with the certified filter unless GlOptions::gpu_filter is off.
+  const BatchResolveProgram& program = point ? point_batch_resolve : cons_batch_resolve[options.gpu_filter ? 1 : 0];
+  gl.UseProgram(program.id);
+  gl.Uniform1ui(program.texels, GLuint(texels));
   gl.BindBufferBase(GL_SHADER_STORAGE_BUFFER, 6, batch.offset_buffer);
   if (!point && batch.deep_rows_capacity == 0) {
     batch.deep_rows_capacity = 4096;
     gl.NamedBufferData(batch.deep_rows, GLsizeiptr(sizeof(DeepHeader) + batch.deep_rows_capacity * 8), nullptr, GL_DYNAMIC_COPY);
   }
-  if (!point) gl.BindBufferBase(GL_SHADER_STORAGE_BUFFER, 7, batch.deep_rows);
+  // The certified filter reads the views (3), the resident (7) and the frame's corners (8) where
+  // the draw bound them.
+  if (!point) gl.BindBufferBase(GL_SHADER_STORAGE_BUFFER, 15, batch.deep_rows);
   PcsHeader got{};
   DeepHeader deep{};
   for (;;) {  // the list's pairs are 16 bytes here (IDs and view): half as many fit
@@ -143,7 +148,7 @@ bool GlImageStage::Impl::resolve_batch_on_gpu(std::size_t take, std::size_t texe
         batch.deep_rows_capacity = std::size_t(deep.row_count) * 3 / 2;
         gl.NamedBufferData(batch.deep_rows, GLsizeiptr(sizeof(DeepHeader) + batch.deep_rows_capacity * 8), nullptr,
                            GL_DYNAMIC_COPY);
-        gl.BindBufferBase(GL_SHADER_STORAGE_BUFFER, 7, batch.deep_rows);
+        gl.BindBufferBase(GL_SHADER_STORAGE_BUFFER, 15, batch.deep_rows);
         continue;
       }
       dispatch_deep_rows(deep, texels);

@@ -66,12 +66,21 @@ void GlImageStage::Impl::build_programs() {
                              stage(GL_GEOMETRY_SHADER, shaders::conservative_geom, "conservative.geom (PEELCD_BATCH)", batch_define),
                              stage(GL_FRAGMENT_SHADER, shaders::conservative_frag, "conservative.frag (PEELCD_BATCH)", batch_define)},
                             "conservative batch");
-  cons_batch_resolve.id =
-      link({stage(GL_COMPUTE_SHADER, shaders::conservative_batch_resolve_comp, "conservative_batch_resolve.comp")},
-           "conservative batch resolve");
-  cons_deep.id = link({stage(GL_COMPUTE_SHADER, shaders::conservative_batch_resolve_comp,
-                                  "conservative_batch_resolve.comp (PEELCD_DEEP)", "#define PEELCD_DEEP\n")},
-                           "conservative batch resolve of deep texels");
+  // Without and with the certified filter: a program each (a uniform switch was not picked up by
+  // zink over lavapipe, Mesa 22.3, once a dispatch had run with the other value).
+  for (int filter = 0; filter < 2; ++filter) {
+    const std::string f = filter ? "#define PEELCD_FILTER_APART\n" : "";
+    const std::string deep = "#define PEELCD_DEEP\n" + f;
+    cons_batch_resolve[filter].id =
+        link({stage(GL_COMPUTE_SHADER, shaders::conservative_batch_resolve_comp, "conservative_batch_resolve.comp", f.c_str())},
+             "conservative batch resolve");
+    cons_deep[filter].id = link({stage(GL_COMPUTE_SHADER, shaders::conservative_batch_resolve_comp,
+                                       "conservative_batch_resolve.comp (PEELCD_DEEP)", deep.c_str())},
+                                "conservative batch resolve of deep texels");
+    cons_batch_resolve[filter].texels = gl.GetUniformLocation(cons_batch_resolve[filter].id, "texels");
+    cons_deep[filter].texels = gl.GetUniformLocation(cons_deep[filter].id, "texels");
+    cons_deep[filter].row_base = gl.GetUniformLocation(cons_deep[filter].id, "row_base");
+  }
   point_batch.id = link({stage(GL_VERTEX_SHADER, shaders::peel_vert, "peel.vert (PEELCD_BATCH)", batch_define),
                               stage(GL_FRAGMENT_SHADER, shaders::abuffer_frag, "abuffer.frag (PEELCD_BATCH)", batch_define)},
                              "point-sampled batch");
@@ -129,9 +138,6 @@ void GlImageStage::Impl::locate_uniforms() {
   cons_resolve.emit = gl.GetUniformLocation(cons_resolve.id, "emit_layer");
   cons_batch.count_only = gl.GetUniformLocation(cons_batch.id, "count_only");
   cons_batch.viewport = gl.GetUniformLocation(cons_batch.id, "viewport");
-  cons_batch_resolve.texels = gl.GetUniformLocation(cons_batch_resolve.id, "texels");
-  cons_deep.texels = gl.GetUniformLocation(cons_deep.id, "texels");
-  cons_deep.row_base = gl.GetUniformLocation(cons_deep.id, "row_base");
   point_batch.viewport = gl.GetUniformLocation(point_batch.id, "viewport");
   point_batch.count_only = gl.GetUniformLocation(point_batch.id, "count_only");
   point_batch_resolve.texels = gl.GetUniformLocation(point_batch_resolve.id, "texels");
@@ -200,8 +206,10 @@ GlImageStage::Impl::~Impl() {
   gl.DeleteProgram(cons.id);
   gl.DeleteProgram(cons_resolve.id);
   gl.DeleteProgram(cons_batch.id);
-  gl.DeleteProgram(cons_batch_resolve.id);
-  gl.DeleteProgram(cons_deep.id);
+  for (int filter = 0; filter < 2; ++filter) {
+    gl.DeleteProgram(cons_batch_resolve[filter].id);
+    gl.DeleteProgram(cons_deep[filter].id);
+  }
   gl.DeleteProgram(select.id);
   gl.DeleteProgram(point_batch.id);
   gl.DeleteProgram(point_batch_resolve.id);
@@ -255,6 +263,7 @@ std::string shader_source(const char* src, const std::string& defines) {
   const std::pair<std::string, std::string> includes[] = {
       {"#include \"peelcd/core/image/pcs_test.inc\"",
        std::string("#define PEELCD_PCS_FN\n#define PEELCD_ABS abs\n") + shaders::pcs_test_inc},
+      {"#include \"peelcd/core/image/certified_apart.inc\"", std::string("#define PEELCD_PCS_FN\n") + shaders::certified_apart_inc},
       {"#include \"batch.inc\"", shaders::batch_inc}};
   for (const auto& [line, text] : includes)
     if (const std::size_t at = out.find(line); at != std::string::npos) out.replace(at, line.size(), text);

@@ -297,8 +297,9 @@ struct GlImageStage::Impl {
   ConservativeProgram cons;
   ConservativeResolveProgram cons_resolve;
   BatchDrawProgram cons_batch, point_batch;
-  BatchResolveProgram cons_batch_resolve, point_batch_resolve;
-  DeepProgram cons_deep;
+  // [1]: with the certified filter (PEELCD_FILTER_APART; GlOptions::gpu_filter), [0] without.
+  BatchResolveProgram cons_batch_resolve[2], point_batch_resolve;
+  DeepProgram cons_deep[2];
   SelectProgram select;
   PrefixSumProgram prefix_sum;
   BatchState batch;

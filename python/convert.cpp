@@ -104,7 +104,7 @@ DetectOptions options_from(const py::dict& kwargs) {
   return o;
 }
 
-// The GL stage's settings from keywords (gl_option_table(): peeler, resolve, batch, gpu_select);
+// The GL stage's settings from keywords (gl_option_table(): peeler, resolve, batch, gpu_select, gpu_filter);
 // refused on the CPU stage, which has none.
 gl::GlOptions gl_options_from(const std::string& backend, const py::kwargs& kwargs) {
   gl::GlOptions o;
@@ -119,7 +119,7 @@ gl::GlOptions gl_options_from(const std::string& backend, const py::kwargs& kwar
     else throw py::type_error("GL option '" + key + "': expected a bool or a string");
     const std::string problem = gl::set_gl_option(o, key, words);
     if (problem.rfind("unknown GL option", 0) == 0)
-      throw py::type_error(problem + " (GL options: peeler, resolve, batch, gpu_select)");
+      throw py::type_error(problem + " (GL options: peeler, resolve, batch, gpu_select, gpu_filter)");
     if (!problem.empty()) throw py::value_error("GL option " + problem);
   }
   return o;

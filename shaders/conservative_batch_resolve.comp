@@ -12,7 +12,12 @@
 // (row, block of D fragments): invocation i of row r tests fragment D * r.block + i against the
 // block's D fragments. No invocation loops more than D * D times in the first pass (its own
 // texel's couples, or its rows) or D times in the second, whatever a texel's depth.
+// With PEELCD_FILTER_APART (GlOptions::gpu_filter; a program of its own), a couple whose two triangles are certainly apart
+// (peelcd/core/image/certified_apart.inc: a separating axis that no rounding can close, by more
+// than the proximity margin) is not written: only couples that may touch come back to the host.
 #include "peelcd/core/image/pcs_test.inc"  // pcs_intervals_overlap (shared with C++)
+#include "peelcd/core/image/certified_apart.inc"
+#include "batch.inc"  // the views' records (their poses and growth)
 
 #ifdef PEELCD_DEEP
 layout(local_size_x = PEELCD_GPU_RESOLVE_DEPTH) in;
@@ -36,7 +41,7 @@ layout(std430, binding = 6) readonly buffer Offsets { uint offsets[]; };  // tex
 // The deep texels' rows: (texel, block of D fragments); row_count may exceed row_capacity (then
 // none past it is written: the host grows the buffer and resolves again); max_blocks: the most
 // blocks of a deep texel (the second dispatch's height).
-layout(std430, binding = 7) buffer DeepRows {
+layout(std430, binding = 15) buffer DeepRows {
   uint row_count;
   uint row_capacity;
   uint max_blocks;
@@ -44,18 +49,45 @@ layout(std430, binding = 7) buffer DeepRows {
   uvec2 rows[];
 };
 
+// The draw's corners as the draw bound them (shaders/batch.inc's Resident and FrameCorners).
+layout(std430, binding = 7) readonly buffer ResidentCorners { uvec4 resident[]; };
+layout(std430, binding = 8) readonly buffer DrawnCorners { uvec4 frame_corners[]; };
+
 uniform uint texels;    // of the packed k-buffer
 uniform uint row_base;  // PEELCD_DEEP: the first row of this dispatch
 
-// Fragments i and j of one texel (A's and B's): a PCS if their intervals overlap.
+// Corner k of entry e in ROI-local coordinates, as shaders/conservative.vert places it, and its
+// error bound (the largest coordinate of |M| |x| + |t| made certified_corner_error()).
+vec3 entry_corner(uvec4 e, uint k, out float error) {
+  uint corner = (e.x & 0x7fffffffu) + k;
+  vec3 x = uintBitsToFloat((e.x >> 31) != 0u ? frame_corners[corner].xyz : resident[corner].xyz);
+  mat4 m = views[e.y >> 1].roi_from_object[e.y & 1u];
+  vec3 magnitude = mat3(abs(m[0].xyz), abs(m[1].xyz), abs(m[2].xyz)) * abs(x) + abs(m[3].xyz);
+  error = certified_corner_error(max(max(magnitude.x, magnitude.y), magnitude.z));
+  return (m * vec4(x, 1.0)).xyz;
+}
+
+// Whether the couple's triangles are certainly farther apart than the view's margin (twice its
+// growth, box_lo.w).
+bool certainly_apart(uvec4 ea, uvec4 eb) {
+  float e0, e1, e2, e3, e4, e5;
+  vec3 p0 = entry_corner(ea, 0u, e0), p1 = entry_corner(ea, 1u, e1), p2 = entry_corner(ea, 2u, e2);
+  vec3 q0 = entry_corner(eb, 0u, e3), q1 = entry_corner(eb, 1u, e4), q2 = entry_corner(eb, 2u, e5);
+  float reach = 2.0 * views[ea.y >> 1].box_lo.w;
+  return certified_apart(p0, p1, p2, max(max(e0, e1), e2), q0, q1, q2, max(max(e3, e4), e5), reach);
+}
+
+// Fragments i and j of one texel (A's and B's): a PCS if their intervals overlap (and, filtered,
+// their triangles may touch).
 void test_couple(uvec4 f, uvec4 g) {
   if (!pcs_intervals_overlap(uintBitsToFloat(f.x), uintBitsToFloat(f.z), uintBitsToFloat(g.x), uintBitsToFloat(g.z)))
     return;
+  uvec4 ea = entries[f.y & 0x7fffffffu], eb = entries[g.y & 0x7fffffffu];
+#ifdef PEELCD_FILTER_APART
+  if (certainly_apart(ea, eb)) return;
+#endif
   uint slot = atomicAdd(count, 1u);
-  if (slot < capacity) {
-    uvec4 ea = entries[f.y & 0x7fffffffu], eb = entries[g.y & 0x7fffffffu];
-    pairs[slot] = uvec4(ea.z, eb.z, ea.y >> 1, 0u);
-  }
+  if (slot < capacity) pairs[slot] = uvec4(ea.z, eb.z, ea.y >> 1, 0u);
 }
 
 #ifdef PEELCD_DEEP

@@ -78,6 +78,7 @@ TEST_CASE("conservative mode: the GPU resolve and the host resolve give the same
     for (const Resolve r : {Resolve::host, Resolve::gpu}) {
       gl::GlOptions o;
       o.resolve = r;
+      o.gpu_filter = false;  // every overlapping couple, as the host resolve lists them
       test_pipeline().set_gl_options(o);
       runs.push_back(test_pipeline().detect(g.objects, opt));
     }
@@ -180,6 +181,7 @@ TEST_CASE("conservative views packed into one k-buffer and drawn together give e
   gl::GlOptions gpu;
   gpu.resolve = Resolve::gpu;  // the batch resolved by one dispatch (shaders/conservative_batch_resolve.comp)
   gpu.gpu_select = false;
+  gpu.gpu_filter = false;  // every overlapping couple, as the host resolve lists them
   test_pipeline().set_gl_options(gpu);
   const FrameResult g = test_pipeline().detect(objects, opt);
   test_pipeline().set_gl_options(gl::GlOptions{});
@@ -208,7 +210,7 @@ TEST_CASE("conservative views packed into one k-buffer and drawn together give e
   CHECK(contacts > 0);
 }
 
-TEST_CASE("a batch of more than 256 blocks of texels: the GPU's prefix sum gives the host's PCS", "[conservative][batch]") {
+TEST_CASE("a batch of more than 256 blocks of texels: the GPU's prefix sum gives the host's PCS; the certified filter", "[conservative][batch]") {
   // The GPU resolve sums the counts on the GPU (shaders/prefix_sum.comp: blocks of 1,024 texels,
   // their sums scanned 256 at a time); the 400-ball pile's frame packs about 330,000 texels. A
   // wrong offset would put fragments in another texel's range: PCS and layers would differ.
@@ -218,6 +220,7 @@ TEST_CASE("a batch of more than 256 blocks of texels: the GPU's prefix sum gives
   opt.stage = Stage::image;
   gl::GlOptions o;
   o.resolve = Resolve::host;
+  o.gpu_filter = false;  // every overlapping couple, as the host resolve lists them
   test_pipeline().set_gl_options(o);
   const FrameResult host = test_pipeline().detect(objects, opt);
   o.resolve = Resolve::gpu;
@@ -234,6 +237,33 @@ TEST_CASE("a batch of more than 256 blocks of texels: the GPU's prefix sum gives
   for (std::size_t i = 0; i < host.pairs.size(); ++i)
     differing += gpu.pairs[i].pcs != host.pairs[i].pcs || gpu.pairs[i].layers != host.pairs[i].layers;
   CHECK(differing == 0);
+
+  // The certified filter (GlOptions::gpu_filter, the default) on the same frame: couples whose
+  // triangles are certainly apart stay on the GPU. The contacts are the unfiltered frame's, every
+  // PCS is one of its PCS, and what reaches the host's exact test is near the colliding pairs
+  // (docs/backends.md's target: at most twice; unfiltered, about ten times).
+  o.gpu_filter = true;
+  test_pipeline().set_gl_options(o);
+  const FrameResult filtered = test_pipeline().detect(objects, opt);
+  test_pipeline().set_gl_options(gl::GlOptions{});
+  REQUIRE(filtered.pairs.size() == gpu.pairs.size());
+  std::size_t pcs_all = 0, pcs_kept = 0, colliding = 0, contacts_differ = 0, outside = 0;
+  for (std::size_t i = 0; i < gpu.pairs.size(); ++i) {
+    const PairResult &a = gpu.pairs[i], &f = filtered.pairs[i];
+    pcs_all += a.pcs.size();
+    pcs_kept += f.pcs.size();
+    colliding += a.colliding.size();
+    contacts_differ += a.colliding.size() != f.colliding.size() ||
+                       !std::equal(a.colliding.begin(), a.colliding.end(), f.colliding.begin(),
+                                   [](const Contact& x, const Contact& y) { return x.tri_a == y.tri_a && x.tri_b == y.tri_b; });
+    for (const IdPair& p : f.pcs) outside += !std::binary_search(a.pcs.begin(), a.pcs.end(), p);
+  }
+  INFO(pcs_all << " PCS unfiltered, " << pcs_kept << " filtered, " << colliding << " colliding pairs");
+  REQUIRE(colliding > 1000);
+  CHECK(contacts_differ == 0);
+  CHECK(outside == 0);
+  CHECK(pcs_kept <= 2 * colliding);
+  CHECK(pcs_all > 2 * colliding);  // the frame is one where the filter has work
 }
 
 TEST_CASE("point-sampled views packed into one k-buffer give each pair's layers and PCS", "[batch]") {

@@ -55,10 +55,12 @@ struct Run {
   Score score;
 };
 
-Run run(const std::vector<Object>& objects, const DetectOptions& opt, Resolve resolve, bool batch) {
+Run run(const std::vector<Object>& objects, const DetectOptions& opt, Resolve resolve, bool batch,
+        bool filter = false) {
   gl::GlOptions o;
   o.resolve = resolve;
   o.batch = batch;
+  o.gpu_filter = filter;  // off: every overlapping couple, as the host resolve lists them
   test_pipeline().set_gl_options(o);
   Run r;
   r.frame = test_pipeline().detect(objects, opt);
@@ -110,6 +112,16 @@ void check_deep(const std::vector<Object>& objects, DetectOptions opt) {
       if (opt.conservative && views > 1 && batch) {
         CHECK(gpu.frame.gl_deep_texels > 0);  // split over invocations, on the GPU
         CHECK(gpu.frame.views_host_resolved == 0);
+        // The certified filter in both programs (a texel's own and the deep rows'): the same
+        // contacts, the PCS among the unfiltered ones.
+        const Run filtered = run(objects, opt, Resolve::gpu, batch, true);
+        CHECK(filtered.score.missed == 0);
+        CHECK(filtered.score.found == gpu.score.found);
+        const auto& all = gpu.frame.pairs[0].pcs;
+        std::size_t outside = 0;
+        for (const auto& p : filtered.frame.pairs[0].pcs) outside += !std::binary_search(all.begin(), all.end(), p);
+        CHECK(outside == 0);
+        CHECK(filtered.frame.pairs[0].pcs.size() <= all.size());
       } else {
         CHECK(gpu.frame.views_host_resolved > 0);  // resolved on the host, and said
       }

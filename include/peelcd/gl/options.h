@@ -60,6 +60,13 @@ struct GlOptions {
   // misses), as between culling modes. Views capturing layers (dumps, goldens) keep the host's
   // selection. false: the host's (peelcd detect --cpu-select).
   bool gpu_select = true;
+  // Conservative views resolved on the GPU in a batch: a couple whose two triangles are certainly
+  // farther apart than the margin (a separating axis in float that no rounding can close,
+  // peelcd/core/image/certified_apart.inc) is dropped on the GPU; only the couples that may touch
+  // come back to the host's exact test. The contacts are the same; the PCS are those couples.
+  // Dumps and goldens turn it off (their PCS are the image stage's). false: every overlapping
+  // couple comes back (peelcd detect --no-gpu-filter).
+  bool gpu_filter = true;
 };
 
 // The GL stage's settings, one row each, as the frame's option table (peelcd/core/options.h)
@@ -107,6 +114,14 @@ inline const std::vector<GlOptionSpec>& gl_option_table() {
        [](GlOptions& o, const std::string& v) {
          if (v != "true" && v != "false") return false;
          o.gpu_select = v == "true";
+         return true;
+       }},
+      {"gpu_filter", "--no-gpu-filter",
+       "In a conservative batch resolved on the GPU, drop couples whose triangles are certainly apart (false: all come back)",
+       "", [](const GlOptions& o) { return std::string(o.gpu_filter ? "true" : "false"); },
+       [](GlOptions& o, const std::string& v) {
+         if (v != "true" && v != "false") return false;
+         o.gpu_filter = v == "true";
          return true;
        }},
   };
