@@ -3,7 +3,7 @@
 #   1. the golden suite on the hardware tier (--quick: the exact tier on llvmpipe), with the
 #      GPU resolve (--resolve gpu) and with the host resolve;
 #   2. the deep-texel scenes of the GPU resolve (a 1-texel tile on the default scene, both
-#      resolves, every PCS compared);
+#      resolves, every PCS compared with the certified filter off; with it, nothing missed);
 #   3. run-to-run determinism: the same frames twice, batched with GPU selection and the GPU
 #      resolve, every PCS and pair compared (detect --pcs --list);
 #   4. peelcd bench on the default scene, the 400-ball pile, the 1.3M-triangle rigid and waving
@@ -117,13 +117,17 @@ for resolve in gpu host; do
 done
 
 # 2. Deep texels: every drawn triangle of both meshes in one texel (a 1-texel tile), the GPU
-# resolve against the host's: the same PCS and pairs, nothing missed.
+# resolve against the host's: the same PCS and pairs, nothing missed (the GPU's certified filter
+# off: every overlapping couple, as the host lists them); then with the filter: nothing missed.
 for resolve in gpu host; do
   step "deep texels (1-texel tile), --resolve $resolve" "deep_$resolve.txt" \
     "$bin" detect fixtures/scenes/bunny_dragon.json --backend egl --stage image --res 1 --views 3 --resolve "$resolve" \
-    --check --max-miss 0 --pcs --list
+    --no-gpu-filter --check --max-miss 0 --pcs --list
 done
 same "deep texels: GPU resolve = host resolve" "$out/deep_gpu.txt" "$out/deep_host.txt"
+step "deep texels (1-texel tile), GPU resolve, certified filter" "deep_gpu_filtered.txt" \
+  "$bin" detect fixtures/scenes/bunny_dragon.json --backend egl --stage image --res 1 --views 3 --resolve gpu \
+  --check --max-miss 0
 
 # 3. Determinism: the production path (batched views, GPU selection, GPU resolve) twice.
 for run in 1 2; do
@@ -138,6 +142,8 @@ if [ "$quick" = 1 ]; then
 else
   step "bench, default scene" "bench_default.txt" "$bin" bench fixtures/scenes/bunny_dragon.json --backend egl --frames 30 --threads 1
   step "bench, 400-ball pile" "bench_pile400.txt" "$bin" bench crowd --objects 400 --backend egl --frames 6 --threads 1
+  step "bench, 400-ball pile, the GPU's certified filter off" "bench_pile400_unfiltered.txt" \
+    "$bin" bench crowd --objects 400 --backend egl --frames 6 --threads 1 --short --no-gpu-filter
   step "bench, rigid spheres 1.3M" "bench_spheres_1m.txt" "$bin" bench spheres --stacks 570 --backend egl --frames 4 --threads 1 --short
   # The deforming scenes, where the image stage should earn its place: the image-work table under
   # each bench says where its frame goes (host work, GL waits, GPU raster/compute/transfer by timer

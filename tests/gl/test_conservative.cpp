@@ -210,7 +210,7 @@ TEST_CASE("conservative views packed into one k-buffer and drawn together give e
   CHECK(contacts > 0);
 }
 
-TEST_CASE("a batch of more than 256 blocks of texels: the GPU's prefix sum gives the host's PCS; the certified filter", "[conservative][batch]") {
+TEST_CASE("a batch of more than 256 blocks of texels: the GPU's prefix sum gives the host's PCS, and the certified filter keeps its contacts", "[conservative][batch]") {
   // The GPU resolve sums the counts on the GPU (shaders/prefix_sum.comp: blocks of 1,024 texels,
   // their sums scanned 256 at a time); the 400-ball pile's frame packs about 330,000 texels. A
   // wrong offset would put fragments in another texel's range: PCS and layers would differ.

@@ -128,7 +128,10 @@ TEST_CASE("the GPU's certified filter drops only triangles that are truly apart"
         ++t.near_dropped;
         if (d <= reach * (1.0 + 1e-9) && d > 0.0) {
           ++t.near_wrong;
-          FAIL_CHECK("case " << i << ": dropped at reach " << reach << ", but the distance is " << d);
+          FAIL_CHECK("case " << i << " (" << kFamilyNames[int(c.family)] << ", scale " << c.scale << ", offset "
+                             << c.offset << ", centre " << centre.transpose() << ", kinds " << i % 2 << (i / 2) % 2
+                             << "): dropped at reach " << reach << ", but the distance is " << d
+                             << "; errors " << ga.error << " " << gb.error);
         }
       }
     }

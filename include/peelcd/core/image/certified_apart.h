@@ -19,7 +19,6 @@ inline vec3 abs(vec3 a) { return {std::fabs(a.x), std::fabs(a.y), std::fabs(a.z)
 inline float min(float a, float b) { return std::min(a, b); }
 inline float max(float a, float b) { return std::max(a, b); }
 inline vec3 max(vec3 a, vec3 b) { return {std::max(a.x, b.x), std::max(a.y, b.y), std::max(a.z, b.z)}; }
-inline float sqrt(float a) { return std::sqrt(a); }
 
 #define PEELCD_PCS_FN inline
 #include "peelcd/core/image/certified_apart.inc"
