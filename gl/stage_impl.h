@@ -141,6 +141,7 @@ struct ConservativeProgram {
 struct ConservativeResolveProgram {
   GLuint id = 0;
   GLint res = -1, slots = -1, append = -1, emit = -1;
+  GLint model[2] = {-1, -1}, reach = -1;  // the certified filter's (PEELCD_FILTER_APART)
 };
 // A batched draw (the conservative or point-sampled sources with PEELCD_BATCH): a count pass
 // and a fill pass over every view of a frame.
@@ -295,7 +296,7 @@ struct GlImageStage::Impl {
   ABufferProgram abuffer;
   ResolveProgram resolve;
   ConservativeProgram cons;
-  ConservativeResolveProgram cons_resolve;
+  ConservativeResolveProgram cons_resolve[2];  // [1]: with the certified filter (GlOptions::gpu_filter)
   BatchDrawProgram cons_batch, point_batch;
   // [1]: with the certified filter (PEELCD_FILTER_APART; GlOptions::gpu_filter), [0] without.
   BatchResolveProgram cons_batch_resolve[2], point_batch_resolve;
