@@ -54,7 +54,7 @@ TEST_CASE("conservative mode with the GPU's selection misses nothing on any clas
         }
         DetectOptions opt;
         opt.stage = Stage::image;
-        opt.views = 3;  // three views of the pair: a batch (one view alone is drawn on its own)
+        opt.views = 3;  // three views of the pair: a batch (one view alone, on the host resolve, is drawn on its own)
         const ClassRow r = measure_class(test_pipeline().detector(), g, "conservative", opt, 1);
         INFO(g.name << (turned ? ", turned" : "") << ", resolve " << to_string(resolve) << ": " << r.found << " of "
                     << r.exact);
