@@ -141,6 +141,8 @@ void print_frame_header(FILE* human, const Scene& scene, const std::vector<Objec
   if (result.gl_deep_texels > 0)
     std::fprintf(human, " (GPU resolve: %zu texels deeper than %d fragments split over invocations)",
                  result.gl_deep_texels, PEELCD_GPU_RESOLVE_DEPTH);
+  if (result.gl_couples_apart > 0)
+    std::fprintf(human, " (GPU resolve: %zu texel couples certainly apart, not read back)", result.gl_couples_apart);
   if (result.views_host_resolved > 0)
     std::fprintf(human, " (%zu views resolved on the host: a texel deeper than the GPU resolve's %d fragments)",
                  result.views_host_resolved, PEELCD_GPU_RESOLVE_DEPTH);

@@ -88,6 +88,7 @@ enum class Kind { world, frame, cgal, peer, floor_box, floor_culled };
 struct Split {
   double total = 0, wait = 0, raster = 0, compute = 0, transfer = 0;
   double uploaded = 0, geometry = 0, candidates = 0, colliding = 0, rois_peeled = 0;
+  double apart = 0;  // texel couples the GPU's certified filter dropped (FrameResult::gl_couples_apart)
   double boxes = 0, views = 0, stage = 0, readback = 0, exact = 0;  // the host's steps (Timings)
   std::size_t untimed = 0;  // passes whose timer query gave an impossible time (left out)
 };
@@ -154,6 +155,7 @@ Split split_of(const FrameResult& r) {
   s.uploaded = double(r.bytes_uploaded);
   s.geometry = double(r.geometry_bytes);
   s.rois_peeled = double(r.rois_peeled);
+  s.apart = double(r.gl_couples_apart);
   s.untimed = r.timings.gpu_passes_untimed;
   s.boxes = r.timings.aabb;
   s.views = r.timings.upload;
@@ -494,8 +496,8 @@ void SuiteRun::print_image_work() const {
     if (!r.peelcd() || med(r.split, &Split::rois_peeled) == 0) continue;
     if (!any) {
       std::printf("\nimage work per frame (medians over the frames; the rows above, the same runs):\n");
-      std::printf("%-38s %8s %8s %8s %8s %8s %8s %6s %9s %9s %9s %9s %6s\n", "method", "frame", "host", "GL wait",
-                  "raster", "compute", "transfer", "x dflt", "KB up", "KB mesh", "cands", "colliding", "c/col");
+      std::printf("%-38s %8s %8s %8s %8s %8s %8s %6s %9s %9s %9s %9s %9s %6s\n", "method", "frame", "host", "GL wait",
+                  "raster", "compute", "transfer", "x dflt", "KB up", "KB mesh", "apart", "cands", "colliding", "c/col");
       any = true;
     }
     const double host = med(r.split, &Split::total) - med(r.split, &Split::wait);
@@ -506,9 +508,9 @@ void SuiteRun::print_image_work() const {
                   med(r.split, &Split::transfer));
     else
       std::printf(" %8s %8s %8s", "-", "-", "-");
-    std::printf(" %6.2f %9.1f %9.1f %9.0f %9.0f %6.2f\n", exact_ms > 0 ? host / exact_ms : 0.0,
-                med(r.split, &Split::uploaded) / 1024.0, med(r.split, &Split::geometry) / 1024.0, candidates, colliding,
-                colliding > 0 ? candidates / colliding : 0.0);
+    std::printf(" %6.2f %9.1f %9.1f %9.0f %9.0f %9.0f %6.2f\n", exact_ms > 0 ? host / exact_ms : 0.0,
+                med(r.split, &Split::uploaded) / 1024.0, med(r.split, &Split::geometry) / 1024.0,
+                med(r.split, &Split::apart), candidates, colliding, colliding > 0 ? candidates / colliding : 0.0);
   }
   if (!any) return;
   std::size_t untimed = 0;
@@ -521,8 +523,9 @@ void SuiteRun::print_image_work() const {
               " maps, query results, and memory barriers, where a software renderer finishes its work); raster, compute,\n"
               " transfer: GPU time of draws, dispatches and uploads/clears/copies by GL timer queries%s; x dflt: host\n"
               " against the default World row's median frame (%.2f ms); KB up: bytes the host wrote into GL buffers, KB\n"
-              " mesh: of those, corners, indices and draw entries; cands: triangle couples the host tested exactly; c/col:\n"
-              " cands per colliding pair.)\n",
+              " mesh: of those, corners, indices and draw entries; apart: texel couples the GPU resolve's certified filter\n"
+              " proved apart and did not read back; cands: triangle couples the host tested exactly; c/col: cands per\n"
+              " colliding pair.)\n",
               gl_stage_.pass_timing() ? "" : " (off: --no-gpu-timers)", exact_ms);
   print_host_steps();
 }

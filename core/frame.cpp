@@ -108,7 +108,7 @@ void FrameResult::reset_counters() {
   gl_passes = rois_peeled = triangles_uploaded = triangles_indexed = shape_uploads = 0;
   pcs_readbacks = views_exhaustive = rois_exact = 0;
   gl_draws = gl_dispatches = gl_readbacks = bytes_uploaded = bytes_read = geometry_bytes = 0;
-  gl_deep_texels = views_host_resolved = 0;
+  gl_deep_texels = views_host_resolved = gl_couples_apart = 0;
 }
 
 void FrameResult::add_image_work(const FrameResult& o) {
@@ -124,6 +124,7 @@ void FrameResult::add_image_work(const FrameResult& o) {
   bytes_read += o.bytes_read;
   geometry_bytes += o.geometry_bytes;
   gl_deep_texels += o.gl_deep_texels;
+  gl_couples_apart += o.gl_couples_apart;
   views_host_resolved += o.views_host_resolved;
   timings.aabb += o.timings.aabb;
   timings.upload += o.timings.upload;

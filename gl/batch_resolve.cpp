@@ -123,10 +123,13 @@ bool GlImageStage::Impl::resolve_batch_on_gpu(std::size_t take, std::size_t texe
   // The certified filter reads the views (3), the resident (7) and the frame's corners (8) where
   // the draw bound them.
   if (!point) gl.BindBufferBase(GL_SHADER_STORAGE_BUFFER, 15, batch.deep_rows);
-  PcsHeader got{};
+  BatchPcsHeader got{};
   DeepHeader deep{};
-  for (;;) {  // the list's pairs are 16 bytes here (IDs and view): half as many fit
-    const PcsHeader header{0, pcs_capacity / 2, 0, 0};
+  // The list's pairs are 16 bytes here (IDs and view), after a 32-byte header: half as many fit,
+  // less one.
+  const auto fitting = [&] { return std::uint32_t(pcs_capacity / 2 - 1); };
+  for (;;) {
+    const BatchPcsHeader header{0, fitting(), 0, 0, 0, {0, 0, 0}};
     upload_buffer(pcs_buffer, 0, sizeof header, &header);
     if (!point) {
       const DeepHeader empty{0, std::uint32_t(batch.deep_rows_capacity), 0, 0};
@@ -156,17 +159,18 @@ bool GlImageStage::Impl::resolve_batch_on_gpu(std::size_t take, std::size_t texe
       read_buffer(pcs_buffer, 0, sizeof got, &got);
       t.readback += ms_since(t_again);
     }
-    if (got.count <= pcs_capacity / 2) break;
+    if (got.count <= fitting()) break;
     grow_pcs(2 * (got.count + got.count / 2));  // the list did not fit: larger, and the dispatch again
     gl.BindBufferBase(GL_SHADER_STORAGE_BUFFER, 0, pcs_buffer);
   }
   counters->deep_texels += deep.deep_texels;
+  counters->couples_apart += got.couples_apart;
   const auto t_read = Clock::now();
   batch.view_layers.resize(take);
   read_buffer(batch.layers, 0, GLsizeiptr(layer_bytes), batch.view_layers.data());
   batch.pairs.resize(std::size_t(got.count) * 4);
   if (got.count) {
-    read_buffer(pcs_buffer, sizeof(PcsHeader), GLsizeiptr(got.count) * 16, batch.pairs.data());
+    read_buffer(pcs_buffer, sizeof(BatchPcsHeader), GLsizeiptr(got.count) * 16, batch.pairs.data());
   }
   t.readback += ms_since(t_read);
   check("the GPU resolve of the packed k-buffer");

@@ -57,19 +57,9 @@ void GlImageStage::Impl::build_programs() {
                        stage(GL_GEOMETRY_SHADER, shaders::conservative_geom, "conservative.geom"),
                        stage(GL_FRAGMENT_SHADER, shaders::conservative_frag, "conservative.frag")},
                       "conservative");
-  for (int filter = 0; filter < 2; ++filter) {  // without and with the certified filter
-    ConservativeResolveProgram& r = cons_resolve[filter];
-    r.id = link({stage(GL_COMPUTE_SHADER, shaders::conservative_resolve_comp, "conservative_resolve.comp",
-                       filter ? "#define PEELCD_FILTER_APART\n" : "")},
-                "conservative resolve");
-    r.res = gl.GetUniformLocation(r.id, "resolution");
-    r.slots = gl.GetUniformLocation(r.id, "slots");
-    r.append = gl.GetUniformLocation(r.id, "append_pcs");
-    r.emit = gl.GetUniformLocation(r.id, "emit_layer");
-    r.model[0] = gl.GetUniformLocation(r.id, "model_a");
-    r.model[1] = gl.GetUniformLocation(r.id, "model_b");
-    r.reach = gl.GetUniformLocation(r.id, "reach");
-  }
+  cons_resolve.id =
+      link({stage(GL_COMPUTE_SHADER, shaders::conservative_resolve_comp, "conservative_resolve.comp")},
+           "conservative resolve");
   // The batched programs: the same sources with PEELCD_BATCH defined.
   const char* batch_define = "#define PEELCD_BATCH\n";
   cons_batch.id = link({stage(GL_VERTEX_SHADER, shaders::conservative_vert, "conservative.vert (PEELCD_BATCH)", batch_define),
@@ -142,6 +132,10 @@ void GlImageStage::Impl::locate_uniforms() {
   cons.object = gl.GetUniformLocation(cons.id, "object_bit");
   cons.grow_texels = gl.GetUniformLocation(cons.id, "grow_texels");
   cons.grow_depth = gl.GetUniformLocation(cons.id, "grow_depth");
+  cons_resolve.res = gl.GetUniformLocation(cons_resolve.id, "resolution");
+  cons_resolve.slots = gl.GetUniformLocation(cons_resolve.id, "slots");
+  cons_resolve.append = gl.GetUniformLocation(cons_resolve.id, "append_pcs");
+  cons_resolve.emit = gl.GetUniformLocation(cons_resolve.id, "emit_layer");
   cons_batch.count_only = gl.GetUniformLocation(cons_batch.id, "count_only");
   cons_batch.viewport = gl.GetUniformLocation(cons_batch.id, "viewport");
   point_batch.viewport = gl.GetUniformLocation(point_batch.id, "viewport");
@@ -210,7 +204,7 @@ GlImageStage::Impl::~Impl() {
   gl.DeleteProgram(abuffer.id);
   gl.DeleteProgram(resolve.id);
   gl.DeleteProgram(cons.id);
-  for (const ConservativeResolveProgram& r : cons_resolve) gl.DeleteProgram(r.id);
+  gl.DeleteProgram(cons_resolve.id);
   gl.DeleteProgram(cons_batch.id);
   for (int filter = 0; filter < 2; ++filter) {
     gl.DeleteProgram(cons_batch_resolve[filter].id);

@@ -253,21 +253,11 @@ bool GlImageStage::Impl::peel_conservative(const PeelJob& job, PeelResult& out, 
   ++out.gl_passes;
   check("the conservative k-buffer draw");
 
-  // The certified filter (GlOptions::gpu_filter) unless layers are captured (their PCS are the
-  // image stage's, every overlapping couple: dumps, goldens).
-  const bool filter = options.gpu_filter && !job.capture;
-  const ConservativeResolveProgram& program = cons_resolve[filter ? 1 : 0];
-  gl.UseProgram(program.id);
+  gl.UseProgram(cons_resolve.id);
   bind_resolve_inputs();
-  gl.Uniform1i(program.res, n);
-  gl.Uniform1ui(program.slots, view_slots);
-  if (filter) {
-    static const std::array<float, 16> identity = {1, 0, 0, 0, 0, 1, 0, 0, 0, 0, 1, 0, 0, 0, 0, 1};
-    for (int slot = 0; slot < 2; ++slot)
-      gl.UniformMatrix4fv(program.model[slot], 1, GL_FALSE, (slot_shape[slot] ? slot_model[slot] : identity).data());
-    gl.Uniform1f(program.reach, float(2.0 * job.grow));
-  }
-  return dispatch_resolve(job, fitting, view_slots, t_gpu, program.append, program.emit, "the conservative resolve", out, t);
+  gl.Uniform1i(cons_resolve.res, n);
+  gl.Uniform1ui(cons_resolve.slots, view_slots);
+  return dispatch_resolve(job, fitting, view_slots, t_gpu, cons_resolve.append, cons_resolve.emit, "the conservative resolve", out, t);
 }
 
 }  // namespace peelcd::gl

@@ -47,6 +47,12 @@ struct PcsHeader {
 };
 
 // Header of the deep texels' rows (DeepRows in shaders/conservative_batch_resolve.comp).
+// The batched resolves' header (shaders/conservative_batch_resolve.comp, abuffer_resolve.comp with
+// PEELCD_BATCH): PcsHeader's words, the couples the certified filter dropped, padding to 32 bytes.
+struct BatchPcsHeader {
+  std::uint32_t count, capacity, max_layers, max_fragments, couples_apart, pad[3];
+};
+
 struct DeepHeader {
   std::uint32_t row_count, row_capacity, max_blocks, deep_texels;
 };
@@ -141,7 +147,6 @@ struct ConservativeProgram {
 struct ConservativeResolveProgram {
   GLuint id = 0;
   GLint res = -1, slots = -1, append = -1, emit = -1;
-  GLint model[2] = {-1, -1}, reach = -1;  // the certified filter's (PEELCD_FILTER_APART)
 };
 // A batched draw (the conservative or point-sampled sources with PEELCD_BATCH): a count pass
 // and a fill pass over every view of a frame.
@@ -296,7 +301,7 @@ struct GlImageStage::Impl {
   ABufferProgram abuffer;
   ResolveProgram resolve;
   ConservativeProgram cons;
-  ConservativeResolveProgram cons_resolve[2];  // [1]: with the certified filter (GlOptions::gpu_filter)
+  ConservativeResolveProgram cons_resolve;
   BatchDrawProgram cons_batch, point_batch;
   // [1]: with the certified filter (PEELCD_FILTER_APART; GlOptions::gpu_filter), [0] without.
   BatchResolveProgram cons_batch_resolve[2], point_batch_resolve;

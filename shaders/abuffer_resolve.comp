@@ -25,6 +25,7 @@ layout(std430, binding = 0) buffer PcsBuffer {
   uint capacity;
   uint max_layers;
   uint max_fragments;
+  uint couples_apart, pad0, pad1, pad2;  // as shaders/conservative_batch_resolve.comp's (0 here)
   uvec4 pairs[];  // ID of A's triangle, ID of B's, view, 0
 };
 layout(std430, binding = 4) readonly buffer Entries { uvec4 entries[]; };  // shaders/batch.inc

@@ -32,6 +32,8 @@ layout(std430, binding = 0) buffer PcsBuffer {
   uint capacity;
   uint max_layers;
   uint max_fragments;  // the most fragments of a texel too deep for the deep rows (> 65535 blocks)
+  uint couples_apart;  // couples the certified filter dropped (PEELCD_FILTER_APART)
+  uint pad0, pad1, pad2;
   uvec4 pairs[];       // ID of A's triangle, ID of B's, view, 0
 };
 // first corner, view << 1 | object, the provoking corner's ID, 0 (shaders/conservative.vert)
@@ -77,6 +79,8 @@ bool certainly_apart(uvec4 ea, uvec4 eb) {
   return certified_apart(p0, p1, p2, max(max(e0, e1), e2), q0, q1, q2, max(max(e3, e4), e5), reach);
 }
 
+uint apart_here = 0u;  // this invocation's couples dropped by the filter, added once at its end
+
 // Fragments i and j of one texel (A's and B's): a PCS if their intervals overlap (and, filtered,
 // their triangles may touch).
 void test_couple(uvec4 f, uvec4 g) {
@@ -84,7 +88,10 @@ void test_couple(uvec4 f, uvec4 g) {
     return;
   uvec4 ea = entries[f.y & 0x7fffffffu], eb = entries[g.y & 0x7fffffffu];
 #ifdef PEELCD_FILTER_APART
-  if (certainly_apart(ea, eb)) return;
+  if (certainly_apart(ea, eb)) {
+    ++apart_here;
+    return;
+  }
 #endif
   uint slot = atomicAdd(count, 1u);
   if (slot < capacity) pairs[slot] = uvec4(ea.z, eb.z, ea.y >> 1, 0u);
@@ -107,6 +114,7 @@ void main() {
     uvec4 g = texelFetch(fragment_tex, int(begin + j));
     if ((g.y >> 31) == 1u) test_couple(f, g);
   }
+  if (apart_here > 0u) atomicAdd(couples_apart, apart_here);
 }
 #else
 void main() {
@@ -140,5 +148,6 @@ void main() {
       if ((g.y >> 31) == 1u) test_couple(f, g);
     }
   }
+  if (apart_here > 0u) atomicAdd(couples_apart, apart_here);
 }
 #endif

@@ -2,11 +2,7 @@
 // Conservative mode, step 3: per texel, every two fragments of different objects whose depth
 // intervals overlap are a PCS (not only adjacent layers); every fragment is a layer, in
 // (lower depth, object, draw order) order. The same set as core/image/kbuffer.cpp's host resolve.
-// With PEELCD_FILTER_APART (GlOptions::gpu_filter; a program of its own, not used when layers are
-// captured), a couple whose triangles are certainly farther apart than the margin
-// (peelcd/core/image/certified_apart.inc) is not written, as in conservative_batch_resolve.comp.
 #include "peelcd/core/image/pcs_test.inc"  // pcs_within_epsilon, pcs_intervals_overlap (shared with C++)
-#include "peelcd/core/image/certified_apart.inc"
 
 layout(local_size_x = 8, local_size_y = 8) in;
 
@@ -27,30 +23,6 @@ uniform int resolution;
 uniform uint slots;
 uniform bool append_pcs;
 uniform int emit_layer;  // -1: none
-
-#ifdef PEELCD_FILTER_APART
-uniform mat4 model_a;  // ROI-local from the corners' frame (a rigid shape's pose), else identity
-uniform mat4 model_b;
-uniform float reach;   // the margin (twice the growth), 0 for contact
-
-// Corner k of fragment f's triangle, ROI-local, and its error bound (certified_corner_error()).
-vec3 corner_of(uvec4 f, uint k, out float error) {
-  uint corner = 3u * (f.y & 0x7fffffffu) + k;
-  bool b = (f.y >> 31) != 0u;
-  vec3 x = uintBitsToFloat(b ? texelFetch(corners_b, int(corner)).xyz : texelFetch(corners_a, int(corner)).xyz);
-  mat4 m = b ? model_b : model_a;
-  vec3 magnitude = mat3(abs(m[0].xyz), abs(m[1].xyz), abs(m[2].xyz)) * abs(x) + abs(m[3].xyz);
-  error = certified_corner_error(max(max(magnitude.x, magnitude.y), magnitude.z));
-  return (m * vec4(x, 1.0)).xyz;
-}
-
-bool certainly_apart(uvec4 f, uvec4 g) {
-  float e0, e1, e2, e3, e4, e5;
-  vec3 p0 = corner_of(f, 0u, e0), p1 = corner_of(f, 1u, e1), p2 = corner_of(f, 2u, e2);
-  vec3 q0 = corner_of(g, 0u, e3), q1 = corner_of(g, 1u, e4), q2 = corner_of(g, 2u, e5);
-  return certified_apart(p0, p1, p2, max(max(e0, e1), e2), q0, q1, q2, max(max(e3, e4), e5), reach);
-}
-#endif
 
 uint id_of(uvec4 f) {
   uint corner = 3u * (f.y & 0x7fffffffu) + 2u;
@@ -87,9 +59,6 @@ void main() {
       uvec4 g = texelFetch(fragment_tex, int(j));
       if ((g.y >> 31) != 1u) continue;
       if (!pcs_intervals_overlap(lo, hi, uintBitsToFloat(g.x), uintBitsToFloat(g.z))) continue;
-#ifdef PEELCD_FILTER_APART
-      if (certainly_apart(f, g)) continue;
-#endif
       uint slot = atomicAdd(count, 1u);
       if (slot < capacity) pairs[slot] = uvec2(id_of(f), id_of(g));
     }

@@ -43,6 +43,7 @@ void copy_stage_counters(const StageCounters& c, FrameResult& out) {
   out.bytes_read = c.bytes_read;
   out.geometry_bytes = c.geometry_bytes;
   out.gl_deep_texels = c.deep_texels;
+  out.gl_couples_apart = c.couples_apart;
   out.views_host_resolved = c.views_host_resolved;
 }
 

@@ -264,6 +264,9 @@ TEST_CASE("a batch of more than 256 blocks of texels: the GPU's prefix sum gives
   CHECK(outside == 0);
   CHECK(pcs_kept <= 2 * colliding);
   CHECK(pcs_all > 2 * colliding);  // the frame is one where the filter has work
+  // Counted: at least one texel couple for each pair it kept away from the host.
+  CHECK(gpu.gl_couples_apart == 0);
+  CHECK(filtered.gl_couples_apart >= pcs_all - pcs_kept);
 }
 
 TEST_CASE("point-sampled views packed into one k-buffer give each pair's layers and PCS", "[batch]") {

@@ -230,6 +230,10 @@ struct FrameResult {
   // fragments): split over invocations (batched conservative views: gl_deep_texels), or their
   // views resolved on the host instead (views_host_resolved). Both 0 on the host resolve.
   std::size_t gl_deep_texels = 0, views_host_resolved = 0;
+  // Texel couples the GPU resolve's certified filter dropped (their triangles proved farther
+  // apart than the margin; a triangle pair counts once per texel where it overlaps in depth);
+  // 0 where the filter does not run (the host resolve, views drawn alone, --no-gpu-filter).
+  std::size_t gl_couples_apart = 0;
   std::string renderer;           // GL_RENDERER of the context that ran it
 
   // Every counter and timing to zero (the pairs and the renderer stay): a frame's start.

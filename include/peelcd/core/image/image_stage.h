@@ -101,6 +101,9 @@ struct StageCounters {
   // views resolved on the host instead (every other GPU resolve; never silent).
   std::size_t deep_texels = 0;
   std::size_t views_host_resolved = 0;
+  // Couples of fragments (overlapping in depth, of two objects, in one texel) whose triangles the
+  // GPU resolve's certified filter proved apart and did not write (GlOptions::gpu_filter).
+  std::size_t couples_apart = 0;
 };
 
 // The stage router's two models and where they came from: a file written by `peelcd calibrate
