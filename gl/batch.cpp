@@ -36,11 +36,9 @@ void GlImageStage::peel_batch(const PeelJob* jobs, std::size_t count, PeelResult
     };
     std::size_t end = i;
     while (end < count && batched(jobs[end])) ++end;
-    // One view alone is drawn on its own, but for a conservative view resolved on the GPU: the
-    // batch splits its deep texels over invocations (the one-view resolve hands such a view to
-    // the host) and selects a rigid object's triangles on the GPU.
-    const bool alone_in_batch = end - i == 1 && conservative && !s.host_resolve();
-    if ((end - i < 2 && !alone_in_batch) || !s.options.batch) {
+    // One view alone is drawn on its own unless Impl::batched_alone() (the one-view resolve would
+    // hand a deep texel to the host).
+    if ((end - i == 1 && !s.batched_alone(jobs[i])) || end == i || !s.options.batch) {
       s.peel_one(jobs[i], outs[i], timings);
       ++i;
       continue;
@@ -81,11 +79,9 @@ std::size_t GlImageStage::Impl::peel_batched_views(const PeelJob* jobs, std::siz
                                                    Timings& t) {
   BatchRun run;
   run.point = !jobs[0].conservative;  // every job of the run is alike
-  // A lone conservative view on the GPU resolve is batched (peel_batch()); otherwise a batch of
-  // fewer than two views goes on its own.
-  const bool lone = count == 1 && jobs[0].conservative && !host_resolve();
+  // Fewer than two views go on their own, but for a lone view batched_alone() takes.
   const std::size_t planned = plan_batch(jobs, count, run);
-  if (planned == 0 || (planned < 2 && !lone)) {
+  if (planned == 0 || (planned < 2 && !(count == 1 && batched_alone(jobs[0])))) {
     peel_one(jobs[0], outs[0], t);
     return 1;
   }

@@ -46,13 +46,13 @@ struct PcsHeader {
   std::uint32_t count, capacity, max_layers, max_fragments;
 };
 
-// Header of the deep texels' rows (DeepRows in shaders/conservative_batch_resolve.comp).
 // The batched resolves' header (shaders/conservative_batch_resolve.comp, abuffer_resolve.comp with
 // PEELCD_BATCH): PcsHeader's words, the couples the certified filter dropped, padding to 32 bytes.
 struct BatchPcsHeader {
   std::uint32_t count, capacity, max_layers, max_fragments, couples_apart, pad[3];
 };
 
+// Header of the deep texels' rows (DeepRows in shaders/conservative_batch_resolve.comp).
 struct DeepHeader {
   std::uint32_t row_count, row_capacity, max_blocks, deep_texels;
 };
@@ -456,6 +456,9 @@ struct GlImageStage::Impl {
   // False when a texel was deeper than the GPU resolve takes (the caller resolves on the host).
   bool resolve_batch_on_gpu(std::size_t take, std::size_t texels, bool point, PeelResult* outs, Timings& t);
   void dispatch_deep_rows(const DeepHeader& deep, std::size_t texels);
+  // A conservative view resolved on the GPU is batched even alone (its deep texels split on the
+  // GPU, the certified filter, GPU selection); other views need a second to batch with.
+  bool batched_alone(const PeelJob& job) const { return job.conservative && !host_resolve(); }
   bool host_resolve() const {
     return options.resolve == Resolve::host || (options.resolve == Resolve::automatic && software_renderer);
   }

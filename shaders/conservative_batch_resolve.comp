@@ -12,9 +12,10 @@
 // (row, block of D fragments): invocation i of row r tests fragment D * r.block + i against the
 // block's D fragments. No invocation loops more than D * D times in the first pass (its own
 // texel's couples, or its rows) or D times in the second, whatever a texel's depth.
-// With PEELCD_FILTER_APART (GlOptions::gpu_filter; a program of its own), a couple whose two triangles are certainly apart
-// (peelcd/core/image/certified_apart.inc: a separating axis that no rounding can close, by more
-// than the proximity margin) is not written: only couples that may touch come back to the host.
+// With PEELCD_FILTER_APART (GlOptions::gpu_filter; a program of its own), a couple whose two
+// triangles are certainly apart (peelcd/core/image/certified_apart.inc: a separating axis that no
+// rounding can close, by more than the proximity margin) is not written, only counted: only
+// couples that may touch come back to the host.
 #include "peelcd/core/image/pcs_test.inc"  // pcs_intervals_overlap (shared with C++)
 #include "peelcd/core/image/certified_apart.inc"
 #include "batch.inc"  // the views' records (their poses and growth)
