@@ -214,6 +214,7 @@ class SuiteRun {
   DetectOptions base_;  // the default of detect: the router
   std::size_t cg_ = 0, fl_ = 0, cfl_ = 0;  // the CGAL row, the floor rows (the peers' between them)
   std::size_t scaling_ = 0;  // the default World row with Suite::scaling_threads (0: none)
+  std::size_t pairs_ = 0;    // the default World row asking for pairs only
   std::vector<Object> objects_;
   std::string csv_;
   std::size_t rois_ = 0, rois_exact_ = 0, world_candidates_ = 0, triangles_ = 0;
@@ -283,6 +284,11 @@ void SuiteRun::add_rows() {
   cfl_ = fl_ + 1;
   row("floor: 1 bare draw, overlap box", "floor", Kind::floor_box, floor1, gl_base);
   row("floor: 1 bare draw, culled", "cfloor", Kind::floor_culled, cfloor1, gl_base);
+  // The default with the colliding pairs alone (no segment or kind: what the float peers return).
+  DetectOptions pairs_only = base_;
+  pairs_only.contacts = ContactDetail::pairs;
+  pairs_ = rows_.size();
+  row("peelcd World, pairs only (stage auto)", "pairs", Kind::world, pairs_only, gl_base);
   if (suite_.scaling_threads > 0) {  // last: the other rows keep their places
     DetectOptions scaled = base_;
     scaled.threads = suite_.scaling_threads;
@@ -450,7 +456,7 @@ void SuiteRun::print_table(bool heap_kept) const {
       std::printf(" %8s %7s", "-", "-");
     else
       std::printf(" %7.2f%% %7zu", 100.0 * r.score.miss_ratio(), r.score.false_contacts);
-    if (m < cg_ || (scaling_ && m == scaling_)) {
+    if (m < cg_ || m == pairs_ || (scaling_ && m == scaling_)) {
       const std::size_t floor = r.opt.cull == Cull::box ? fl_ : cfl_;
       std::printf(" %8.2f %8.2f %8.2f %8.2f\n", med[m] / med[cg_], med[m] / med[fc], med[m] / med[best],
                   med[floor] > 0 ? med[m] / med[floor] : 0.0);
@@ -466,7 +472,8 @@ void SuiteRun::print_table(bool heap_kept) const {
               " peer row (%s); x floor: against one bare\n"
               " draw of the triangles the configuration would draw, one view. World rows: their bodies brought to each\n"
               " frame inside the time (poses; a deforming body's vertices and refit; its topology kept while its counts stay,\n"
-              " as the float peers keep theirs).)\n",
+              " as the float peers keep theirs). pairs only: the default row asking for the colliding triangle pairs\n"
+              " alone (DetectOptions::contacts pairs: no segment or kind, as the float peers return them).)\n",
               rows_[fc].name.c_str(), rows_[best].name.c_str());
   // Each peer's setup, in words, and its trees or scenes built and refitted over all frames
   // (docs/performance.md, "The peers").

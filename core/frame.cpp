@@ -79,6 +79,14 @@ std::optional<SelfAdjacency> parse_self_adjacency(const std::string& text) {
   return std::nullopt;
 }
 
+const char* to_string(ContactDetail detail) { return detail == ContactDetail::segments ? "segments" : "pairs"; }
+
+std::optional<ContactDetail> parse_contact_detail(const std::string& text) {
+  if (text == "segments") return ContactDetail::segments;
+  if (text == "pairs") return ContactDetail::pairs;
+  return std::nullopt;
+}
+
 double edge_texels_of(const DetectOptions& o) {
   if (o.edge_texels) return *o.edge_texels;
   return o.conservative ? kConservativeEdgeTexels : kPointEdgeTexels;

@@ -138,6 +138,13 @@ const std::vector<OptionSpec> kTable = {
      K::integer, 0, 1e9, "must be within 0..1000000000 (0 = every contact)", "", "", kRecordedWhenSet,
      [](const DetectOptions& o) { return OptionValue(double(o.max_contacts)); },
      [](DetectOptions& o, const OptionValue& v) { o.max_contacts = std::size_t(num(v)); }},
+    {"contacts", "", "--contacts",
+     "What each contact holds: segments (its exact intersection segment and kind; the default) or pairs (the "
+     "colliding triangle pairs alone, the same exact answer: kind \"unclassified\", no segment, but for the contacts "
+     "tested before an object pair's first crossing one, which decide its relation)",
+     K::choice, 0, 0, "", "segments,pairs", "contact detail", kRecordedWhenSet,
+     [](const DetectOptions& o) { return OptionValue(std::string(to_string(o.contacts))); },
+     [](DetectOptions& o, const OptionValue& v) { o.contacts = *parse_contact_detail(word(v)); }},
     {"volume", "", "--volume",
      "The intersection volume of every pair of closed objects whose boxes overlap, with its error estimate and "
      "the direction that reduces it (rays over the overlap box; an open or inside-out object gets none, and why)",

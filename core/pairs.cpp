@@ -12,6 +12,7 @@ const char* to_string(ContactKind kind) {
     case ContactKind::touching: return "touching";
     case ContactKind::coplanar: return "coplanar";
     case ContactKind::degenerate: return "degenerate";
+    case ContactKind::unclassified: return "unclassified";
   }
   return "?";
 }

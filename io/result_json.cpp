@@ -26,9 +26,10 @@ nlohmann::json to_json(const FrameResult& r, const std::vector<Object>& objects,
   for (std::size_t i = 0; i < r.pairs.size(); ++i) {
     const PairResult& p = r.pairs[i];
     json colliding = json::array();
-    for (const Contact& c : p.colliding)
-      colliding.push_back({{"tri_a", c.tri_a}, {"tri_b", c.tri_b}, {"kind", to_string(c.kind)},
-                           {"segment", {vec(c.p), vec(c.q)}}});
+    for (const Contact& c : p.colliding) {
+      colliding.push_back({{"tri_a", c.tri_a}, {"tri_b", c.tri_b}, {"kind", to_string(c.kind)}});
+      if (c.classified()) colliding.back()["segment"] = {vec(c.p), vec(c.q)};  // none asked for (contacts: pairs)
+    }
     total += p.colliding.size();
     colliding_objects += p.is_collision() ? 1 : 0;
     pairs.push_back({{"a", objects[p.object_a].name},

@@ -9,6 +9,7 @@
 
 #include <cmath>
 #include <cstring>
+#include <limits>
 
 namespace peelcd::python {
 
@@ -178,9 +179,10 @@ py::dict pair_dict(const PairResult& p, const std::function<std::string(std::siz
     const Contact& c = p.colliding[i];
     t(i, 0) = c.tri_a;
     t(i, 1) = c.tri_b;
+    const double nan = std::numeric_limits<double>::quiet_NaN();  // no segment asked for (contacts="pairs")
     for (int d = 0; d < 3; ++d) {
-      s(i, 0, d) = c.p[d];
-      s(i, 1, d) = c.q[d];
+      s(i, 0, d) = c.classified() ? c.p[d] : nan;
+      s(i, 1, d) = c.classified() ? c.q[d] : nan;
     }
     kinds.append(to_string(c.kind));
   }

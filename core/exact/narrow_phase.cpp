@@ -71,7 +71,12 @@ bool triangles_intersect(const TriangleCorners& a, const TriangleCorners& b) {
   return std::visit([](const auto& x, const auto& y) { return intersect(x, y); }, sa, sb);
 }
 
-bool test_triangle_pair(const TriangleCorners& ca, const TriangleCorners& cb, Contact& contact) {
+namespace {
+
+// The test, with the segment and kind (kClassify) or the yes/no alone: one body, so that the two
+// answer alike on every couple.
+template <bool kClassify>
+bool test_pair(const TriangleCorners& ca, const TriangleCorners& cb, Contact& contact) {
   // The six corner/plane signs, each once (certified in double, exact where double cannot
   // tell); most candidates end here, one triangle strictly on one side of the other's plane.
   // Where a sign is left to exact arithmetic (a corner on or within rounding of the other's
@@ -96,6 +101,7 @@ bool test_triangle_pair(const TriangleCorners& ca, const TriangleCorners& cb, Co
   if (coplanar_b || all_zero(side_a)) {
     // Coplanar, or a triangle without area: the general exact test and constructions.
     if (!triangles_intersect(ca, cb)) return false;
+    if (!kClassify) return true;
     std::tie(contact.p, contact.q) = intersection_segment(ca, cb);
     contact.kind = classify_contact(ca, cb);
     return true;
@@ -104,6 +110,7 @@ bool test_triangle_pair(const TriangleCorners& ca, const TriangleCorners& cb, Co
   // plane): Guigue-Devillers on the signs, the kind from them, the segment in double where it
   // is well conditioned.
   if (!crossing_intersect(ca, cb, side_a, side_b)) return false;
+  if (!kClassify) return true;
   const auto both = [](const int s[3]) {
     return (s[0] < 0 || s[1] < 0 || s[2] < 0) && (s[0] > 0 || s[1] > 0 || s[2] > 0);
   };
@@ -123,10 +130,34 @@ bool test_triangle_pair(const TriangleCorners& ca, const TriangleCorners& cb, Co
   return true;
 }
 
+}  // namespace
+
+bool test_triangle_pair(const TriangleCorners& ca, const TriangleCorners& cb, Contact& contact) {
+  return test_pair<true>(ca, cb, contact);
+}
+
+bool triangles_meet(const TriangleCorners& a, const TriangleCorners& b) {
+  Contact unused;
+  return test_pair<false>(a, b, unused);
+}
+
+bool ContactTest::operator()(const TriangleCorners& a, const TriangleCorners& b, Contact& contact) {
+  if (detail == ContactDetail::segments || !crossing_seen) {
+    if (!test_pair<true>(a, b, contact)) return false;
+    crossing_seen |= contact.kind == ContactKind::crossing;
+    return true;
+  }
+  if (!test_pair<false>(a, b, contact)) return false;
+  contact.p = contact.q = Vec3::Zero();
+  contact.kind = ContactKind::unclassified;
+  return true;
+}
+
 
 void narrow_phase(const Mesh& a, const Mesh& b, const std::vector<std::uint64_t>& candidates,
-                  std::vector<Contact>& out, bool boxes_overlap, std::size_t max_contacts) {
+                  std::vector<Contact>& out, bool boxes_overlap, std::size_t max_contacts, ContactDetail detail) {
   const std::size_t limit = max_contacts ? out.size() + max_contacts : std::size_t(-1);
+  ContactTest test{detail};
   for (std::uint64_t c : candidates) {
     const std::uint32_t ta = pair_a(c), tb = pair_b(c);
     // A triangle lies in the box of its corners: disjoint boxes, no contact (exact: comparisons
@@ -136,7 +167,7 @@ void narrow_phase(const Mesh& a, const Mesh& b, const std::vector<std::uint64_t>
     Contact contact;
     contact.tri_a = ta;
     contact.tri_b = tb;
-    if (test_triangle_pair(corners(a, ta), corners(b, tb), contact)) {
+    if (test(corners(a, ta), corners(b, tb), contact)) {
       out.push_back(contact);
       if (out.size() >= limit) return;
     }

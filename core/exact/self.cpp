@@ -76,13 +76,14 @@ bool test_self_couple(const TriangleCorners& a, const TriangleCorners& b, Contac
 }
 
 void self_narrow_phase(const Mesh& mesh, const std::vector<std::uint64_t>& candidates, std::vector<Contact>& out,
-                       std::size_t max_contacts) {
+                       std::size_t max_contacts, ContactDetail detail) {
   const std::size_t limit = max_contacts ? out.size() + max_contacts : std::size_t(-1);
+  ContactTest test{detail};
   for (const std::uint64_t c : candidates) {
     Contact contact;
     contact.tri_a = pair_a(c);
     contact.tri_b = pair_b(c);
-    if (test_self_couple(corners(mesh, contact.tri_a), corners(mesh, contact.tri_b), contact)) {
+    if (test(corners(mesh, contact.tri_a), corners(mesh, contact.tri_b), contact)) {
       out.push_back(contact);
       if (out.size() >= limit) return;
     }

@@ -289,7 +289,7 @@ void Detector::Impl::exact_path(const ObjectRefs& objects, const DetectOptions& 
       if (p.self_tested)  // tested while planning (FramePlan::plan_self())
         r.colliding.swap(p.self_contacts);
       else
-        self_narrow_phase(ma, p.self_candidates, r.colliding, opt.max_contacts);
+        self_narrow_phase(ma, p.self_candidates, r.colliding, opt.max_contacts, opt.contacts);
       sort_contacts(r.colliding);  // in traversal order
       return;
     }
@@ -298,7 +298,8 @@ void Detector::Impl::exact_path(const ObjectRefs& objects, const DetectOptions& 
     sort_unique_pairs(lane.candidates, lane.candidate_scratch);
     r.candidates = lane.candidates.size();
     // With a margin the boxes were grown: each couple's own boxes are tested first.
-    narrow_phase(ma, mb, lane.candidates, r.colliding, /*boxes_overlap=*/opt.margin == 0.0, opt.max_contacts);
+    narrow_phase(ma, mb, lane.candidates, r.colliding, /*boxes_overlap=*/opt.margin == 0.0, opt.max_contacts,
+                 opt.contacts);
     if (opt.margin > 0.0) {
       r.near = near_among(ma, mb, lane.candidates, opt.margin);
       near_found[pi] = 1;
@@ -397,9 +398,9 @@ void Detector::Impl::resolve_pair(const ObjectRefs& objects, const DetectOptions
   if (p.a == p.b) self_candidates(ma, p.rep, candidates);  // one object peeled as both
   r.candidates = candidates.size();
   if (p.a == p.b)
-    self_narrow_phase(ma, candidates, r.colliding, opt.max_contacts);
+    self_narrow_phase(ma, candidates, r.colliding, opt.max_contacts, opt.contacts);
   else
-    narrow_phase(ma, mb, candidates, r.colliding, false, opt.max_contacts);
+    narrow_phase(ma, mb, candidates, r.colliding, false, opt.max_contacts, opt.contacts);
   // Conservative: every couple within the margin is a candidate (PeelJob::grow).
   if (opt.margin > 0.0 && p.a != p.b && opt.conservative) {
     r.near = near_among(ma, mb, candidates, opt.margin);

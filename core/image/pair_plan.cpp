@@ -118,13 +118,14 @@ void FramePlan::plan_self(const Mesh& mesh, const DetectOptions& opt, PairPlan& 
   p.self_tested = opt.stage != Stage::image && opt.max_contacts == 0;
   if (p.self_tested) {
     p.self_count = 0;
+    ContactTest test{opt.contacts};
     self_overlap_visit(mesh, tree, p.rep, [&](std::uint32_t t, std::uint32_t u) {
       p.marks[t] = p.marks[u] = 1;
       ++p.self_count;
       Contact contact;
       contact.tri_a = t;
       contact.tri_b = u;
-      if (test_self_couple(corners(mesh, t), corners(mesh, u), contact)) p.self_contacts.push_back(contact);
+      if (test(corners(mesh, t), corners(mesh, u), contact)) p.self_contacts.push_back(contact);
     });
   } else {
     self_overlap_pairs(mesh, tree, p.rep, p.self_candidates);

@@ -65,16 +65,18 @@ void World::Impl::self_pair(Body& a, std::size_t first, std::size_t last, PairRe
     }
     sort_contacts(a.self_contacts, scratch);
     a.self_cached = a.is_rigid;
+    a.self_detail = detail;
     r.candidates = n;
   } else {
     r.candidates = 0;  // nothing tested this frame
   }
   r.colliding = a.self_contacts;
   if (a.is_rigid)
-    for (Contact& c : r.colliding) {
-      c.p = a.pose * c.p;
-      c.q = a.pose * c.q;
-    }
+    for (Contact& c : r.colliding)
+      if (c.classified()) {
+        c.p = a.pose * c.p;
+        c.q = a.pose * c.q;
+      }
 }
 
 void World::Impl::collide(const DetectOptions& opt, FrameResult& out) {
@@ -84,6 +86,7 @@ void World::Impl::collide(const DetectOptions& opt, FrameResult& out) {
   stats.node_pairs = stats.candidates = stats.vertices_transformed = 0;
   const unsigned lanes = lanes_for(opt);
   frame_lanes = lanes;
+  detail = opt.contacts;
   refit_pending(lanes);
 
   auto t0 = Clock::now();
@@ -120,6 +123,7 @@ void World::Impl::find_pairs(const DetectOptions& opt, unsigned lanes) {
   for (BodyId id = 0; id < bodies.size(); ++id) {
     if (!bodies[id].alive) continue;
     bodies[id].enter_frame();
+    if (bodies[id].self_detail != opt.contacts) bodies[id].self_cached = false;  // cached with other detail
     ids.push_back(id);
     boxes.push_back(bodies[id].world_box());
     const Aabb& w = boxes.back();
@@ -239,13 +243,14 @@ void World::Impl::traverse(std::size_t used, unsigned lanes) {
     t.tested = 0;
     if (t.kind == TaskKind::self) {  // in the body's own frame
       const Mesh& m = a.local();
+      ContactTest test{detail};
       t.visited = bvh_self_traverse(a.tree, self_stacks[lane].v, [&](std::uint32_t x, std::uint32_t y) {
         if (triangles_adjacent(m, a.rep, x, y)) return;
         ++t.tested;
         Contact contact;
         contact.tri_a = std::min(x, y);
         contact.tri_b = std::max(x, y);
-        if (test_self_couple(corners(m, contact.tri_a), corners(m, contact.tri_b), contact)) t.contacts.push_back(contact);
+        if (test(corners(m, contact.tri_a), corners(m, contact.tri_b), contact)) t.contacts.push_back(contact);
       });
       return;
     }
@@ -329,7 +334,7 @@ void World::Impl::test_candidates(const DetectOptions& opt, std::size_t used, un
     if (t.kind == TaskKind::small_pair) {  // the sweep's pairs: distinct, boxes overlapping, world meshes at hand
       sort_unique_pairs(t.candidates, lane_scratch[lane]->sorted);
       narrow_phase(*a.world_mesh(), *b.world_mesh(), t.candidates, t.contacts, /*boxes_overlap=*/true,
-                   opt.max_contacts);
+                   opt.max_contacts, opt.contacts);
       return;
     }
     test_task(a, b, opt, t);
@@ -387,6 +392,7 @@ void World::Impl::test_task_as(const Body& a, const Body& b, const DetectOptions
   };
   constexpr std::uint32_t kKeptB = kKeep ? 16 : 1;  // B's table: a leaf's eight triangles and the next leaf's
   Corners x, kept_b[kKeptB];
+  ContactTest test{opt.contacts};
   for (std::size_t k = 0; k < n; ++k) {
     if (k + kAhead < n) {
       const std::uint64_t f = t.candidates[k + kAhead];
@@ -417,7 +423,7 @@ void World::Impl::test_task_as(const Body& a, const Body& b, const DetectOptions
     Contact contact;
     contact.tri_a = ta;
     contact.tri_b = tb;
-    if (test_triangle_pair(x.c, y.c, contact)) {
+    if (test(x.c, y.c, contact)) {
       t.contacts.push_back(contact);
       if (opt.max_contacts && t.contacts.size() >= opt.max_contacts) return;  // enough for this task
     }

@@ -111,6 +111,7 @@ struct Body {
   SelfAdjacency rep_adjacency = SelfAdjacency::index;
   std::vector<std::uint32_t> rep;
   bool self_cached = false;
+  ContactDetail self_detail = ContactDetail::segments;  // what the cached contacts hold
   std::vector<Contact> self_contacts;
   void topology_changed() {
     rep_valid = false;
@@ -295,6 +296,7 @@ struct World::Impl {
   // The last frame's lanes: World::set_vertices() checks and copies a large body's vertices
   // over them.
   unsigned frame_lanes = 1;
+  ContactDetail detail = ContactDetail::segments;  // this frame's DetectOptions::contacts
   std::size_t vertex_parts(std::size_t n) const;  // the parts set_vertices() splits n vertices in
   // fn(k) for k in [0, parts), one part a lane (parts <= the pool's lanes).
   template <class Fn>

@@ -477,6 +477,20 @@ def test_max_contacts_one_is_a_first_contact_query():
         peelcd.collide(a, b, max_contacts=-1)
 
 
+def test_contacts_pairs_gives_the_pairs_without_segments():
+    a, b = uv_sphere((0, 0, 0), 1.0, 24), uv_sphere((1.2, 0.1, 0.05), 1.0, 24)
+    for stage in ("exact", "image"):
+        full = peelcd.collide(a, b, stage=stage)
+        pairs = peelcd.collide(a, b, stage=stage, contacts="pairs")
+        assert np.array_equal(full["colliding"], pairs["colliding"]) and pairs["relation"] == full["relation"]
+        unclassified = np.array([k == "unclassified" for k in pairs["kinds"]])
+        assert unclassified.any() and "crossing" in pairs["kinds"]
+        assert np.isnan(pairs["segments"][unclassified]).all()
+        assert not np.isnan(pairs["segments"][~unclassified]).any()
+    with pytest.raises(ValueError, match="contacts"):
+        peelcd.collide(a, b, contacts="segment")
+
+
 def test_meshes_pickle_and_paths_may_be_pathlib():
     import copy
     import pathlib

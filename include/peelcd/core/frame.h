@@ -49,6 +49,15 @@ enum class SelfAdjacency { index, position };
 const char* to_string(SelfAdjacency adjacency);
 std::optional<SelfAdjacency> parse_self_adjacency(const std::string& text);
 
+// What each contact holds (DetectOptions::contacts): its exact intersection segment and kind
+// (segments), or the colliding pair alone (pairs: the same exact yes/no, as float peers return
+// their pairs; kind unclassified, no segment). With pairs, each run of tests still classifies
+// its contacts until it meets one that crosses, so that the object pair's relation (crossing,
+// touching, containment) stays exact: those contacts keep their segment and kind.
+enum class ContactDetail { segments, pairs };
+const char* to_string(ContactDetail detail);
+std::optional<ContactDetail> parse_contact_detail(const std::string& text);
+
 // Defaults chosen on the per-class accuracy measurements of docs/accuracy.md and the benchmarks
 // of docs/performance.md. The paper's own configuration (paper_options()) is conservative =
 // false, theta = phi = roll = 0, ids = paper, peel = alternate, slope = 0, views = 1, cull = box.
@@ -123,6 +132,9 @@ struct DetectOptions {
   // pair still collides (is_collision()), its relation is decided from the contacts found
   // (relation_note says so) and the candidates are found whole.
   std::size_t max_contacts = 0;
+  // Each contact with its segment and kind (the default), or the colliding pairs alone
+  // (ContactDetail::pairs: cheaper where most pairs collide; docs/api.md).
+  ContactDetail contacts = ContactDetail::segments;
 };
 
 constexpr int kVolumeResolution = 256;

@@ -20,14 +20,17 @@ using TriangleCorners = std::array<Vec3, 3>;
 //   touching:   not coplanar, and one triangle lies on one closed side of the other's plane
 //               (contact without penetration: a vertex, an edge or a face resting on the other);
 //   coplanar:   all six corners in one plane, overlapping;
-//   degenerate: one of the triangles has no area (collinear or repeated corners).
-enum class ContactKind { crossing, touching, coplanar, degenerate };
+//   degenerate: one of the triangles has no area (collinear or repeated corners);
+//   unclassified: they meet (exact), neither kind nor segment asked for (ContactDetail::pairs).
+enum class ContactKind { crossing, touching, coplanar, degenerate, unclassified };
 const char* to_string(ContactKind kind);
 
 struct Contact {
   std::uint32_t tri_a = 0, tri_b = 0;  // triangle indices in A's and B's file order
-  Vec3 p = Vec3::Zero(), q = Vec3::Zero();  // intersection segment (p == q for a point)
+  Vec3 p = Vec3::Zero(), q = Vec3::Zero();  // intersection segment (p == q for a point); both 0
+                                            // when unclassified
   ContactKind kind = ContactKind::crossing;
+  bool classified() const { return kind != ContactKind::unclassified; }
 };
 
 inline TriangleCorners corners(const Mesh& m, std::uint32_t t) {

@@ -74,6 +74,7 @@ double segment_bound(const TriangleCorners& a, const TriangleCorners& b) {
 struct Tally {
   std::size_t cases = 0, disagreements = 0, order_dependent = 0, segment_off = 0;
   std::size_t narrow_kind_differs = 0, narrow_order_dependent = 0;
+  std::size_t meet_differs = 0;  // triangles_meet() (contacts: pairs) against the oracle, both orders
   std::size_t per_family[int(Family::count)] = {};
   std::size_t hits[int(Family::count)] = {};
   std::size_t kinds[4] = {};
@@ -96,6 +97,7 @@ Tally run_cases(std::uint64_t seed, std::size_t n) {
     mb.triangles = {{0, 1, 2}};
     std::vector<Contact> contacts;
     narrow_phase(ma, mb, {pack_pair(0, 0)}, contacts);
+    if (triangles_meet(c.a, c.b) != expected || triangles_meet(c.b, c.a) != expected) ++t.meet_differs;
     if (got != expected || contacts.empty() == expected) {
       ++t.disagreements;
       continue;
@@ -227,14 +229,15 @@ TEST_CASE("adversarial pairs: exact answers, order-invariant, segments on both t
               t.disagreements, t.order_dependent, t.segment_off, t.narrow_kind_differs, t.narrow_order_dependent);
   for (int f = 0; f < int(Family::count); ++f)
     std::printf("  %-17s %8zu cases, %8zu intersecting\n", kFamilyNames[f], t.per_family[f], t.hits[f]);
-  std::printf("  contact kinds: crossing %zu, touching %zu, coplanar %zu, degenerate %zu\n", t.kinds[0], t.kinds[1],
-              t.kinds[2], t.kinds[3]);
+  std::printf("  contact kinds: crossing %zu, touching %zu, coplanar %zu, degenerate %zu; triangles_meet() differs "
+              "from the oracle on %zu\n", t.kinds[0], t.kinds[1], t.kinds[2], t.kinds[3], t.meet_differs);
   CHECK(t.cases == n);
   CHECK(t.disagreements == 0);
   CHECK(t.order_dependent == 0);
   CHECK(t.segment_off == 0);
   CHECK(t.narrow_kind_differs == 0);
   CHECK(t.narrow_order_dependent == 0);
+  CHECK(t.meet_differs == 0);
   // The generator must really produce every kind of contact, or the test proves little.
   for (int k = 0; k < 4; ++k) CHECK(t.kinds[k] > 0);
   for (int f = 0; f < int(Family::count); ++f) CHECK(t.hits[f] > 0);

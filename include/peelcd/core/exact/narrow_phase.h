@@ -3,6 +3,7 @@
 // (Exact_predicates_inexact_constructions_kernel), so it does not depend on vertex order,
 // triangle order or rounding. Degenerate triangles (collinear or repeated vertices) are tested
 // as the segment or point they are. The intersection segment is constructed in double.
+#include "peelcd/core/frame.h"
 #include "peelcd/core/mesh.h"
 #include "peelcd/core/pairs.h"
 
@@ -34,6 +35,20 @@ std::pair<Vec3, Vec3> intersection_segment(const TriangleCorners& a, const Trian
 // the contact's segment and kind filled in (its triangle indices are the caller's). The same
 // test narrow_phase() runs on each candidate.
 bool test_triangle_pair(const TriangleCorners& a, const TriangleCorners& b, Contact& contact);
+// The same exact yes/no without the segment and kind (cheaper where the triangles meet).
+bool triangles_meet(const TriangleCorners& a, const TriangleCorners& b);
+
+// The test of one run of couples (an object pair's, a task's) as DetectOptions::contacts asks:
+// every contact with its segment and kind (segments), or (pairs) classified until the run's
+// first crossing contact and unclassified after it (kind unclassified, segment 0): a pair's
+// relation needs one crossing contact, or, with none, every contact's kind
+// (contact_relation(), touching_relation()).
+struct ContactTest {
+  ContactDetail detail = ContactDetail::segments;
+  bool crossing_seen = false;
+  // true when the triangles share a point, `contact` filled as said (its indices are the caller's).
+  bool operator()(const TriangleCorners& a, const TriangleCorners& b, Contact& contact);
+};
 
 
 // Tests every candidate pair (packed with pack_pair(triA, triB), peelcd/core/pairs.h) and appends
@@ -41,7 +56,9 @@ bool test_triangle_pair(const TriangleCorners& a, const TriangleCorners& b, Cont
 // a pair of overlapping triangle boxes (box_overlap_pairs()'s output), so that first test is
 // skipped; the answer is the same either way.
 // max_contacts > 0: stops once `out` has gained that many (DetectOptions::max_contacts).
+// detail: what each contact holds (ContactTest; DetectOptions::contacts).
 void narrow_phase(const Mesh& a, const Mesh& b, const std::vector<std::uint64_t>& candidates,
-                  std::vector<Contact>& out, bool boxes_overlap = false, std::size_t max_contacts = 0);
+                  std::vector<Contact>& out, bool boxes_overlap = false, std::size_t max_contacts = 0,
+                  ContactDetail detail = ContactDetail::segments);
 
 }  // namespace peelcd

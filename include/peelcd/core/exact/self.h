@@ -68,8 +68,9 @@ bool test_self_couple(const TriangleCorners& a, const TriangleCorners& b, Contac
 // Every self candidate (pack_pair(t, u)) through test_self_couple(), the colliding appended to
 // `out` in candidate order.
 // max_contacts > 0: stops once `out` has gained that many (DetectOptions::max_contacts).
+// detail: what each contact holds (ContactTest; DetectOptions::contacts).
 void self_narrow_phase(const Mesh& mesh, const std::vector<std::uint64_t>& candidates, std::vector<Contact>& out,
-                       std::size_t max_contacts = 0);
+                       std::size_t max_contacts = 0, ContactDetail detail = ContactDetail::segments);
 
 // The exact self reference: every non-adjacent couple of triangles that share a point, through
 // CGAL's box_self_intersection_d and the exact triangle test; pack_pair(t, u), t < u, sorted
