@@ -3,6 +3,7 @@
 // orientation predicates evaluated in double with a certified error bound (Shewchuk's), which
 // decide most signs without exact arithmetic, and their exact fallbacks. Inline: the triangle
 // test runs them on every candidate.
+#include "peelcd/core/exact/bvh.h"  // PEELCD_ALWAYS_INLINE
 #include "peelcd/core/exact/narrow_phase.h"
 
 #include <cmath>
@@ -67,7 +68,7 @@ inline int certain_orientation_2d(const Vec3& p, const Vec3& q, const Vec3& r, i
 // 3-term sum: his error bound applies as it stands). A plane along a coordinate axis decides
 // the rest exactly. Returns false when a sign is left at 0 uncertified (exact_plane_sides()
 // decides those).
-inline bool certain_plane_sides(const TriangleCorners& plane, const TriangleCorners& t, int side[3]) {
+PEELCD_ALWAYS_INLINE bool certain_plane_sides(const TriangleCorners& plane, const TriangleCorners& t, int side[3]) {
   const Vec3& p = plane[0];
   const double e1x = plane[1].x() - p.x(), e1y = plane[1].y() - p.y(), e1z = plane[1].z() - p.z();
   const double e2x = plane[2].x() - p.x(), e2y = plane[2].y() - p.y(), e2z = plane[2].z() - p.z();
