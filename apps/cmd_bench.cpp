@@ -23,6 +23,7 @@ struct BenchArgs {
   unsigned threads = 0;  // 0: the machine's (at most 8)
   unsigned scaling = 0;  // > 0: the default World row again with this many threads
   bool short_rows = false;
+  bool audit = false;
   bool no_gpu_timers = false;
   bool return_memory = false;
   std::string csv;
@@ -129,6 +130,7 @@ int run_bench(const BenchArgs& a) {
   suite.threads = threads;
   suite.scaling_threads = a.scaling;
   suite.short_rows = a.short_rows;
+  suite.audit = a.audit;
   suite.gpu_timers = !a.no_gpu_timers;
   suite.keep_freed_memory = !a.return_memory;
   const Progress progress;
@@ -166,6 +168,10 @@ std::vector<Command> add_bench_commands(CLI::App& app) {
       ->check(CLI::Range(2, 2000));
   benchmark->add_flag("--short", be.short_rows, "Only the World rows, the frame API's router and image stage, the peers "
                                                  "and the floors (for the scale scenes)");
+  benchmark->add_flag("--audit", be.audit,
+                      "Add Embree 3 as a plain user writes it from its documentation (bench/plain_embree.cpp: world "
+                      "space, static scenes until their vertices change, then refitted) and print each Embree row's "
+                      "ratio to it");
   benchmark->add_flag("--no-gpu-timers", be.no_gpu_timers,
                       "No GL timer queries around the image stage's passes (the image-work table's raster, compute "
                       "and transfer columns; on by default)");

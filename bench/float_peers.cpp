@@ -60,12 +60,16 @@ struct Collector {
   TriangleTest which = TriangleTest::moller;
   std::vector<std::uint64_t> hits;
   std::mutex mutex;
+  // Filled by one thread (Bullet's lane): hits appended directly. Else (rtcCollide) a callback
+  // may run on any of the library's threads: each keeps its buffer (no allocation per callback
+  // once it has grown; rtcCollide calls back once per small batch of couples) and appends it
+  // under the lock.
+  bool serial = false;
   template <class Pairs>
   void test(const Pairs& pairs, std::size_t n) {
-    // A callback may run on any of the peer's threads: each keeps its buffer (no allocation per
-    // callback once it has grown; rtcCollide calls back once per small batch of couples).
-    thread_local std::vector<std::uint64_t> local;
-    local.clear();
+    thread_local std::vector<std::uint64_t> buffer;
+    std::vector<std::uint64_t>& local = serial ? hits : buffer;
+    if (!serial) local.clear();
     std::array<float, 9> ta, tb;
     for (std::size_t i = 0; i < n; ++i) {
       std::uint32_t x = pairs(i).first, y = pairs(i).second;
@@ -85,16 +89,23 @@ struct Collector {
         }
       if (which == TriangleTest::moller ? tri_tri_moller(ta, tb) : tri_tri_float(ta, tb)) local.push_back(pack_pair(x, y));
     }
-    if (local.empty()) return;
+    if (serial || local.empty()) return;
     std::lock_guard<std::mutex> lock(mutex);
     hits.insert(hits.end(), local.begin(), local.end());
   }
-  std::vector<std::uint64_t> take() {
-    std::sort(hits.begin(), hits.end());
-    hits.erase(std::unique(hits.begin(), hits.end()), hits.end());
-    return std::move(hits);
-  }
+  // The hits as found: sorted by sort_pairs() after the frame's clock stops (a user of the
+  // library gets them unsorted; the bench's scoring wants them sorted).
+  std::vector<std::uint64_t> take() { return std::move(hits); }
 };
+
+// Each pair's hits sorted and distinct, and the total (for scoring; outside the timed frame).
+void sort_pairs(PeerFrame& f) {
+  for (std::vector<std::uint64_t>& p : f.per_pair) {
+    std::sort(p.begin(), p.end());
+    p.erase(std::unique(p.begin(), p.end()), p.end());
+    f.pairs += p.size();
+  }
+}
 
 bool same_pose(const Eigen::Affine3d& a, const Eigen::Affine3d& b) { return a.matrix() == b.matrix(); }
 
@@ -289,14 +300,16 @@ PeerFrame EmbreePeer::frame(const std::vector<Object>& objects) {
     const auto [a, b] = f.objects[k];
     Collector c;
     c.which = m.test;
+    // (never serial: rtcCollide may call back from several of TBB's threads, even on a device
+    // of one thread once another device in the process asked for more)
     c.a = &m.bodies[a]->mesh;
     c.b = &m.bodies[b]->mesh;
     if (a == b) c.self_mesh = &objects[a].mesh, c.rep = &m.bodies[a]->rep;
     rtcCollide(m.bodies[a]->scene, m.bodies[b]->scene, &Impl::collide, &c);
     f.per_pair[k] = c.take();
   });
-  for (const auto& p : f.per_pair) f.pairs += p.size();
   f.ms = ms_since(t0);
+  sort_pairs(f);
   return f;
 }
 
@@ -459,6 +472,7 @@ PeerFrame BulletPeer::frame(const std::vector<Object>& objects) {
     // The float test in A's frame: each candidate triangle of B moved by A^-1 B (as GImpact's own
     // algorithm moves each candidate triangle; nothing when both are in world space).
     Collector c;
+    c.serial = true;  // filled by this lane alone (find_collision runs here)
     c.which = m.test;
     c.a = &ba.shape().mesh;
     c.b = &bb.shape().mesh;
@@ -480,8 +494,8 @@ PeerFrame BulletPeer::frame(const std::vector<Object>& objects) {
         std::size_t(found.size()));
     f.per_pair[k] = c.take();
   });
-  for (const auto& p : f.per_pair) f.pairs += p.size();
   f.ms = ms_since(t0);
+  sort_pairs(f);
   return f;
 }
 

@@ -2,6 +2,7 @@
 #include "peelcd/core/clock.h"
 
 #include "peelcd/bench/float_peers.h"
+#include "peelcd/bench/plain_embree.h"
 #include "peelcd/bench/floor.h"
 #include "peelcd/bench/peers.h"
 #include "peelcd/core/image/id_map.h"
@@ -132,7 +133,7 @@ double median(std::vector<double> v) {
 namespace {
 
 // The peers of the suite, one line each (`all`: the labelled variants too).
-std::vector<std::unique_ptr<Peer>> make_peers(unsigned threads, bool all) {
+std::vector<std::unique_ptr<Peer>> make_peers(unsigned threads, bool all, bool audit) {
   std::vector<std::unique_ptr<Peer>> peers;
   peers.push_back(std::make_unique<FclPeer>(FclPeer::Deforming::refit, threads));
   peers.push_back(std::make_unique<FclPeer>(FclPeer::Deforming::rebuild, threads));
@@ -142,6 +143,8 @@ std::vector<std::unique_ptr<Peer>> make_peers(unsigned threads, bool all) {
   // for Moller's published test; not a peer's default.
   if (all) peers.push_back(std::make_unique<EmbreePeer>(EmbreePeer::Update::refit, threads, TriangleTest::scaled));
   peers.push_back(std::make_unique<BulletPeer>(threads));
+  // --audit: Embree as a plain user writes it (bench/plain_embree.cpp), against the rows above.
+  if (audit) peers.push_back(std::make_unique<PlainEmbree>());
   return peers;
 }
 
@@ -190,7 +193,7 @@ class SuiteRun {
         gl_stage_(gl_stage),
         detector_(suite.stage),
         threads_(std::max(1u, suite.threads)),
-        peers_(make_peers(threads_, !suite.short_rows)) {}
+        peers_(make_peers(threads_, !suite.short_rows, suite.audit)) {}
 
   std::string run(bool heap_kept) {
     add_rows();
@@ -245,6 +248,7 @@ class SuiteRun {
     return best;
   }
   void print_image_work() const;
+  void print_audit(const std::vector<double>& med) const;
   void print_host_steps() const;
   void print_phases() const;
 };
@@ -483,6 +487,22 @@ void SuiteRun::print_table(bool heap_kept) const {
   if (scaling_)
     std::printf("scaling: the default World with %u threads / with %u, the same frames side by side: %.2f (medians %.2f / %.2f ms)\n",
                 suite_.scaling_threads, threads_, med[scaling_] / med[0], med[scaling_], med[0]);
+  print_audit(med);
+}
+
+// --audit: each of the bench's Embree rows against the plain setup, the same frames side by side.
+void SuiteRun::print_audit(const std::vector<double>& med) const {
+  std::size_t plain = 0;
+  for (std::size_t m = 0; m < rows_.size(); ++m)
+    if (rows_[m].peer && dynamic_cast<const PlainEmbree*>(rows_[m].peer)) plain = m;
+  if (!plain) return;
+  for (std::size_t m = 0; m < rows_.size(); ++m) {
+    const Peer* p = rows_[m].peer;
+    if (!p || m == plain || p->library() != "Embree" || p->variant()) continue;
+    std::printf("audit: %s / the plain setup: %.2f (medians %.3f / %.3f ms; pairs %zu / %zu over the frames)%s\n",
+                rows_[m].name.c_str(), med[m] / med[plain], med[m], med[plain], rows_[m].score.found,
+                rows_[plain].score.found, threads_ == 1 ? "" : " (the plain setup runs one thread)");
+  }
 }
 
 // The median of one field of a row's frames.

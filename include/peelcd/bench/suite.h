@@ -33,6 +33,9 @@ struct Suite {
   // others (its ratio to the default row, same frames, printed under the table).
   unsigned scaling_threads = 0;
   bool short_rows = false;
+  // A row of Embree set up as a plain user writes it (PlainEmbree), and each Embree row's ratio
+  // to it printed under the table (docs/performance.md, "The peers").
+  bool audit = false;
   // The image stage's GPU passes timed by GL timer queries (the image-work table's raster,
   // compute and transfer columns) in every peelcd row's frames.
   bool gpu_timers = true;
