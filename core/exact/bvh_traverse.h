@@ -288,8 +288,9 @@ std::size_t bvh_self_traverse(const Bvh& tree, std::vector<BvhNodePair>& stack, 
 template <class Fn>
 std::size_t self_overlap_visit(const Mesh& mesh, SelfTree& st, const std::vector<std::uint32_t>& rep, Fn&& fn) {
   st.update(mesh);
+  const std::uint32_t* r = representatives_or_null(rep);
   return bvh_self_traverse(st.tree, st.stack, [&](std::uint32_t x, std::uint32_t y) {
-    if (triangles_adjacent(mesh, rep, x, y)) return;
+    if (triangles_adjacent(mesh, r, x, y)) return;
     if (x < y)
       fn(x, y);
     else

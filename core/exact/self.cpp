@@ -31,13 +31,10 @@ void vertex_representatives(const Mesh& mesh, SelfAdjacency adjacency, std::vect
     if (mesh.vertices[order[k]] == mesh.vertices[order[k - 1]]) out[order[k]] = out[order[k - 1]];
 }
 
-bool triangles_adjacent(const Mesh& mesh, const std::vector<std::uint32_t>& rep, std::uint32_t t, std::uint32_t u) {
-  const Tri& a = mesh.triangles[t];
-  const Tri& b = mesh.triangles[u];
-  for (int i = 0; i < 3; ++i)
-    for (int j = 0; j < 3; ++j)
-      if (rep[a[i]] == rep[b[j]]) return true;
-  return false;
+const std::uint32_t* representatives_or_null(const std::vector<std::uint32_t>& rep) {
+  for (std::size_t v = 0; v < rep.size(); ++v)
+    if (rep[v] != v) return rep.data();
+  return nullptr;
 }
 
 bool SelfTree::update(const Mesh& mesh) {
@@ -60,9 +57,10 @@ std::size_t self_overlap_pairs(const Mesh& mesh, SelfTree& st, const std::vector
 
 void self_candidates(const Mesh& mesh, const std::vector<std::uint32_t>& rep, std::vector<std::uint64_t>& pairs) {
   std::size_t w = 0;
+  const std::uint32_t* r = representatives_or_null(rep);
   for (const std::uint64_t p : pairs) {
     std::uint32_t t = pair_a(p), u = pair_b(p);
-    if (t == u || triangles_adjacent(mesh, rep, t, u)) continue;
+    if (t == u || triangles_adjacent(mesh, r, t, u)) continue;
     if (u < t) std::swap(t, u);
     pairs[w++] = pack_pair(t, u);
   }

@@ -243,9 +243,10 @@ void World::Impl::traverse(std::size_t used, unsigned lanes) {
     t.tested = 0;
     if (t.kind == TaskKind::self) {  // in the body's own frame
       const Mesh& m = a.local();
+      const std::uint32_t* rep = a.rep_adjacency == SelfAdjacency::index ? nullptr : a.rep.data();  // index: the identity
       ContactTest test{detail};
       t.visited = bvh_self_traverse(a.tree, self_stacks[lane].v, [&](std::uint32_t x, std::uint32_t y) {
-        if (triangles_adjacent(m, a.rep, x, y)) return;
+        if (triangles_adjacent(m, rep, x, y)) return;
         ++t.tested;
         Contact contact;
         contact.tri_a = std::min(x, y);
