@@ -54,10 +54,10 @@ struct Method {
 // What the methods keep between frames, made before the timed frames (trees, the World's body),
 // as a simulation would keep it.
 struct SelfState {
-  explicit SelfState(const SelfSuite& suite) : world(suite.stage), detector(suite.stage) {}
+  explicit SelfState(const SelfSuite& suite) : world(suite.stage), pairs_world(suite.stage), detector(suite.stage) {}
   std::vector<Mesh> meshes;
-  World world;
-  BodyId cloth = 0;
+  World world, pairs_world;  // the default, and the default asking for pairs only
+  BodyId cloth = 0, pairs_cloth = 0;
   Detector detector;
   std::vector<Object> objects{1}, peer_objects{1};
   FrameResult frame;
@@ -70,13 +70,22 @@ struct SelfState {
   std::vector<SM> sms;
 };
 
-// peelcd's rows: the World, the frame API's three stages.
+// peelcd's rows: the World (and again asking for pairs only), the frame API's three stages.
 void add_peelcd_methods(SelfState& st, std::vector<Method>& methods) {
   st.cloth = st.world.add_deforming(st.meshes[0], "cloth");
   st.world.set_self(st.cloth, true);
   methods.push_back({"peelcd World (default)", [&st](std::size_t f) {
                        st.world.set_vertices(st.cloth, st.meshes[f].vertices);
                        const FrameResult& r = st.world.collide(DetectOptions{});
+                       return r.pairs.empty() ? std::vector<std::uint64_t>{} : keys_of(r.pairs[0].colliding);
+                     }});
+  st.pairs_cloth = st.pairs_world.add_deforming(st.meshes[0], "cloth");
+  st.pairs_world.set_self(st.pairs_cloth, true);
+  methods.push_back({"peelcd World, pairs only", [&st](std::size_t f) {
+                       st.pairs_world.set_vertices(st.pairs_cloth, st.meshes[f].vertices);
+                       DetectOptions opt;
+                       opt.contacts = ContactDetail::pairs;  // no segment or kind, as the peers report
+                       const FrameResult& r = st.pairs_world.collide(opt);
                        return r.pairs.empty() ? std::vector<std::uint64_t>{} : keys_of(r.pairs[0].colliding);
                      }});
   st.objects[0].name = "cloth";
@@ -157,33 +166,26 @@ void add_peer_methods(SelfState& st, std::vector<Method>& methods) {
                      }});
 }
 
-// One method over the frames (an untimed pass first: first-frame work), scored against the
-// exact pairs; its row printed, its frames into `csv`. Returns its median.
-double time_method(Method& m, const std::vector<std::vector<std::uint64_t>>& exact, double first_median,
-                   std::string& csv) {
-  const std::size_t frames = exact.size();
-  for (std::size_t f = 0; f < frames; ++f) m.run(f);
+// One method's timed frames and scores.
+struct Tally {
   std::vector<double> ms;
-  std::size_t e = 0, found = 0, false_pairs = 0;
-  for (std::size_t f = 0; f < frames; ++f) {
-    const auto t0 = Clock::now();
-    const std::vector<std::uint64_t> got = m.run(f);
-    ms.push_back(ms_since(t0));
-    std::vector<std::uint64_t> both;
-    std::set_intersection(got.begin(), got.end(), exact[f].begin(), exact[f].end(), std::back_inserter(both));
-    e += exact[f].size();
-    found += both.size();
-    false_pairs += got.size() - both.size();
-    char line[200];
-    std::snprintf(line, sizeof line, "%s,%zu,%.4f,%zu,%zu,%zu,%zu\n", m.name.c_str(), f, ms.back(), exact[f].size(),
-                  both.size(), exact[f].size() - both.size(), got.size() - both.size());
-    csv += line;
-  }
-  const double med = median(ms);
-  std::printf("%-36s %10.3f %8.3f %10zu %10zu %8zu %8zu\n", m.name.c_str(), med, med / (first_median > 0 ? first_median : med),
-              e, found, e - found, false_pairs);
-  std::fflush(stdout);
-  return med;
+  std::size_t exact = 0, found = 0, false_pairs = 0;
+};
+
+// Method m on frame f, timed, scored against the exact pairs; its line into `csv`.
+void time_frame(Method& m, std::size_t f, const std::vector<std::uint64_t>& exact, Tally& t, std::string& csv) {
+  const auto t0 = Clock::now();
+  const std::vector<std::uint64_t> got = m.run(f);
+  t.ms.push_back(ms_since(t0));
+  std::vector<std::uint64_t> both;
+  std::set_intersection(got.begin(), got.end(), exact.begin(), exact.end(), std::back_inserter(both));
+  t.exact += exact.size();
+  t.found += both.size();
+  t.false_pairs += got.size() - both.size();
+  char line[200];
+  std::snprintf(line, sizeof line, "%s,%zu,%.4f,%zu,%zu,%zu,%zu\n", m.name.c_str(), f, t.ms.back(), exact.size(),
+                both.size(), exact.size() - both.size(), got.size() - both.size());
+  csv += line;
 }
 
 }  // namespace
@@ -199,16 +201,25 @@ std::string run_self_suite(const SelfSuite& suite) {
   add_peer_methods(st, methods);
 
   std::printf("peelcd bench: %s (%s; %zu triangles, %zu frames, %zu exact self pairs in the first); "
-              "median ms per frame after an untimed pass, one thread\n",
+              "median ms per frame after an untimed pass, the methods taking turns on each frame, one thread\n",
               suite.crumpled ? "cloth-crumpled" : "cloth-self",
               suite.crumpled ? "a cloth crumpled over a ball, its folds drifting" : "a folded cloth folding through itself",
               st.meshes[0].triangles.size(), frames, exact[0].size());
   std::printf("%-36s %10s %8s %10s %10s %8s %8s\n", "method", "median ms", "ratio", "exact", "found", "missed", "false");
   std::string csv = "method,frame,ms,exact,found,missed,false\n";
-  double first = 0.0;
-  for (Method& m : methods) {
-    const double med = time_method(m, exact, first, csv);
-    if (first == 0.0) first = med;
+  // An untimed pass of every method over the frames (first-frame work), then the timed frames
+  // with the methods taking turns on each (a change in the machine's load reaches every row).
+  for (Method& m : methods)
+    for (std::size_t f = 0; f < frames; ++f) m.run(f);
+  std::vector<Tally> tally(methods.size());
+  for (std::size_t f = 0; f < frames; ++f)
+    for (std::size_t k = 0; k < methods.size(); ++k) time_frame(methods[k], f, exact[f], tally[k], csv);
+  const double first = median(tally[0].ms);
+  for (std::size_t k = 0; k < methods.size(); ++k) {
+    const Tally& t = tally[k];
+    const double med = median(t.ms);
+    std::printf("%-36s %10.3f %8.3f %10zu %10zu %8zu %8zu\n", methods[k].name.c_str(), med, med / first, t.exact,
+                t.found, t.exact - t.found, t.false_pairs);
   }
   std::printf("(ratio: to the first row. exact: the exact self pairs summed over the frames (docs/design.md's "
               "definition; CGAL's own adjacent-face reports are left out of its count).)\n");

@@ -15,21 +15,22 @@ mkdir -p "$out"
 ./build/peelcd calibrate --backend cpu --large 0 > "$out/calibrate_cpu.txt"
 for t in test1 test2; do
   ./build/peelcd simulate "$t" --frames 40 --csv "$out/simulate_$t.csv" > "$out/simulate_$t.txt"
-  ./build/peelcd bench "$t" --frames 12 --threads 1 --csv "$out/bench_$t.csv" > "$out/bench_$t.txt"
+  ./build/peelcd bench "$t" --frames 12 --threads 1 --audit --csv "$out/bench_$t.csv" > "$out/bench_$t.txt"
 done
 scene=fixtures/scenes/bunny_dragon.json
-./build/peelcd bench "$scene" --frames 30 --threads 1 --csv "$out/bench_default.csv" > "$out/bench_default.txt"
+./build/peelcd bench "$scene" --frames 30 --threads 1 --audit --csv "$out/bench_default.csv" > "$out/bench_default.txt"
 ./build/peelcd bench "$scene" --frames 30 > "$out/bench_default_2threads.txt"
-./build/peelcd bench crowd --objects 400 --frames 6 --threads 1 --csv "$out/bench_crowd.csv" > "$out/bench_crowd.txt"
+./build/peelcd bench crowd --objects 400 --frames 6 --threads 1 --audit --csv "$out/bench_crowd.csv" > "$out/bench_crowd.txt"
 ./build/peelcd bench crowd --objects 400 --frames 6 > "$out/bench_crowd_2threads.txt"
 # The scale scenes: two crossing spheres of 330k and 1.3M triangles each, rigid and with a wave
 # over their vertices, and a pile of 1,000 balls (the World, the frame API's router and image
 # stage, the peers, the floors: --short).
-./build/peelcd bench spheres --frames 6 --threads 1 --short > "$out/bench_spheres.txt"
-./build/peelcd bench spheres-wave --frames 6 --threads 1 --short > "$out/bench_spheres_wave.txt"
+./build/peelcd bench spheres --frames 6 --threads 1 --short --audit > "$out/bench_spheres.txt"
+./build/peelcd bench spheres-wave --frames 6 --threads 1 --short --audit > "$out/bench_spheres_wave.txt"
 ./build/peelcd bench spheres --stacks 570 --frames 8 --threads 1 --short --scaling 2 > "$out/bench_spheres_1m.txt"
 ./build/peelcd bench spheres-wave --stacks 570 --frames 8 --threads 1 --short --scaling 2 > "$out/bench_spheres_1m_wave.txt"
 ./build/peelcd bench crowd --objects 1000 --frames 8 --threads 1 --short --scaling 2 > "$out/bench_pile1000.txt"
+# (--audit: Embree as a plain user writes it, beside the bench's Embree rows.)
 # (--scaling 2: the World again with two threads, side by side with its one-thread row on the
 # same frames.) The large scenes again with one thread per core, for the peers' two-thread times.
 ./build/peelcd bench spheres --stacks 570 --frames 4 --short > "$out/bench_spheres_1m_2threads.txt"

@@ -58,15 +58,32 @@ PEERS = ("CGAL", "FCL", "Embree", "Bullet")
 
 
 def standing_table(d, scenes):
-    """Per bench scene: the World's median, the fastest peer row and the ratio."""
-    rows = ["| scene | World (default) ms | fastest peer | its ms | World / peer |", "|---|---|---|---|---|"]
+    """Per bench scene: the World's median, the fastest peer row and the ratio; the World asking
+    for pairs only (its row, where the run has one) against the same peer row."""
+    rows = ["| scene | World (default) ms | fastest peer | its ms | World / peer | pairs only / peer |",
+            "|---|---|---|---|---|---|"]
     for label, name in scenes:
         b = bench_methods(d + "/" + name + ".txt")
         world = float(b["peelcd default (World, stage auto)"][0])
-        # A labelled variant ("scaled test") is no peer's default: left out, as bench's x best does.
-        peers = [(float(v[0]), k) for k, v in b.items() if k.startswith(PEERS) and "scaled test" not in k]
+        # Labelled variants ("scaled test", the plain setup of --audit) are no peer's default:
+        # left out, as bench's x best does.
+        peers = [(float(v[0]), k) for k, v in b.items()
+                 if k.startswith(PEERS) and "scaled test" not in k and "(audit)" not in k]
         best_ms, best = min(peers)
-        rows.append("| %s | %.2f | %s | %.2f | %.2f |" % (label, world, best, best_ms, world / best_ms))
+        pairs = b.get("peelcd World, pairs only (stage auto)")
+        pairs_ratio = "%.2f" % (float(pairs[0]) / best_ms) if pairs else "-"
+        rows.append("| %s | %.2f | %s | %.2f | %.2f | %s |" % (label, world, best, best_ms, world / best_ms, pairs_ratio))
+    return "\n".join(rows)
+
+
+def audit_table(d, scenes):
+    """The `audit:` lines of bench runs with --audit: each Embree row against the plain setup."""
+    rows = ["| scene | Embree row | its ms | plain setup ms | row / plain |", "|---|---|---|---|---|"]
+    for label, name in scenes:
+        for line in open(d + "/" + name + ".txt"):
+            m = re.match(r"^audit: (.*?) / the plain setup: (\S+) \(medians (\S+) / (\S+) ms", line)
+            if m:
+                rows.append("| %s | %s | %s | %s | %s |" % (label, m.group(1), m.group(3), m.group(4), m.group(2)))
     return "\n".join(rows)
 
 
@@ -111,6 +128,10 @@ def main():
         ("400-ball pile", "bench_crowd"), ("1,000-ball pile", "bench_pile1000"),
         ("rigid spheres, 330k each", "bench_spheres"), ("rigid spheres, 1.3M each", "bench_spheres_1m"),
         ("waving spheres, 330k each", "bench_spheres_wave"), ("waving spheres, 1.3M each", "bench_spheres_1m_wave")])
+    tables["audit"] = audit_table(d, [
+        ("default scene (bunny vs dragon)", "bench_default"), ("test1", "bench_test1"), ("test2", "bench_test2"),
+        ("400-ball pile", "bench_crowd"), ("rigid spheres, 330k each", "bench_spheres"),
+        ("waving spheres, 330k each", "bench_spheres_wave")])
     tables["threads"] = threads_table(d, [
         ("rigid spheres, 1.3M", "bench_spheres_1m", "bench_spheres_1m_2threads"),
         ("waving spheres, 1.3M", "bench_spheres_1m_wave", "bench_spheres_1m_wave_2threads"),
