@@ -123,6 +123,8 @@ void FrameResult::add_image_work(const FrameResult& o) {
   gl_passes += o.gl_passes;
   rois_peeled += o.rois_peeled;
   triangles_uploaded += o.triangles_uploaded;
+  triangles_indexed += o.triangles_indexed;
+  shape_uploads += o.shape_uploads;
   pcs_readbacks += o.pcs_readbacks;
   views_exhaustive += o.views_exhaustive;
   gl_draws += o.gl_draws;

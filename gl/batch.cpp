@@ -196,11 +196,10 @@ void GlImageStage::Impl::gather_batch_object(const PeelJob& job, std::size_t j, 
     for (int i = 0; i < 16; ++i) model[i] = float(mm(i % 4, i / 4));
   }
   put_matrix(batch.view_data, model);
-  const std::vector<std::uint32_t>& tris = *job.triangles[slot];
   constexpr float inf = std::numeric_limits<float>::infinity();
   if (rigid) {
     const std::size_t first = resident_base(object.rigid->shape, job.ids);
-    if (options.gpu_select && !job.capture) {  // the selection pass picks its triangles
+    if (options.gpu_select && !job.capture) {  // the selection pass picks its triangles (no list read)
       if (!mesh.triangles.empty())
         batch.job_data.push_back({std::uint32_t(first), std::uint32_t(mesh.triangles.size()), view_object,
                                   std::uint32_t(run.invocations)});
@@ -209,6 +208,7 @@ void GlImageStage::Impl::gather_batch_object(const PeelJob& job, std::size_t j, 
       return;
     }
     put_region(batch.region_data, Eigen::Vector3f::Constant(-inf), Eigen::Vector3f::Constant(inf));
+    const std::vector<std::uint32_t>& tris = job_triangles(job, slot, selected[slot]);
     for (const std::uint32_t tri : tris) {  // the host's selection, from the resident corners
       batch.entry_data.push_back(
           {std::uint32_t(first + 3 * std::size_t(tri)), view_object, corner_id(mesh, tri, 2, job.ids), 0u});
@@ -218,6 +218,7 @@ void GlImageStage::Impl::gather_batch_object(const PeelJob& job, std::size_t j, 
     return;
   }
   Eigen::Vector3f lo = Eigen::Vector3f::Constant(inf), hi = Eigen::Vector3f::Constant(-inf);
+  const std::vector<std::uint32_t>& tris = job_triangles(job, slot, selected[slot]);
   for (const std::uint32_t tri : tris) {
     const std::uint32_t corner = std::uint32_t(batch.corners.size());
     for (int k = 0; k < 3; ++k) {

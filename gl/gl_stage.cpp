@@ -32,6 +32,9 @@ const std::string& GlImageStage::renderer() const { return impl_->renderer; }
 const std::string& GlImageStage::version() const { return impl_->version; }
 int GlImageStage::max_resolution() const { return impl_->max_texture; }
 bool GlImageStage::runs_on_cpu() const { return impl_->software_renderer; }
+bool GlImageStage::prefers_batches() const {
+  return !impl_->software_renderer || impl_->options.resolve == Resolve::gpu;
+}
 
 StageCost GlImageStage::cost() const {
   // llvmpipe: fitted by `peelcd calibrate --backend osmesa` on 2 cores (2026-11-25, after the
@@ -53,7 +56,8 @@ void GlImageStage::end_frame() noexcept { impl_->context->restore_previous(); }
 
 double GlImageStage::floor_draw_ms(const PeelJob& job) {
   Impl& s = *impl_;
-  for (int slot = 0; slot < 2; ++slot) s.prepare(*job.objects[slot], job.view, *job.triangles[slot], job.ids, slot);
+  for (int slot = 0; slot < 2; ++slot)
+    s.prepare(*job.objects[slot], job.view, job_triangles(job, slot, s.selected[slot]), job.ids, slot);
   s.upload(0);
   s.upload(1);
   const int tile = job.view.resolution;
@@ -91,7 +95,8 @@ void GlImageStage::Impl::peel_one(const PeelJob& job, PeelResult& out, Timings& 
   out.clear();
   const auto t0 = Clock::now();
   shape_uploads = 0;
-  for (int slot = 0; slot < 2; ++slot) prepare(*job.objects[slot], job.view, *job.triangles[slot], job.ids, slot);
+  for (int slot = 0; slot < 2; ++slot)
+    prepare(*job.objects[slot], job.view, job_triangles(job, slot, selected[slot]), job.ids, slot);
   upload(0);
   upload(1);
   timings.upload += ms_since(t0);

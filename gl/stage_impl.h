@@ -219,6 +219,9 @@ struct GlImageStage::Impl {
   GLint max_texture = 0;
   std::size_t max_storage_block = 0;  // GL_MAX_SHADER_STORAGE_BLOCK_SIZE, bytes
   bool software_renderer = false;     // GL runs on the CPU: Resolve::automatic resolves on the host
+  // A rigid object's triangles in a view selected on the host (job_triangles(): a job without
+  // its list drawn alone, or by the host's selection in a batch), per slot.
+  std::vector<std::uint32_t> selected[2];
   // The stage's counters (GlImageStage::counters): every draw, dispatch, upload and readback.
   StageCounters* counters = nullptr;
   void count_upload(std::size_t bytes) { counters->bytes_uploaded += bytes; }

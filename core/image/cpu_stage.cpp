@@ -57,7 +57,8 @@ void CpuImageStage::raster_object(const PeelJob& job, int slot) {
   const double half_n = 0.5 * n;
   const Object& object = *job.objects[slot];
   const Mesh& mesh = object.mesh;
-  const std::vector<std::uint32_t>& tris = *job.triangles[slot];
+  const std::vector<std::uint32_t>& tris = job_triangles(job, slot, selected_[slot]);
+  drawn_[slot] = tris.size();
   std::vector<std::uint32_t>& ids = ids_[slot];
   ids.resize(tris.size());
   Eigen::Matrix4f model = Eigen::Matrix4f::Identity();
@@ -223,7 +224,7 @@ void CpuImageStage::resolve(const PeelJob& job, PeelResult& out) {
   const KResolveResult got = resolve_kbuffer(kb, p, out.pcs, scratch_, job.capture ? &out.captured : nullptr);
   out.layers = int(got.max_layers);
   out.peel_passes = 1;
-  out.triangles_uploaded = job.triangles[0]->size() + job.triangles[1]->size();
+  out.triangles_uploaded = drawn_[0] + drawn_[1];
 }
 
 void CpuImageStage::raster_conservative(const conservative::Triangle& t, int n, std::uint32_t key) {

@@ -24,39 +24,6 @@
 #include <thread>
 
 namespace peelcd {
-namespace {
-
-// Gives the caller's context back when the frame ends, also on an exception.
-struct FrameScope {
-  ImageStage* stage = nullptr;
-  ~FrameScope() {
-    if (stage) stage->end_frame();
-  }
-};
-
-// What the stage counted in the frame (GL calls and bytes), into the frame's result.
-void copy_stage_counters(const StageCounters& c, FrameResult& out) {
-  out.gl_draws = c.draws;
-  out.gl_dispatches = c.dispatches;
-  out.gl_readbacks = c.readbacks;
-  out.bytes_uploaded = c.bytes_uploaded;
-  out.bytes_read = c.bytes_read;
-  out.geometry_bytes = c.geometry_bytes;
-  out.gl_deep_texels = c.deep_texels;
-  out.gl_couples_apart = c.couples_apart;
-  out.views_host_resolved = c.views_host_resolved;
-}
-
-// One peeled view's work counters, added to the frame's.
-void add_view_counters(const PeelResult& one, FrameResult& out) {
-  out.gl_passes += one.gl_passes;
-  out.pcs_readbacks += one.pcs_readbacks;
-  out.triangles_uploaded += one.triangles_uploaded;
-  out.triangles_indexed += one.triangles_indexed;
-  out.shape_uploads += one.shape_uploads;
-}
-
-}  // namespace
 
 bool triangle_touches(const Mesh& mesh, std::uint32_t t, const Aabb& box) {
   const Tri& f = mesh.triangles[t];
@@ -71,6 +38,24 @@ void triangles_touching(const Mesh& mesh, const Aabb& box, std::vector<std::uint
   out.clear();
   for (std::uint32_t t = 0; t < mesh.triangles.size(); ++t)
     if (triangle_touches(mesh, t, box)) out.push_back(t);
+}
+
+const std::vector<std::uint32_t>& job_triangles(const PeelJob& job, int slot, std::vector<std::uint32_t>& scratch) {
+  if (job.triangles[slot]) return *job.triangles[slot];
+  const Object& object = *job.objects[slot];
+  if (!object.rigid || !object.rigid->shape)
+    throw std::invalid_argument("peelcd::PeelJob: no triangle list for '" + object.name + "', which has no rigid shape");
+  const Mesh& shape = *object.rigid->shape;
+  const Eigen::Affine3d& pose = object.rigid->pose;
+  const Aabb box = job.view.box.grown(job.grow);
+  scratch.clear();
+  for (std::uint32_t t = 0; t < shape.triangles.size(); ++t) {
+    const Tri& f = shape.triangles[t];
+    const Vec3 a = pose * shape.vertices[f[0]], b = pose * shape.vertices[f[1]], c = pose * shape.vertices[f[2]];
+    const Vec3 lo = a.cwiseMin(b).cwiseMin(c), hi = a.cwiseMax(b).cwiseMax(c);
+    if (!((hi.array() < box.lo.array()).any() || (lo.array() > box.hi.array()).any())) scratch.push_back(t);
+  }
+  return scratch;
 }
 
 double triangles_in_view(const Mesh& mesh, const RoiView& view, const std::vector<std::uint32_t>* only,
@@ -179,7 +164,7 @@ void Detector::detect(const std::vector<const Object*>& object_ptrs, const Detec
   auto t0 = Clock::now();
   s.plan.find_pairs(objects, opt, s.only);
   const std::size_t n = s.plan.pairs.size();
-  FrameScope scope;  // the stage's frame begins at the first ROI it peels
+  StageFrameScope scope;  // the stage's frame begins at the first ROI it peels
   const std::string& renderer = stage.renderer();
   if (out.renderer != renderer) out.renderer = renderer;
   s.plan.plan(objects, opt, s.loop);

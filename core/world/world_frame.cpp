@@ -92,10 +92,12 @@ void World::Impl::collide(const DetectOptions& opt, FrameResult& out) {
   auto t0 = Clock::now();
   find_pairs(opt, lanes);
   const std::size_t used = plan_tasks(lanes);
+  mark_untraversed(opt);
   traverse(used, lanes);
   out.timings.aabb = ms_since(t0);
 
   route_pairs(opt, used, out);
+  resident_image_pairs(opt, out);  // its pairs' candidates: their PCS, tested below
   t0 = Clock::now();
   test_candidates(opt, used, lanes);
   gather_contacts(out);
@@ -234,41 +236,53 @@ std::size_t World::Impl::plan_tasks(unsigned lanes) {
 // reaches it, adjacent couples dropped), over the lanes.
 void World::Impl::traverse(std::size_t used, unsigned lanes) {
   parallel(used, lanes, [&](std::size_t k, unsigned lane) {
-    Task& t = tasks[k];
-    const Body& a = bodies[ids[pairs[t.pair].first]];
-    const Body& b = bodies[ids[pairs[t.pair].second]];
-    t.candidates.clear();
-    t.contacts.clear();
-    t.transformed = 0;
-    t.tested = 0;
-    if (t.kind == TaskKind::self) {  // in the body's own frame
-      const Mesh& m = a.local();
-      const std::uint32_t* rep = a.rep_adjacency == SelfAdjacency::index ? nullptr : a.rep.data();  // index: the identity
-      ContactTest test{detail};
-      t.visited = bvh_self_traverse(a.tree, self_stacks[lane].v, [&](std::uint32_t x, std::uint32_t y) {
-        if (triangles_adjacent(m, rep, x, y)) return;
-        ++t.tested;
-        Contact contact;
-        contact.tri_a = std::min(x, y);
-        contact.tri_b = std::max(x, y);
-        if (test(corners(m, contact.tri_a), corners(m, contact.tri_b), contact)) t.contacts.push_back(contact);
-      });
+    if (!untraversed.empty() && untraversed[tasks[k].pair]) {  // the image stage's alone (resident_image_pairs())
+      Task& t = tasks[k];
+      t.candidates.clear();
+      t.contacts.clear();
+      t.transformed = t.tested = t.visited = 0;
       return;
     }
-    if (t.kind == TaskKind::small_pair) {  // as the frame API's exact path: one culling round, a sweep
-      const Mesh& ma = *a.world_mesh();
-      const Mesh& mb = *b.world_mesh();
-      LaneScratch& s = *lane_scratch[lane];
-      cull_to_contact_region(ma, mb, intersection(boxes[pairs[t.pair].first], boxes[pairs[t.pair].second]), s.cull, 1);
-      if (!s.cull.box.empty()) box_overlap_pairs(ma, s.cull.kept_a, mb, s.cull.kept_b, t.candidates, &s.boxes);
-      t.visited = 0;
-      return;
-    }
-    const BvhRelation rel = BvhRelation::between(a.frame_pose(), b.frame_pose());
-    const auto take = [&](std::uint32_t ta, std::uint32_t tb) { t.candidates.push_back(pack_pair(ta, tb)); };
-    t.visited = rel.identity ? bvh_traverse_same_frame(a.frame_tree(), b.frame_tree(), t.start, self_stacks[lane].v, take)
-                             : bvh_traverse(a.frame_tree(), b.frame_tree(), rel, t.start, stacks[lane].v, take);
+    traverse_task(k, lane);
   });
+}
+
+// Task k's traversal on lane `lane`'s stacks.
+void World::Impl::traverse_task(std::size_t k, unsigned lane) {
+  Task& t = tasks[k];
+  const Body& a = bodies[ids[pairs[t.pair].first]];
+  const Body& b = bodies[ids[pairs[t.pair].second]];
+  t.candidates.clear();
+  t.contacts.clear();
+  t.transformed = 0;
+  t.tested = 0;
+  if (t.kind == TaskKind::self) {  // in the body's own frame
+    const Mesh& m = a.local();
+    const std::uint32_t* rep = a.rep_adjacency == SelfAdjacency::index ? nullptr : a.rep.data();  // index: the identity
+    ContactTest test{detail};
+    t.visited = bvh_self_traverse(a.tree, self_stacks[lane].v, [&](std::uint32_t x, std::uint32_t y) {
+      if (triangles_adjacent(m, rep, x, y)) return;
+      ++t.tested;
+      Contact contact;
+      contact.tri_a = std::min(x, y);
+      contact.tri_b = std::max(x, y);
+      if (test(corners(m, contact.tri_a), corners(m, contact.tri_b), contact)) t.contacts.push_back(contact);
+    });
+    return;
+  }
+  if (t.kind == TaskKind::small_pair) {  // as the frame API's exact path: one culling round, a sweep
+    const Mesh& ma = *a.world_mesh();
+    const Mesh& mb = *b.world_mesh();
+    LaneScratch& s = *lane_scratch[lane];
+    cull_to_contact_region(ma, mb, intersection(boxes[pairs[t.pair].first], boxes[pairs[t.pair].second]), s.cull, 1);
+    if (!s.cull.box.empty()) box_overlap_pairs(ma, s.cull.kept_a, mb, s.cull.kept_b, t.candidates, &s.boxes);
+    t.visited = 0;
+    return;
+  }
+  const BvhRelation rel = BvhRelation::between(a.frame_pose(), b.frame_pose());
+  const auto take = [&](std::uint32_t ta, std::uint32_t tb) { t.candidates.push_back(pack_pair(ta, tb)); };
+  t.visited = rel.identity ? bvh_traverse_same_frame(a.frame_tree(), b.frame_tree(), t.start, self_stacks[lane].v, take)
+                           : bvh_traverse(a.frame_tree(), b.frame_tree(), rel, t.start, stacks[lane].v, take);
 }
 
 // Per pair: its result started, its tasks found (first_task), its route: self pairs and
@@ -312,6 +326,10 @@ void World::Impl::route_pairs(const DetectOptions& opt, std::size_t used, FrameR
     // A margin too wide for the image stage: the exact path, whatever the stage asked.
     if (opt.stage != Stage::exact && margin_too_wide_for_image(opt, r.roi)) {
       r.exact_stage = r.margin_fallback = true;
+      continue;
+    }
+    if (!untraversed.empty() && untraversed[p]) {  // Stage::image, resident: not traversed
+      to_image[p] = 1;
       continue;
     }
     if (n == 0) continue;  // no couple of boxes overlaps: no contact, nothing to test
@@ -435,7 +453,7 @@ void World::Impl::test_task_as(const Body& a, const Body& b, const DetectOptions
 void World::Impl::gather_contacts(FrameResult& out) {
   for (std::size_t p = 0; p < pairs.size(); ++p) {  // the counts
     const PairResult& r = out.pairs[p];
-    if (r.object_a != r.object_b && (r.candidates == 0 || to_image[p])) continue;
+    if (r.object_a != r.object_b && (r.candidates == 0 || to_image[p] || peeled_resident[p])) continue;
     ++out.rois_exact;
     if (r.object_a != r.object_b)
       for (std::size_t k = first_task[p]; k < first_task[p + 1]; ++k) stats.vertices_transformed += tasks[k].transformed;
@@ -480,92 +498,6 @@ void World::Impl::relate(const DetectOptions& opt, FrameResult& out) {
         return it->second;
       },
       body_boxes, opt);
-}
-
-// The image stage on every pair routed there, in one frame of the Detector (one batch of views
-// for all of them): per pair, the candidates' triangles of each body, in world space, as two
-// objects (triangle k of each is the k-th of its ascending list), the Detector asked for those
-// pairs alone (Detector::only_pairs()); the contacts mapped back to the bodies' triangles.
-void World::Impl::image_pairs(const DetectOptions& opt, FrameResult& out, std::size_t only) {
-  const auto t_copy = Clock::now();  // the candidates' triangles copied: part of `upload`
-  // The objects and triangle lists are kept from frame to frame, their storage reused (`used`:
-  // how many this frame fills).
-  std::size_t used = 0;
-  image_of.clear();
-  image_only.clear();
-  for (std::size_t p = 0; p < pairs.size(); ++p) {
-    if (!to_image[p] || (only != kAllPairs && p != only)) continue;
-    const Body* body[2] = {&bodies[ids[pairs[p].first]], &bodies[ids[pairs[p].second]]};
-    const std::size_t first = used;
-    used += 2;
-    if (image_objects.size() < used) image_objects.resize(used), image_kept.resize(used);
-    std::vector<std::uint32_t>* kept[2] = {&image_kept[first], &image_kept[first + 1]};
-    kept[0]->clear();
-    kept[1]->clear();
-    for (std::size_t k = first_task[p]; k < first_task[p + 1]; ++k)
-      for (const std::uint64_t c : tasks[k].candidates) {
-        kept[0]->push_back(pair_a(c));
-        kept[1]->push_back(pair_b(c));
-      }
-    for (int s = 0; s < 2; ++s) {
-      std::vector<std::uint32_t>& ks = *kept[s];
-      std::sort(ks.begin(), ks.end());
-      ks.erase(std::unique(ks.begin(), ks.end()), ks.end());
-      Object& o = image_objects[first + s];
-      o.mesh.vertices.resize(3 * ks.size());
-      o.mesh.triangles.resize(ks.size());
-      const Mesh& local = body[s]->local();
-      for (std::size_t i = 0; i < ks.size(); ++i) {
-        const Tri& t = local.triangles[ks[i]];
-        const std::uint32_t base = std::uint32_t(3 * i);
-        for (int c = 0; c < 3; ++c) o.mesh.vertices[base + c] = body[s]->world(t[c]);
-        o.mesh.triangles[i] = Tri{base, base + 1, base + 2};
-      }
-      o.name = body[s]->name;
-      o.rigid.reset();
-      o.self = false;
-    }
-    image_only.emplace_back(first, first + 1);
-    image_of.push_back(p);
-  }
-  image_objects.resize(used);  // (objects beyond this frame's count: not the Detector's)
-  image_kept.resize(used);
-  out.timings.upload += ms_since(t_copy);
-  if (image_of.empty()) return;
-  if (!detector) detector = std::make_unique<Detector>(stage);
-  DetectOptions image = opt;
-  image.stage = Stage::image;
-  FrameResult inner;
-  struct Only {  // the Detector back to every pair, also on an exception
-    Detector& d;
-    ~Only() { d.only_pairs(nullptr); }
-  } reset_pairs{*detector};
-  detector->only_pairs(&image_only);
-  detector->detect(image_objects, image, inner);
-  for (const PairResult& ir : inner.pairs) {
-    const std::size_t i = ir.object_a / 2;
-    const std::vector<std::uint32_t>& ka = image_kept[2 * i];
-    const std::vector<std::uint32_t>& kb = image_kept[2 * i + 1];
-    PairResult& r = out.pairs[image_of[i]];
-    const double pe = r.predicted_exact_ms, pi = r.predicted_image_ms;
-    const std::size_t oa = r.object_a, ob = r.object_b;
-    const Aabb roi = r.roi;
-    r = ir;
-    r.object_a = oa;
-    r.object_b = ob;
-    r.roi = roi;
-    r.predicted_exact_ms = pe;
-    r.predicted_image_ms = pi;
-    r.triangles_in_roi_a = ka.size();
-    r.triangles_in_roi_b = kb.size();
-    r.pcs.clear();  // IDs of the peeled copies, not of the bodies: the count (pcs_count) stays
-    for (Contact& c : r.colliding) {
-      c.tri_a = ka[c.tri_a];
-      c.tri_b = kb[c.tri_b];
-    }
-    sort_contacts(r.colliding);
-  }
-  out.add_image_work(inner);
 }
 
 }  // namespace peelcd

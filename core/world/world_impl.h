@@ -4,6 +4,8 @@
 
 #include "peelcd/core/world/world.h"
 #include "peelcd/core/image/planner.h"
+#include "peelcd/core/image/id_map.h"
+#include "peelcd/core/image/image_stage.h"
 
 #include "peelcd/core/broad_phase.h"
 #include "peelcd/core/image/cull.h"
@@ -357,6 +359,7 @@ struct World::Impl {
   void copy_paired(const DetectOptions& opt, unsigned lanes);
   std::size_t plan_tasks(unsigned lanes);
   void traverse(std::size_t used, unsigned lanes);
+  void traverse_task(std::size_t k, unsigned lane);
   void route_pairs(const DetectOptions& opt, std::size_t used, FrameResult& out);
   void test_candidates(const DetectOptions& opt, std::size_t used, unsigned lanes);
   void test_task(const Body& a, const Body& b, const DetectOptions& opt, Task& t);
@@ -373,7 +376,7 @@ struct World::Impl {
   std::optional<bool> batch_pairs;  // World::batch_image_pairs()
   bool batched_image() const {
     if (batch_pairs) return *batch_pairs;
-    return !stage->runs_on_cpu();
+    return stage->prefers_batches();
   }
   // The image-routed pairs' objects (two a pair), their triangles' indices in the bodies, the
   // pair each came from, and the object pairs the Detector is asked for.
@@ -381,6 +384,31 @@ struct World::Impl {
   std::vector<std::vector<std::uint32_t>> image_kept;
   std::vector<std::size_t> image_of;
   std::vector<std::pair<std::size_t, std::size_t>> image_only;
+
+  // The image-routed pairs of two rigid bodies, batched (resident_image_pairs()): each body
+  // drawn from its shape, resident on the stage (uploaded once), by its pose; the views' PCS
+  // become the pair's candidates, tested on the exact path's tasks. No triangle is copied.
+  void resident_image_pairs(const DetectOptions& opt, FrameResult& out);
+  bool resident_route(const DetectOptions& opt) const;
+  bool resident_pair(std::size_t p) const;  // two rigid bodies
+  void mark_untraversed(const DetectOptions& opt);
+  double shape_median_edge(const Body& b);
+  std::vector<char> untraversed;                // pair p's traversal skipped (empty: none)
+  std::vector<char> peeled_resident;            // pair p: its candidates are its views' PCS
+  std::vector<std::size_t> resident_pairs;      // this frame's, in pair order
+  std::vector<Object> resident_objects;         // two a pair: shape and pose, no world mesh
+  std::vector<PeelJob> resident_jobs;
+  std::vector<std::size_t> resident_job_first;  // resident pair i's jobs: [first[i], first[i + 1])
+  std::vector<PeelResult> resident_peeled;
+  std::vector<int> resident_needs, resident_tiles;
+  std::vector<IdPair> resident_pcs;
+  std::vector<std::uint64_t> resident_keys, resident_scratch;
+  IdMap resident_map_a, resident_map_b;
+  struct ShapeEdge {
+    std::weak_ptr<const Mesh> owner;
+    double edge = 0.0;
+  };
+  std::unordered_map<const Mesh*, ShapeEdge> shape_edges;  // a shape's median edge (tiles by need)
 };
 
 

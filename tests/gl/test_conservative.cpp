@@ -442,6 +442,131 @@ TEST_CASE("the World's image-routed pairs together in one batch or one at a time
   CHECK(runs[0] == runs[1]);
 }
 
+namespace {
+// A pair's contacts as sorted packed couples.
+std::vector<std::uint64_t> couples_of(const PairResult& p) {
+  std::vector<std::uint64_t> out;
+  for (const Contact& c : p.colliding) out.push_back(pack_pair(c.tri_a, c.tri_b));
+  std::sort(out.begin(), out.end());
+  return out;
+}
+Mesh posed(const Mesh& shape, const Eigen::Affine3d& pose) {
+  Mesh m = shape;
+  for (Vec3& v : m.vertices) v = pose * v;
+  return m;
+}
+}  // namespace
+
+TEST_CASE("the World's batched image pairs of rigid bodies: drawn from resident shapes, untraversed, exact", "[conservative][batch][world]") {
+  // Rigid balls of three shapes, turned and scaled, in a row that overlaps, and one deforming
+  // body across two of them (its pairs take the copying route). Stage::image, batched: the
+  // rigid pairs are not traversed (no node pair visited), nothing of theirs is copied or
+  // uploaded after the first frame, and every contact is the exact reference's, also with ring
+  // IDs (expanded by the shapes' ID maps) and after the poses move.
+  const std::vector<std::shared_ptr<const Mesh>> shapes = {
+      std::make_shared<const Mesh>(make_uv_sphere(Vec3::Zero(), 1.0, 12, 24)),
+      std::make_shared<const Mesh>(make_uv_sphere(Vec3(0.1, 0, 0), 0.8, 16, 20)),
+      std::make_shared<const Mesh>(make_box(Vec3(-0.9, -0.7, -0.6), Vec3(0.9, 0.7, 0.6)))};
+  const auto pose_of = [](int i, double t) {
+    Eigen::Affine3d p = Eigen::Affine3d::Identity();
+    p.translate(Vec3(1.45 * i + 0.05 * t, 0.1 * (i % 3), 0.05 * i));
+    p.rotate(Eigen::AngleAxisd(0.3 * i + t, Vec3(1, 2, 3).normalized()));
+    p.scale(1.0 + 0.05 * (i % 2));
+    return p;
+  };
+  for (const Resolve resolve : {Resolve::automatic, Resolve::gpu})
+  for (const IdMode ids : {IdMode::unique, IdMode::ring}) {
+    gl::GlOptions go;
+    go.resolve = resolve;
+    World world(make_image_stage(test_backend(), go));
+    world.batch_image_pairs(true);
+    std::vector<BodyId> rigid;
+    for (int i = 0; i < 10; ++i) rigid.push_back(world.add_rigid(shapes[i % 3], pose_of(i, 0.0)));
+    const Mesh sheet = make_grid(Vec3(2.2, -2, -2), Vec3(0, 4, 0), Vec3(0.3, 0, 4), 12, 12);
+    const BodyId deforming = world.add_deforming(sheet);
+    DetectOptions opt;
+    opt.stage = Stage::image;
+    opt.ids = ids;
+    for (int frame = 0; frame < 2; ++frame) {
+      INFO("resolve " << to_string(resolve) << ", ids " << to_string(ids) << ", frame " << frame);
+      for (int i = 0; i < 10; ++i) world.set_pose(rigid[std::size_t(i)], pose_of(i, 0.2 * frame));
+      const FrameResult& f = world.collide(opt);
+      std::size_t rigid_pairs = 0, touching = 0;
+      for (const PairResult& p : f.pairs) {
+        CHECK_FALSE(p.exact_stage);
+        const bool mixed = p.object_a == deforming || p.object_b == deforming;
+        const Mesh ma = p.object_a == deforming ? sheet : posed(*shapes[p.object_a % 3], pose_of(int(p.object_a), 0.2 * frame));
+        const Mesh mb = p.object_b == deforming ? sheet : posed(*shapes[p.object_b % 3], pose_of(int(p.object_b), 0.2 * frame));
+        INFO("pair " << p.object_a << "-" << p.object_b);
+        CHECK(couples_of(p) == exact_colliding_pairs(ma, mb));
+        if (!mixed) {
+          ++rigid_pairs;
+          CHECK(p.views_peeled >= 1);
+          if (ids == IdMode::unique) CHECK(p.pcs_count >= p.colliding.size());  // (a ring ID stands for several)
+          touching += !p.colliding.empty();
+        }
+      }
+      CHECK(rigid_pairs >= 9);
+      CHECK(touching >= 5);
+      // Only the mixed pairs were traversed and copied: the sheet against two balls.
+      CHECK(world.stats().candidates > 0);
+      CHECK(f.triangles_indexed > 0);  // the rigid objects' triangles, selected from resident shapes
+      if (frame == 1) CHECK(f.shape_uploads == 0);
+    }
+  }
+  // Without the deforming body no pair is traversed at all, and nothing is uploaded of a mesh
+  // once the shapes are resident.
+  World world(make_image_stage(test_backend()));
+  world.batch_image_pairs(true);
+  std::vector<BodyId> rigid;
+  for (int i = 0; i < 10; ++i) rigid.push_back(world.add_rigid(shapes[i % 3], pose_of(i, 0.0)));
+  DetectOptions opt;
+  opt.stage = Stage::image;
+  world.collide(opt);
+  for (int i = 0; i < 10; ++i) world.set_pose(rigid[std::size_t(i)], pose_of(i, 0.3));
+  const FrameResult& f = world.collide(opt);
+  CHECK(world.stats().node_pairs == 0);
+  CHECK(world.stats().candidates == 0);
+  CHECK(f.geometry_bytes == 0);
+  CHECK(f.triangles_uploaded == 0);
+  CHECK(f.triangles_indexed > 0);
+  CHECK(f.gl_draws == 2u);  // one batch
+  for (const PairResult& p : f.pairs)
+    CHECK(couples_of(p) == exact_colliding_pairs(posed(*shapes[p.object_a % 3], pose_of(int(p.object_a), 0.3)),
+                                                 posed(*shapes[p.object_b % 3], pose_of(int(p.object_b), 0.3))));
+}
+
+TEST_CASE("the World's resident image route: a view no k-buffer holds is tested on the traversal's candidates", "[conservative][world]") {
+  // The stacked quads of the exhaustive case above as two rigid bodies, one view at 1024^2: on
+  // the host's resolve on llvmpipe the view cannot be resolved; the pair, not traversed (Stage::image),
+  // is traversed then and its contacts are the exact reference's.
+  Mesh a, b;
+  for (int k = 0; k < 13; ++k) {
+    const Mesh qa = make_grid(Vec3(-5, -5, 0.1 * k), Vec3(10, 0, 0), Vec3(0, 10, 0), 1, 1);
+    const Mesh qb = make_grid(Vec3(-5, -5, 0.1 * k + 0.05 - 0.1), Vec3(10, 0, 0.2), Vec3(0, 10, 0), 1, 1);
+    for (auto [m, q] : {std::pair<Mesh*, const Mesh*>{&a, &qa}, {&b, &qb}}) {
+      const auto base = std::uint32_t(m->vertices.size());
+      m->vertices.insert(m->vertices.end(), q->vertices.begin(), q->vertices.end());
+      for (const Tri& t : q->triangles) m->triangles.push_back({t[0] + base, t[1] + base, t[2] + base});
+    }
+  }
+  World world(make_image_stage(test_backend()));
+  world.batch_image_pairs(true);
+  world.add_rigid(std::make_shared<const Mesh>(a), Eigen::Affine3d::Identity());
+  world.add_rigid(std::make_shared<const Mesh>(b), Eigen::Affine3d::Identity());
+  DetectOptions opt;
+  opt.stage = Stage::image;
+  opt.resolution = 1024;
+  const FrameResult& f = world.collide(opt);
+  REQUIRE(f.pairs.size() == 1);
+  if (world.stage().renderer().find("llvmpipe") != std::string::npos) {  // resolved on the host there
+    CHECK(f.views_exhaustive == 1);
+    CHECK(f.pairs[0].candidates > 0);  // the tree's
+  }
+  CHECK(couples_of(f.pairs[0]) == exact_colliding_pairs(a, b));
+  CHECK(!f.pairs[0].colliding.empty());
+}
+
 TEST_CASE("conservative mode serves proximity: no pair within the margin missed, one view and batched", "[conservative][proximity]") {
   // Triangles grown by half the margin (PeelJob::grow) in the geometry shader, the batch's view
   // records and the GPU's selection: one view drawn alone, three batched with the host's and the

@@ -40,6 +40,8 @@ class GlImageStage final : public ImageStage {
   const std::string& version() const override;   // GL_VERSION
   int max_resolution() const override;           // GL_MAX_TEXTURE_SIZE
   bool runs_on_cpu() const override;             // a software renderer (GL_RENDERER says which)
+  // A GPU, or the GPU's resolve asked for (GlOptions::resolve gpu): the production path.
+  bool prefers_batches() const override;
   // The router's model: one for GL on the CPU (llvmpipe, lavapipe), one for a GPU
   // (docs/router.md).
   StageCost cost() const override;

@@ -50,6 +50,8 @@ class CpuImageStage final : public ImageStage {
   std::string backend_ = "cpu", renderer_ = "peelcd CPU image stage (k-buffer model)", version_ = "1";
   std::vector<Fragment> fragments_;
   std::vector<std::uint32_t> counts_, ids_[2];
+  std::vector<std::uint32_t> selected_[2];  // a rigid object's triangles without a list (job_triangles())
+  std::size_t drawn_[2] = {0, 0};
   std::vector<KFragment> slots_, scratch_;
 };
 

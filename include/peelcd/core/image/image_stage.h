@@ -19,7 +19,9 @@ namespace peelcd {
 struct PeelJob {
   const Object* objects[2] = {nullptr, nullptr};
   // The triangles of each object to draw, ascending: those whose box touches view.box (after
-  // contact culling). Never empty when a stage is called.
+  // contact culling). Never empty when a stage is called. Null for a rigid object: every
+  // triangle of its shape whose box, through its pose, touches the view (job_triangles()); the
+  // GL stage's batch selects those on the GPU, the other paths on the host.
   const std::vector<std::uint32_t>* triangles[2] = {nullptr, nullptr};
   RoiView view;                    // the padded ROI view (box, frame, resolution)
   std::size_t pair_index = 0;      // the object pair (FrameResult::pairs) and fused view (0..2)
@@ -106,6 +108,34 @@ struct StageCounters {
   std::size_t couples_apart = 0;
 };
 
+// What the stage counted in the frame (GL calls and bytes), into the frame's result.
+inline void copy_stage_counters(const StageCounters& c, FrameResult& out) {
+  out.gl_draws = c.draws;
+  out.gl_dispatches = c.dispatches;
+  out.gl_readbacks = c.readbacks;
+  out.bytes_uploaded = c.bytes_uploaded;
+  out.bytes_read = c.bytes_read;
+  out.geometry_bytes = c.geometry_bytes;
+  out.gl_deep_texels = c.deep_texels;
+  out.gl_couples_apart = c.couples_apart;
+  out.views_host_resolved = c.views_host_resolved;
+}
+
+// One peeled view's work counters, added to the frame's.
+inline void add_view_counters(const PeelResult& one, FrameResult& out) {
+  out.gl_passes += one.gl_passes;
+  out.pcs_readbacks += one.pcs_readbacks;
+  out.triangles_uploaded += one.triangles_uploaded;
+  out.triangles_indexed += one.triangles_indexed;
+  out.shape_uploads += one.shape_uploads;
+}
+
+// Job's triangle list of object `slot`: PeelJob::triangles[slot], or, where that is null (a rigid
+// object), the triangles of its shape whose box through its pose (in double) touches the view's
+// box grown by job.grow, written into `scratch` (ascending). Throws std::invalid_argument for a
+// null list of an object without a rigid shape.
+const std::vector<std::uint32_t>& job_triangles(const PeelJob& job, int slot, std::vector<std::uint32_t>& scratch);
+
 // The stage router's two models and where they came from: a file written by `peelcd calibrate
 // --write-costs` (peelcd/io/costs.h reads it; fitted on one backend and renderer), or, with
 // `source` empty, the stage's built-in models (ImageStage::cost(), exact_path_cost()).
@@ -139,6 +169,9 @@ class ImageStage {
   // no GPU to overlap with, so batching and GPU-side work do not pay (the World peels its image
   // pairs one at a time there; the GL stage resolves on the host).
   virtual bool runs_on_cpu() const { return false; }
+  // The World sends its image-routed pairs to peel_batch() together (World::batch_image_pairs()
+  // unset): on a GPU, and where a stage on the CPU was asked to run a GPU's production path.
+  virtual bool prefers_batches() const { return !runs_on_cpu(); }
   // The router's model of this stage. The default (all zero) predicts it free: a stage that
   // does not model its cost always peels (as before the router existed).
   virtual StageCost cost() const { return StageCost{}; }
@@ -164,6 +197,15 @@ class ImageStage {
 
  private:
   CostModels models_;
+};
+
+// Ends the stage's frame (ImageStage::end_frame(): the caller's context given back) when the
+// scope ends, also on an exception; nothing while `stage` is null (no frame begun).
+struct StageFrameScope {
+  ImageStage* stage = nullptr;
+  ~StageFrameScope() {
+    if (stage) stage->end_frame();
+  }
 };
 
 }  // namespace peelcd

@@ -125,8 +125,10 @@ class World {
   // The pairs routed to the image stage go to it together, in one frame of the stage (one batch
   // of views and a sync, where one at a time costs a sync a pair: the faster on a GPU), or one
   // at a time (each pair's views alone: the faster where GL runs on the CPU). Unset: together on
-  // a GPU, one at a time where the stage runs on the CPU (ImageStage::runs_on_cpu(): llvmpipe,
-  // softpipe, swrast, the CPU stage). docs/backends.md has the measurements.
+  // a GPU, or where a software renderer was asked for the GPU's resolve (GlOptions::resolve gpu:
+  // the production path), one at a time elsewhere (ImageStage::prefers_batches(): llvmpipe,
+  // softpipe, swrast, the CPU stage). Together, the pairs of two rigid bodies are drawn from their
+  // shapes, resident on the stage (docs/backends.md).
   void batch_image_pairs(std::optional<bool> together);
 
  private:

@@ -1,0 +1,302 @@
+// The World's image route: the pairs the router (or Stage::image) sent to the image stage.
+//   resident_image_pairs()  pairs of two rigid bodies on a stage that batches its views: each
+//                           body drawn from its shape, resident on the stage, by its pose (the
+//                           GL stage selects the triangles in each view on the GPU); the views'
+//                           PCS become the pair's candidates on the exact path's tasks.
+//   image_pairs()           the others: the candidates' triangles copied into world-space
+//                           objects for the Detector, which culls, plans and peels them.
+#include "world_impl.h"
+#include "peelcd/core/clock.h"
+#include "peelcd/core/image/view.h"
+
+#include <algorithm>
+#include <cmath>
+#include <stdexcept>
+
+namespace peelcd {
+
+// The median first-edge length of a rigid body's shape (as the Detector's culling measures its
+// kept triangles), computed once per shape, scaled by the pose's volume scale.
+double World::Impl::shape_median_edge(const Body& b) {
+  const Mesh* key = b.shape.get();
+  auto it = shape_edges.find(key);
+  if (it == shape_edges.end() || it->second.owner.expired()) {
+    const Mesh& m = *b.shape;
+    std::vector<double> edges;
+    edges.reserve(m.triangles.size());
+    for (const Tri& f : m.triangles) edges.push_back((m.vertices[f[1]] - m.vertices[f[0]]).norm());
+    double edge = 0.0;
+    if (!edges.empty()) {
+      std::nth_element(edges.begin(), edges.begin() + edges.size() / 2, edges.end());
+      edge = edges[edges.size() / 2];
+    }
+    it = shape_edges.insert_or_assign(key, ShapeEdge{b.shape, edge}).first;
+  }
+  return it->second.edge * std::cbrt(std::fabs(b.pose.linear().determinant()));
+}
+
+// Whether the resident route serves this frame's image pairs of two rigid bodies: the World
+// batches its image pairs (batched_image()), conservative coverage, no margin.
+bool World::Impl::resident_route(const DetectOptions& opt) const {
+  return opt.conservative && opt.margin == 0.0 && batched_image();
+}
+
+bool World::Impl::resident_pair(std::size_t p) const {
+  const Body& a = bodies[ids[pairs[p].first]];
+  const Body& b = bodies[ids[pairs[p].second]];
+  return pairs[p].first != pairs[p].second && a.is_rigid && b.is_rigid && a.shape && b.shape;
+}
+
+// With Stage::image, the resident route's pairs need no traversal: their candidates will be
+// their PCS (untraversed; a view the stage cannot resolve traverses them after all).
+void World::Impl::mark_untraversed(const DetectOptions& opt) {
+  untraversed.clear();
+  if (opt.stage != Stage::image || !resident_route(opt)) return;
+  untraversed.assign(pairs.size(), 0);
+  for (std::size_t p = 0; p < pairs.size(); ++p) untraversed[p] = resident_pair(p);
+}
+
+// The image-routed pairs of two rigid bodies, where resident_route(): every view of every such
+// pair in one call of the stage. A job's objects are the bodies' shapes and poses alone (no
+// world mesh, no corner copied) without triangle lists: the GL stage's batch selects each rigid
+// object's triangles in the view on the GPU from the resident shape (other paths select them on
+// the host, job_triangles()); the triangles drawn are therefore not counted here
+// (triangles_in_roi, triangles_drawn 0). Each pair's ROI is its boxes' overlap; the pairs share
+// the budget among themselves as the Detector's ROIs do. The PCS (unique IDs: the triangles;
+// else expanded by the shapes' ID maps) replace the pair's candidates on its first task; the
+// exact path's tests (test_candidates()) and contact gathering then serve them. A pair with a
+// view the stage could not resolve is tested on its tree's candidates (traversed now if it was
+// not): a superset of every couple the view could list.
+void World::Impl::resident_image_pairs(const DetectOptions& opt, FrameResult& out) {
+  peeled_resident.assign(pairs.size(), 0);
+  resident_pairs.clear();
+  if (!resident_route(opt)) return;
+  for (std::size_t p = 0; p < pairs.size(); ++p)
+    if (to_image[p] && resident_pair(p)) resident_pairs.push_back(p);
+  if (resident_pairs.empty()) return;
+  const auto t_views = Clock::now();
+  const std::size_t n = resident_pairs.size();
+
+  // Tiles: as the Detector's (by need from the median edge, or equal shares, or forced).
+  resident_tiles.assign(n, opt.resolution);
+  if (opt.resolution == 0 && opt.cull == Cull::contact) {
+    const double edge_texels = edge_texels_of(opt);
+    resident_needs.clear();
+    for (const std::size_t p : resident_pairs) {
+      const double ea = shape_median_edge(bodies[ids[pairs[p].first]]);
+      const double eb = shape_median_edge(bodies[ids[pairs[p].second]]);
+      resident_needs.push_back(edge_tile_resolution(opt.budget, out.pairs[p].roi, std::sqrt(ea * eb), edge_texels));
+    }
+    allocate_tiles(opt.budget, resident_needs, resident_tiles);
+  } else if (opt.resolution == 0) {
+    resident_tiles.assign(n, tile_resolution(opt.budget, n));
+  }
+
+  // The objects: shape and pose.
+  if (resident_objects.size() < 2 * n) resident_objects.resize(2 * n);
+  for (std::size_t i = 0; i < n; ++i) {
+    const std::size_t p = resident_pairs[i];
+    for (int s = 0; s < 2; ++s) {
+      const Body& body = bodies[ids[s ? pairs[p].second : pairs[p].first]];
+      Object& o = resident_objects[2 * i + s];
+      if (o.name != body.name) o.name = body.name;
+      o.rigid = RigidMotion{body.shape, body.pose};
+      o.self = false;
+    }
+  }
+
+  // The views: one job per fused view frame.
+  ViewFrame frames[3];
+  const std::size_t frame_count = fused_view_frames(opt, frames);
+  resident_jobs.clear();
+  resident_job_first.assign(n + 1, 0);
+  for (std::size_t i = 0; i < n; ++i) {
+    const std::size_t p = resident_pairs[i];
+    PairResult& r = out.pairs[p];
+    r.resolution = resident_tiles[i];
+    resident_job_first[i] = resident_jobs.size();
+    for (std::size_t v = 0; v < frame_count; ++v) {
+      PeelJob job;
+      job.view = make_padded_roi_view(r.roi, boxes[pairs[p].first], boxes[pairs[p].second], frames[v], resident_tiles[i]);
+      if (v == 0) r.epsilon = opt.epsilon > 0.0 ? opt.epsilon : job.view.texel();
+      job.objects[0] = &resident_objects[2 * i];
+      job.objects[1] = &resident_objects[2 * i + 1];
+      job.triangles[0] = job.triangles[1] = nullptr;  // the stage selects them
+      job.pair_index = p;
+      job.view_index = int(v);
+      job.ids = opt.ids;
+      job.peel = opt.peel;
+      job.epsilon = r.epsilon;
+      job.slope = opt.slope;
+      job.conservative = true;
+      resident_jobs.push_back(job);
+    }
+  }
+  resident_job_first[n] = resident_jobs.size();
+  FrameResult inner;  // the stage's work, added to the frame's at the end
+  inner.timings.upload += ms_since(t_views);
+
+  // Every view in one call of the stage.
+  if (resident_peeled.size() < resident_jobs.size()) resident_peeled.resize(resident_jobs.size());
+  {
+    StageFrameScope scope;
+    stage->counters = StageCounters{};
+    scope.stage = stage.get();
+    stage->begin_frame();
+    stage->peel_batch(resident_jobs.data(), resident_jobs.size(), resident_peeled.data(), inner.timings);
+    copy_stage_counters(stage->counters, inner);
+  }
+
+  // Per pair: its views' PCS united, sorted, unique, as candidates.
+  const auto t_pcs = Clock::now();
+  for (std::size_t i = 0; i < n; ++i) {
+    const std::size_t p = resident_pairs[i];
+    PairResult& r = out.pairs[p];
+    const Body& a = bodies[ids[pairs[p].first]];
+    const Body& b = bodies[ids[pairs[p].second]];
+    resident_pcs.clear();
+    bool exhaustive = false;
+    for (std::size_t j = resident_job_first[i]; j < resident_job_first[i + 1]; ++j) {
+      const PeelResult& one = resident_peeled[j];
+      ++inner.rois_peeled;
+      ++r.views_peeled;
+      add_view_counters(one, inner);
+      if (one.exhaustive) {
+        ++inner.views_exhaustive;
+        ++r.views_exhaustive;
+        exhaustive = true;
+      }
+      r.layers = std::max(r.layers, one.layers);
+      r.passes += one.peel_passes;
+      resident_pcs.insert(resident_pcs.end(), one.pcs.begin(), one.pcs.end());
+    }
+    resident_keys.clear();
+    for (const IdPair& c : resident_pcs) resident_keys.push_back(pack_pair(c.a, c.b));
+    sort_unique_pairs(resident_keys, resident_scratch);
+    r.pcs_count = resident_keys.size();
+    r.exact_stage = false;
+    to_image[p] = 0;
+    peeled_resident[p] = 1;
+    if (exhaustive) {  // the tree's candidates: the pair's
+      if (!untraversed.empty() && untraversed[p]) {
+        std::size_t count = 0;
+        for (std::size_t k = first_task[p]; k < first_task[p + 1]; ++k) {
+          traverse_task(k, 0);
+          count += tasks[k].candidates.size();
+        }
+        r.candidates = count;
+      }
+      continue;
+    }
+    if (first_task[p] == first_task[p + 1]) {  // no node pair of its trees overlaps: no contact
+      r.candidates = 0;
+      continue;
+    }
+    for (std::size_t k = first_task[p] + 1; k < first_task[p + 1]; ++k) tasks[k].candidates.clear();
+    std::vector<std::uint64_t>& candidates = tasks[first_task[p]].candidates;
+    if (opt.ids == IdMode::unique) {  // an ID is its triangle
+      for (const std::uint64_t k : resident_keys)
+        if (pair_a(k) >= a.shape->triangles.size() || pair_b(k) >= b.shape->triangles.size())
+          throw std::out_of_range("peelcd::World: triangle ID out of range");
+      candidates.assign(resident_keys.begin(), resident_keys.end());
+    } else {
+      resident_pcs.clear();
+      for (const std::uint64_t k : resident_keys) resident_pcs.push_back(IdPair{pair_a(k), pair_b(k)});
+      resident_map_a.rebuild(*a.shape, opt.ids);
+      resident_map_b.rebuild(*b.shape, opt.ids);
+      candidates.clear();
+      expand_pcs(resident_pcs, resident_map_a, resident_map_b, candidates, resident_scratch);
+    }
+    r.candidates = candidates.size();
+  }
+  inner.timings.cpu += ms_since(t_pcs);
+  out.add_image_work(inner);
+}
+
+// The image stage on every pair routed there, in one frame of the Detector (one batch of views
+// for all of them): per pair, the candidates' triangles of each body, in world space, as two
+// objects (triangle k of each is the k-th of its ascending list), the Detector asked for those
+// pairs alone (Detector::only_pairs()); the contacts mapped back to the bodies' triangles.
+void World::Impl::image_pairs(const DetectOptions& opt, FrameResult& out, std::size_t only) {
+  const auto t_copy = Clock::now();  // the candidates' triangles copied: part of `upload`
+  // The objects and triangle lists are kept from frame to frame, their storage reused (`used`:
+  // how many this frame fills).
+  std::size_t used = 0;
+  image_of.clear();
+  image_only.clear();
+  for (std::size_t p = 0; p < pairs.size(); ++p) {
+    if (!to_image[p] || (only != kAllPairs && p != only)) continue;
+    const Body* body[2] = {&bodies[ids[pairs[p].first]], &bodies[ids[pairs[p].second]]};
+    const std::size_t first = used;
+    used += 2;
+    if (image_objects.size() < used) image_objects.resize(used), image_kept.resize(used);
+    std::vector<std::uint32_t>* kept[2] = {&image_kept[first], &image_kept[first + 1]};
+    kept[0]->clear();
+    kept[1]->clear();
+    for (std::size_t k = first_task[p]; k < first_task[p + 1]; ++k)
+      for (const std::uint64_t c : tasks[k].candidates) {
+        kept[0]->push_back(pair_a(c));
+        kept[1]->push_back(pair_b(c));
+      }
+    for (int s = 0; s < 2; ++s) {
+      std::vector<std::uint32_t>& ks = *kept[s];
+      std::sort(ks.begin(), ks.end());
+      ks.erase(std::unique(ks.begin(), ks.end()), ks.end());
+      Object& o = image_objects[first + s];
+      o.mesh.vertices.resize(3 * ks.size());
+      o.mesh.triangles.resize(ks.size());
+      const Mesh& local = body[s]->local();
+      for (std::size_t i = 0; i < ks.size(); ++i) {
+        const Tri& t = local.triangles[ks[i]];
+        const std::uint32_t base = std::uint32_t(3 * i);
+        for (int c = 0; c < 3; ++c) o.mesh.vertices[base + c] = body[s]->world(t[c]);
+        o.mesh.triangles[i] = Tri{base, base + 1, base + 2};
+      }
+      o.name = body[s]->name;
+      o.rigid.reset();
+      o.self = false;
+    }
+    image_only.emplace_back(first, first + 1);
+    image_of.push_back(p);
+  }
+  image_objects.resize(used);  // (objects beyond this frame's count: not the Detector's)
+  image_kept.resize(used);
+  out.timings.upload += ms_since(t_copy);
+  if (image_of.empty()) return;
+  if (!detector) detector = std::make_unique<Detector>(stage);
+  DetectOptions image = opt;
+  image.stage = Stage::image;
+  FrameResult inner;
+  struct Only {  // the Detector back to every pair, also on an exception
+    Detector& d;
+    ~Only() { d.only_pairs(nullptr); }
+  } reset_pairs{*detector};
+  detector->only_pairs(&image_only);
+  detector->detect(image_objects, image, inner);
+  for (const PairResult& ir : inner.pairs) {
+    const std::size_t i = ir.object_a / 2;
+    const std::vector<std::uint32_t>& ka = image_kept[2 * i];
+    const std::vector<std::uint32_t>& kb = image_kept[2 * i + 1];
+    PairResult& r = out.pairs[image_of[i]];
+    const double pe = r.predicted_exact_ms, pi = r.predicted_image_ms;
+    const std::size_t oa = r.object_a, ob = r.object_b;
+    const Aabb roi = r.roi;
+    r = ir;
+    r.object_a = oa;
+    r.object_b = ob;
+    r.roi = roi;
+    r.predicted_exact_ms = pe;
+    r.predicted_image_ms = pi;
+    r.triangles_in_roi_a = ka.size();
+    r.triangles_in_roi_b = kb.size();
+    r.pcs.clear();  // IDs of the peeled copies, not of the bodies: the count (pcs_count) stays
+    for (Contact& c : r.colliding) {
+      c.tri_a = ka[c.tri_a];
+      c.tri_b = kb[c.tri_b];
+    }
+    sort_contacts(r.colliding);
+  }
+  out.add_image_work(inner);
+}
+
+}  // namespace peelcd
