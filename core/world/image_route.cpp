@@ -14,6 +14,80 @@
 #include <stdexcept>
 
 namespace peelcd {
+namespace {
+
+// The world box of a node's shape-frame box under `pose`, grown by a relative 1e-9 of its
+// magnitude: more than the rounding of the double arithmetic that carries it.
+Aabb world_box(const FBox& f, const Eigen::Affine3d& pose) {
+  const Vec3 lo(f.lo[0], f.lo[1], f.lo[2]), hi(f.hi[0], f.hi[1], f.hi[2]);
+  const Vec3 c = pose * (0.5 * (lo + hi));
+  const Vec3 e = pose.linear().cwiseAbs() * (0.5 * (hi - lo));
+  const double slack = 1e-9 * (c.cwiseAbs() + e).maxCoeff() + 1e-300;
+  Aabb out;
+  out.lo = c - e - Vec3::Constant(slack);
+  out.hi = c + e + Vec3::Constant(slack);
+  return out;
+}
+
+// Where two rigid bodies can meet inside `roi`: the node pairs of their trees (world boxes) whose
+// boxes meet inside `roi`, refined level by level (each pair splits its larger node) until the
+// nodes hold about kRegionLeaves leaves each (finer costs host work that a small ROI's view does
+// not repay), while a level holds at most kRegionPairs pairs, and not past two leaves; the
+// region is the box of the last level's meetings. A point of both bodies in `roi` lies in a leaf
+// box of each, and in each ancestor's box, so in a node pair of every level: the region holds
+// it. Empty when no node pair meets (no contact possible). `level` and `next` are scratch.
+constexpr double kRegionLeaves = 8.0;
+constexpr std::size_t kRegionPairs = 4096;
+Aabb meeting_region(const Bvh& ta, const Eigen::Affine3d& pa, const Bvh& tb, const Eigen::Affine3d& pb,
+                    const Aabb& roi, std::vector<RegionEntry>& level, std::vector<RegionEntry>& next) {
+  Aabb out;
+  const std::vector<BvhNode>& na = ta.nodes();
+  const std::vector<BvhNode>& nb = tb.nodes();
+  if (na.empty() || nb.empty() || roi.empty()) return out;
+  level.clear();
+  level.push_back({0u, 0u, world_box(na[0].box, pa), world_box(nb[0].box, pb)});
+  const auto levels = [](const Bvh& t) { return std::max(0.0, std::log2(double(t.leaves()) / kRegionLeaves)); };
+  const int steps = int(std::ceil(levels(ta) + levels(tb)));
+  for (int step = 0;; ++step) {
+    // The level's pairs that still meet inside the ROI (their meeting boxes in place of theirs).
+    std::size_t kept = 0, splittable = 0;
+    for (const RegionEntry& e : level) {
+      const Aabb meet = intersection(intersection(e.a, e.b), roi);
+      if (meet.empty()) continue;
+      level[kept] = e;
+      level[kept].meet = meet;
+      splittable += !(na[e.i].leaf() && nb[e.j].leaf());
+      ++kept;
+    }
+    level.resize(kept);
+    if (splittable == 0 || step >= steps || kept + splittable > kRegionPairs) break;
+    next.clear();
+    for (const RegionEntry& e : level) {
+      const BvhNode& x = na[e.i];
+      const BvhNode& y = nb[e.j];
+      if (x.leaf() && y.leaf()) {
+        next.push_back(e);
+        continue;
+      }
+      if (y.leaf() || (!x.leaf() && e.a.extent().maxCoeff() >= e.b.extent().maxCoeff()))
+        for (const std::uint32_t c : {e.i + 1, x.first}) next.push_back({c, e.j, world_box(na[c].box, pa), e.b});
+      else
+        for (const std::uint32_t c : {e.j + 1, y.first}) next.push_back({e.i, c, e.a, world_box(nb[c].box, pb)});
+    }
+    level.swap(next);
+  }
+  for (const RegionEntry& e : level) {
+    out.extend(e.meet.lo);
+    out.extend(e.meet.hi);
+  }
+  return out;
+}
+
+}  // namespace
+
+Aabb World::Impl::rigid_contact_region(const Body& a, const Body& b, const Aabb& roi, RegionScratch& scratch) const {
+  return meeting_region(a.tree, a.pose, b.tree, b.pose, roi, scratch.level, scratch.next);
+}
 
 // The median first-edge length of a rigid body's shape (as the Detector's culling measures its
 // kept triangles), computed once per shape, scaled by the pose's volume scale.
@@ -61,8 +135,9 @@ void World::Impl::mark_untraversed(const DetectOptions& opt) {
 // world mesh, no corner copied) without triangle lists: the GL stage's batch selects each rigid
 // object's triangles in the view on the GPU from the resident shape (other paths select them on
 // the host, job_triangles()); the triangles drawn are therefore not counted here
-// (triangles_in_roi, triangles_drawn 0). Each pair's ROI is its boxes' overlap; the pairs share
-// the budget among themselves as the Detector's ROIs do. The PCS (unique IDs: the triangles;
+// (triangles_in_roi, triangles_drawn 0). Each pair's view is its region: its boxes' overlap
+// narrowed by its trees' nodes (rigid_contact_region()); the pairs share the budget among
+// themselves as the Detector's ROIs do. The PCS (unique IDs: the triangles;
 // else expanded by the shapes' ID maps) replace the pair's candidates on its first task; the
 // exact path's tests (test_candidates()) and contact gathering then serve them. A pair with a
 // view the stage could not resolve is tested on its tree's candidates (traversed now if it was
@@ -75,7 +150,36 @@ void World::Impl::resident_image_pairs(const DetectOptions& opt, FrameResult& ou
     if (to_image[p] && resident_pair(p)) resident_pairs.push_back(p);
   if (resident_pairs.empty()) return;
   const auto t_views = Clock::now();
+
+  // Each pair's region (its trees' nodes against its ROI, over the lanes); a pair whose bodies
+  // cannot meet there is done: no contact.
+  resident_regions.resize(resident_pairs.size());
+  if (region_stacks.size() < frame_lanes) region_stacks.resize(frame_lanes);
+  parallel(resident_pairs.size(), frame_lanes, [&](std::size_t i, unsigned lane) {
+    const std::size_t p = resident_pairs[i];
+    resident_regions[i] = rigid_contact_region(bodies[ids[pairs[p].first]], bodies[ids[pairs[p].second]],
+                                               out.pairs[p].roi, region_stacks[lane]);
+  });
+  std::size_t kept = 0;
+  for (std::size_t i = 0; i < resident_pairs.size(); ++i) {
+    const std::size_t p = resident_pairs[i];
+    PairResult& r = out.pairs[p];
+    r.region = resident_regions[i];
+    if (!r.region.empty()) {
+      resident_pairs[kept] = p;
+      resident_regions[kept++] = r.region;
+      continue;
+    }
+    to_image[p] = 0;  // nothing to peel or test
+    peeled_resident[p] = 1;
+    r.exact_stage = false;
+    r.candidates = 0;
+    for (std::size_t k = first_task[p]; k < first_task[p + 1]; ++k) tasks[k].candidates.clear();
+  }
+  resident_pairs.resize(kept);
+  resident_regions.resize(kept);
   const std::size_t n = resident_pairs.size();
+  if (n == 0) return;
 
   // Tiles: as the Detector's (by need from the median edge, or equal shares, or forced).
   resident_tiles.assign(n, opt.resolution);
@@ -85,7 +189,7 @@ void World::Impl::resident_image_pairs(const DetectOptions& opt, FrameResult& ou
     for (const std::size_t p : resident_pairs) {
       const double ea = shape_median_edge(bodies[ids[pairs[p].first]]);
       const double eb = shape_median_edge(bodies[ids[pairs[p].second]]);
-      resident_needs.push_back(edge_tile_resolution(opt.budget, out.pairs[p].roi, std::sqrt(ea * eb), edge_texels));
+      resident_needs.push_back(edge_tile_resolution(opt.budget, out.pairs[p].region, std::sqrt(ea * eb), edge_texels));
     }
     allocate_tiles(opt.budget, resident_needs, resident_tiles);
   } else if (opt.resolution == 0) {
@@ -117,7 +221,7 @@ void World::Impl::resident_image_pairs(const DetectOptions& opt, FrameResult& ou
     resident_job_first[i] = resident_jobs.size();
     for (std::size_t v = 0; v < frame_count; ++v) {
       PeelJob job;
-      job.view = make_padded_roi_view(r.roi, boxes[pairs[p].first], boxes[pairs[p].second], frames[v], resident_tiles[i]);
+      job.view = make_padded_roi_view(r.region, boxes[pairs[p].first], boxes[pairs[p].second], frames[v], resident_tiles[i]);
       if (v == 0) r.epsilon = opt.epsilon > 0.0 ? opt.epsilon : job.view.texel();
       job.objects[0] = &resident_objects[2 * i];
       job.objects[1] = &resident_objects[2 * i + 1];

@@ -226,6 +226,15 @@ struct alignas(64) Task {
   std::size_t tested = 0;  // a self task's couples given to the exact test
 };
 
+// A node pair of two rigid bodies' trees and its world boxes (rigid_contact_region()).
+struct RegionEntry {
+  std::uint32_t i = 0, j = 0;
+  Aabb a, b, meet;
+};
+struct RegionScratch {
+  std::vector<RegionEntry> level, next;
+};
+
 }  // namespace world_detail
 
 using namespace world_detail;
@@ -393,6 +402,9 @@ struct World::Impl {
   bool resident_pair(std::size_t p) const;  // two rigid bodies
   void mark_untraversed(const DetectOptions& opt);
   double shape_median_edge(const Body& b);
+  Aabb rigid_contact_region(const Body& a, const Body& b, const Aabb& roi, RegionScratch& scratch) const;
+  std::vector<Aabb> resident_regions;           // per resident pair: where its bodies can meet
+  std::vector<RegionScratch> region_stacks;  // per lane
   std::vector<char> untraversed;                // pair p's traversal skipped (empty: none)
   std::vector<char> peeled_resident;            // pair p: its candidates are its views' PCS
   std::vector<std::size_t> resident_pairs;      // this frame's, in pair order

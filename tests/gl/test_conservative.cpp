@@ -491,7 +491,7 @@ TEST_CASE("the World's batched image pairs of rigid bodies: drawn from resident 
       INFO("resolve " << to_string(resolve) << ", ids " << to_string(ids) << ", frame " << frame);
       for (int i = 0; i < 10; ++i) world.set_pose(rigid[std::size_t(i)], pose_of(i, 0.2 * frame));
       const FrameResult& f = world.collide(opt);
-      std::size_t rigid_pairs = 0, touching = 0;
+      std::size_t rigid_pairs = 0, touching = 0, skipped = 0;
       for (const PairResult& p : f.pairs) {
         CHECK_FALSE(p.exact_stage);
         const bool mixed = p.object_a == deforming || p.object_b == deforming;
@@ -501,13 +501,16 @@ TEST_CASE("the World's batched image pairs of rigid bodies: drawn from resident 
         CHECK(couples_of(p) == exact_colliding_pairs(ma, mb));
         if (!mixed) {
           ++rigid_pairs;
-          CHECK(p.views_peeled >= 1);
+          // Peeled, or no node pair of their trees meets in the ROI (nothing to peel).
+          CHECK((p.views_peeled >= 1 || (p.region.empty() && p.colliding.empty())));
+          skipped += p.views_peeled == 0;
           if (ids == IdMode::unique) CHECK(p.pcs_count >= p.colliding.size());  // (a ring ID stands for several)
           touching += !p.colliding.empty();
         }
       }
       CHECK(rigid_pairs >= 9);
       CHECK(touching >= 5);
+      CHECK(skipped < rigid_pairs - touching + 1);
       // Only the mixed pairs were traversed and copied: the sheet against two balls.
       CHECK(world.stats().candidates > 0);
       CHECK(f.triangles_indexed > 0);  // the rigid objects' triangles, selected from resident shapes
@@ -534,6 +537,47 @@ TEST_CASE("the World's batched image pairs of rigid bodies: drawn from resident 
   for (const PairResult& p : f.pairs)
     CHECK(couples_of(p) == exact_colliding_pairs(posed(*shapes[p.object_a % 3], pose_of(int(p.object_a), 0.3)),
                                                  posed(*shapes[p.object_b % 3], pose_of(int(p.object_b), 0.3))));
+}
+
+TEST_CASE("the World's resident image route under random poses, sheared and scaled: every contact", "[conservative][world]") {
+  // Two rigid shapes under random affine poses (rotation, non-uniform scale, shear), Stage::image
+  // batched: each frame's region (the trees' meeting node pairs) must hold every contact, which
+  // the exact reference checks couple by couple.
+  const auto a = std::make_shared<const Mesh>(make_uv_sphere(Vec3::Zero(), 1.0, 20, 30));
+  const auto b = std::make_shared<const Mesh>(make_box(Vec3(-0.8, -0.5, -0.3), Vec3(0.8, 0.5, 0.3)));
+  World world(make_image_stage(test_backend()));
+  world.batch_image_pairs(true);
+  const BodyId ia = world.add_rigid(a, Eigen::Affine3d::Identity());
+  const BodyId ib = world.add_rigid(b, Eigen::Affine3d::Identity());
+  DetectOptions opt;
+  opt.stage = Stage::image;
+  std::uint32_t seed = 12345u;
+  const auto next = [&] {  // in [-1, 1)
+    seed = seed * 1664525u + 1013904223u;
+    return double(seed >> 8) / double(1u << 23) - 1.0;
+  };
+  std::size_t meeting = 0;
+  for (int frame = 0; frame < 16; ++frame) {
+    Eigen::Affine3d pa = Eigen::Affine3d::Identity(), pb = Eigen::Affine3d::Identity();
+    pa.linear() = Eigen::AngleAxisd(3 * next(), Vec3(next(), next(), 1).normalized()).toRotationMatrix() *
+                  Vec3(1.0 + 0.3 * next(), 1.0 + 0.3 * next(), 1.0).asDiagonal();
+    pb.translation() = 0.9 * Vec3(next(), next(), next());
+    pb.linear() = Eigen::AngleAxisd(3 * next(), Vec3(1, next(), next()).normalized()).toRotationMatrix();
+    pb.linear()(0, 1) += 0.3 * next();  // a shear
+    world.set_pose(ia, pa);
+    world.set_pose(ib, pb);
+    const FrameResult& f = world.collide(opt);
+    INFO("frame " << frame);
+    const std::vector<std::uint64_t> exact = exact_colliding_pairs(posed(*a, pa), posed(*b, pb));
+    meeting += !exact.empty();
+    if (f.pairs.empty()) {
+      CHECK(exact.empty());
+      continue;
+    }
+    REQUIRE(f.pairs.size() == 1);
+    CHECK(couples_of(f.pairs[0]) == exact);
+  }
+  CHECK(meeting >= 8);
 }
 
 TEST_CASE("the World's resident image route: a view no k-buffer holds is tested on the traversal's candidates", "[conservative][world]") {
