@@ -118,7 +118,9 @@ bool World::Impl::resident_route(const DetectOptions& opt) const {
 bool World::Impl::resident_pair(std::size_t p) const {
   const Body& a = bodies[ids[pairs[p].first]];
   const Body& b = bodies[ids[pairs[p].second]];
-  return pairs[p].first != pairs[p].second && a.is_rigid && b.is_rigid && a.shape && b.shape;
+  // (An ill-conditioned pose keeps its body in world space, as the exact path does.)
+  return pairs[p].first != pairs[p].second && a.is_rigid && b.is_rigid && a.shape && b.shape && !a.ill_conditioned &&
+         !b.ill_conditioned;
 }
 
 // With Stage::image, the resident route's pairs need no traversal: their candidates will be
@@ -157,8 +159,10 @@ void World::Impl::resident_image_pairs(const DetectOptions& opt, FrameResult& ou
   if (region_stacks.size() < frame_lanes) region_stacks.resize(frame_lanes);
   parallel(resident_pairs.size(), frame_lanes, [&](std::size_t i, unsigned lane) {
     const std::size_t p = resident_pairs[i];
-    resident_regions[i] = rigid_contact_region(bodies[ids[pairs[p].first]], bodies[ids[pairs[p].second]],
-                                               out.pairs[p].roi, region_stacks[lane]);
+    resident_regions[i] = opt.cull == Cull::box ? out.pairs[p].roi  // the paper's: the whole ROI
+                                                : rigid_contact_region(bodies[ids[pairs[p].first]],
+                                                                       bodies[ids[pairs[p].second]], out.pairs[p].roi,
+                                                                       region_stacks[lane]);
   });
   std::size_t kept = 0;
   for (std::size_t i = 0; i < resident_pairs.size(); ++i) {
