@@ -112,10 +112,10 @@ TEST_CASE("random intersecting pairs are always found in conservative mode", "[c
   CHECK(found == cases);
 }
 
-TEST_CASE("a conservative view no k-buffer can hold goes to the exact CPU path", "[conservative]") {
-  // 27 stacked quads of two objects, each of B's crossing its neighbours in A, at 1024^2: every
-  // texel holds 26 fragments; on llvmpipe (128 MiB storage blocks) that k-buffer does not fit.
-  Mesh a, b;
+namespace {
+// 13 stacked quads of A and 13 of B, each of B's crossing its neighbours in A: at 1024^2 every
+// texel of a view along z holds 26 fragments.
+void stacked_quads(Mesh& a, Mesh& b) {
   for (int k = 0; k < 13; ++k) {
     const Mesh qa = make_grid(Vec3(-5, -5, 0.1 * k), Vec3(10, 0, 0), Vec3(0, 10, 0), 1, 1);
     const Mesh qb = make_grid(Vec3(-5, -5, 0.1 * k + 0.05 - 0.1), Vec3(10, 0, 0.2), Vec3(0, 10, 0), 1, 1);
@@ -125,6 +125,14 @@ TEST_CASE("a conservative view no k-buffer can hold goes to the exact CPU path",
       for (const Tri& t : q->triangles) m->triangles.push_back({t[0] + base, t[1] + base, t[2] + base});
     }
   }
+}
+}  // namespace
+
+TEST_CASE("a conservative view no k-buffer can hold goes to the exact CPU path", "[conservative]") {
+  // 27 stacked quads of two objects, each of B's crossing its neighbours in A, at 1024^2: every
+  // texel holds 26 fragments; on llvmpipe (128 MiB storage blocks) that k-buffer does not fit.
+  Mesh a, b;
+  stacked_quads(a, b);
   DetectOptions opt;
   opt.stage = Stage::image;  // the image stage is what this checks
   opt.resolution = 1024;
@@ -585,15 +593,7 @@ TEST_CASE("the World's resident image route: a view no k-buffer holds is tested 
   // the host's resolve on llvmpipe the view cannot be resolved; the pair, not traversed (Stage::image),
   // is traversed then and its contacts are the exact reference's.
   Mesh a, b;
-  for (int k = 0; k < 13; ++k) {
-    const Mesh qa = make_grid(Vec3(-5, -5, 0.1 * k), Vec3(10, 0, 0), Vec3(0, 10, 0), 1, 1);
-    const Mesh qb = make_grid(Vec3(-5, -5, 0.1 * k + 0.05 - 0.1), Vec3(10, 0, 0.2), Vec3(0, 10, 0), 1, 1);
-    for (auto [m, q] : {std::pair<Mesh*, const Mesh*>{&a, &qa}, {&b, &qb}}) {
-      const auto base = std::uint32_t(m->vertices.size());
-      m->vertices.insert(m->vertices.end(), q->vertices.begin(), q->vertices.end());
-      for (const Tri& t : q->triangles) m->triangles.push_back({t[0] + base, t[1] + base, t[2] + base});
-    }
-  }
+  stacked_quads(a, b);
   World world(make_image_stage(test_backend()));
   world.batch_image_pairs(true);
   world.add_rigid(std::make_shared<const Mesh>(a), Eigen::Affine3d::Identity());
