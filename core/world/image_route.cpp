@@ -118,9 +118,15 @@ bool World::Impl::resident_route(const DetectOptions& opt) const {
 bool World::Impl::resident_pair(std::size_t p) const {
   const Body& a = bodies[ids[pairs[p].first]];
   const Body& b = bodies[ids[pairs[p].second]];
-  // (An ill-conditioned pose keeps its body in world space, as the exact path does.)
+  // An ill-conditioned pose keeps its body in world space, as the exact path does; a body whose
+  // box leaves the float range the GPU draws in takes the copying route, whose Detector checks
+  // (and refuses) the coordinates it would draw.
+  const auto in_float = [](const Aabb& box) {
+    return box.lo.allFinite() && box.hi.allFinite() && box.lo.cwiseAbs().maxCoeff() <= kFloatMax &&
+           box.hi.cwiseAbs().maxCoeff() <= kFloatMax;
+  };
   return pairs[p].first != pairs[p].second && a.is_rigid && b.is_rigid && a.shape && b.shape && !a.ill_conditioned &&
-         !b.ill_conditioned;
+         !b.ill_conditioned && in_float(boxes[pairs[p].first]) && in_float(boxes[pairs[p].second]);
 }
 
 // With Stage::image, the resident route's pairs need no traversal: their candidates will be
