@@ -153,6 +153,7 @@ void World::Impl::mark_untraversed(const DetectOptions& opt) {
 void World::Impl::resident_image_pairs(const DetectOptions& opt, FrameResult& out) {
   peeled_resident.assign(pairs.size(), 0);
   resident_pairs.clear();
+  for (Object& o : resident_objects) o.rigid.reset();  // last frame's shapes no longer held here
   if (!resident_route(opt)) return;
   for (std::size_t p = 0; p < pairs.size(); ++p)
     if (to_image[p] && resident_pair(p)) resident_pairs.push_back(p);
