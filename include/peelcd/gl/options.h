@@ -93,7 +93,8 @@ inline const std::vector<GlOptionSpec>& gl_option_table() {
          return bool(p);
        }},
       {"resolve", "--resolve",
-       "Where the k-buffer becomes layers and PCS: auto (host on a software renderer, else gpu), gpu or host",
+       "Where the k-buffer becomes layers and PCS: auto (host on a software renderer, else gpu), gpu (on a "
+       "software renderer also the World's image pairs batched, as on a GPU) or host",
        "auto,gpu,host", [](const GlOptions& o) { return std::string(to_string(o.resolve)); },
        [](GlOptions& o, const std::string& v) {
          const auto r = parse_resolve(v);
