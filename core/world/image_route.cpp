@@ -190,7 +190,10 @@ void World::Impl::resident_image_pairs(const DetectOptions& opt, FrameResult& ou
   resident_pairs.resize(kept);
   resident_regions.resize(kept);
   const std::size_t n = resident_pairs.size();
-  if (n == 0) return;
+  if (n == 0) {
+    out.timings.upload += ms_since(t_views);
+    return;
+  }
 
   // Tiles: as the Detector's (by need from the median edge, or equal shares, or forced).
   resident_tiles.assign(n, opt.resolution);
