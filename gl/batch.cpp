@@ -151,12 +151,14 @@ void GlImageStage::Impl::gather_batch(const PeelJob* jobs, PeelResult* outs, Bat
   batch.region_data.clear();
   run.invocations = 0;
   shape_uploads = 0;  // the batch's, reported on its first view
-  // Every rigid shape of the batch resident first: adding one may move the others (compaction),
-  // so their first corners are read only after all are in.
+  batch.moving_bases.clear();
+  // Every rigid shape and moving mesh of the batch resident first: adding one may move the others
+  // (compaction), so their first corners are read only after all are in.
   for (std::size_t j = 0; j < run.take; ++j)
     for (int slot = 0; slot < 2; ++slot) {
       const Object& object = *jobs[j].objects[slot];
       if (object.rigid && object.rigid->shape) resident_base(object.rigid->shape, jobs[j].ids);
+      if (moving_mesh(object)) resident_topology(*object.moving, jobs[j].ids);
     }
   std::size_t base = 0;
   for (std::size_t j = 0; j < run.take; ++j) {
@@ -186,23 +188,28 @@ void GlImageStage::Impl::gather_batch_object(const PeelJob& job, std::size_t j, 
   const RoiView& view = job.view;
   const Object& object = *job.objects[slot];
   const bool rigid = object.rigid && object.rigid->shape;
-  const Mesh& mesh = rigid ? *object.rigid->shape : object.mesh;
+  const bool moving = !rigid && moving_mesh(object);
+  const Mesh& mesh = rigid ? *object.rigid->shape : drawn_mesh(object);
   const std::uint32_t view_object = std::uint32_t(j) << 1 | std::uint32_t(slot);
   float model[16] = {1, 0, 0, 0, 0, 1, 0, 0, 0, 0, 1, 0, 0, 0, 0, 1};
-  if (rigid) {  // composed in double, rounded once (as prepare())
-    Eigen::Affine3d m = object.rigid->pose;
+  if (rigid || moving) {  // composed in double, rounded once (as prepare()); a moving mesh's: a shift
+    Eigen::Affine3d m = rigid ? object.rigid->pose : Eigen::Affine3d::Identity();
     m.translation() -= view.center;
     const Eigen::Matrix4d mm = m.matrix();
     for (int i = 0; i < 16; ++i) model[i] = float(mm(i % 4, i / 4));
   }
   put_matrix(batch.view_data, model);
   constexpr float inf = std::numeric_limits<float>::infinity();
-  if (rigid) {
-    const std::size_t first = resident_base(object.rigid->shape, job.ids);
+  if (rigid || moving) {
+    const std::size_t first = rigid ? resident_base(object.rigid->shape, job.ids) : resident_topology(*object.moving, job.ids);
+    // A moving mesh's vertices: in the frame's corners once a batch (its first + 1 in the entries).
+    const std::uint32_t positions = moving ? moving_positions(mesh) + 1u : 0u;
     if (options.gpu_select && !job.capture) {  // the selection pass picks its triangles (no list read)
-      if (!mesh.triangles.empty())
+      if (!mesh.triangles.empty()) {
         batch.job_data.push_back({std::uint32_t(first), std::uint32_t(mesh.triangles.size()), view_object,
                                   std::uint32_t(run.invocations)});
+        batch.job_data.push_back({positions, 0u, 0u, 0u});
+      }
       run.invocations += mesh.triangles.size();
       put_region(batch.region_data, Eigen::Vector3f::Constant(inf), Eigen::Vector3f::Constant(-inf));
       return;
@@ -211,7 +218,7 @@ void GlImageStage::Impl::gather_batch_object(const PeelJob& job, std::size_t j, 
     const std::vector<std::uint32_t>& tris = job_triangles(job, slot, selected[slot]);
     for (const std::uint32_t tri : tris) {  // the host's selection, from the resident corners
       batch.entry_data.push_back(
-          {std::uint32_t(first + 3 * std::size_t(tri)), view_object, corner_id(mesh, tri, 2, job.ids), 0u});
+          {std::uint32_t(first + 3 * std::size_t(tri)), view_object, corner_id(mesh, tri, 2, job.ids), positions});
       batch.ids.push_back(batch.entry_data.back()[2]);
     }
     out.triangles_indexed += tris.size();
@@ -299,7 +306,7 @@ void GlImageStage::Impl::select_batch(const BatchRun& run) {
   gl.UseProgram(select.id);
   const std::size_t groups = (run.invocations + 63) / 64;
   const std::size_t gx = std::min<std::size_t>(groups, 65535), gy = (groups + gx - 1) / gx;
-  gl.Uniform1ui(select.jobs, GLuint(batch.job_data.size()));
+  gl.Uniform1ui(select.jobs, GLuint(batch.job_data.size() / 2));  // two records a job
   gl.Uniform1ui(select.invocations, GLuint(run.invocations));
   gl.Uniform1ui(select.row, GLuint(gx * 64));
   gl.Uniform1i(select.conservative, run.point ? 0 : 1);
@@ -408,12 +415,55 @@ void GlImageStage::Impl::fill_batch(const BatchRun& run) {
 
 // A rigid shape's first corner in the resident buffer: copied there (GPU to GPU) from its cached
 // buffer (cached_shape(): uploaded the first time the shape is seen) the first time a batch draws
-// it. When the buffer is full, the shapes still held are moved into a larger one.
+// it.
 std::size_t GlImageStage::Impl::resident_base(const std::shared_ptr<const Mesh>& shape, IdMode ids) {
-  const auto key = std::make_pair(shape.get(), ids);
+  const auto key = std::make_pair(static_cast<const void*>(shape.get()), ids);
   if (auto it = resident.find(key); it != resident.end() && !it->second.owner.expired()) return it->second.base;
   const CachedShape& cached = cached_shape(shape, ids);
-  const std::size_t corners = cached.corners;
+  const std::size_t base = resident_reserve(key, shape, cached.corners);
+  if (cached.corners)
+    copy_buffer(cached.vbo, resident_buffer, 0, GLintptr(base * sizeof(GpuVertex)),
+                GLsizeiptr(cached.corners * sizeof(GpuVertex)));
+  check("a rigid shape into the resident buffer");
+  return base;
+}
+
+// A moving mesh's first corner record in the resident buffer (per corner of each triangle: its
+// vertex, 0, 0, its ID), uploaded the first time a batch draws this topology with this ID mode
+// (counted in shape_uploads); kept while something holds the topology.
+std::size_t GlImageStage::Impl::resident_topology(const MovingMesh& moving, IdMode ids) {
+  const auto key = std::make_pair(moving.topology.get(), ids);
+  if (auto it = resident.find(key); it != resident.end() && !it->second.owner.expired()) return it->second.base;
+  const Mesh& mesh = *moving.source;
+  std::vector<std::array<std::uint32_t, 4>> records;
+  records.reserve(3 * mesh.triangles.size());
+  for (std::uint32_t t = 0; t < mesh.triangles.size(); ++t)
+    for (int k = 0; k < 3; ++k) records.push_back({mesh.triangles[t][k], 0u, 0u, corner_id(mesh, t, k, ids)});
+  const std::size_t base = resident_reserve(key, moving.topology, records.size());
+  if (!records.empty())
+    upload_geometry(resident_buffer, GLintptr(base * sizeof(GpuVertex)), GLsizeiptr(records.size() * sizeof(GpuVertex)),
+                    records.data());
+  ++shape_uploads;
+  check("a moving mesh's triangles into the resident buffer");
+  return base;
+}
+
+// Where a moving mesh's vertices are in this batch's frame corners: appended (world-space floats,
+// rounded to nearest) the first time the batch draws the mesh.
+std::uint32_t GlImageStage::Impl::moving_positions(const Mesh& mesh) {
+  const auto [it, added] = batch.moving_bases.try_emplace(&mesh, std::uint32_t(batch.corners.size()));
+  if (!added) return it->second;
+  const std::size_t at = batch.corners.size();
+  batch.corners.resize(at + mesh.vertices.size());
+  GpuVertex* out = batch.corners.data() + at;
+  for (const Vec3& p : mesh.vertices) *out++ = {float(p.x()), float(p.y()), float(p.z()), 0u};
+  return it->second;
+}
+
+// Room for `corners` resident corners under `key` (held while `owner` lives): its first corner.
+// When the buffer is full, the entries still held are moved into a larger one (compaction).
+std::size_t GlImageStage::Impl::resident_reserve(const std::pair<const void*, IdMode>& key,
+                                                 const std::shared_ptr<const void>& owner, std::size_t corners) {
   resident.erase(key);
   if (resident_used + corners > resident_capacity) {
     std::size_t live = 0;
@@ -441,16 +491,13 @@ std::size_t GlImageStage::Impl::resident_base(const std::shared_ptr<const Mesh>&
     resident_capacity = capacity;
     resident_used = at;
   }
-  if (corners)
-    copy_buffer(cached.vbo, resident_buffer, 0, GLintptr(resident_used * sizeof(GpuVertex)),
-                GLsizeiptr(corners * sizeof(GpuVertex)));
   ResidentShape r;
-  r.owner = shape;
+  r.owner = owner;
   r.base = resident_used;
   r.corners = corners;
   resident_used += corners;
-  check("a rigid shape into the resident buffer");
-  return resident.emplace(key, r).first->second.base;
+  resident.emplace(key, r);
+  return r.base;
 }
 
 }  // namespace peelcd::gl

@@ -7,7 +7,7 @@ namespace peelcd::gl {
 
 void GlImageStage::Impl::prepare(const Object& object, const RoiView& view, const std::vector<std::uint32_t>& triangles,
                                  IdMode ids, int slot) {
-  const Mesh& mesh = object.mesh;
+  const Mesh& mesh = drawn_mesh(object);
   if (!object.rigid || !object.rigid->shape) {
     slot_shape[slot] = nullptr;
     std::vector<GpuVertex>& out = staging[slot];

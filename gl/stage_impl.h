@@ -21,6 +21,7 @@
 #include <chrono>
 #include <initializer_list>
 #include <map>
+#include <unordered_map>
 #include <memory>
 #include <string>
 #include <vector>
@@ -187,6 +188,10 @@ struct BatchState {
   GLuint frame = 0, views = 0, entries = 0, jobs = 0, command = 0, vao = 0;
   std::size_t frame_capacity = 0, views_capacity = 0, entries_capacity = 0, jobs_capacity = 0;  // bytes
   std::vector<GpuVertex> corners;
+  // Each moving mesh's vertices' first corner in `corners` (appended once a batch).
+  std::unordered_map<const Mesh*, std::uint32_t> moving_bases;
+  // Entries: first corner, view << 1 | object, provoking ID, a moving mesh's positions + 1 (or
+  // 0). Selection jobs: two records each (shaders/batch_select.comp).
   std::vector<std::array<std::uint32_t, 4>> entry_data, job_data;
   std::vector<std::uint32_t> ids;  // the provoking ID by draw order (the host resolve's)
   std::vector<float> view_data;
@@ -314,17 +319,24 @@ struct GlImageStage::Impl {
   BatchState batch;
   std::size_t read_batch_counts(std::size_t texels, Timings& t);
 
-  // Rigid shapes resident for the batch: one buffer holding every shape a batch drew (its
-  // corners, with IDs, copied GPU to GPU from the shape's cached buffer: uploaded once), each at
-  // its first corner; kept while some object holds the shape, compacted when the buffer grows.
+  // Rigid shapes and moving meshes' triangles resident for the batch: one buffer holding every
+  // shape a batch drew (its corners, with IDs, copied GPU to GPU from the shape's cached buffer:
+  // uploaded once) and every moving mesh's corner records (vertex, ID; uploaded once per
+  // topology), each at its first corner; kept while some object holds the shape or topology,
+  // compacted when the buffer grows (batch.cpp).
   struct ResidentShape {
-    std::weak_ptr<const Mesh> owner;
+    std::weak_ptr<const void> owner;
     std::size_t base = 0, corners = 0;
   };
-  std::map<std::pair<const Mesh*, IdMode>, ResidentShape> resident;
+  std::map<std::pair<const void*, IdMode>, ResidentShape> resident;
   GLuint resident_buffer = 0;
   std::size_t resident_capacity = 0, resident_used = 0;  // corners
-  std::size_t resident_base(const std::shared_ptr<const Mesh>& shape, IdMode ids);  // batch.cpp
+  std::size_t resident_base(const std::shared_ptr<const Mesh>& shape, IdMode ids);
+  std::size_t resident_topology(const MovingMesh& moving, IdMode ids);
+  std::uint32_t moving_positions(const Mesh& mesh);
+  std::size_t resident_reserve(const std::pair<const void*, IdMode>& key, const std::shared_ptr<const void>& owner,
+                               std::size_t corners);
+  static bool moving_mesh(const Object& o) { return !(o.rigid && o.rigid->shape) && o.moving && o.moving->source && o.moving->topology; }
 
   // Geometry: per slot (0 = A, 1 = B), the corners of a world-space object's triangles in the
   // view (`staging`, uploaded to `vbo`), or a rigid object's cached shape and the corner indices

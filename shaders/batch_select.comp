@@ -1,8 +1,9 @@
 #version 450 core
 // Batched views (gl/batch.cpp), conservative or point-sampled: the GPU selects the triangles of
-// rigid objects that a frame's views draw. A rigid shape lives in the resident buffer (uploaded
-// once); per view and rigid object, a job names the shape's corners and how many triangles it
-// has. Two dispatches of this program (`pass`), one invocation per (job, triangle) each:
+// rigid objects and moving meshes that a frame's views draw. A rigid shape lives in the resident
+// buffer (uploaded once), as do a moving mesh's corner records (its triangles: uploaded once; its
+// vertices come with the frame's corners); per view and such object, a job names the corners
+// and how many triangles it has. Two dispatches of this program (`pass`), one invocation per (job, triangle) each:
 //   0. the triangle's corners moved into ROI-local coordinates by the object's matrix for the
 //      view (as the batched vertex shaders move them), kept when their box overlaps the ROI box
 //      grown by 1e-3 of its largest half extent (the host's culling keeps only triangles whose
@@ -22,10 +23,11 @@
 // triangle's box is grown by half the margin in both passes (as the host's selection grows them).
 layout(local_size_x = 64) in;
 
+#define PEELCD_BATCH_CORNERS  // the resident buffer and the frame's corners, resident_corner()
 #include "batch.inc"  // the views
 layout(std430, binding = 4) writeonly buffer Entries { uvec4 entries[]; };
-layout(std430, binding = 7) readonly buffer Resident { uvec4 resident[]; };
-// first corner in the resident buffer, triangles, view << 1 | object, first invocation
+// Two records a job: (first corner in the resident buffer, triangles, view << 1 | object, first
+// invocation), then (a moving mesh's first position in the frame's corners + 1, else 0; 0, 0, 0).
 layout(std430, binding = 9) readonly buffer Jobs { uvec4 jobs[]; };
 layout(std430, binding = 10) buffer Command { uint vertex_count; uint instance_count; uint first; uint base_instance; };
 // Pass 0's triangles, as entries, and how many (the last word of the header).
@@ -48,12 +50,13 @@ uint ordered(float f) {
 }
 float from_ordered(uint e) { return uintBitsToFloat((e & 0x80000000u) != 0u ? e & 0x7fffffffu : ~e); }
 
-// The ROI-local box of the triangle at `corner` of the resident buffer, moved by `m`.
-void triangle_box(uint corner, mat4 m, out vec3 lo3, out vec3 hi3) {
+// The ROI-local box of the triangle at `corner` of the resident buffer (`moving`: as
+// resident_corner()), moved by `m`.
+void triangle_box(uint corner, uint moving, mat4 m, out vec3 lo3, out vec3 hi3) {
   lo3 = vec3(3.0e38);
   hi3 = vec3(-3.0e38);
   for (uint k = 0u; k < 3u; ++k) {
-    vec3 p = (m * vec4(uintBitsToFloat(resident[corner + k].xyz), 1.0)).xyz;
+    vec3 p = (m * vec4(resident_corner(corner + k, moving), 1.0)).xyz;
     lo3 = min(lo3, p);
     hi3 = max(hi3, p);
   }
@@ -74,7 +77,7 @@ void main() {
     vec3 hi_b = vec3(from_ordered(regions[r + 9u]), from_ordered(regions[r + 10u]), from_ordered(regions[r + 11u]));
     vec3 lo_r = max(max(lo_a, lo_b), -h) - vec3(margin), hi_r = min(min(hi_a, hi_b), h) + vec3(margin);
     vec3 lo3, hi3;
-    triangle_box(e.x, views[view].roi_from_object[e.y & 1u], lo3, hi3);
+    triangle_box(e.x, e.w, views[view].roi_from_object[e.y & 1u], lo3, hi3);
     lo3 -= vec3(grow_of(view));
     hi3 += vec3(grow_of(view));
     if (any(greaterThan(lo3, hi_r)) || any(lessThan(hi3, lo_r))) return;
@@ -86,19 +89,20 @@ void main() {
   uint lo = 0u, hi = job_count - 1u;  // the last job starting at or before i
   while (lo < hi) {
     uint mid = (lo + hi + 1u) >> 1;
-    if (jobs[mid].w <= i) lo = mid; else hi = mid - 1u;
+    if (jobs[2u * mid].w <= i) lo = mid; else hi = mid - 1u;
   }
-  uvec4 job = jobs[lo];
+  uvec4 job = jobs[2u * lo];
+  uint moving = jobs[2u * lo + 1u].x;
   uint corner = job.x + 3u * (i - job.w);
   uint view = job.z >> 1;
   vec3 h = views[view].half_box.xyz;
   vec3 reach = h + vec3(1.0e-3 * max(max(h.x, h.y), h.z));
   vec3 lo3, hi3;
-  triangle_box(corner, views[view].roi_from_object[job.z & 1u], lo3, hi3);
+  triangle_box(corner, moving, views[view].roi_from_object[job.z & 1u], lo3, hi3);
   lo3 -= vec3(grow_of(view));
   hi3 += vec3(grow_of(view));
   if (any(greaterThan(lo3, reach)) || any(lessThan(hi3, -reach))) return;
-  staged[atomicAdd(staged_header.w, 1u)] = uvec4(corner, job.z, resident[corner + 2u].w, 0u);
+  staged[atomicAdd(staged_header.w, 1u)] = uvec4(corner, job.z, resident[corner + 2u].w, moving);
   uint r = 12u * view + 6u * (job.z & 1u);
   for (uint k = 0u; k < 3u; ++k) {
     atomicMin(regions[r + k], ordered(lo3[k]));

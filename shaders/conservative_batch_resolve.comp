@@ -18,6 +18,7 @@
 // couples that may touch come back to the host.
 #include "peelcd/core/image/pcs_test.inc"  // pcs_intervals_overlap (shared with C++)
 #include "peelcd/core/image/certified_apart.inc"
+#define PEELCD_BATCH_CORNERS  // entry_position(): the draw's corners, as the draw bound them
 #include "batch.inc"  // the views' records (their poses and growth)
 
 #ifdef PEELCD_DEEP
@@ -52,9 +53,6 @@ layout(std430, binding = 15) buffer DeepRows {
   uvec2 rows[];
 };
 
-// The draw's corners as the draw bound them (shaders/batch.inc's Resident and FrameCorners).
-layout(std430, binding = 7) readonly buffer ResidentCorners { uvec4 resident[]; };
-layout(std430, binding = 8) readonly buffer DrawnCorners { uvec4 frame_corners[]; };
 
 uniform uint texels;    // of the packed k-buffer
 uniform uint row_base;  // PEELCD_DEEP: the first row of this dispatch
@@ -62,8 +60,7 @@ uniform uint row_base;  // PEELCD_DEEP: the first row of this dispatch
 // Corner k of entry e in ROI-local coordinates, as shaders/conservative.vert places it, and its
 // error bound (the largest coordinate of |M| |x| + |t| made certified_corner_error()).
 vec3 entry_corner(uvec4 e, uint k, out float error) {
-  uint corner = (e.x & 0x7fffffffu) + k;
-  vec3 x = uintBitsToFloat((e.x >> 31) != 0u ? frame_corners[corner].xyz : resident[corner].xyz);
+  vec3 x = entry_position(e, k);  // the draw's corner (shaders/batch.inc)
   mat4 m = views[e.y >> 1].roi_from_object[e.y & 1u];
   vec3 magnitude = mat3(abs(m[0].xyz), abs(m[1].xyz), abs(m[2].xyz)) * abs(x) + abs(m[3].xyz);
   error = certified_corner_error(max(max(magnitude.x, magnitude.y), magnitude.z));

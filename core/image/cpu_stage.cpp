@@ -56,7 +56,7 @@ void CpuImageStage::raster_object(const PeelJob& job, int slot) {
   const float box_hi[3] = {float(hi_d.x()), float(hi_d.y()), float(hi_d.z())};
   const double half_n = 0.5 * n;
   const Object& object = *job.objects[slot];
-  const Mesh& mesh = object.mesh;
+  const Mesh& mesh = drawn_mesh(object);
   const std::vector<std::uint32_t>& tris = job_triangles(job, slot, selected_[slot]);
   drawn_[slot] = tris.size();
   std::vector<std::uint32_t>& ids = ids_[slot];

@@ -43,8 +43,17 @@ void triangles_touching(const Mesh& mesh, const Aabb& box, std::vector<std::uint
 const std::vector<std::uint32_t>& job_triangles(const PeelJob& job, int slot, std::vector<std::uint32_t>& scratch) {
   if (job.triangles[slot]) return *job.triangles[slot];
   const Object& object = *job.objects[slot];
+  if (object.moving && object.moving->source) {  // a moving mesh: its world-space triangles
+    const Mesh& mesh = *object.moving->source;
+    const Aabb box = job.view.box.grown(job.grow);
+    scratch.clear();
+    for (std::uint32_t t = 0; t < mesh.triangles.size(); ++t)
+      if (triangle_touches(mesh, t, box)) scratch.push_back(t);
+    return scratch;
+  }
   if (!object.rigid || !object.rigid->shape)
-    throw std::invalid_argument("peelcd::PeelJob: no triangle list for '" + object.name + "', which has no rigid shape");
+    throw std::invalid_argument("peelcd::PeelJob: no triangle list for '" + object.name +
+                                "', which has neither a rigid shape nor a moving mesh");
   const Mesh& shape = *object.rigid->shape;
   const Eigen::Affine3d& pose = object.rigid->pose;
   const Aabb box = job.view.box.grown(job.grow);

@@ -1,8 +1,9 @@
 // The World's image route: the pairs the router (or Stage::image) sent to the image stage.
-//   resident_image_pairs()  pairs of two rigid bodies on a stage that batches its views: each
-//                           body drawn from its shape, resident on the stage, by its pose (the
-//                           GL stage selects the triangles in each view on the GPU); the views'
-//                           PCS become the pair's candidates on the exact path's tasks.
+//   resident_image_pairs()  pairs of two bodies on a stage that batches its views: a rigid body
+//                           drawn from its shape, resident on the stage, by its pose; a deforming
+//                           one from its triangles, resident, and its vertices, uploaded once a
+//                           frame (the GL stage selects the triangles in each view on the GPU);
+//                           the views' PCS become the pair's candidates on the exact path's tasks.
 //   image_pairs()           the others: the candidates' triangles copied into world-space
 //                           objects for the Detector, which culls, plans and peels them.
 #include "world_impl.h"
@@ -29,7 +30,7 @@ Aabb world_box(const FBox& f, const Eigen::Affine3d& pose) {
   return out;
 }
 
-// Where two rigid bodies can meet inside `roi`: the node pairs of their trees (world boxes) whose
+// Where two bodies can meet inside `roi`: the node pairs of their trees (world boxes) whose
 // boxes meet inside `roi`, refined level by level (each pair splits its larger node) until the
 // nodes hold about kRegionLeaves leaves each (finer costs host work that a small ROI's view does
 // not repay), while a level holds at most kRegionPairs pairs, and not past two leaves; the
@@ -45,7 +46,7 @@ Aabb meeting_region(const Bvh& ta, const Eigen::Affine3d& pa, const Bvh& tb, con
   const std::vector<BvhNode>& nb = tb.nodes();
   if (na.empty() || nb.empty() || roi.empty()) return out;
   level.clear();
-  level.push_back({0u, 0u, world_box(na[0].box, pa), world_box(nb[0].box, pb)});
+  level.push_back({0u, 0u, world_box(na[0].box, pa), world_box(nb[0].box, pb), Aabb{}});
   const auto levels = [](const Bvh& t) { return std::max(0.0, std::log2(double(t.leaves()) / kRegionLeaves)); };
   const int steps = int(std::ceil(levels(ta) + levels(tb)));
   for (int step = 0;; ++step) {
@@ -70,9 +71,9 @@ Aabb meeting_region(const Bvh& ta, const Eigen::Affine3d& pa, const Bvh& tb, con
         continue;
       }
       if (y.leaf() || (!x.leaf() && e.a.extent().maxCoeff() >= e.b.extent().maxCoeff()))
-        for (const std::uint32_t c : {e.i + 1, x.first}) next.push_back({c, e.j, world_box(na[c].box, pa), e.b});
+        for (const std::uint32_t c : {e.i + 1, x.first}) next.push_back({c, e.j, world_box(na[c].box, pa), e.b, Aabb{}});
       else
-        for (const std::uint32_t c : {e.j + 1, y.first}) next.push_back({e.i, c, e.a, world_box(nb[c].box, pb)});
+        for (const std::uint32_t c : {e.j + 1, y.first}) next.push_back({e.i, c, e.a, world_box(nb[c].box, pb), Aabb{}});
     }
     level.swap(next);
   }
@@ -85,36 +86,44 @@ Aabb meeting_region(const Bvh& ta, const Eigen::Affine3d& pa, const Bvh& tb, con
 
 }  // namespace
 
-Aabb World::Impl::rigid_contact_region(const Body& a, const Body& b, const Aabb& roi, RegionScratch& scratch) const {
-  return meeting_region(a.tree, a.pose, b.tree, b.pose, roi, scratch.level, scratch.next);
+// A deforming body's tree is in world space (its pose the identity), refitted at the frame's start.
+Aabb World::Impl::contact_region(const Body& a, const Body& b, const Aabb& roi, RegionScratch& scratch) const {
+  const Eigen::Affine3d identity = Eigen::Affine3d::Identity();
+  return meeting_region(a.tree, a.is_rigid ? a.pose : identity, b.tree, b.is_rigid ? b.pose : identity, roi,
+                        scratch.level, scratch.next);
 }
 
-// The median first-edge length of a rigid body's shape (as the Detector's culling measures its
-// kept triangles), computed once per shape, scaled by the pose's volume scale.
-double World::Impl::shape_median_edge(const Body& b) {
+// The median first-edge length of a body's triangles (as the Detector's culling measures its
+// kept triangles): of a rigid body's shape computed once per shape, scaled by the pose's volume
+// scale; of a deforming body over at most 1,025 of its triangles, evenly spread, each frame (its
+// edges change; a sample keeps the cost per body, not per triangle).
+double World::Impl::median_edge(const Body& b) {
+  const auto median = [](const Mesh& m, std::size_t step) {
+    std::vector<double> edges;
+    edges.reserve(m.triangles.size() / step + 1);
+    for (std::size_t t = 0; t < m.triangles.size(); t += step) {
+      const Tri& f = m.triangles[t];
+      edges.push_back((m.vertices[f[1]] - m.vertices[f[0]]).norm());
+    }
+    if (edges.empty()) return 0.0;
+    std::nth_element(edges.begin(), edges.begin() + edges.size() / 2, edges.end());
+    return edges[edges.size() / 2];
+  };
+  if (!b.is_rigid) return median(b.mesh, std::max<std::size_t>(1, b.mesh.triangles.size() / 1024));
   const Mesh* key = b.shape.get();
   auto it = shape_edges.find(key);
-  if (it == shape_edges.end() || it->second.owner.expired()) {
-    const Mesh& m = *b.shape;
-    std::vector<double> edges;
-    edges.reserve(m.triangles.size());
-    for (const Tri& f : m.triangles) edges.push_back((m.vertices[f[1]] - m.vertices[f[0]]).norm());
-    double edge = 0.0;
-    if (!edges.empty()) {
-      std::nth_element(edges.begin(), edges.begin() + edges.size() / 2, edges.end());
-      edge = edges[edges.size() / 2];
-    }
-    it = shape_edges.insert_or_assign(key, ShapeEdge{b.shape, edge}).first;
-  }
+  if (it == shape_edges.end() || it->second.owner.expired())
+    it = shape_edges.insert_or_assign(key, ShapeEdge{b.shape, median(*b.shape, 1)}).first;
   return it->second.edge * std::cbrt(std::fabs(b.pose.linear().determinant()));
 }
 
-// Whether the resident route serves this frame's image pairs of two rigid bodies: the World
+// Whether the resident route serves this frame's image pairs (resident_pair()): the World
 // batches its image pairs (batched_image()), conservative coverage, no margin.
 bool World::Impl::resident_route(const DetectOptions& opt) const {
   return opt.conservative && opt.margin == 0.0 && batched_image();
 }
 
+// Two bodies (a self pair takes the copying route), each rigid or deforming.
 bool World::Impl::resident_pair(std::size_t p) const {
   const Body& a = bodies[ids[pairs[p].first]];
   const Body& b = bodies[ids[pairs[p].second]];
@@ -125,8 +134,9 @@ bool World::Impl::resident_pair(std::size_t p) const {
     return box.lo.allFinite() && box.hi.allFinite() && box.lo.cwiseAbs().maxCoeff() <= kFloatMax &&
            box.hi.cwiseAbs().maxCoeff() <= kFloatMax;
   };
-  return pairs[p].first != pairs[p].second && a.is_rigid && b.is_rigid && a.shape && b.shape && !a.ill_conditioned &&
-         !b.ill_conditioned && in_float(boxes[pairs[p].first]) && in_float(boxes[pairs[p].second]);
+  const auto drawable = [](const Body& x) { return x.is_rigid ? x.shape && !x.ill_conditioned : true; };
+  return pairs[p].first != pairs[p].second && drawable(a) && drawable(b) && in_float(boxes[pairs[p].first]) &&
+         in_float(boxes[pairs[p].second]);
 }
 
 // With Stage::image, the resident route's pairs need no traversal: their candidates will be
@@ -138,13 +148,13 @@ void World::Impl::mark_untraversed(const DetectOptions& opt) {
   for (std::size_t p = 0; p < pairs.size(); ++p) untraversed[p] = resident_pair(p);
 }
 
-// The image-routed pairs of two rigid bodies, where resident_route(): every view of every such
-// pair in one call of the stage. A job's objects are the bodies' shapes and poses alone (no
-// world mesh, no corner copied) without triangle lists: the GL stage's batch selects each rigid
-// object's triangles in the view on the GPU from the resident shape (other paths select them on
-// the host, job_triangles()); the triangles drawn are therefore not counted here
-// (triangles_in_roi, triangles_drawn 0). Each pair's view is its region: its boxes' overlap
-// narrowed by its trees' nodes (rigid_contact_region()); the pairs share the budget among
+// The image-routed pairs of resident_pair(), where resident_route(): every view of every such
+// pair in one call of the stage. A job's objects are the bodies' shapes and poses (rigid) or
+// their world meshes as moving meshes (deforming), no corner copied, without triangle lists: the
+// GL stage's batch selects each object's triangles in the view on the GPU from the resident shape
+// or triangles (other paths select them on the host, job_triangles()); the triangles drawn are
+// therefore not counted here (triangles_in_roi, triangles_drawn 0). Each pair's view is its
+// region: its boxes' overlap narrowed by its trees' nodes (contact_region()); the pairs share the budget among
 // themselves as the Detector's ROIs do. The PCS (unique IDs: the triangles;
 // else expanded by the shapes' ID maps) replace the pair's candidates on its first task; the
 // exact path's tests (test_candidates()) and contact gathering then serve them. A pair with a
@@ -153,7 +163,7 @@ void World::Impl::mark_untraversed(const DetectOptions& opt) {
 void World::Impl::resident_image_pairs(const DetectOptions& opt, FrameResult& out) {
   peeled_resident.assign(pairs.size(), 0);
   resident_pairs.clear();
-  for (Object& o : resident_objects) o.rigid.reset();  // last frame's shapes no longer held here
+  for (Object& o : resident_objects) o.rigid.reset(), o.moving.reset();  // last frame's no longer held here
   if (!resident_route(opt)) return;
   for (std::size_t p = 0; p < pairs.size(); ++p)
     if (to_image[p] && resident_pair(p)) resident_pairs.push_back(p);
@@ -167,9 +177,8 @@ void World::Impl::resident_image_pairs(const DetectOptions& opt, FrameResult& ou
   parallel(resident_pairs.size(), frame_lanes, [&](std::size_t i, unsigned lane) {
     const std::size_t p = resident_pairs[i];
     resident_regions[i] = opt.cull == Cull::box ? out.pairs[p].roi  // the paper's: the whole ROI
-                                                : rigid_contact_region(bodies[ids[pairs[p].first]],
-                                                                       bodies[ids[pairs[p].second]], out.pairs[p].roi,
-                                                                       region_stacks[lane]);
+                                                : contact_region(bodies[ids[pairs[p].first]], bodies[ids[pairs[p].second]],
+                                                                 out.pairs[p].roi, region_stacks[lane]);
   });
   std::size_t kept = 0;
   for (std::size_t i = 0; i < resident_pairs.size(); ++i) {
@@ -201,8 +210,8 @@ void World::Impl::resident_image_pairs(const DetectOptions& opt, FrameResult& ou
     const double edge_texels = edge_texels_of(opt);
     resident_needs.clear();
     for (const std::size_t p : resident_pairs) {
-      const double ea = shape_median_edge(bodies[ids[pairs[p].first]]);
-      const double eb = shape_median_edge(bodies[ids[pairs[p].second]]);
+      const double ea = median_edge(bodies[ids[pairs[p].first]]);
+      const double eb = median_edge(bodies[ids[pairs[p].second]]);
       resident_needs.push_back(edge_tile_resolution(opt.budget, out.pairs[p].region, std::sqrt(ea * eb), edge_texels));
     }
     allocate_tiles(opt.budget, resident_needs, resident_tiles);
@@ -210,15 +219,20 @@ void World::Impl::resident_image_pairs(const DetectOptions& opt, FrameResult& ou
     resident_tiles.assign(n, tile_resolution(opt.budget, n));
   }
 
-  // The objects: shape and pose.
+  // The objects: shape and pose, or the deforming body's world mesh as a moving mesh.
   if (resident_objects.size() < 2 * n) resident_objects.resize(2 * n);
   for (std::size_t i = 0; i < n; ++i) {
     const std::size_t p = resident_pairs[i];
     for (int s = 0; s < 2; ++s) {
-      const Body& body = bodies[ids[s ? pairs[p].second : pairs[p].first]];
+      Body& body = bodies[ids[s ? pairs[p].second : pairs[p].first]];
       Object& o = resident_objects[2 * i + s];
       if (o.name != body.name) o.name = body.name;
-      o.rigid = RigidMotion{body.shape, body.pose};
+      if (body.is_rigid) {
+        o.rigid = RigidMotion{body.shape, body.pose};
+      } else {
+        if (!body.topology) body.topology = std::make_shared<const char>(0);
+        o.moving = MovingMesh{body.topology, &body.mesh};
+      }
       o.self = false;
     }
   }
@@ -314,14 +328,14 @@ void World::Impl::resident_image_pairs(const DetectOptions& opt, FrameResult& ou
     std::vector<std::uint64_t>& candidates = tasks[first_task[p]].candidates;
     if (opt.ids == IdMode::unique) {  // an ID is its triangle
       for (const std::uint64_t k : resident_keys)
-        if (pair_a(k) >= a.shape->triangles.size() || pair_b(k) >= b.shape->triangles.size())
+        if (pair_a(k) >= a.local().triangles.size() || pair_b(k) >= b.local().triangles.size())
           throw std::out_of_range("peelcd::World: triangle ID out of range");
       candidates.assign(resident_keys.begin(), resident_keys.end());
     } else {
       resident_pcs.clear();
       for (const std::uint64_t k : resident_keys) resident_pcs.push_back(IdPair{pair_a(k), pair_b(k)});
-      resident_map_a.rebuild(*a.shape, opt.ids);
-      resident_map_b.rebuild(*b.shape, opt.ids);
+      resident_map_a.rebuild(a.local(), opt.ids);
+      resident_map_b.rebuild(b.local(), opt.ids);
       candidates.clear();
       expand_pcs(resident_pcs, resident_map_a, resident_map_b, candidates, resident_scratch);
     }

@@ -118,7 +118,11 @@ struct Body {
   void topology_changed() {
     rep_valid = false;
     self_cached = false;
+    topology.reset();
   }
+  // Deforming: what the GL stage keys this body's resident triangles by (MovingMesh::topology);
+  // made when the image route first draws the body, dropped when its triangles change.
+  std::shared_ptr<const char> topology;
   const std::vector<std::uint32_t>& representatives(SelfAdjacency adjacency) {
     // By position on a deforming body: the positions of this frame.
     if (!rep_valid || rep_adjacency != adjacency || (adjacency == SelfAdjacency::position && !is_rigid)) {
@@ -394,21 +398,23 @@ struct World::Impl {
   std::vector<std::size_t> image_of;
   std::vector<std::pair<std::size_t, std::size_t>> image_only;
 
-  // The image-routed pairs of two rigid bodies, batched (resident_image_pairs()): each body
-  // drawn from its shape, resident on the stage (uploaded once), by its pose; the views' PCS
-  // become the pair's candidates, tested on the exact path's tasks. No triangle is copied.
+  // The image-routed pairs of two bodies, rigid or deforming, batched (resident_image_pairs()):
+  // a rigid body drawn from its shape, resident on the stage (uploaded once), by its pose; a
+  // deforming one from its triangles, resident (uploaded once per topology), and its vertices
+  // (uploaded once a frame); the views' PCS become the pair's candidates, tested on the exact
+  // path's tasks. No triangle is copied.
   void resident_image_pairs(const DetectOptions& opt, FrameResult& out);
   bool resident_route(const DetectOptions& opt) const;
-  bool resident_pair(std::size_t p) const;  // two rigid bodies
+  bool resident_pair(std::size_t p) const;
   void mark_untraversed(const DetectOptions& opt);
-  double shape_median_edge(const Body& b);
-  Aabb rigid_contact_region(const Body& a, const Body& b, const Aabb& roi, RegionScratch& scratch) const;
+  double median_edge(const Body& b);
+  Aabb contact_region(const Body& a, const Body& b, const Aabb& roi, RegionScratch& scratch) const;
   std::vector<Aabb> resident_regions;           // per resident pair: where its bodies can meet
   std::vector<RegionScratch> region_stacks;  // per lane
   std::vector<char> untraversed;                // pair p's traversal skipped (empty: none)
   std::vector<char> peeled_resident;            // pair p: its candidates are its views' PCS
   std::vector<std::size_t> resident_pairs;      // this frame's, in pair order
-  std::vector<Object> resident_objects;         // two a pair: shape and pose, no world mesh
+  std::vector<Object> resident_objects;         // two a pair: shape and pose, or moving mesh
   std::vector<PeelJob> resident_jobs;
   std::vector<std::size_t> resident_job_first;  // resident pair i's jobs: [first[i], first[i + 1])
   std::vector<PeelResult> resident_peeled;

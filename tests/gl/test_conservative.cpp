@@ -465,12 +465,13 @@ Mesh posed(const Mesh& shape, const Eigen::Affine3d& pose) {
 }
 }  // namespace
 
-TEST_CASE("the World's batched image pairs of rigid bodies: drawn from resident shapes, untraversed, exact", "[conservative][batch][world]") {
+TEST_CASE("the World's batched image pairs: drawn from resident shapes and moving meshes, untraversed, exact", "[conservative][batch][world]") {
   // Rigid balls of three shapes, turned and scaled, in a row that overlaps, and one deforming
-  // body across two of them (its pairs take the copying route). Stage::image, batched: the
-  // rigid pairs are not traversed (no node pair visited), nothing of theirs is copied or
-  // uploaded after the first frame, and every contact is the exact reference's, also with ring
-  // IDs (expanded by the shapes' ID maps) and after the poses move.
+  // sheet across two of them whose vertices wave every frame (and whose triangles are replaced in
+  // the last frame). Stage::image, batched: no pair is traversed (no node pair visited, no
+  // candidate from a tree), no triangle is copied, the rigid shapes and the sheet's triangles are
+  // uploaded once (the sheet's vertices each frame), and every contact is the exact reference's,
+  // also with ring IDs (expanded by the ID maps) and after the poses and vertices move.
   const std::vector<std::shared_ptr<const Mesh>> shapes = {
       std::make_shared<const Mesh>(make_uv_sphere(Vec3::Zero(), 1.0, 12, 24)),
       std::make_shared<const Mesh>(make_uv_sphere(Vec3(0.1, 0, 0), 0.8, 16, 20)),
@@ -482,6 +483,12 @@ TEST_CASE("the World's batched image pairs of rigid bodies: drawn from resident 
     p.scale(1.0 + 0.05 * (i % 2));
     return p;
   };
+  const Mesh flat = make_grid(Vec3(2.2, -2, -2), Vec3(0, 4, 0), Vec3(0.3, 0, 4), 12, 12);
+  const auto sheet_at = [&](int frame) {  // a wave across the sheet; frame 2: a finer sheet
+    Mesh m = frame < 2 ? flat : make_grid(Vec3(2.3, -2, -2), Vec3(0, 4, 0), Vec3(0.2, 0, 4), 17, 15);
+    for (Vec3& v : m.vertices) v.x() += 0.15 * std::sin(1.7 * v.y() + 0.9 * v.z() + frame);
+    return m;
+  };
   for (const Resolve resolve : {Resolve::automatic, Resolve::gpu})
   for (const IdMode ids : {IdMode::unique, IdMode::ring}) {
     gl::GlOptions go;
@@ -490,16 +497,18 @@ TEST_CASE("the World's batched image pairs of rigid bodies: drawn from resident 
     world.batch_image_pairs(true);
     std::vector<BodyId> rigid;
     for (int i = 0; i < 10; ++i) rigid.push_back(world.add_rigid(shapes[i % 3], pose_of(i, 0.0)));
-    const Mesh sheet = make_grid(Vec3(2.2, -2, -2), Vec3(0, 4, 0), Vec3(0.3, 0, 4), 12, 12);
-    const BodyId deforming = world.add_deforming(sheet);
+    const BodyId deforming = world.add_deforming(sheet_at(0));
     DetectOptions opt;
     opt.stage = Stage::image;
     opt.ids = ids;
-    for (int frame = 0; frame < 2; ++frame) {
+    for (int frame = 0; frame < 3; ++frame) {
       INFO("resolve " << to_string(resolve) << ", ids " << to_string(ids) << ", frame " << frame);
       for (int i = 0; i < 10; ++i) world.set_pose(rigid[std::size_t(i)], pose_of(i, 0.2 * frame));
+      const Mesh sheet = sheet_at(frame);
+      if (frame == 2) world.set_mesh(deforming, sheet);
+      else world.set_vertices(deforming, sheet.vertices);
       const FrameResult& f = world.collide(opt);
-      std::size_t rigid_pairs = 0, touching = 0;
+      std::size_t rigid_pairs = 0, touching = 0, mixed_touching = 0;
       for (const PairResult& p : f.pairs) {
         CHECK_FALSE(p.exact_stage);
         const bool mixed = p.object_a == deforming || p.object_b == deforming;
@@ -507,20 +516,23 @@ TEST_CASE("the World's batched image pairs of rigid bodies: drawn from resident 
         const Mesh mb = p.object_b == deforming ? sheet : posed(*shapes[p.object_b % 3], pose_of(int(p.object_b), 0.2 * frame));
         INFO("pair " << p.object_a << "-" << p.object_b);
         CHECK(couples_of(p) == exact_colliding_pairs(ma, mb));
-        if (!mixed) {
-          ++rigid_pairs;
-          // Peeled, or no node pair of their trees meets in the ROI (nothing to peel).
-          CHECK((p.views_peeled >= 1 || (p.region.empty() && p.colliding.empty())));
-          if (ids == IdMode::unique) CHECK(p.pcs_count >= p.colliding.size());  // (a ring ID stands for several)
-          touching += !p.colliding.empty();
-        }
+        // Peeled, or no node pair of their trees meets in the ROI (nothing to peel).
+        CHECK((p.views_peeled >= 1 || (p.region.empty() && p.colliding.empty())));
+        if (ids == IdMode::unique) CHECK(p.pcs_count >= p.colliding.size());  // (a ring ID stands for several)
+        rigid_pairs += !mixed;
+        touching += !mixed && !p.colliding.empty();
+        mixed_touching += mixed && !p.colliding.empty();
       }
       CHECK(rigid_pairs >= 9);
       CHECK(touching >= 5);
-      // Only the mixed pairs were traversed and copied: the sheet against two balls.
-      CHECK(world.stats().candidates > 0);
-      CHECK(f.triangles_indexed > 0);  // the rigid objects' triangles, selected from resident shapes
+      CHECK(mixed_touching >= 1);  // the sheet cuts a ball
+      CHECK(world.stats().node_pairs == 0);  // no traversal
+      CHECK(world.stats().candidates == 0);
+      CHECK(f.triangles_uploaded == 0);  // nothing copied: every triangle selected from resident ones
+      CHECK(f.triangles_indexed > 0);
+      CHECK(f.geometry_bytes > 0);  // the sheet's vertices
       if (frame == 1) CHECK(f.shape_uploads == 0);
+      if (frame == 2) CHECK(f.shape_uploads == 1);  // the sheet's new triangles
     }
   }
   // Without the deforming body no pair is traversed at all, and nothing is uploaded of a mesh

@@ -46,14 +46,28 @@ struct RigidMotion {
   Eigen::Affine3d pose = Eigen::Affine3d::Identity();
 };
 
-// One object of a frame: its world-space mesh (always: the CPU stages use it), and optionally
-// the rigid motion that produced it.
+// Optional for an object whose triangles stay while its vertices move from frame to frame (a
+// deforming body of the World): its world-space mesh is `*source` (the object's own `mesh` is
+// left empty; drawn_mesh()). The GL stage's batch keeps the triangles on the GPU (uploaded once
+// per `topology` and ID mode, while something holds `topology`: whoever changes the triangles
+// makes a new one) and uploads the vertices once a batch.
+struct MovingMesh {
+  std::shared_ptr<const void> topology;
+  const Mesh* source = nullptr;
+};
+
+// One object of a frame: its world-space mesh (always, but for a moving mesh: the CPU stages
+// use it), and optionally the rigid motion that produced it.
 struct Object {
   std::string name;
   Mesh mesh;
   std::optional<RigidMotion> rigid;
+  std::optional<MovingMesh> moving;
   // Test the object against itself too (self-collision; DetectOptions::self asks it for all).
   bool self = false;
 };
+
+// The world-space mesh an object's triangles are drawn from: a moving mesh's source, else its own.
+inline const Mesh& drawn_mesh(const Object& o) { return o.moving && o.moving->source ? *o.moving->source : o.mesh; }
 
 }  // namespace peelcd

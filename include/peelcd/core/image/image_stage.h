@@ -19,9 +19,10 @@ namespace peelcd {
 struct PeelJob {
   const Object* objects[2] = {nullptr, nullptr};
   // The triangles of each object to draw, ascending: those whose box touches view.box (after
-  // contact culling). Never empty when a stage is called. Null for a rigid object: every
-  // triangle of its shape whose box, through its pose, touches the view (job_triangles()); the
-  // GL stage's batch selects those on the GPU, the other paths on the host.
+  // contact culling). Never empty when a stage is called. Null for a rigid object or a moving
+  // mesh: every triangle of its shape whose box, through its pose (or of its moving mesh), touches
+  // the view (job_triangles()); the GL stage's batch selects those on the GPU, the other paths on
+  // the host.
   const std::vector<std::uint32_t>* triangles[2] = {nullptr, nullptr};
   RoiView view;                    // the padded ROI view (box, frame, resolution)
   std::size_t pair_index = 0;      // the object pair (FrameResult::pairs) and fused view (0..2)
@@ -130,10 +131,10 @@ inline void add_view_counters(const PeelResult& one, FrameResult& out) {
   out.shape_uploads += one.shape_uploads;
 }
 
-// Job's triangle list of object `slot`: PeelJob::triangles[slot], or, where that is null (a rigid
-// object), the triangles of its shape whose box through its pose (in double) touches the view's
-// box grown by job.grow, written into `scratch` (ascending). Throws std::invalid_argument for a
-// null list of an object without a rigid shape.
+// Job's triangle list of object `slot`: PeelJob::triangles[slot], or, where that is null, the
+// triangles of its shape whose box through its pose (a rigid object; in double), or of its moving
+// mesh (world space), touches the view's box grown by job.grow, written into `scratch`
+// (ascending). Throws std::invalid_argument for a null list of an object with neither.
 const std::vector<std::uint32_t>& job_triangles(const PeelJob& job, int slot, std::vector<std::uint32_t>& scratch);
 
 // The stage router's two models and where they came from: a file written by `peelcd calibrate
