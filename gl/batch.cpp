@@ -152,6 +152,8 @@ void GlImageStage::Impl::gather_batch(const PeelJob* jobs, PeelResult* outs, Bat
   run.invocations = 0;
   shape_uploads = 0;  // the batch's, reported on its first view
   batch.moving_bases.clear();
+  batch.moving_order.clear();
+  batch.position_count = 0;
   // Every rigid shape and moving mesh of the batch resident first: adding one may move the others
   // (compaction), so their first corners are read only after all are in.
   for (std::size_t j = 0; j < run.take; ++j)
@@ -173,9 +175,10 @@ void GlImageStage::Impl::gather_batch(const PeelJob* jobs, PeelResult* outs, Bat
   }
   outs[0].shape_uploads = shape_uploads;
   run.host_entries = batch.entry_data.size();
-  if (std::max(run.host_entries + run.invocations, batch.corners.size()) >= 0x7fffffffu / 3)
+  if (std::max({run.host_entries + run.invocations, batch.corners.size(), batch.position_count}) >= 0x7fffffffu / 3)
     throw GlError("peelcd::gl::GlImageStage: a batch of " + std::to_string(run.host_entries + run.invocations) +
-                  " triangles is more than a draw's order holds (2^31 / 3)");
+                  " triangles and " + std::to_string(batch.position_count) +
+                  " moving vertices is more than a draw's order holds (2^31 / 3)");
 }
 
 // One object of view j: its pose (ROI-local from shape-local for a rigid object), then its
@@ -202,7 +205,7 @@ void GlImageStage::Impl::gather_batch_object(const PeelJob& job, std::size_t j, 
   constexpr float inf = std::numeric_limits<float>::infinity();
   if (rigid || moving) {
     const std::size_t first = rigid ? resident_base(object.rigid->shape, job.ids) : resident_topology(*object.moving, job.ids);
-    // A moving mesh's vertices: in the frame's corners once a batch (its first + 1 in the entries).
+    // A moving mesh's vertices: in the positions once a batch (its first + 1 in the entries).
     const std::uint32_t positions = moving ? moving_positions(mesh) + 1u : 0u;
     if (options.gpu_select && !job.capture) {  // the selection pass picks its triangles (no list read)
       if (!mesh.triangles.empty()) {
@@ -281,6 +284,7 @@ void GlImageStage::Impl::upload_batch_buffer(GLuint buffer, std::size_t& capacit
 void GlImageStage::Impl::upload_batch(const BatchRun& run) {
   upload_batch_buffer(batch.frame, batch.frame_capacity, batch.corners.data(), batch.corners.size() * sizeof(GpuVertex),
                       0, true);
+  upload_positions();
   upload_batch_buffer(batch.views, batch.views_capacity, batch.view_data.data(), batch.view_data.size() * sizeof(float),
                       0, false);
   upload_batch_buffer(batch.entries, batch.entries_capacity, batch.entry_data.data(), run.host_entries * kEntry,
@@ -329,6 +333,7 @@ void GlImageStage::Impl::count_batch(BatchRun& run, Timings& t) {
   gl.BindBufferBase(GL_SHADER_STORAGE_BUFFER, 4, batch.entries);
   gl.BindBufferBase(GL_SHADER_STORAGE_BUFFER, 7, resident_buffer);
   gl.BindBufferBase(GL_SHADER_STORAGE_BUFFER, 8, batch.frame);
+  gl.BindBufferBase(GL_SHADER_STORAGE_BUFFER, 16, batch.positions);
   if (run.invocations) select_batch(run);
   gl.BindBuffer(GL_DRAW_INDIRECT_BUFFER, batch.command);
   gl.UseProgram(run.point ? point_batch.id : cons_batch.id);
@@ -448,16 +453,40 @@ std::size_t GlImageStage::Impl::resident_topology(const MovingMesh& moving, IdMo
   return base;
 }
 
-// Where a moving mesh's vertices are in this batch's frame corners: appended (world-space floats,
-// rounded to nearest) the first time the batch draws the mesh.
+// Where a moving mesh's vertices are in this batch's positions: placed after the meshes met
+// before (written by upload_batch()).
 std::uint32_t GlImageStage::Impl::moving_positions(const Mesh& mesh) {
-  const auto [it, added] = batch.moving_bases.try_emplace(&mesh, std::uint32_t(batch.corners.size()));
-  if (!added) return it->second;
-  const std::size_t at = batch.corners.size();
-  batch.corners.resize(at + mesh.vertices.size());
-  GpuVertex* out = batch.corners.data() + at;
-  for (const Vec3& p : mesh.vertices) *out++ = {float(p.x()), float(p.y()), float(p.z()), 0u};
+  const auto [it, added] = batch.moving_bases.try_emplace(&mesh, std::uint32_t(batch.position_count));
+  if (added) {
+    batch.moving_order.push_back(&mesh);
+    batch.position_count += mesh.vertices.size();
+  }
   return it->second;
+}
+
+// The batch's moving meshes' vertices into the positions buffer (grown when too small), rounded
+// to the nearest floats as they are written through a mapping of the buffer: one pass over the
+// doubles, no host copy (the bytes counted as geometry uploaded).
+void GlImageStage::Impl::upload_positions() {
+  const std::size_t bytes = batch.position_count * 3 * sizeof(float);
+  if (bytes == 0) return;
+  if (bytes > batch.positions_capacity) {
+    batch.positions_capacity = std::max(bytes, batch.positions_capacity * 3 / 2);
+    gl.NamedBufferData(batch.positions, GLsizeiptr(batch.positions_capacity), nullptr, GL_STREAM_DRAW);
+  }
+  const TimedPass pass(timers, GpuPass::transfer);
+  auto* out = static_cast<float*>(gl.MapNamedBufferRange(batch.positions, 0, GLsizeiptr(bytes),
+                                                        GL_MAP_WRITE_BIT | GL_MAP_INVALIDATE_BUFFER_BIT));
+  if (!out) throw GlError("peelcd::gl::GlImageStage: could not map the moving meshes' vertex buffer");
+  for (const Mesh* mesh : batch.moving_order)
+    for (const Vec3& p : mesh->vertices) {
+      out[0] = float(p.x());
+      out[1] = float(p.y());
+      out[2] = float(p.z());
+      out += 3;
+    }
+  gl.UnmapNamedBuffer(batch.positions);
+  count_geometry(bytes);
 }
 
 // Room for `corners` resident corners under `key` (held while `owner` lives): its first corner.

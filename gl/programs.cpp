@@ -169,6 +169,7 @@ void GlImageStage::Impl::create_objects() {
   gl.CreateBuffers(2, vbo);
   gl.CreateBuffers(2, ibo);
   gl.CreateBuffers(1, &batch.frame);
+  gl.CreateBuffers(1, &batch.positions);
   gl.CreateBuffers(1, &batch.views);
   gl.CreateBuffers(1, &batch.entries);
   gl.CreateBuffers(1, &batch.jobs);
@@ -215,6 +216,7 @@ GlImageStage::Impl::~Impl() {
   gl.DeleteProgram(point_batch_resolve.id);
   gl.DeleteProgram(prefix_sum.id);
   gl.DeleteBuffers(1, &batch.frame);
+  gl.DeleteBuffers(1, &batch.positions);
   gl.DeleteBuffers(1, &batch.views);
   gl.DeleteBuffers(1, &batch.entries);
   gl.DeleteBuffers(1, &batch.jobs);

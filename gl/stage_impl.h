@@ -188,8 +188,13 @@ struct BatchState {
   GLuint frame = 0, views = 0, entries = 0, jobs = 0, command = 0, vao = 0;
   std::size_t frame_capacity = 0, views_capacity = 0, entries_capacity = 0, jobs_capacity = 0;  // bytes
   std::vector<GpuVertex> corners;
-  // Each moving mesh's vertices' first corner in `corners` (appended once a batch).
+  // The moving meshes' vertices (world-space floats, three a vertex), once a batch: each mesh's
+  // first vertex there, in the order met; written into the buffer through a mapping
+  // (upload_batch()), not staged on the host.
+  GLuint positions = 0;
+  std::size_t positions_capacity = 0, position_count = 0;  // bytes; vertices this batch
   std::unordered_map<const Mesh*, std::uint32_t> moving_bases;
+  std::vector<const Mesh*> moving_order;
   // Entries: first corner, view << 1 | object, provoking ID, a moving mesh's positions + 1 (or
   // 0). Selection jobs: two records each (shaders/batch_select.comp).
   std::vector<std::array<std::uint32_t, 4>> entry_data, job_data;
@@ -334,6 +339,7 @@ struct GlImageStage::Impl {
   std::size_t resident_base(const std::shared_ptr<const Mesh>& shape, IdMode ids);
   std::size_t resident_topology(const MovingMesh& moving, IdMode ids);
   std::uint32_t moving_positions(const Mesh& mesh);
+  void upload_positions();
   std::size_t resident_reserve(const std::pair<const void*, IdMode>& key, const std::shared_ptr<const void>& owner,
                                std::size_t corners);
   static bool moving_mesh(const Object& o) { return !(o.rigid && o.rigid->shape) && o.moving && o.moving->source && o.moving->topology; }

@@ -36,19 +36,28 @@ Aabb world_box(const FBox& f, const Eigen::Affine3d& pose) {
 // not repay), while a level holds at most kRegionPairs pairs, and not past two leaves; the
 // region is the box of the last level's meetings. A point of both bodies in `roi` lies in a leaf
 // box of each, and in each ancestor's box, so in a node pair of every level: the region holds
-// it. Empty when no node pair meets (no contact possible). `level` and `next` are scratch.
+// it. Empty when no node pair meets (no contact possible). A side without a tree (null: a
+// deforming body whose refit was put off) is one node, its world box `whole`, never split.
+// `level` and `next` are scratch.
 constexpr double kRegionLeaves = 8.0;
 constexpr std::size_t kRegionPairs = 4096;
-Aabb meeting_region(const Bvh& ta, const Eigen::Affine3d& pa, const Bvh& tb, const Eigen::Affine3d& pb,
-                    const Aabb& roi, std::vector<RegionEntry>& level, std::vector<RegionEntry>& next) {
+struct RegionSide {
+  const Bvh* tree;  // null: `whole` alone
+  Eigen::Affine3d pose;
+  Aabb whole;
+  bool leaf(std::uint32_t n) const { return !tree || tree->nodes()[n].leaf(); }
+  Aabb box(std::uint32_t n) const { return tree ? world_box(tree->nodes()[n].box, pose) : whole; }
+  double levels() const {
+    return tree ? std::max(0.0, std::log2(double(tree->leaves()) / kRegionLeaves)) : 0.0;
+  }
+};
+Aabb meeting_region(const RegionSide& sa, const RegionSide& sb, const Aabb& roi, std::vector<RegionEntry>& level,
+                    std::vector<RegionEntry>& next) {
   Aabb out;
-  const std::vector<BvhNode>& na = ta.nodes();
-  const std::vector<BvhNode>& nb = tb.nodes();
-  if (na.empty() || nb.empty() || roi.empty()) return out;
+  if ((sa.tree && sa.tree->empty()) || (sb.tree && sb.tree->empty()) || roi.empty()) return out;
   level.clear();
-  level.push_back({0u, 0u, world_box(na[0].box, pa), world_box(nb[0].box, pb), Aabb{}});
-  const auto levels = [](const Bvh& t) { return std::max(0.0, std::log2(double(t.leaves()) / kRegionLeaves)); };
-  const int steps = int(std::ceil(levels(ta) + levels(tb)));
+  level.push_back({0u, 0u, sa.box(0), sb.box(0), Aabb{}});
+  const int steps = int(std::ceil(sa.levels() + sb.levels()));
   for (int step = 0;; ++step) {
     // The level's pairs that still meet inside the ROI (their meeting boxes in place of theirs).
     std::size_t kept = 0, splittable = 0;
@@ -57,23 +66,25 @@ Aabb meeting_region(const Bvh& ta, const Eigen::Affine3d& pa, const Bvh& tb, con
       if (meet.empty()) continue;
       level[kept] = e;
       level[kept].meet = meet;
-      splittable += !(na[e.i].leaf() && nb[e.j].leaf());
+      splittable += !(sa.leaf(e.i) && sb.leaf(e.j));
       ++kept;
     }
     level.resize(kept);
     if (splittable == 0 || step >= steps || kept + splittable > kRegionPairs) break;
     next.clear();
     for (const RegionEntry& e : level) {
-      const BvhNode& x = na[e.i];
-      const BvhNode& y = nb[e.j];
-      if (x.leaf() && y.leaf()) {
+      const bool xl = sa.leaf(e.i), yl = sb.leaf(e.j);
+      if (xl && yl) {
         next.push_back(e);
         continue;
       }
-      if (y.leaf() || (!x.leaf() && e.a.extent().maxCoeff() >= e.b.extent().maxCoeff()))
-        for (const std::uint32_t c : {e.i + 1, x.first}) next.push_back({c, e.j, world_box(na[c].box, pa), e.b, Aabb{}});
-      else
-        for (const std::uint32_t c : {e.j + 1, y.first}) next.push_back({e.i, c, e.a, world_box(nb[c].box, pb), Aabb{}});
+      if (yl || (!xl && e.a.extent().maxCoeff() >= e.b.extent().maxCoeff())) {
+        const BvhNode& x = sa.tree->nodes()[e.i];
+        for (const std::uint32_t c : {e.i + 1, x.first}) next.push_back({c, e.j, sa.box(c), e.b, Aabb{}});
+      } else {
+        const BvhNode& y = sb.tree->nodes()[e.j];
+        for (const std::uint32_t c : {e.j + 1, y.first}) next.push_back({e.i, c, e.a, sb.box(c), Aabb{}});
+      }
     }
     level.swap(next);
   }
@@ -86,11 +97,14 @@ Aabb meeting_region(const Bvh& ta, const Eigen::Affine3d& pa, const Bvh& tb, con
 
 }  // namespace
 
-// A deforming body's tree is in world space (its pose the identity), refitted at the frame's start.
-Aabb World::Impl::contact_region(const Body& a, const Body& b, const Aabb& roi, RegionScratch& scratch) const {
-  const Eigen::Affine3d identity = Eigen::Affine3d::Identity();
-  return meeting_region(a.tree, a.is_rigid ? a.pose : identity, b.tree, b.is_rigid ? b.pose : identity, roi,
-                        scratch.level, scratch.next);
+// A deforming body's tree is in world space (its pose the identity); one whose refit was put
+// off this frame is its box (pair_boxes: the broad phase's).
+Aabb World::Impl::contact_region(std::size_t p, const Aabb& roi, RegionScratch& scratch) const {
+  const auto side = [&](std::size_t i) {
+    const Body& b = bodies[ids[i]];
+    return RegionSide{b.tree_current() ? &b.tree : nullptr, b.is_rigid ? b.pose : Eigen::Affine3d::Identity(), boxes[i]};
+  };
+  return meeting_region(side(pairs[p].first), side(pairs[p].second), roi, scratch.level, scratch.next);
 }
 
 // The median first-edge length of a body's triangles (as the Detector's culling measures its
@@ -139,6 +153,30 @@ bool World::Impl::resident_pair(std::size_t p) const {
          in_float(boxes[pairs[p].second]);
 }
 
+// A deforming body whose refit may wait this frame: Stage::image on the resident route, the
+// body's new vertices loaded by set_vertices() (their box known without the refit). Whether it
+// does depends on its pairs (defer_refits()).
+bool World::Impl::may_defer_refit(const Body& b, const DetectOptions& opt) const {
+  return !b.is_rigid && b.refit_pending && b.points_loaded && opt.stage == Stage::image && resident_route(opt);
+}
+
+// After the broad phase: a body whose refit waits but that has a pair the resident route does
+// not draw (a self pair, a pair with an ill-conditioned or out-of-range body: the copying
+// route traverses it) is refitted now.
+void World::Impl::defer_refits(const DetectOptions& opt, unsigned lanes) {
+  (void)opt;
+  bool any = false;
+  for (std::size_t p = 0; p < pairs.size(); ++p) {
+    if (resident_pair(p)) continue;
+    for (const std::size_t i : {pairs[p].first, pairs[p].second}) {
+      Body& b = bodies[ids[i]];
+      any |= b.refit_deferred;
+      b.refit_deferred = false;
+    }
+  }
+  if (any) refit_pending(lanes, false);
+}
+
 // With Stage::image, the resident route's pairs need no traversal: their candidates will be
 // their PCS (untraversed; a view the stage cannot resolve traverses them after all).
 void World::Impl::mark_untraversed(const DetectOptions& opt) {
@@ -177,8 +215,7 @@ void World::Impl::resident_image_pairs(const DetectOptions& opt, FrameResult& ou
   parallel(resident_pairs.size(), frame_lanes, [&](std::size_t i, unsigned lane) {
     const std::size_t p = resident_pairs[i];
     resident_regions[i] = opt.cull == Cull::box ? out.pairs[p].roi  // the paper's: the whole ROI
-                                                : contact_region(bodies[ids[pairs[p].first]], bodies[ids[pairs[p].second]],
-                                                                 out.pairs[p].roi, region_stacks[lane]);
+                                                : contact_region(p, out.pairs[p].roi, region_stacks[lane]);
   });
   std::size_t kept = 0;
   for (std::size_t i = 0; i < resident_pairs.size(); ++i) {
@@ -311,6 +348,8 @@ void World::Impl::resident_image_pairs(const DetectOptions& opt, FrameResult& ou
     peeled_resident[p] = 1;
     if (exhaustive) {  // the tree's candidates: the pair's
       if (!untraversed.empty() && untraversed[p]) {
+        refit_now(bodies[ids[pairs[p].first]]);  // (a refit put off: its single task starts at the roots)
+        refit_now(bodies[ids[pairs[p].second]]);
         std::size_t count = 0;
         for (std::size_t k = first_task[p]; k < first_task[p + 1]; ++k) {
           traverse_task(k, 0);

@@ -12,11 +12,12 @@
 #include <stdexcept>
 
 namespace peelcd {
-void World::Impl::refit_pending(unsigned lanes) {
+void World::Impl::refit_pending(unsigned lanes, bool all) {
   refit_chunks.clear();
   refit_bodies.clear();
   for (Body& b : bodies) {
-    if (!b.alive || !b.refit_pending) continue;
+    if (!b.alive || !b.refit_pending || (!all && b.refit_deferred)) continue;
+    b.refit_deferred = false;
     const std::size_t parts = lanes > 1 && b.mesh.triangles.size() >= kSplitRefitTriangles ? lanes : 1;
     const std::size_t nv = b.mesh.vertices.size(), nl = b.tree.leaves();
     refit_bodies.push_back({&b, refit_chunks.size(), refit_chunks.size() + parts, false});
@@ -87,10 +88,12 @@ void World::Impl::collide(const DetectOptions& opt, FrameResult& out) {
   const unsigned lanes = lanes_for(opt);
   frame_lanes = lanes;
   detail = opt.contacts;
-  refit_pending(lanes);
+  for (Body& b : bodies) b.refit_deferred = b.alive && may_defer_refit(b, opt);
+  refit_pending(lanes, false);
 
   auto t0 = Clock::now();
   find_pairs(opt, lanes);
+  defer_refits(opt, lanes);
   const std::size_t used = plan_tasks(lanes);
   mark_untraversed(opt);
   traverse(used, lanes);
@@ -213,8 +216,9 @@ std::size_t World::Impl::plan_tasks(unsigned lanes) {
       a.ensure_world_tree();
       b.ensure_world_tree();
       // Few pairs each split into node pairs for the lanes (kSplitPairsPerLane); a small pair
-      // (under kSplitTriangles between its bodies) is one task whatever the lanes.
-      if (lanes > 1 && pairs.size() < kSplitPairsPerLane * std::size_t(lanes) &&
+      // (under kSplitTriangles between its bodies) is one task whatever the lanes; so is a pair
+      // with a refit put off (its tree is last frame's: the task starts at the roots).
+      if (lanes > 1 && pairs.size() < kSplitPairsPerLane * std::size_t(lanes) && a.tree_current() && b.tree_current() &&
           a.local().triangles.size() + b.local().triangles.size() >= kSplitTriangles)
         bvh_split(a.frame_tree(), b.frame_tree(), BvhRelation::between(a.frame_pose(), b.frame_pose()),
                   kSplitNodePairsPerLane * std::size_t(lanes), split);

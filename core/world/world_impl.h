@@ -96,6 +96,12 @@ struct Body {
   // Deforming: its tree is refitted whole at the next collide() (set_vertices, many moved
   // vertices), every such body's triangles split over the frame's lanes.
   bool refit_pending = false;
+  // Deforming, this frame: its pending refit put off (World::Impl::defer_refits()): every pair
+  // of it is drawn by the resident image route, which needs its box (loaded_box) but not its
+  // tree. The refit stays pending (done by a later frame that needs the tree, World::tree(), or
+  // a view the stage cannot resolve).
+  bool refit_deferred = false;
+  bool tree_current() const { return !refit_pending; }
   // Deforming: set_vertices() checked, rounded (Bvh::load_vertices) and copied the vertices in
   // one pass: the pending refit starts from those floats (`loaded_box`: the exact box of the
   // used vertices). The copy goes to `spare_vertices`, swapped with the mesh's once all are
@@ -205,6 +211,7 @@ struct Body {
   // The world box: the copy's (exact) where it is current, else the root box moved by the pose.
   Aabb world_box() const {
     if (world_frame && copy_valid) return world_copy_box;
+    if (!is_rigid && refit_pending && points_loaded) return loaded_box;  // (the refit's root box)
     const Aabb b = tree.box();
     if (!is_rigid || b.empty()) return b;
     // The root box moved by the pose, grown as the traversal grows its boxes.
@@ -355,9 +362,14 @@ struct World::Impl {
   };
   std::vector<RefitChunk> refit_chunks;
   std::vector<RefitBody> refit_bodies;
-  void refit_pending(unsigned lanes);
+  // The pending refits of the bodies that need their trees this frame (`all`: every body; else
+  // those not refit_deferred).
+  void refit_pending(unsigned lanes, bool all = true);
+  bool may_defer_refit(const Body& b, const DetectOptions& opt) const;
+  void defer_refits(const DetectOptions& opt, unsigned lanes);
   // One body's pending refit now (World::tree() asked for it between frames).
   void refit_now(Body& b) {
+    b.refit_deferred = false;
     if (!b.refit_pending) return;
     b.tree.refit(b.mesh.vertices, b.mesh.triangles);
     b.refit_pending = b.points_loaded = false;
@@ -408,7 +420,7 @@ struct World::Impl {
   bool resident_pair(std::size_t p) const;
   void mark_untraversed(const DetectOptions& opt);
   double median_edge(const Body& b);
-  Aabb contact_region(const Body& a, const Body& b, const Aabb& roi, RegionScratch& scratch) const;
+  Aabb contact_region(std::size_t p, const Aabb& roi, RegionScratch& scratch) const;
   std::vector<Aabb> resident_regions;           // per resident pair: where its bodies can meet
   std::vector<RegionScratch> region_stacks;  // per lane
   std::vector<char> untraversed;                // pair p's traversal skipped (empty: none)

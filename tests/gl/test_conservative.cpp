@@ -627,26 +627,101 @@ TEST_CASE("the World's resident image route on touching and coincident rigid box
 }
 
 TEST_CASE("the World's resident image route: a view no k-buffer holds is tested on the traversal's candidates", "[conservative][world]") {
-  // The stacked quads of the exhaustive case above as two rigid bodies, one view at 1024^2: on
-  // the host's resolve on llvmpipe the view cannot be resolved; the pair, not traversed (Stage::image),
-  // is traversed then and its contacts are the exact reference's.
+  // The stacked quads of the exhaustive case above as two bodies (two rigid; then A deforming,
+  // moved by set_vertices, its refit put off by the route), one view at 1024^2: on the host's
+  // resolve on llvmpipe the view cannot be resolved; the pair, not traversed (Stage::image), is
+  // traversed then (the deforming body refitted first) and its contacts are the exact reference's.
   Mesh a, b;
   stacked_quads(a, b);
+  for (const bool deforming : {false, true}) {
+    INFO((deforming ? "A deforming" : "both rigid"));
+    World world(make_image_stage(test_backend()));
+    world.batch_image_pairs(true);
+    Mesh moved = a;
+    if (deforming) {
+      const BodyId ia = world.add_deforming(a);
+      for (Vec3& v : moved.vertices) v += Vec3(0.3, -0.2, 0.01);
+      world.set_vertices(ia, moved.vertices);
+    } else {
+      world.add_rigid(std::make_shared<const Mesh>(a), Eigen::Affine3d::Identity());
+    }
+    world.add_rigid(std::make_shared<const Mesh>(b), Eigen::Affine3d::Identity());
+    DetectOptions opt;
+    opt.stage = Stage::image;
+    opt.resolution = 1024;
+    const FrameResult& f = world.collide(opt);
+    REQUIRE(f.pairs.size() == 1);
+    if (world.stage().renderer().find("llvmpipe") != std::string::npos) {  // resolved on the host there
+      CHECK(f.views_exhaustive == 1);
+      CHECK(f.pairs[0].candidates > 0);  // the tree's
+    }
+    CHECK(couples_of(f.pairs[0]) == exact_colliding_pairs(moved, b));
+    CHECK(!f.pairs[0].colliding.empty());
+  }
+}
+
+TEST_CASE("the World's resident image route puts a deforming body's refit off; later frames see its vertices", "[conservative][world]") {
+  // A waving sheet through a rigid ball, Stage::image batched: the route draws the sheet from its
+  // loaded vertices and box without refitting its tree; a later frame on the exact path, a
+  // partial move (move_vertices), a self pair and World::tree() each get the tree refitted over
+  // the current vertices, and every frame's contacts are the exact reference's.
+  const auto ball = std::make_shared<const Mesh>(make_uv_sphere(Vec3::Zero(), 1.0, 16, 32));
+  const Mesh flat = make_grid(Vec3(-2, -2, 0.0), Vec3(4, 0, 0), Vec3(0, 4, 0), 24, 24);
+  const auto wave = [&](int frame) {
+    std::vector<Vec3> v = flat.vertices;
+    for (Vec3& p : v) p.z() += 0.2 * std::sin(1.3 * p.x() + 0.7 * p.y() + frame) + 0.15 * frame;
+    return v;
+  };
   World world(make_image_stage(test_backend()));
   world.batch_image_pairs(true);
-  world.add_rigid(std::make_shared<const Mesh>(a), Eigen::Affine3d::Identity());
-  world.add_rigid(std::make_shared<const Mesh>(b), Eigen::Affine3d::Identity());
-  DetectOptions opt;
-  opt.stage = Stage::image;
-  opt.resolution = 1024;
-  const FrameResult& f = world.collide(opt);
-  REQUIRE(f.pairs.size() == 1);
-  if (world.stage().renderer().find("llvmpipe") != std::string::npos) {  // resolved on the host there
-    CHECK(f.views_exhaustive == 1);
-    CHECK(f.pairs[0].candidates > 0);  // the tree's
+  const BodyId sheet = world.add_deforming(flat);
+  const BodyId rigid = world.add_rigid(ball, Eigen::Affine3d::Identity());
+  Mesh current = flat;
+  const auto check_frame = [&](const DetectOptions& opt) {
+    const FrameResult& f = world.collide(opt);
+    std::size_t found = 0;
+    for (const PairResult& p : f.pairs) {
+      if (p.object_a != p.object_b) {
+        CHECK(couples_of(p) == exact_colliding_pairs(current, *ball));
+        found += p.colliding.size();
+      }
+    }
+    return found;
+  };
+  DetectOptions image;
+  image.stage = Stage::image;
+  DetectOptions exact;
+  exact.stage = Stage::exact;
+  std::size_t found = 0;
+  for (int frame = 0; frame < 6; ++frame) {
+    INFO("frame " << frame);
+    current.vertices = wave(frame);
+    world.set_vertices(sheet, current.vertices);
+    const std::size_t refits = world.stats().full_refits;
+    if (frame == 2) {  // the exact path: the tree refitted over this frame's vertices
+      found += check_frame(exact);
+      CHECK(world.stats().full_refits == refits + 1);
+      continue;
+    }
+    if (frame == 3) {  // a few vertices moved after the load: the loaded box is no longer theirs
+      std::vector<std::uint32_t> moved_ids = {0u, 1u, 2u};
+      std::vector<Vec3> to = {current.vertices[0] + Vec3(0, 0, 0.5), current.vertices[1], current.vertices[2]};
+      current.vertices[0] = to[0];
+      world.move_vertices(sheet, moved_ids, to);
+    }
+    if (frame == 4) world.set_self(sheet, true);  // a self pair needs the tree
+    if (frame == 5) world.set_self(sheet, false);
+    found += check_frame(image);
+    if (frame == 0 || frame == 1 || frame == 5) CHECK(world.stats().full_refits == refits);  // put off
+    else CHECK(world.stats().full_refits == refits + 1);
   }
-  CHECK(couples_of(f.pairs[0]) == exact_colliding_pairs(a, b));
-  CHECK(!f.pairs[0].colliding.empty());
+  CHECK(found > 0);
+  // World::tree() refits what was put off: its box is the current vertices'.
+  const Aabb box = world.tree(sheet).box();
+  const Aabb want = bounds(current);
+  CHECK(box.lo == want.lo);
+  CHECK(box.hi == want.hi);
+  (void)rigid;
 }
 
 TEST_CASE("conservative mode serves proximity: no pair within the margin missed, one view and batched", "[conservative][proximity]") {
