@@ -660,7 +660,7 @@ TEST_CASE("the World's resident image route: a view no k-buffer holds is tested 
   }
 }
 
-TEST_CASE("the World's resident image route puts a deforming body's refit off; later frames see its vertices", "[conservative][world]") {
+TEST_CASE("the World's resident image route puts a deforming body's refit off, and later frames see its vertices", "[conservative][world]") {
   // A waving sheet through a rigid ball, Stage::image batched: the route draws the sheet from its
   // loaded vertices and box without refitting its tree; a later frame on the exact path, a
   // partial move (move_vertices), a self pair and World::tree() each get the tree refitted over
