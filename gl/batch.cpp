@@ -54,6 +54,9 @@ namespace {
 // ivec4 info, vec4 half_box, vec4 box_lo, vec4 box_hi).
 constexpr std::size_t kViewWords = 16 + 32 + 4 + 4 + 4 + 4;
 constexpr std::size_t kEntry = 4 * sizeof(std::uint32_t);  // a draw entry or selection job
+// The selection's contact grid (shaders/batch_select.comp): per view and object, 16^3 cells'
+// bits and one word that marks them all.
+constexpr std::size_t kGridWords = 16 * 16 * 16 / 32 + 1;
 
 void put_matrix(std::vector<float>& out, const float* m) { out.insert(out.end(), m, m + 16); }
 
@@ -169,7 +172,9 @@ void GlImageStage::Impl::gather_batch(const PeelJob* jobs, PeelResult* outs, Bat
     out.clear();
     const std::array<float, 16> clip = job.view.clip_from_local();
     put_matrix(batch.view_data, clip.data());
-    for (int slot = 0; slot < 2; ++slot) gather_batch_object(job, j, slot, out, run);
+    std::uint32_t selected_on_gpu[2];
+    for (int slot = 0; slot < 2; ++slot) selected_on_gpu[slot] = gather_batch_object(job, j, slot, out, run);
+    batch.region_data.insert(batch.region_data.end(), {selected_on_gpu[0], selected_on_gpu[1], 0u, 0u});
     put_view_record(job, base, run.point, out);
     base += std::size_t(job.view.resolution) * std::size_t(job.view.resolution);
   }
@@ -182,11 +187,11 @@ void GlImageStage::Impl::gather_batch(const PeelJob* jobs, PeelResult* outs, Bat
 }
 
 // One object of view j: its pose (ROI-local from shape-local for a rigid object), then its
-// triangles. The object's region in the view (the selection's contact-region round): empty, for
+// triangles; returns whether the selection pass picks them (else the host listed them). The object's region in the view (the selection's contact-region round): empty, for
 // the selection to merge its triangles' boxes into; everything, for the host's selection of a
 // rigid object (its ROI-local corners are the GPU's to compute); the box of the corners
 // uploaded, for a deforming object.
-void GlImageStage::Impl::gather_batch_object(const PeelJob& job, std::size_t j, int slot, PeelResult& out,
+bool GlImageStage::Impl::gather_batch_object(const PeelJob& job, std::size_t j, int slot, PeelResult& out,
                                              BatchRun& run) {
   const RoiView& view = job.view;
   const Object& object = *job.objects[slot];
@@ -215,7 +220,7 @@ void GlImageStage::Impl::gather_batch_object(const PeelJob& job, std::size_t j, 
       }
       run.invocations += mesh.triangles.size();
       put_region(batch.region_data, Eigen::Vector3f::Constant(inf), Eigen::Vector3f::Constant(-inf));
-      return;
+      return true;
     }
     put_region(batch.region_data, Eigen::Vector3f::Constant(-inf), Eigen::Vector3f::Constant(inf));
     const std::vector<std::uint32_t>& tris = job_triangles(job, slot, selected[slot]);
@@ -225,7 +230,7 @@ void GlImageStage::Impl::gather_batch_object(const PeelJob& job, std::size_t j, 
       batch.ids.push_back(batch.entry_data.back()[2]);
     }
     out.triangles_indexed += tris.size();
-    return;
+    return false;
   }
   Eigen::Vector3f lo = Eigen::Vector3f::Constant(inf), hi = Eigen::Vector3f::Constant(-inf);
   const std::vector<std::uint32_t>& tris = job_triangles(job, slot, selected[slot]);
@@ -244,6 +249,7 @@ void GlImageStage::Impl::gather_batch_object(const PeelJob& job, std::size_t j, 
   const float grow = float(job.grow);  // proximity: the region of the triangles grown (batch_select.comp)
   put_region(batch.region_data, (lo.array() - grow).matrix(), (hi.array() + grow).matrix());
   out.triangles_uploaded += tris.size();
+  return false;
 }
 
 // The rest of a view's record: info (resolution, first texel, peel flags), half box, the clip
@@ -303,6 +309,10 @@ void GlImageStage::Impl::select_batch(const BatchRun& run) {
   upload_batch_buffer(batch.staged, batch.staged_capacity, nullptr, 0, (run.invocations + 1) * kEntry, false);
   const std::uint32_t staged_header[4] = {0, 0, 0, 0};
   upload_buffer(batch.staged, 0, sizeof staged_header, staged_header);
+  const std::size_t grid_bytes = run.take * 2 * kGridWords * sizeof(std::uint32_t);  // cleared: no cell marked
+  upload_batch_buffer(batch.grid, batch.grid_capacity, nullptr, 0, grid_bytes, false);
+  clear_buffer(batch.grid, GLsizeiptr(grid_bytes));
+  gl.BindBufferBase(GL_SHADER_STORAGE_BUFFER, 17, batch.grid);
   gl.BindBufferBase(GL_SHADER_STORAGE_BUFFER, 9, batch.jobs);
   gl.BindBufferBase(GL_SHADER_STORAGE_BUFFER, 10, batch.command);
   gl.BindBufferBase(GL_SHADER_STORAGE_BUFFER, 13, batch.staged);
@@ -314,7 +324,7 @@ void GlImageStage::Impl::select_batch(const BatchRun& run) {
   gl.Uniform1ui(select.invocations, GLuint(run.invocations));
   gl.Uniform1ui(select.row, GLuint(gx * 64));
   gl.Uniform1i(select.conservative, run.point ? 0 : 1);
-  for (int pass = 0; pass < 2; ++pass) {
+  for (int pass = 0; pass < 3; ++pass) {
     gl.Uniform1i(select.pass, pass);
     dispatch(GLuint(gx), GLuint(gy), 1);
     barrier(GL_SHADER_STORAGE_BARRIER_BIT | GL_COMMAND_BARRIER_BIT);

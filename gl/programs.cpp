@@ -185,6 +185,7 @@ void GlImageStage::Impl::create_objects() {
   gl.CreateBuffers(1, &batch.scan_total);
   gl.CreateBuffers(1, &batch.staged);
   gl.CreateBuffers(1, &batch.regions);
+  gl.CreateBuffers(1, &batch.grid);
   gl.NamedBufferData(batch.scan_total, 4, nullptr, GL_DYNAMIC_READ);
   gl.CreateQueries(GL_ANY_SAMPLES_PASSED, 1, &query);
   gl.CreateBuffers(1, &pcs_buffer);
@@ -230,6 +231,7 @@ GlImageStage::Impl::~Impl() {
   gl.DeleteBuffers(1, &batch.scan_total);
   gl.DeleteBuffers(1, &batch.staged);
   gl.DeleteBuffers(1, &batch.regions);
+  gl.DeleteBuffers(1, &batch.grid);
   gl.DeleteBuffers(1, &count_buffer);
   gl.DeleteBuffers(1, &fragment_buffer);
   gl.DeleteTextures(1, &count_tex);

@@ -200,10 +200,13 @@ struct BatchState {
   std::vector<std::array<std::uint32_t, 4>> entry_data, job_data;
   std::vector<std::uint32_t> ids;  // the provoking ID by draw order (the host resolve's)
   std::vector<float> view_data;
-  // The selection pass's staged triangles (pass 0's, before the contact-region round) and the
-  // objects' regions per view (12 words a view, uploaded per frame: what the host knows of them).
-  GLuint staged = 0, regions = 0;
-  std::size_t staged_capacity = 0, regions_capacity = 0;  // bytes
+  // The selection pass's staged triangles (pass 0's, before the contact-region rounds) and the
+  // objects' regions per view (16 words a view, uploaded per frame: what the host knows of them,
+  // and whether the selection picks each object's triangles).
+  // The contact grid: per view and object, which of 16^3 cells over the view's region its
+  // triangles reach (shaders/batch_select.comp), cleared per batch.
+  GLuint staged = 0, regions = 0, grid = 0;
+  std::size_t staged_capacity = 0, regions_capacity = 0, grid_capacity = 0;  // bytes
   std::vector<std::uint32_t> region_data;
   // The count pass's counts and their prefix sums (the compact packed k-buffer's offsets): on the
   // host for the host resolve, else by shaders/prefix_sum.comp (per block of 1024 texels its sum
@@ -463,7 +466,7 @@ struct GlImageStage::Impl {
   };
   std::size_t plan_batch(const PeelJob* jobs, std::size_t count, BatchRun& run) const;
   void gather_batch(const PeelJob* jobs, PeelResult* outs, BatchRun& run);
-  void gather_batch_object(const PeelJob& job, std::size_t j, int slot, PeelResult& out, BatchRun& run);
+  bool gather_batch_object(const PeelJob& job, std::size_t j, int slot, PeelResult& out, BatchRun& run);
   void put_view_record(const PeelJob& job, std::size_t base, bool point, PeelResult& out);
   void upload_batch_buffer(GLuint buffer, std::size_t& capacity, const void* data, std::size_t bytes,
                            std::size_t reserve, bool geometry);

@@ -96,16 +96,16 @@ TEST_CASE("GL counters: the batched conservative frame is a count pass and a fil
     REQUIRE(r.rois_peeled == 3);
     CHECK(first.gl_draws == 2);
     CHECK(r.gl_draws == 2);
-    // Both balls rigid: their triangles selected on the GPU (one dispatch), no mesh data uploaded
-    // after the first frame.
+    // Both balls rigid: their triangles selected on the GPU (three dispatches), no mesh data
+    // uploaded after the first frame.
     CHECK(first.geometry_bytes > 0);
     CHECK(r.geometry_bytes == 0);
     if (resolve == Resolve::host) {
-      CHECK(r.gl_dispatches == 2);  // the selection and its contact-region round
+      CHECK(r.gl_dispatches == 3);  // the selection, its contact-region round and its grid round
       CHECK(r.gl_readbacks == 4);   // the counts, the draw's command, the selected IDs, the fragments mapped
     } else {
-      // The selection and its contact-region round, the prefix sum's three passes, the resolve.
-      CHECK(r.gl_dispatches == 6);
+      // The selection's three passes, the prefix sum's three, the resolve.
+      CHECK(r.gl_dispatches == 7);
       // The fragments' total, the command, the PCS header, the views' depths, the PCS list; nothing
       // per texel (the counts stay on the GPU).
       CHECK(r.gl_readbacks == 5);
