@@ -12,7 +12,6 @@
 
 #include <algorithm>
 #include <cmath>
-#include <cstdlib>
 #include <stdexcept>
 
 namespace peelcd {
@@ -158,7 +157,6 @@ bool World::Impl::resident_pair(std::size_t p) const {
 // body's new vertices loaded by set_vertices() (their box known without the refit). Whether it
 // does depends on its pairs (defer_refits()).
 bool World::Impl::may_defer_refit(const Body& b, const DetectOptions& opt) const {
-  if (std::getenv("PEELCD_NO_DEFER")) return false;
   return !b.is_rigid && b.refit_pending && b.points_loaded && opt.stage == Stage::image && resident_route(opt);
 }
 
