@@ -32,14 +32,16 @@ Aabb world_box(const FBox& f, const Eigen::Affine3d& pose) {
 
 // Where two bodies can meet inside `roi`: the node pairs of their trees (world boxes) whose
 // boxes meet inside `roi`, refined level by level (each pair splits its larger node) until the
-// nodes hold about kRegionLeaves leaves each (finer costs host work that a small ROI's view does
-// not repay), while a level holds at most kRegionPairs pairs, and not past two leaves; the
+// nodes hold about kRegionLeaves leaves each (finer costs host work that the GPU's grid round,
+// shaders/batch_select.comp, does better: on the 1,000-ball pile 8 leaves took 10 ms of host
+// work a frame for 4,716 pairs, 32 leaves 2.5-5 ms), while a level holds at most kRegionPairs
+// pairs, and not past two leaves; the
 // region is the box of the last level's meetings. A point of both bodies in `roi` lies in a leaf
 // box of each, and in each ancestor's box, so in a node pair of every level: the region holds
 // it. Empty when no node pair meets (no contact possible). A side without a tree (null: a
 // deforming body whose refit was put off) is one node, its world box `whole`, never split.
 // `level` and `next` are scratch.
-constexpr double kRegionLeaves = 8.0;
+constexpr double kRegionLeaves = 32.0;
 constexpr std::size_t kRegionPairs = 4096;
 struct RegionSide {
   const Bvh* tree;  // null: `whole` alone
@@ -246,9 +248,14 @@ void World::Impl::resident_image_pairs(const DetectOptions& opt, FrameResult& ou
   if (opt.resolution == 0 && opt.cull == Cull::contact) {
     const double edge_texels = edge_texels_of(opt);
     resident_needs.clear();
+    frame_edges.assign(ids.size(), -1.0);  // each body's median edge, once a frame
+    const auto edge_of = [&](std::size_t i) {
+      if (frame_edges[i] < 0.0) frame_edges[i] = median_edge(bodies[ids[i]]);
+      return frame_edges[i];
+    };
     for (const std::size_t p : resident_pairs) {
-      const double ea = median_edge(bodies[ids[pairs[p].first]]);
-      const double eb = median_edge(bodies[ids[pairs[p].second]]);
+      const double ea = edge_of(pairs[p].first);
+      const double eb = edge_of(pairs[p].second);
       resident_needs.push_back(edge_tile_resolution(opt.budget, out.pairs[p].region, std::sqrt(ea * eb), edge_texels));
     }
     allocate_tiles(opt.budget, resident_needs, resident_tiles);

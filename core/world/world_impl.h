@@ -431,6 +431,7 @@ struct World::Impl {
   std::vector<std::size_t> resident_job_first;  // resident pair i's jobs: [first[i], first[i + 1])
   std::vector<PeelResult> resident_peeled;
   std::vector<int> resident_needs, resident_tiles;
+  std::vector<double> frame_edges;  // per body of the frame (ids): its median edge, or -1 (not yet)
   std::vector<IdPair> resident_pcs;
   std::vector<std::uint64_t> resident_keys, resident_scratch;
   IdMap resident_map_a, resident_map_b;
