@@ -186,11 +186,12 @@ void GlImageStage::Impl::gather_batch(const PeelJob* jobs, PeelResult* outs, Bat
                   " moving vertices is more than a draw's order holds (2^31 / 3)");
 }
 
-// One object of view j: its pose (ROI-local from shape-local for a rigid object), then its
-// triangles; returns whether the selection pass picks them (else the host listed them). The object's region in the view (the selection's contact-region round): empty, for
-// the selection to merge its triangles' boxes into; everything, for the host's selection of a
-// rigid object (its ROI-local corners are the GPU's to compute); the box of the corners
-// uploaded, for a deforming object.
+// One object of view j: its pose (ROI-local from shape-local for a rigid object, a shift for a
+// moving mesh), then its triangles; returns whether the selection pass picks them (else the host
+// listed them). The object's region in the view (the selection's contact-region round): empty,
+// for the selection to merge its triangles' boxes into; everything, for the host's selection of
+// a rigid object or moving mesh (its ROI-local corners are the GPU's to compute); the box of the
+// corners uploaded, for a deforming object.
 bool GlImageStage::Impl::gather_batch_object(const PeelJob& job, std::size_t j, int slot, PeelResult& out,
                                              BatchRun& run) {
   const RoiView& view = job.view;
@@ -300,9 +301,10 @@ void GlImageStage::Impl::upload_batch(const BatchRun& run) {
   upload_buffer(batch.command, 0, sizeof command, command);
 }
 
-// The selection pass: rigid objects' triangles in each view's ROI box staged, their objects'
-// regions merged; then its contact-region round: those that reach the view's region appended to
-// the entries (shaders/batch_select.comp).
+// The selection pass: rigid objects' and moving meshes' triangles in each view's ROI box staged,
+// their objects' regions merged; then its contact-region round (those that reach the view's
+// region mark their cells of the view's grid) and its grid round (those in a cell the other
+// object marked appended to the entries) (shaders/batch_select.comp).
 void GlImageStage::Impl::select_batch(const BatchRun& run) {
   upload_batch_buffer(batch.regions, batch.regions_capacity, batch.region_data.data(),
                       batch.region_data.size() * sizeof(std::uint32_t), 0, false);
