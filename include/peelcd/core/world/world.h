@@ -54,7 +54,7 @@ using BodyId = std::uint32_t;
 // What the World did, cumulative since it was made (the counters a test or benchmark reads).
 struct WorldStats {
   std::size_t builds = 0;           // trees built (add_*, set_mesh)
-  std::size_t full_refits = 0;      // whole-tree refits (set_vertices, many moved vertices)
+  std::size_t full_refits = 0;      // whole-tree refits done (set_vertices, many moved vertices)
   std::size_t partial_refits = 0;   // refits of the changed triangles' paths only
   std::size_t node_pairs = 0;       // node pairs visited by the traversals, last frame
   std::size_t candidates = 0;       // triangle couples whose boxes overlap, last frame
@@ -78,7 +78,9 @@ class World {
 
   void set_pose(BodyId body, const Eigen::Affine3d& pose);  // rigid bodies
   // Every vertex of a deforming body moved (same count): its tree refitted whole at the next
-  // collide() (every such body's refit split over the frame's threads). The const& overload
+  // collide() (every such body's refit split over the frame's threads), or, where that frame's
+  // image route draws every pair of the body from the GPU (Stage::image, batched), at the
+  // first frame or query (tree()) that needs the tree. The const& overload
   // copies into the body's own storage (no allocation after the first frame); the rvalue
   // overload takes the vector over.
   void set_vertices(BodyId body, const std::vector<Vec3>& vertices);
