@@ -572,7 +572,8 @@ void SuiteRun::print_host_steps() const {
                 exact, frame - boxes - views - stage - readback - exact);
   }
   std::printf("(boxes: bounds, broad phase, the World's tree traversals, culling, routing; views: the views and their\n"
-              " triangles gathered (the World's image route: rigid pairs' jobs; other pairs' candidates' triangles copied) and uploaded; stage:\n"
+              " triangles gathered (the World's image route: regions, tiles and jobs; moving meshes' vertices into the GPU's\n"
+              " buffer; the copying route's candidates' triangles) and uploaded; stage:\n"
               " the image stage's draw and dispatch calls on the host, GL waits included; readback: layers and PCS read\n"
               " back; exact: the exact tests of the candidates, relations; other: the rest (refits, the World's\n"
               " routing and result assembly). Medians of each column: the columns need not sum to the frame.)\n");

@@ -197,8 +197,8 @@ struct PairResult {
 
 struct Timings {  // milliseconds, as in the paper's tables
   // aabb: bounds, the broad phase, the World's tree traversals, culling and routing; upload: the
-  // image stage's views and their triangles gathered (the World's image route: the candidates'
-  // triangles copied), uploads; gpu: the image stage's calls that draw and dispatch, timed on the
+  // image stage's views and their triangles gathered (the World's image route: regions, tiles,
+  // jobs, moving meshes' vertices; the copying route's candidates' triangles), uploads; gpu: the image stage's calls that draw and dispatch, timed on the
   // host (its GL waits included); readback: reading layers and PCS back; cpu: the exact tests,
   // relations and the rest of the narrow phase; total: the frame.
   double aabb = 0, upload = 0, gpu = 0, readback = 0, cpu = 0, total = 0;
