@@ -114,9 +114,9 @@ Aabb World::Impl::contact_region(std::size_t p, const Aabb& roi, RegionScratch& 
 // scale; of a deforming body over at most 1,025 of its triangles, evenly spread, each frame (its
 // edges change; a sample keeps the cost per body, not per triangle).
 double World::Impl::median_edge(const Body& b) {
-  const auto median = [](const Mesh& m, std::size_t step) {
-    std::vector<double> edges;
-    edges.reserve(m.triangles.size() / step + 1);
+  const auto median = [&](const Mesh& m, std::size_t step) {
+    std::vector<double>& edges = edge_scratch;  // (kept: no allocation per body and frame)
+    edges.clear();
     for (std::size_t t = 0; t < m.triangles.size(); t += step) {
       const Tri& f = m.triangles[t];
       edges.push_back((m.vertices[f[1]] - m.vertices[f[0]]).norm());
@@ -165,8 +165,7 @@ bool World::Impl::may_defer_refit(const Body& b, const DetectOptions& opt) const
 // After the broad phase: a body whose refit waits but that has a pair the resident route does
 // not draw (a self pair, a pair with an ill-conditioned or out-of-range body: the copying
 // route traverses it) is refitted now.
-void World::Impl::defer_refits(const DetectOptions& opt, unsigned lanes) {
-  (void)opt;
+void World::Impl::defer_refits(unsigned lanes) {
   bool any = false;
   for (std::size_t p = 0; p < pairs.size(); ++p) {
     if (resident_pair(p)) continue;

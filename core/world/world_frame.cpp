@@ -93,7 +93,7 @@ void World::Impl::collide(const DetectOptions& opt, FrameResult& out) {
 
   auto t0 = Clock::now();
   find_pairs(opt, lanes);
-  defer_refits(opt, lanes);
+  defer_refits(lanes);
   const std::size_t used = plan_tasks(lanes);
   mark_untraversed(opt);
   traverse(used, lanes);

@@ -366,7 +366,7 @@ struct World::Impl {
   // those not refit_deferred).
   void refit_pending(unsigned lanes, bool all = true);
   bool may_defer_refit(const Body& b, const DetectOptions& opt) const;
-  void defer_refits(const DetectOptions& opt, unsigned lanes);
+  void defer_refits(unsigned lanes);
   // One body's pending refit now (World::tree() asked for it between frames).
   void refit_now(Body& b) {
     b.refit_deferred = false;
@@ -432,6 +432,7 @@ struct World::Impl {
   std::vector<PeelResult> resident_peeled;
   std::vector<int> resident_needs, resident_tiles;
   std::vector<double> frame_edges;  // per body of the frame (ids): its median edge, or -1 (not yet)
+  std::vector<double> edge_scratch;  // median_edge()'s
   std::vector<IdPair> resident_pcs;
   std::vector<std::uint64_t> resident_keys, resident_scratch;
   IdMap resident_map_a, resident_map_b;
