@@ -193,7 +193,7 @@ std::vector<Command> add_bench_commands(CLI::App& app) {
                                          "tiles by need, as detect does")->capture_default_str()
       ->check(kNonNegative);
   add_backend_option(benchmark, be.backend, true);
-  add_gl_options(benchmark, be.gl, {"resolve", "gpu_filter"});
+  add_gl_options(benchmark, be.gl, {"resolve", "gpu_filter", "coverage"});
   benchmark->add_option("--csv", be.csv, "Write one row per (frame, method) to FILE, or - for stdout")->check(kOutputPath);
 
   return {{benchmark, [be_holder] { return run_bench(*be_holder); }}};

@@ -331,7 +331,7 @@ std::vector<Command> add_golden_commands(CLI::App& app) {
   compare->add_option("--tier", gc.tier, "auto (exact on llvmpipe, hardware otherwise), exact or hardware")
       ->capture_default_str();
   compare->add_option("--report", gc.report, "Folder for the reports of differing cases")->check(kOutputPath)->capture_default_str();
-  add_gl_options(compare, gc.gl, {"peeler", "resolve"});
+  add_gl_options(compare, gc.gl, {"peeler", "resolve", "coverage"});
   compare->add_option("--repeat", gc.repeat, "Run and compare each case N times in one process (determinism)")
       ->check(kPositive)->capture_default_str();
   compare->add_option("--shard", gc.shard, "Compare the K-th of N deterministic slices of the cases (K/N)");

@@ -4,6 +4,7 @@
 #include "peelcd/core/world/world.h"
 #include "peelcd/eval/classes.h"
 
+#include <algorithm>
 #include <ctime>
 
 namespace peelcd::cli {
@@ -133,6 +134,33 @@ int run_calibrate(const CalibrateArgs& a) {
     std::printf("cost models written to %s (peelcd detect --costs %s, or PEELCD_COSTS=%s)\n", a.write_costs.c_str(),
                 a.write_costs.c_str(), a.write_costs.c_str());
   };
+  // The GL stage's conservative coverage: the rasterizer against the compute pass (the same
+  // layers), timed in turns; the faster in total goes into the file (GlOptions::coverage auto).
+  if (runner.gl) {
+    const int budget = *std::max_element(a.budgets.begin(), a.budgets.end());
+    const bool timing = runner.stage->pass_timing();
+    runner.stage->set_pass_timing(true);
+    const std::vector<VariantRow> rows =
+        time_variants(*runner.detector, data_dir("fixtures/meshes"), budget, a.repeat, 2, [&](int k) {
+          gl::GlOptions o = runner.gl_options;
+          o.coverage = k == 0 ? Coverage::raster : Coverage::compute;
+          runner.gl->set_options(o);
+        });
+    runner.gl->set_options(runner.gl_options);
+    runner.stage->set_pass_timing(timing);
+    std::printf("\nconservative coverage at budget %d (image stage ms, and its GPU passes' ms by timer queries; "
+                "medians, in turns):\n", budget);
+    std::printf("%-28s %10s %10s %10s %10s\n", "scene", "raster", "compute", "raster GPU", "compute GPU");
+    double sum[2] = {0.0, 0.0};
+    for (const VariantRow& r : rows) {
+      std::printf("%-28s %10.3f %10.3f %10.3f %10.3f\n", r.scene.c_str(), r.ms[0], r.ms[1], r.gpu_ms[0], r.gpu_ms[1]);
+      sum[0] += r.ms[0];
+      sum[1] += r.ms[1];
+    }
+    fitted.coverage = sum[1] < sum[0] ? "compute" : "raster";
+    std::printf("coverage: raster %.3f ms, compute %.3f ms over the scenes: %s (--coverage auto follows the file)\n",
+                sum[0], sum[1], fitted.coverage.c_str());
+  }
   std::vector<int> large_stacks;
   for (const int n : a.large)
     if (n >= 3) large_stacks.push_back(n);

@@ -87,6 +87,37 @@ std::vector<std::pair<std::string, std::vector<Object>>> calibration_scenes(cons
   return scenes;
 }
 
+std::vector<VariantRow> time_variants(Detector& detector, const std::string& meshes_dir, int budget, int repeat,
+                                      int variants, const std::function<void(int)>& use) {
+  std::vector<VariantRow> rows;
+  FrameResult r;
+  for (const auto& [name, objects] : calibration_scenes(meshes_dir)) {
+    DetectOptions opt;
+    opt.budget = budget;
+    opt.stage = Stage::image;
+    VariantRow row;
+    row.scene = name;
+    std::vector<std::vector<double>> ms(static_cast<std::size_t>(variants)), gpu(ms);
+    for (int k = 0; k < variants; ++k) {  // untimed: buffers grow, shapes upload
+      use(k);
+      detector.detect(objects, opt, r);
+    }
+    for (int i = 0; i < repeat; ++i)
+      for (int k = 0; k < variants; ++k) {
+        use(k);
+        detector.detect(objects, opt, r);
+        ms[std::size_t(k)].push_back(r.timings.total - r.timings.aabb);
+        gpu[std::size_t(k)].push_back(r.timings.gpu_raster + r.timings.gpu_compute);
+      }
+    for (int k = 0; k < variants; ++k) {
+      row.ms.push_back(median_of(ms[std::size_t(k)]));
+      row.gpu_ms.push_back(median_of(gpu[std::size_t(k)]));
+    }
+    rows.push_back(row);
+  }
+  return rows;
+}
+
 Calibration calibrate(Detector& detector, const std::string& meshes_dir, const std::vector<int>& budgets, int repeat) {
   Calibration cal;
   const auto scenes = calibration_scenes(meshes_dir);

@@ -349,7 +349,7 @@ void GlImageStage::Impl::count_batch(BatchRun& run, Timings& t) {
   if (run.invocations) select_batch(run);
   gl.BindBuffer(GL_DRAW_INDIRECT_BUFFER, batch.command);
   gl.UseProgram(run.point ? point_batch.id : cons_batch.id);
-  gl.Uniform1i(run.point ? point_batch.viewport : cons_batch.viewport, run.largest);
+  gl.Uniform1i(run.point ? point_batch.viewport : cons_batch.viewport, run.largest);  // kept by the program
   gl.BindFramebuffer(GL_FRAMEBUFFER, bare_fbo);
   gl.Viewport(0, 0, run.largest, run.largest);
   gl.Disable(GL_DEPTH_TEST);
@@ -358,10 +358,30 @@ void GlImageStage::Impl::count_batch(BatchRun& run, Timings& t) {
   // Point sampling clips to the ROI box; the conservative intervals clip in depth themselves.
   for (int i = 0; i < 6; ++i) run.point ? gl.Enable(GL_CLIP_DISTANCE0 + i) : gl.Disable(GL_CLIP_DISTANCE0 + i);
   gl.BindVertexArray(batch.vao);
-  gl.Uniform1i(run.point ? point_batch.count_only : cons_batch.count_only, 1);
-  timed_draw([&] { gl.DrawArraysIndirect(GL_TRIANGLES, nullptr); });
+  cover_batch_pass(run, true);
   barrier(GL_BUFFER_UPDATE_BARRIER_BIT);
   batch_offsets(run, t);
+}
+
+// A pass over the batch's triangles (the count pass, or the fill pass): the indirect draw, or,
+// for conservative views with GlOptions::coverage compute, one invocation per entry the draw
+// could have (the host's and every triangle the selection may append; those past the command's
+// count return at once) running the draw's arithmetic (shaders/conservative_cover.comp).
+void GlImageStage::Impl::cover_batch_pass(const BatchRun& run, bool count_only) {
+  if (run.point || !compute_coverage()) {
+    gl.UseProgram(run.point ? point_batch.id : cons_batch.id);
+    gl.Uniform1i(run.point ? point_batch.count_only : cons_batch.count_only, count_only ? 1 : 0);
+    timed_draw([&] { gl.DrawArraysIndirect(GL_TRIANGLES, nullptr); });
+    return;
+  }
+  const std::size_t groups = (run.host_entries + run.invocations + 63) / 64;
+  if (groups == 0) return;
+  const std::size_t gx = std::min<std::size_t>(groups, 65535), gy = (groups + gx - 1) / gx;
+  gl.UseProgram(cover_batch.id);
+  gl.BindBufferBase(GL_SHADER_STORAGE_BUFFER, 10, batch.command);
+  gl.Uniform1ui(cover_batch.row, GLuint(gx * 64));
+  gl.Uniform1i(cover_batch.count_only, count_only ? 1 : 0);
+  dispatch(GLuint(gx), GLuint(gy), 1);
 }
 
 // The counts into offsets, the k-buffer sized to hold them all; the triangles drawn (the
@@ -401,7 +421,6 @@ void GlImageStage::Impl::batch_offsets(BatchRun& run, Timings& t) {
     read_buffer(batch.command, 0, sizeof drawn, drawn);
     t.readback += ms_since(t_total);
     run.total = sum == 0xffffffffu ? std::numeric_limits<std::size_t>::max() : sum;
-    gl.UseProgram(run.point ? point_batch.id : cons_batch.id);
   } else {
     run.total = read_batch_counts(run.texels, t);
     run.deepest = batch.deepest;
@@ -421,8 +440,7 @@ void GlImageStage::Impl::fill_batch(const BatchRun& run) {
   clear_buffer(count_buffer, GLsizeiptr(run.texels * 4));
   gl.BindBufferBase(GL_SHADER_STORAGE_BUFFER, 1, fragment_buffer);
   gl.BindBufferBase(GL_SHADER_STORAGE_BUFFER, 6, batch.offset_buffer);
-  gl.Uniform1i(run.point ? point_batch.count_only : cons_batch.count_only, 0);
-  timed_draw([&] { gl.DrawArraysIndirect(GL_TRIANGLES, nullptr); });
+  cover_batch_pass(run, false);
   gl.BindBuffer(GL_DRAW_INDIRECT_BUFFER, 0);
   gl.BindVertexArray(vao);
   gl.BindFramebuffer(GL_FRAMEBUFFER, 0);

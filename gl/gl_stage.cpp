@@ -12,6 +12,7 @@ GlImageStage::GlImageStage(std::shared_ptr<Context> context, GlOptions options) 
   try {
     impl_ = std::make_unique<Impl>(context, options);
     impl_->counters = &counters;
+    impl_->models = &cost_models();
   } catch (...) {
     context->restore_previous();
     throw;

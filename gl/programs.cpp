@@ -81,6 +81,12 @@ void GlImageStage::Impl::build_programs() {
     cons_deep[filter].texels = gl.GetUniformLocation(cons_deep[filter].id, "texels");
     cons_deep[filter].row_base = gl.GetUniformLocation(cons_deep[filter].id, "row_base");
   }
+  // The compute path's coverage (GlOptions::coverage compute), one-view and batched.
+  cover.id = link({stage(GL_COMPUTE_SHADER, shaders::conservative_cover_comp, "conservative_cover.comp")},
+                  "conservative coverage by compute");
+  cover_batch.id = link({stage(GL_COMPUTE_SHADER, shaders::conservative_cover_comp,
+                               "conservative_cover.comp (PEELCD_BATCH)", batch_define)},
+                        "batched conservative coverage by compute");
   point_batch.id = link({stage(GL_VERTEX_SHADER, shaders::peel_vert, "peel.vert (PEELCD_BATCH)", batch_define),
                               stage(GL_FRAGMENT_SHADER, shaders::abuffer_frag, "abuffer.frag (PEELCD_BATCH)", batch_define)},
                              "point-sampled batch");
@@ -138,6 +144,19 @@ void GlImageStage::Impl::locate_uniforms() {
   cons_resolve.emit = gl.GetUniformLocation(cons_resolve.id, "emit_layer");
   cons_batch.count_only = gl.GetUniformLocation(cons_batch.id, "count_only");
   cons_batch.viewport = gl.GetUniformLocation(cons_batch.id, "viewport");
+  for (CoverProgram* c : {&cover, &cover_batch}) {
+    c->clip = gl.GetUniformLocation(c->id, "clip_from_local");
+    c->model = gl.GetUniformLocation(c->id, "roi_from_object");
+    c->res = gl.GetUniformLocation(c->id, "resolution");
+    c->slots = gl.GetUniformLocation(c->id, "slots");
+    c->object = gl.GetUniformLocation(c->id, "object_bit");
+    c->grow_texels = gl.GetUniformLocation(c->id, "grow_texels");
+    c->grow_depth = gl.GetUniformLocation(c->id, "grow_depth");
+    c->triangles = gl.GetUniformLocation(c->id, "triangles");
+    c->indexed = gl.GetUniformLocation(c->id, "indexed");
+    c->row = gl.GetUniformLocation(c->id, "row");
+    c->count_only = gl.GetUniformLocation(c->id, "count_only");
+  }
   point_batch.viewport = gl.GetUniformLocation(point_batch.id, "viewport");
   point_batch.count_only = gl.GetUniformLocation(point_batch.id, "count_only");
   point_batch_resolve.texels = gl.GetUniformLocation(point_batch_resolve.id, "texels");
@@ -208,6 +227,8 @@ GlImageStage::Impl::~Impl() {
   gl.DeleteProgram(cons.id);
   gl.DeleteProgram(cons_resolve.id);
   gl.DeleteProgram(cons_batch.id);
+  gl.DeleteProgram(cover.id);
+  gl.DeleteProgram(cover_batch.id);
   for (int filter = 0; filter < 2; ++filter) {
     gl.DeleteProgram(cons_batch_resolve[filter].id);
     gl.DeleteProgram(cons_deep[filter].id);
@@ -268,7 +289,8 @@ std::string shader_source(const char* src, const std::string& defines) {
       {"#include \"peelcd/core/image/pcs_test.inc\"",
        std::string("#define PEELCD_PCS_FN\n#define PEELCD_ABS abs\n") + shaders::pcs_test_inc},
       {"#include \"peelcd/core/image/certified_apart.inc\"", std::string("#define PEELCD_PCS_FN\n") + shaders::certified_apart_inc},
-      {"#include \"batch.inc\"", shaders::batch_inc}};
+      {"#include \"batch.inc\"", shaders::batch_inc},
+      {"#include \"conservative.inc\"", shaders::conservative_inc}};
   for (const auto& [line, text] : includes)
     if (const std::size_t at = out.find(line); at != std::string::npos) out.replace(at, line.size(), text);
   return out;

@@ -225,26 +225,31 @@ bool GlImageStage::Impl::peel_conservative(const PeelJob& job, PeelResult& out, 
   const auto t_gpu = Clock::now();
   start_kbuffer(n, view_slots);
 
-  gl.UseProgram(cons.id);
+  const bool compute = compute_coverage();
+  gl.UseProgram(compute ? cover.id : cons.id);
   const std::array<float, 16> m = view.clip_from_local();
-  gl.UniformMatrix4fv(cons.clip, 1, GL_FALSE, m.data());
-  gl.Uniform1i(cons.res, n);
-  gl.Uniform1ui(cons.slots, view_slots);
+  gl.UniformMatrix4fv(compute ? cover.clip : cons.clip, 1, GL_FALSE, m.data());
+  gl.Uniform1i(compute ? cover.res : cons.res, n);
+  gl.Uniform1ui(compute ? cover.slots : cons.slots, view_slots);
   float grow_x = 0.0f, grow_z = 0.0f;
   conservative::grow_of(job.grow, view.texel(), 2.0 * view.half_depth, grow_x, grow_z);
-  gl.Uniform1f(cons.grow_texels, grow_x);
-  gl.Uniform1f(cons.grow_depth, grow_z);
-  gl.BindFramebuffer(GL_FRAMEBUFFER, bare_fbo);
-  gl.Viewport(0, 0, n, n);
-  gl.Disable(GL_DEPTH_TEST);
-  gl.Disable(GL_CULL_FACE);
-  for (int i = 0; i < 6; ++i) gl.Disable(GL_CLIP_DISTANCE0 + i);  // the intervals clip in depth
-  gl.BindVertexArray(vao);
-  for (int slot = 0; slot < 2; ++slot) {
-    gl.Uniform1ui(cons.object, GLuint(slot));
-    draw(slot, cons.model);
+  gl.Uniform1f(compute ? cover.grow_texels : cons.grow_texels, grow_x);
+  gl.Uniform1f(compute ? cover.grow_depth : cons.grow_depth, grow_z);
+  if (compute) {
+    for (int slot = 0; slot < 2; ++slot) cover_one_view(slot);
+  } else {
+    gl.BindFramebuffer(GL_FRAMEBUFFER, bare_fbo);
+    gl.Viewport(0, 0, n, n);
+    gl.Disable(GL_DEPTH_TEST);
+    gl.Disable(GL_CULL_FACE);
+    for (int i = 0; i < 6; ++i) gl.Disable(GL_CLIP_DISTANCE0 + i);  // the intervals clip in depth
+    gl.BindVertexArray(vao);
+    for (int slot = 0; slot < 2; ++slot) {
+      gl.Uniform1ui(cons.object, GLuint(slot));
+      draw(slot, cons.model);
+    }
+    gl.BindFramebuffer(GL_FRAMEBUFFER, 0);
   }
-  gl.BindFramebuffer(GL_FRAMEBUFFER, 0);
   out.epsilon_window = 0.0f;
   out.slope = 0.0f;
   if (host_resolve())
@@ -258,6 +263,27 @@ bool GlImageStage::Impl::peel_conservative(const PeelJob& job, PeelResult& out, 
   gl.Uniform1i(cons_resolve.res, n);
   gl.Uniform1ui(cons_resolve.slots, view_slots);
   return dispatch_resolve(job, fitting, view_slots, t_gpu, cons_resolve.append, cons_resolve.emit, "the conservative resolve", out, t);
+}
+
+// The compute path's coverage of one object of a one-view conservative draw (the cover program
+// in use, the view's uniforms set): one invocation per triangle the draw would have, its corners
+// read from the buffer the draw would have fetched (a rigid shape's through its indices).
+void GlImageStage::Impl::cover_one_view(int slot) {
+  static const float identity[16] = {1, 0, 0, 0, 0, 1, 0, 0, 0, 0, 1, 0, 0, 0, 0, 1};
+  const bool indexed = slot_shape[slot] != nullptr;
+  const std::size_t triangles = (indexed ? indices[slot].size() : staging[slot].size()) / 3;
+  if (triangles == 0) return;
+  const GLuint corners = indexed ? slot_shape[slot]->vbo : vbo[slot];
+  gl.BindBufferBase(GL_SHADER_STORAGE_BUFFER, 18, corners);
+  gl.BindBufferBase(GL_SHADER_STORAGE_BUFFER, 19, indexed ? ibo[slot] : corners);
+  gl.UniformMatrix4fv(cover.model, 1, GL_FALSE, indexed ? slot_model[slot].data() : identity);
+  gl.Uniform1ui(cover.object, GLuint(slot));
+  gl.Uniform1ui(cover.triangles, GLuint(triangles));
+  gl.Uniform1i(cover.indexed, indexed ? 1 : 0);
+  const std::size_t groups = (triangles + 63) / 64;
+  const std::size_t gx = std::min<std::size_t>(groups, 65535), gy = (groups + gx - 1) / gx;
+  gl.Uniform1ui(cover.row, GLuint(gx * 64));
+  dispatch(GLuint(gx), GLuint(gy), 1);
 }
 
 }  // namespace peelcd::gl

@@ -149,6 +149,13 @@ struct ConservativeResolveProgram {
   GLuint id = 0;
   GLint res = -1, slots = -1, append = -1, emit = -1;
 };
+// shaders/conservative_cover.comp: the compute path's coverage (GlOptions::coverage compute),
+// one-view (one object a dispatch) and batched (PEELCD_BATCH: count_only, row only).
+struct CoverProgram {
+  GLuint id = 0;
+  GLint clip = -1, model = -1, res = -1, slots = -1, object = -1, grow_texels = -1, grow_depth = -1, triangles = -1,
+        indexed = -1, row = -1, count_only = -1;
+};
 // A batched draw (the conservative or point-sampled sources with PEELCD_BATCH): a count pass
 // and a fill pass over every view of a frame.
 struct BatchDrawProgram {
@@ -319,6 +326,7 @@ struct GlImageStage::Impl {
   ConservativeProgram cons;
   ConservativeResolveProgram cons_resolve;
   BatchDrawProgram cons_batch, point_batch;
+  CoverProgram cover, cover_batch;
   // [1]: with the certified filter (PEELCD_FILTER_APART; GlOptions::gpu_filter), [0] without.
   BatchResolveProgram cons_batch_resolve[2], point_batch_resolve;
   DeepProgram cons_deep[2];
@@ -441,6 +449,7 @@ struct GlImageStage::Impl {
   // Conservative mode (shaders/conservative.*): false as peel_single_pass(); a view deeper than
   // any k-buffer that fits is marked PeelResult::exhaustive.
   bool peel_conservative(const PeelJob& job, PeelResult& out, Timings& t);
+  void cover_one_view(int slot);
   bool resolve_on_host(const PeelJob& job, std::size_t fitting, std::uint32_t view_slots, Clock::time_point t_gpu,
                        PeelResult& out, Timings& t);
 
@@ -475,6 +484,7 @@ struct GlImageStage::Impl {
   void count_batch(BatchRun& run, Timings& t);
   void batch_offsets(BatchRun& run, Timings& t);
   void fill_batch(const BatchRun& run);
+  void cover_batch_pass(const BatchRun& run, bool count_only);
   double resolve_batch_on_host(const PeelJob* jobs, PeelResult* outs, const BatchRun& run, Timings& t);
   // The GPU resolve of a drawn batch (batch.cpp): each job's PCS and layers.
   // False when a texel was deeper than the GPU resolve takes (the caller resolves on the host).
@@ -483,6 +493,13 @@ struct GlImageStage::Impl {
   // A conservative view resolved on the GPU is batched even alone (its deep texels split on the
   // GPU, the certified filter, GPU selection); other views need a second to batch with.
   bool batched_alone(const PeelJob& job) const { return job.conservative && !host_resolve(); }
+  // Conservative views covered by the compute pass (GlOptions::coverage; auto: the cost models'
+  // choice, the stage's own, `models`).
+  const CostModels* models = nullptr;
+  bool compute_coverage() const {
+    return options.coverage == Coverage::compute ||
+           (options.coverage == Coverage::automatic && models && models->coverage == "compute");
+  }
   bool host_resolve() const {
     return options.resolve == Resolve::host || (options.resolve == Resolve::automatic && software_renderer);
   }

@@ -44,6 +44,12 @@ CostModels read_cost_models(const std::string& path) {
   m.source = path;
   m.backend = j.at("backend").get<std::string>();
   m.renderer = j.at("renderer").get<std::string>();
+  if (j.contains("coverage")) {
+    const nlohmann::json& c = j.at("coverage");
+    if (!c.is_string() || (c.get<std::string>() != "raster" && c.get<std::string>() != "compute"))
+      throw InputError(where + ": \"coverage\" must be \"raster\" or \"compute\"");
+    m.coverage = c.get<std::string>();
+  }
   const nlohmann::json &image = j.at("image"), &exact = j.at("exact");
   m.image = StageCost{coefficient(image, "view_ms", where + ": image"), coefficient(image, "triangle_us", where + ": image"),
                       coefficient(image, "texel_ns", where + ": image"), coefficient(image, "scan_us", where + ": image")};
@@ -53,7 +59,7 @@ CostModels read_cost_models(const std::string& path) {
 }
 
 void write_cost_models(const std::string& path, const CostModels& m, const std::string& fitted) {
-  const nlohmann::json j = {
+  nlohmann::json j = {
       {"format", kCostsFormat},
       {"backend", m.backend},
       {"renderer", m.renderer},
@@ -61,6 +67,7 @@ void write_cost_models(const std::string& path, const CostModels& m, const std::
       {"image", {{"view_ms", m.image.view_ms}, {"triangle_us", m.image.triangle_us}, {"texel_ns", m.image.texel_ns},
                  {"scan_us", m.image.scan_us}}},
       {"exact", {{"view_ms", m.exact.view_ms}, {"triangle_us", m.exact.triangle_us}, {"scan_us", m.exact.scan_us}}}};
+  if (!m.coverage.empty()) j["coverage"] = m.coverage;
   write_output_file(path, j.dump(2) + "\n", "peelcd calibrate: --write-costs");
 }
 

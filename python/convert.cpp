@@ -105,7 +105,7 @@ DetectOptions options_from(const py::dict& kwargs) {
   return o;
 }
 
-// The GL stage's settings from keywords (gl_option_table(): peeler, resolve, batch, gpu_select, gpu_filter);
+// The GL stage's settings from keywords (gl_option_table(): peeler, resolve, batch, gpu_select, gpu_filter, coverage);
 // refused on the CPU stage, which has none.
 gl::GlOptions gl_options_from(const std::string& backend, const py::kwargs& kwargs) {
   gl::GlOptions o;
@@ -120,7 +120,7 @@ gl::GlOptions gl_options_from(const std::string& backend, const py::kwargs& kwar
     else throw py::type_error("GL option '" + key + "': expected a bool or a string");
     const std::string problem = gl::set_gl_option(o, key, words);
     if (problem.rfind("unknown GL option", 0) == 0)
-      throw py::type_error(problem + " (GL options: peeler, resolve, batch, gpu_select, gpu_filter)");
+      throw py::type_error(problem + " (GL options: peeler, resolve, batch, gpu_select, gpu_filter, coverage)");
     if (!problem.empty()) throw py::value_error("GL option " + problem);
   }
   return o;

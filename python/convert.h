@@ -37,7 +37,7 @@ Eigen::Affine3d pose_from(const py::handle& obj);
 // Keyword options, named as in scene files (theta, stage, self, volume, ...), checked as there.
 DetectOptions options_from(const py::dict& kwargs);
 
-// The GL stage's settings from keywords (gl_option_table(): peeler, resolve, batch, gpu_select, gpu_filter);
+// The GL stage's settings from keywords (gl_option_table(): peeler, resolve, batch, gpu_select, gpu_filter, coverage);
 // refused on the CPU stage, which has none.
 gl::GlOptions gl_options_from(const std::string& backend, const py::kwargs& kwargs);
 

@@ -115,7 +115,7 @@ void bind_world(py::module_& m) {
              return std::make_unique<PyWorld>(backend, gl_options_from(backend, kwargs), costs_from(kwargs));
            }),
            py::arg("backend") = "cpu",
-           "backend: cpu, osmesa or egl; GL backends take the GL options as keywords (peeler, resolve, batch, gpu_select, gpu_filter); "
+           "backend: cpu, osmesa or egl; GL backends take the GL options as keywords (peeler, resolve, batch, gpu_select, gpu_filter, coverage); "
            "costs=FILE: the router's cost models (peelcd calibrate --write-costs; default $PEELCD_COSTS)")
       .def("add_rigid", [](PyWorld& w, const py::handle& m, const py::object& pose, const std::string& name, bool self) {
         const ExclusiveUse guard(w.owner, kWorld);
@@ -195,7 +195,7 @@ void bind_detector(py::module_& m) {
              return std::make_unique<PyDetector>(backend, gl_options_from(backend, kwargs), costs_from(kwargs));
            }),
            py::arg("backend") = "cpu",
-           "backend: cpu, osmesa or egl; GL backends take the GL options as keywords (peeler, resolve, batch, gpu_select, gpu_filter); "
+           "backend: cpu, osmesa or egl; GL backends take the GL options as keywords (peeler, resolve, batch, gpu_select, gpu_filter, coverage); "
            "costs=FILE: the router's cost models (peelcd calibrate --write-costs; default $PEELCD_COSTS)")
       .def("_detect", [](PyDetector& d, const py::list& objects, const py::dict& options) {
         const ExclusiveUse guard(d.owner, "peelcd::Detector");

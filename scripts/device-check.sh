@@ -1,7 +1,8 @@
 #!/usr/bin/env bash
 # The GPU path checked and measured in one command, on the EGL backend:
 #   1. the golden suite on the hardware tier (--quick: the exact tier on llvmpipe), with the
-#      GPU resolve (--resolve gpu) and with the host resolve;
+#      GPU resolve (--resolve gpu) and with the host resolve, and (not --quick) with the coverage
+#      by compute;
 #   2. the deep-texel scenes of the GPU resolve (a 1-texel tile on the default scene, both
 #      resolves, every PCS compared with the certified filter off; with it, nothing missed);
 #   3. run-to-run determinism: the same frames twice, batched with GPU selection and the GPU
@@ -10,8 +11,9 @@
 #      spheres and the 1,000-ball pile (--quick: the default scene only), one thread per method:
 #      the router's default rows and the image stage forced side by side with the CPU peers, and
 #      the image-work table (host work, GL waits, GPU passes by timer queries, bytes, candidates);
-#   5. peelcd calibrate --backend egl --write-costs (the router's cost models of this device, in
-#      the record as costs.json), then detect routing by them.
+#   5. peelcd calibrate --backend egl --write-costs (the router's cost models of this device and
+#      the faster conservative coverage, raster or compute, in the record as costs.json), then
+#      detect routing by them.
 # Each step is stopped after STEP_TIMEOUT seconds (default 600), and counted as failed.
 # It writes a dated record (device, driver, renderer, every command and its output) into
 # docs/backends/<device>-<date>/ (or --out DIR) and prints a summary. Exit 1 if a check fails.
@@ -110,11 +112,16 @@ say "renderer: $renderer"
 say "host: $(uname -srm), $(nproc) cores"
 say "binary: $(basename "$bin"), peelcd $("$bin" --version 2>/dev/null | cut -d' ' -f2)"
 
-# 1. The goldens, both resolves (the GPU resolve is what a GPU runs by default).
+# 1. The goldens, both resolves (the GPU resolve is what a GPU runs by default), then the
+# conservative coverage by compute (--coverage compute: the same layers as the rasterizer's).
 for resolve in gpu host; do
   step "golden compare, $tier tier, --resolve $resolve" "golden_$resolve.txt" \
     "$bin" golden compare --backend egl --tier "$tier" --resolve "$resolve" --report "$out/golden-report-$resolve"
 done
+if [ "$quick" != 1 ]; then  # on llvmpipe ctest runs it ("golden ...: coverage by compute")
+  step "golden compare, $tier tier, --coverage compute" "golden_compute.txt" \
+    "$bin" golden compare --backend egl --tier "$tier" --coverage compute --report "$out/golden-report-compute"
+fi
 
 # 2. Deep texels: every drawn triangle of both meshes in one texel (a 1-texel tile), the GPU
 # resolve against the host's: the same PCS and pairs, nothing missed (the GPU's certified filter
@@ -150,6 +157,12 @@ else
   # queries, bytes uploaded, candidates to the host's exact test).
   step "bench, waving spheres 1.3M" "bench_spheres_wave_1m.txt" "$bin" bench spheres-wave --stacks 570 --backend egl --frames 4 --threads 1 --short
   step "bench, 1,000-ball pile" "bench_pile1000.txt" "$bin" bench crowd --objects 1000 --backend egl --frames 4 --threads 1 --short
+  # The same deforming scenes with the conservative coverage by compute (no draw): the image-work
+  # tables' raster and compute columns against the runs above.
+  step "bench, waving spheres 1.3M, --coverage compute" "bench_spheres_wave_1m_compute.txt" \
+    "$bin" bench spheres-wave --stacks 570 --backend egl --frames 4 --threads 1 --short --coverage compute
+  step "bench, 1,000-ball pile, --coverage compute" "bench_pile1000_compute.txt" \
+    "$bin" bench crowd --objects 1000 --backend egl --frames 4 --threads 1 --short --coverage compute
 fi
 
 # 5. The router's cost models of this device, written where detect --costs, $PEELCD_COSTS and

@@ -5,6 +5,7 @@
 // one indirect draw (GlImageStage::peel_batch). Nothing comes through vertex attributes: triangle
 // k of the draw is entries[k] (shaders/batch.inc), its corners moved by the view's matrix for its
 // object.
+#include "conservative.inc"  // cover_corner()
 #ifdef PEELCD_BATCH
 #define PEELCD_BATCH_DRAW
 #include "batch.inc"  // the views, the entries, batch_corner()
@@ -24,9 +25,6 @@ void main() {
   vec3 in_position = batch_corner(v_view);
   mat4 roi_from_object = views[v_view >> 1].roi_from_object[v_view & 1u];
 #endif
-  v_local = (roi_from_object * vec4(in_position, 1.0)).xyz;
-  vec3 a = abs(in_position);
-  v_mag = abs(roi_from_object[0].xyz) * a.x + abs(roi_from_object[1].xyz) * a.y +
-          abs(roi_from_object[2].xyz) * a.z + abs(roi_from_object[3].xyz);
+  cover_corner(in_position, roi_from_object, v_local, v_mag);
   v_order = uint(gl_VertexID) / 3u;
 }

@@ -174,13 +174,14 @@ def uv_sphere(center, radius, n=24):
 def test_gl_options_as_keywords_recorded_in_the_result():
     a, b = uv_sphere((0, 0, 0), 1.0), uv_sphere((1.2, 0.1, 0.05), 1.0)
     assert peelcd.gl_options() == {"peeler": "abuffer", "resolve": "auto", "batch": True, "gpu_select": True,
-                                   "gpu_filter": True}
-    world = peelcd.World(BACKEND, peeler="multipass", resolve="host", batch=False, gpu_select=False, gpu_filter=False)
+                                   "gpu_filter": True, "coverage": "auto"}
+    world = peelcd.World(BACKEND, peeler="multipass", resolve="host", batch=False, gpu_select=False, gpu_filter=False,
+                         coverage="compute")
     world.add_rigid(a)
     world.add_rigid(b)
     r = world.collide(stage="image")
     assert r["gl_options"] == {"peeler": "multipass", "resolve": "host", "batch": False, "gpu_select": False,
-                               "gpu_filter": False}
+                               "gpu_filter": False, "coverage": "compute"}
     exact = peelcd.exact_pairs(a, b).tolist()
     assert r["pairs"][0]["triangles"].tolist() == exact
     d = peelcd.Detector(BACKEND, resolve="gpu").detect([a, b], stage="image")

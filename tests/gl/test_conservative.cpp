@@ -753,3 +753,85 @@ TEST_CASE("conservative mode serves proximity: no pair within the margin missed,
     }
   CHECK(within > 1000);
 }
+
+TEST_CASE("coverage by compute: the rasterizer's layers and PCS bit for bit, one view and batched", "[conservative][coverage]") {
+  // GlOptions::coverage compute (shaders/conservative_cover.comp) against the rasterizer
+  // (shaders/conservative.{vert,geom,frag}): every view's layers (captured on the host resolve),
+  // PCS and contacts, on a crowd of rigid balls (poses in the views buffer; the GPU selection
+  // appends to the entries the compute pass reads), the geometry classes posed, and proximity
+  // (triangles grown by the margin); the one-view path (its deforming objects' corners and its
+  // rigid shapes' indices), the batch with the host's selection and resolve, and the batch with
+  // the GPU's selection and resolve (the certified filter off: every overlapping couple).
+  struct Case {
+    std::string name;
+    std::vector<Object> objects;
+    DetectOptions opt;
+  };
+  std::vector<Case> cases;
+  {
+    Case c{"crowd", {}, {}};
+    make_crowd(60, 2)->frame(1, c.objects);
+    cases.push_back(c);
+  }
+  const Eigen::Affine3d pose(Eigen::Translation3d(Vec3(0.3, -0.2, 0.1)) * Eigen::AngleAxisd(0.7, Vec3(1, 2, 3).normalized()));
+  for (GeometryClass g : geometry_classes(3)) {
+    Case c{g.name, g.objects, {}};
+    c.opt.views = 3;
+    cases.push_back(c);
+    for (Object& object : g.objects) {  // the same class, rigid and turned
+      Mesh shape = object.mesh;
+      for (Vec3& v : shape.vertices) v = pose.inverse() * v;
+      object.rigid = RigidMotion{std::make_shared<const Mesh>(std::move(shape)), pose};
+    }
+    cases.push_back(Case{g.name + ", rigid", g.objects, c.opt});
+  }
+  for (const GeometryClass& g : test::proximity_scenes()) {
+    Case c{g.name + ", margin", g.objects, {}};
+    c.opt.margin = 2e-2 * test::scene_size(g);
+    cases.push_back(c);
+  }
+  std::size_t views = 0, contacts = 0;
+  for (int path = 0; path < 3; ++path)
+    for (const Case& c : cases) {
+      std::vector<CapturedView> captured[2];
+      FrameResult frames[2];
+      for (const Coverage coverage : {Coverage::raster, Coverage::compute}) {
+        gl::GlOptions o;
+        o.coverage = coverage;
+        o.batch = path != 0;
+        o.resolve = path == 2 ? Resolve::gpu : Resolve::host;
+        o.gpu_select = path == 2;
+        o.gpu_filter = false;
+        test_pipeline().set_gl_options(o);
+        DetectOptions opt = c.opt;
+        opt.stage = Stage::image;
+        const int k = coverage == Coverage::compute;
+        if (path != 2) test_pipeline().capture_layers(&captured[k]);
+        frames[k] = test_pipeline().detect(c.objects, opt);
+        test_pipeline().capture_layers(nullptr);
+        if (coverage == Coverage::compute && frames[k].rois_peeled > 0) {
+          CHECK(frames[k].gl_draws == 0);  // no conservative view was rasterized
+          CHECK(frames[k].gl_dispatches > 0);
+        }
+      }
+      test_pipeline().set_gl_options(gl::GlOptions{});
+      INFO(c.name << ", path " << (path == 0 ? "one view" : path == 1 ? "batched, host" : "batched, GPU"));
+      REQUIRE(captured[0].size() == captured[1].size());
+      for (std::size_t v = 0; v < captured[0].size(); ++v) {
+        INFO("view " << v << " of pair " << captured[0][v].pair);
+        CHECK(captured[1][v].layers == captured[0][v].layers);
+        CHECK(captured[1][v].pcs == captured[0][v].pcs);
+        ++views;
+      }
+      REQUIRE(frames[0].pairs.size() == frames[1].pairs.size());
+      for (std::size_t i = 0; i < frames[0].pairs.size(); ++i) {
+        INFO("pair " << i);
+        CHECK(frames[1].pairs[i].pcs == frames[0].pairs[i].pcs);
+        CHECK(frames[1].pairs[i].layers == frames[0].pairs[i].layers);
+        CHECK(frames[1].pairs[i].colliding.size() == frames[0].pairs[i].colliding.size());
+        contacts += frames[0].pairs[i].colliding.size();
+      }
+    }
+  CHECK(views > 50);
+  CHECK(contacts > 0);
+}

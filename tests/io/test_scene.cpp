@@ -234,7 +234,12 @@ TEST_CASE("cost models round-trip through a calibration file, and a bad or forei
   CHECK(back.image.texel_ns == m.image.texel_ns);
   CHECK(back.exact.triangle_us == m.exact.triangle_us);
   CHECK(back.exact.scan_us == m.exact.scan_us);
-  // Refused: a missing file, not JSON, another format, a negative coefficient.
+  CHECK(back.coverage.empty());  // not timed: GlOptions::coverage auto rasterizes
+  m.coverage = "compute";
+  write_cost_models(path, m, "2026-11-28");
+  CHECK(read_cost_models(path).coverage == "compute");
+  // Refused: a missing file, not JSON, another format, a negative coefficient, a coverage that is
+  // not one.
   CHECK_THROWS_WITH(read_cost_models(dir + "/none.json"), Catch::Contains("none.json': cannot open"));
   const auto write = [&](const std::string& text) {
     std::ofstream(dir + "/bad.json") << text;
@@ -245,6 +250,9 @@ TEST_CASE("cost models round-trip through a calibration file, and a bad or forei
   CHECK_THROWS_WITH(read_cost_models(write(R"({"format":"peelcd.costs/1","backend":"cpu","renderer":"r",)"
                                            R"("image":{"view_ms":-1},"exact":{}})")),
                     Catch::Contains("image.view_ms: must be a finite number >= 0"));
+  CHECK_THROWS_WITH(read_cost_models(write(R"({"format":"peelcd.costs/1","backend":"cpu","renderer":"r",)"
+                                           R"("image":{},"exact":{},"coverage":"fast"})")),
+                    Catch::Contains("\"coverage\" must be \"raster\" or \"compute\""));
   std::filesystem::remove_all(dir);
 }
 

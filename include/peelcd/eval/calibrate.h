@@ -4,6 +4,7 @@
 // exact CPU path on the same detector, and the two linear cost models fitted to them.
 #include "peelcd/core/image/detector.h"
 
+#include <functional>
 #include <string>
 #include <vector>
 
@@ -35,6 +36,17 @@ std::vector<std::pair<std::string, std::vector<Object>>> calibration_scenes(cons
 // Times every scene at every budget in `budgets` `repeat` times per stage (after one untimed
 // frame) and fits the models.
 Calibration calibrate(Detector& detector, const std::string& meshes_dir, const std::vector<int>& budgets, int repeat);
+
+// One stage setting against another (the GL stage's coverage: raster or compute): the image
+// stage's part of the frame (as calibrate() times it) and its GPU pass time (Timings::gpu_raster
+// + gpu_compute, with pass timing on) on every calibration scene at `budget`, each of `variants`
+// settings applied by `use(k)`, in turns each frame after one untimed frame each; medians.
+struct VariantRow {
+  std::string scene;
+  std::vector<double> ms, gpu_ms;  // per variant
+};
+std::vector<VariantRow> time_variants(Detector& detector, const std::string& meshes_dir, int budget, int repeat,
+                                      int variants, const std::function<void(int)>& use);
 
 // Large meshes (two crossing rigid spheres, make_crossing_spheres(), at `stacks` bands): what the
 // routers predict against what the frame takes, through the frame API (Stage::automatic: the

@@ -19,6 +19,16 @@ enum class Peeler { multipass, abuffer };
 // the CPU (llvmpipe, softpipe: the buffers are host memory already), gpu elsewhere.
 enum class Resolve { automatic, gpu, host };
 
+// How conservative views find the texels each triangle touches; both store the same fragments,
+// bit for bit (the goldens check it). raster: the rasterizer, through a quad per triangle
+// (shaders/conservative.{vert,geom,frag}). compute: one compute invocation per triangle loops
+// over the texels of that quad (shaders/conservative_cover.comp), with the same arithmetic
+// (shaders/conservative.inc): for a device whose raster engine is the bottleneck
+// (docs/backends.md, "Raster or compute for coverage"). automatic: the one `peelcd calibrate
+// --write-costs` timed faster on this device and renderer when the stage routes by such a file
+// (CostModels::coverage), else raster. Point-sampled views always rasterize.
+enum class Coverage { automatic, raster, compute };
+
 inline const char* to_string(Peeler peeler) { return peeler == Peeler::abuffer ? "abuffer" : "multipass"; }
 
 inline std::optional<Peeler> parse_peeler(const std::string& text) {
@@ -35,6 +45,17 @@ inline std::optional<Resolve> parse_resolve(const std::string& text) {
   if (text == "auto") return Resolve::automatic;
   if (text == "gpu") return Resolve::gpu;
   if (text == "host") return Resolve::host;
+  return std::nullopt;
+}
+
+inline const char* to_string(Coverage coverage) {
+  return coverage == Coverage::compute ? "compute" : coverage == Coverage::raster ? "raster" : "auto";
+}
+
+inline std::optional<Coverage> parse_coverage(const std::string& text) {
+  if (text == "auto") return Coverage::automatic;
+  if (text == "raster") return Coverage::raster;
+  if (text == "compute") return Coverage::compute;
   return std::nullopt;
 }
 
@@ -67,6 +88,9 @@ struct GlOptions {
   // Dumps and goldens turn it off (their PCS are the image stage's). false: every overlapping
   // couple comes back (peelcd detect --no-gpu-filter).
   bool gpu_filter = true;
+  // Conservative views' coverage: the rasterizer or a compute pass (Coverage above); the same
+  // layers and PCS. `peelcd calibrate` times both on the device and records the faster.
+  Coverage coverage = Coverage::automatic;
 };
 
 // The GL stage's settings, one row each, as the frame's option table (peelcd/core/options.h)
@@ -124,6 +148,15 @@ inline const std::vector<GlOptionSpec>& gl_option_table() {
          if (v != "true" && v != "false") return false;
          o.gpu_filter = v == "true";
          return true;
+       }},
+      {"coverage", "--coverage",
+       "How conservative views find the texels a triangle touches: raster (the rasterizer), compute (a compute "
+       "pass, the same layers) or auto (the faster by the cost models of peelcd calibrate, else raster)",
+       "auto,raster,compute", [](const GlOptions& o) { return std::string(to_string(o.coverage)); },
+       [](GlOptions& o, const std::string& v) {
+         const auto c = parse_coverage(v);
+         if (c) o.coverage = *c;
+         return bool(c);
        }},
   };
   return table;

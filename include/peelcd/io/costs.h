@@ -7,7 +7,8 @@
 //
 //   {"format": "peelcd.costs/1", "backend": "egl-device", "renderer": "NVIDIA H200/PCIe/SSE2",
 //    "fitted": "2026-11-25", "image": {"view_ms": 0.16, "triangle_us": 0.72, "texel_ns": 0},
-//    "exact": {"view_ms": 0, "triangle_us": 0.32, "scan_us": 0.055}}
+//    "exact": {"view_ms": 0, "triangle_us": 0.32, "scan_us": 0.055}, "coverage": "raster"}
+// ("coverage": optional, the GL stage's conservative coverage calibrate timed faster there.)
 #include "peelcd/core/image/image_stage.h"
 
 #include <string>

@@ -144,6 +144,9 @@ struct CostModels {
   StageCost image, exact;
   std::string source;             // the file; empty: built in
   std::string backend, renderer;  // what the file's models were fitted on
+  // The GL stage's conservative coverage that calibrate timed faster on that device ("raster",
+  // "compute"; empty: not timed): GlOptions::coverage auto follows it.
+  std::string coverage;
 };
 
 // The exact CPU path's built-in cost model (view_ms + triangle_us per kept triangle, scan_us per
