@@ -377,10 +377,10 @@ void GlImageStage::Impl::cover_batch_pass(const BatchRun& run, bool count_only) 
   const std::size_t groups = (run.host_entries + run.invocations + 63) / 64;
   if (groups == 0) return;
   const std::size_t gx = std::min<std::size_t>(groups, 65535), gy = (groups + gx - 1) / gx;
-  gl.UseProgram(cover_batch.id);
+  const CoverProgram& program = cover_batch[count_only ? 1 : 0];
+  gl.UseProgram(program.id);
   gl.BindBufferBase(GL_SHADER_STORAGE_BUFFER, 10, batch.command);
-  gl.Uniform1ui(cover_batch.row, GLuint(gx * 64));
-  gl.Uniform1i(cover_batch.count_only, count_only ? 1 : 0);
+  gl.Uniform1ui(program.row, GLuint(gx * 64));
   dispatch(GLuint(gx), GLuint(gy), 1);
 }
 
@@ -445,6 +445,11 @@ void GlImageStage::Impl::fill_batch(const BatchRun& run) {
   gl.BindVertexArray(vao);
   gl.BindFramebuffer(GL_FRAMEBUFFER, 0);
   barrier(GL_BUFFER_UPDATE_BARRIER_BIT | GL_TEXTURE_FETCH_BARRIER_BIT);
+  // The compute coverage's k-buffer read by the GPU resolve (through buffer textures): its
+  // commands submitted first. zink over lavapipe (Mesa 22.3) left the resolve's texel fetches
+  // unordered with the fill dispatch's storage writes under any memory barrier (a draw's are
+  // ordered by its render pass); a flush orders them, and costs a submission, no wait.
+  if (!run.point && compute_coverage() && !host_resolve()) gl.Flush();
   check("the batched draws");
 }
 

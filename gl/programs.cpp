@@ -84,9 +84,16 @@ void GlImageStage::Impl::build_programs() {
   // The compute path's coverage (GlOptions::coverage compute), one-view and batched.
   cover.id = link({stage(GL_COMPUTE_SHADER, shaders::conservative_cover_comp, "conservative_cover.comp")},
                   "conservative coverage by compute");
-  cover_batch.id = link({stage(GL_COMPUTE_SHADER, shaders::conservative_cover_comp,
-                               "conservative_cover.comp (PEELCD_BATCH)", batch_define)},
-                        "batched conservative coverage by compute");
+  // Batched: a program for the count pass and one for the fill pass (a uniform switch between
+  // two dispatches of one program was not picked up by zink over lavapipe, Mesa 22.3).
+  for (int count = 0; count < 2; ++count) {
+    const std::string defines = std::string(batch_define) + "#define PEELCD_COUNT_ONLY " + (count ? "true" : "false") + "\n";
+    cover_batch[count].id = link({stage(GL_COMPUTE_SHADER, shaders::conservative_cover_comp,
+                                        count ? "conservative_cover.comp (PEELCD_BATCH, count pass)"
+                                              : "conservative_cover.comp (PEELCD_BATCH, fill pass)",
+                                        defines.c_str())},
+                                 "batched conservative coverage by compute");
+  }
   point_batch.id = link({stage(GL_VERTEX_SHADER, shaders::peel_vert, "peel.vert (PEELCD_BATCH)", batch_define),
                               stage(GL_FRAGMENT_SHADER, shaders::abuffer_frag, "abuffer.frag (PEELCD_BATCH)", batch_define)},
                              "point-sampled batch");
@@ -144,19 +151,7 @@ void GlImageStage::Impl::locate_uniforms() {
   cons_resolve.emit = gl.GetUniformLocation(cons_resolve.id, "emit_layer");
   cons_batch.count_only = gl.GetUniformLocation(cons_batch.id, "count_only");
   cons_batch.viewport = gl.GetUniformLocation(cons_batch.id, "viewport");
-  for (CoverProgram* c : {&cover, &cover_batch}) {
-    c->clip = gl.GetUniformLocation(c->id, "clip_from_local");
-    c->model = gl.GetUniformLocation(c->id, "roi_from_object");
-    c->res = gl.GetUniformLocation(c->id, "resolution");
-    c->slots = gl.GetUniformLocation(c->id, "slots");
-    c->object = gl.GetUniformLocation(c->id, "object_bit");
-    c->grow_texels = gl.GetUniformLocation(c->id, "grow_texels");
-    c->grow_depth = gl.GetUniformLocation(c->id, "grow_depth");
-    c->triangles = gl.GetUniformLocation(c->id, "triangles");
-    c->indexed = gl.GetUniformLocation(c->id, "indexed");
-    c->row = gl.GetUniformLocation(c->id, "row");
-    c->count_only = gl.GetUniformLocation(c->id, "count_only");
-  }
+  for (CoverProgram* c : {&cover_batch[0], &cover_batch[1]}) c->row = gl.GetUniformLocation(c->id, "row");
   point_batch.viewport = gl.GetUniformLocation(point_batch.id, "viewport");
   point_batch.count_only = gl.GetUniformLocation(point_batch.id, "count_only");
   point_batch_resolve.texels = gl.GetUniformLocation(point_batch_resolve.id, "texels");
@@ -205,6 +200,8 @@ void GlImageStage::Impl::create_objects() {
   gl.CreateBuffers(1, &batch.staged);
   gl.CreateBuffers(1, &batch.regions);
   gl.CreateBuffers(1, &batch.grid);
+  gl.CreateBuffers(1, &cover_params);
+  gl.NamedBufferData(cover_params, 512, nullptr, GL_DYNAMIC_DRAW);
   gl.NamedBufferData(batch.scan_total, 4, nullptr, GL_DYNAMIC_READ);
   gl.CreateQueries(GL_ANY_SAMPLES_PASSED, 1, &query);
   gl.CreateBuffers(1, &pcs_buffer);
@@ -228,7 +225,8 @@ GlImageStage::Impl::~Impl() {
   gl.DeleteProgram(cons_resolve.id);
   gl.DeleteProgram(cons_batch.id);
   gl.DeleteProgram(cover.id);
-  gl.DeleteProgram(cover_batch.id);
+  gl.DeleteProgram(cover_batch[0].id);
+  gl.DeleteProgram(cover_batch[1].id);
   for (int filter = 0; filter < 2; ++filter) {
     gl.DeleteProgram(cons_batch_resolve[filter].id);
     gl.DeleteProgram(cons_deep[filter].id);
@@ -253,6 +251,7 @@ GlImageStage::Impl::~Impl() {
   gl.DeleteBuffers(1, &batch.staged);
   gl.DeleteBuffers(1, &batch.regions);
   gl.DeleteBuffers(1, &batch.grid);
+  gl.DeleteBuffers(1, &cover_params);
   gl.DeleteBuffers(1, &count_buffer);
   gl.DeleteBuffers(1, &fragment_buffer);
   gl.DeleteTextures(1, &count_tex);

@@ -3,6 +3,9 @@
 // GPU (shaders/abuffer_resolve.comp) or on the host (core/image/kbuffer.cpp) where GL runs on the CPU.
 #include "stage_impl.h"
 #include "peelcd/core/image/conservative.h"
+#include "peelcd/core/image/texel.h"
+
+#include <cstring>
 
 #include <algorithm>
 
@@ -225,19 +228,22 @@ bool GlImageStage::Impl::peel_conservative(const PeelJob& job, PeelResult& out, 
   const auto t_gpu = Clock::now();
   start_kbuffer(n, view_slots);
 
-  const bool compute = compute_coverage();
-  gl.UseProgram(compute ? cover.id : cons.id);
   const std::array<float, 16> m = view.clip_from_local();
-  gl.UniformMatrix4fv(compute ? cover.clip : cons.clip, 1, GL_FALSE, m.data());
-  gl.Uniform1i(compute ? cover.res : cons.res, n);
-  gl.Uniform1ui(compute ? cover.slots : cons.slots, view_slots);
   float grow_x = 0.0f, grow_z = 0.0f;
   conservative::grow_of(job.grow, view.texel(), 2.0 * view.half_depth, grow_x, grow_z);
-  gl.Uniform1f(compute ? cover.grow_texels : cons.grow_texels, grow_x);
-  gl.Uniform1f(compute ? cover.grow_depth : cons.grow_depth, grow_z);
-  if (compute) {
-    for (int slot = 0; slot < 2; ++slot) cover_one_view(slot);
+  if (compute_coverage()) {
+    gl.UseProgram(cover.id);
+    for (int slot = 0; slot < 2; ++slot) cover_one_view(slot, m, n, view_slots, grow_x, grow_z);
+    // The GPU resolve reads the k-buffer through buffer textures: the dispatches submitted first
+    // (fill_batch() says why).
+    if (!host_resolve()) gl.Flush();
   } else {
+    gl.UseProgram(cons.id);
+    gl.UniformMatrix4fv(cons.clip, 1, GL_FALSE, m.data());
+    gl.Uniform1i(cons.res, n);
+    gl.Uniform1ui(cons.slots, view_slots);
+    gl.Uniform1f(cons.grow_texels, grow_x);
+    gl.Uniform1f(cons.grow_depth, grow_z);
     gl.BindFramebuffer(GL_FRAMEBUFFER, bare_fbo);
     gl.Viewport(0, 0, n, n);
     gl.Disable(GL_DEPTH_TEST);
@@ -266,23 +272,33 @@ bool GlImageStage::Impl::peel_conservative(const PeelJob& job, PeelResult& out, 
 }
 
 // The compute path's coverage of one object of a one-view conservative draw (the cover program
-// in use, the view's uniforms set): one invocation per triangle the draw would have, its corners
-// read from the buffer the draw would have fetched (a rigid shape's through its indices).
-void GlImageStage::Impl::cover_one_view(int slot) {
+// in use): one invocation per triangle the draw would have, its corners read from the buffer the
+// draw would have fetched (a rigid shape's through its indices); the view's matrix, resolution,
+// slots and growth and the object's pose go in the parameters buffer (not uniforms: zink over
+// lavapipe, Mesa 22.3, kept a compute program's earlier uniform values).
+void GlImageStage::Impl::cover_one_view(int slot, const std::array<float, 16>& clip, int n, std::uint32_t view_slots,
+                                        float grow_x, float grow_z) {
   static const float identity[16] = {1, 0, 0, 0, 0, 1, 0, 0, 0, 0, 1, 0, 0, 0, 0, 1};
   const bool indexed = slot_shape[slot] != nullptr;
   const std::size_t triangles = (indexed ? indices[slot].size() : staging[slot].size()) / 3;
   if (triangles == 0) return;
+  const std::size_t groups = (triangles + 63) / 64;
+  const std::size_t gx = std::min<std::size_t>(groups, 65535), gy = (groups + gx - 1) / gx;
+  std::uint32_t params[40];
+  std::memcpy(params, indexed ? slot_model[slot].data() : identity, 64);
+  std::memcpy(params + 16, clip.data(), 64);
+  const std::uint32_t words[8] = {std::uint32_t(n), view_slots, std::uint32_t(slot), std::uint32_t(triangles),
+                                  indexed ? 1u : 0u, std::uint32_t(gx * 64), texel::bits_of(grow_x),
+                                  texel::bits_of(grow_z)};
+  std::memcpy(params + 32, words, sizeof words);
+  // Each object its own 256 bytes (an offset every implementation aligns storage buffers to):
+  // the second upload does not overwrite what the first dispatch reads.
+  const GLintptr at = GLintptr(slot) * 256;
+  upload_buffer(cover_params, at, sizeof params, params);
   const GLuint corners = indexed ? slot_shape[slot]->vbo : vbo[slot];
   gl.BindBufferBase(GL_SHADER_STORAGE_BUFFER, 18, corners);
   gl.BindBufferBase(GL_SHADER_STORAGE_BUFFER, 19, indexed ? ibo[slot] : corners);
-  gl.UniformMatrix4fv(cover.model, 1, GL_FALSE, indexed ? slot_model[slot].data() : identity);
-  gl.Uniform1ui(cover.object, GLuint(slot));
-  gl.Uniform1ui(cover.triangles, GLuint(triangles));
-  gl.Uniform1i(cover.indexed, indexed ? 1 : 0);
-  const std::size_t groups = (triangles + 63) / 64;
-  const std::size_t gx = std::min<std::size_t>(groups, 65535), gy = (groups + gx - 1) / gx;
-  gl.Uniform1ui(cover.row, GLuint(gx * 64));
+  gl.BindBufferRange(GL_SHADER_STORAGE_BUFFER, 20, cover_params, at, sizeof params);
   dispatch(GLuint(gx), GLuint(gy), 1);
 }
 

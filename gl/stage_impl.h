@@ -150,11 +150,10 @@ struct ConservativeResolveProgram {
   GLint res = -1, slots = -1, append = -1, emit = -1;
 };
 // shaders/conservative_cover.comp: the compute path's coverage (GlOptions::coverage compute),
-// one-view (one object a dispatch) and batched (PEELCD_BATCH: count_only, row only).
+// one-view (one object a dispatch) and batched (PEELCD_BATCH: a program per pass).
 struct CoverProgram {
   GLuint id = 0;
-  GLint clip = -1, model = -1, res = -1, slots = -1, object = -1, grow_texels = -1, grow_depth = -1, triangles = -1,
-        indexed = -1, row = -1, count_only = -1;
+  GLint row = -1;  // batched only (the one-view program reads its parameters from a buffer)
 };
 // A batched draw (the conservative or point-sampled sources with PEELCD_BATCH): a count pass
 // and a fill pass over every view of a frame.
@@ -326,7 +325,7 @@ struct GlImageStage::Impl {
   ConservativeProgram cons;
   ConservativeResolveProgram cons_resolve;
   BatchDrawProgram cons_batch, point_batch;
-  CoverProgram cover, cover_batch;
+  CoverProgram cover, cover_batch[2];  // [1]: the batch's count pass, [0]: its fill pass
   // [1]: with the certified filter (PEELCD_FILTER_APART; GlOptions::gpu_filter), [0] without.
   BatchResolveProgram cons_batch_resolve[2], point_batch_resolve;
   DeepProgram cons_deep[2];
@@ -449,7 +448,9 @@ struct GlImageStage::Impl {
   // Conservative mode (shaders/conservative.*): false as peel_single_pass(); a view deeper than
   // any k-buffer that fits is marked PeelResult::exhaustive.
   bool peel_conservative(const PeelJob& job, PeelResult& out, Timings& t);
-  void cover_one_view(int slot);
+  void cover_one_view(int slot, const std::array<float, 16>& clip, int n, std::uint32_t view_slots, float grow_x,
+                      float grow_z);
+  GLuint cover_params = 0;  // cover_one_view()'s parameters (256 bytes per object)
   bool resolve_on_host(const PeelJob& job, std::size_t fitting, std::uint32_t view_slots, Clock::time_point t_gpu,
                        PeelResult& out, Timings& t);
 

@@ -21,21 +21,32 @@ layout(std430, binding = 10) readonly buffer Command { uint command[4]; };
 #else
 layout(std430, binding = 18) readonly buffer Corners { uvec4 corners[]; };
 layout(std430, binding = 19) readonly buffer Indices { uint indices[]; };
-uniform mat4 roi_from_object;
-uniform mat4 clip_from_local;
-uniform int resolution;
-uniform float grow_texels;
-uniform float grow_depth;
-uniform uint object_bit;
-uniform uint triangles;  // of the draw
-uniform bool indexed;    // a rigid shape's corners, through its selected triangles' indices
+// The dispatch's parameters, in a buffer rather than uniforms (zink over lavapipe, Mesa 22.3,
+// kept a compute program's earlier uniform values after they changed between dispatches).
+layout(std430, binding = 20) readonly buffer Params {
+  mat4 roi_from_object;
+  mat4 clip_from_local;
+  uvec4 sizes;  // resolution, slots, object (0: A, 1: B), triangles of the draw
+  uvec4 flags;  // indexed (a rigid shape's corners through its selected triangles' indices),
+                // invocations a row, the growth in texels and in window depth (float bits)
+};
+#define PEELCD_COVER_SLOTS sizes.y
 #endif
+#ifdef PEELCD_BATCH
 uniform uint row;  // invocations a row of the dispatch (the x groups times 64)
+#endif
 
 #define PEELCD_COVER_STORE
 #include "conservative.inc"
 
 void main() {
+#ifndef PEELCD_BATCH
+  uint row = flags.y;
+  int resolution = int(sizes.x);
+  uint object_bit = sizes.z, triangles = sizes.w;
+  bool indexed = flags.x != 0u;
+  float grow_texels = uintBitsToFloat(flags.z), grow_depth = uintBitsToFloat(flags.w);
+#endif
   uint k = gl_GlobalInvocationID.y * row + gl_GlobalInvocationID.x;
   vec3 local[3], mag[3];
 #ifdef PEELCD_BATCH

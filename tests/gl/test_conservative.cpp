@@ -760,8 +760,9 @@ TEST_CASE("coverage by compute: the rasterizer's layers and PCS bit for bit, one
   // PCS and contacts, on a crowd of rigid balls (poses in the views buffer; the GPU selection
   // appends to the entries the compute pass reads), the geometry classes posed, and proximity
   // (triangles grown by the margin); the one-view path (its deforming objects' corners and its
-  // rigid shapes' indices), the batch with the host's selection and resolve, and the batch with
-  // the GPU's selection and resolve (the certified filter off: every overlapping couple).
+  // rigid shapes' indices) with both resolves, the batch with the host's selection and resolve,
+  // and the batch with the GPU's selection and resolve (the certified filter off: every
+  // overlapping couple).
   struct Case {
     std::string name;
     std::vector<Object> objects;
@@ -791,22 +792,22 @@ TEST_CASE("coverage by compute: the rasterizer's layers and PCS bit for bit, one
     cases.push_back(c);
   }
   std::size_t views = 0, contacts = 0;
-  for (int path = 0; path < 3; ++path)
+  for (int path = 0; path < 4; ++path)
     for (const Case& c : cases) {
       std::vector<CapturedView> captured[2];
       FrameResult frames[2];
       for (const Coverage coverage : {Coverage::raster, Coverage::compute}) {
         gl::GlOptions o;
         o.coverage = coverage;
-        o.batch = path != 0;
-        o.resolve = path == 2 ? Resolve::gpu : Resolve::host;
-        o.gpu_select = path == 2;
+        o.batch = path >= 2;
+        o.resolve = path == 1 || path == 3 ? Resolve::gpu : Resolve::host;
+        o.gpu_select = path == 3;
         o.gpu_filter = false;
         test_pipeline().set_gl_options(o);
         DetectOptions opt = c.opt;
         opt.stage = Stage::image;
         const int k = coverage == Coverage::compute;
-        if (path != 2) test_pipeline().capture_layers(&captured[k]);
+        if (path != 3) test_pipeline().capture_layers(&captured[k]);
         frames[k] = test_pipeline().detect(c.objects, opt);
         test_pipeline().capture_layers(nullptr);
         if (coverage == Coverage::compute && frames[k].rois_peeled > 0) {
@@ -815,7 +816,8 @@ TEST_CASE("coverage by compute: the rasterizer's layers and PCS bit for bit, one
         }
       }
       test_pipeline().set_gl_options(gl::GlOptions{});
-      INFO(c.name << ", path " << (path == 0 ? "one view" : path == 1 ? "batched, host" : "batched, GPU"));
+      const char* paths[] = {"one view, host", "one view, GPU", "batched, host", "batched, GPU"};
+      INFO(c.name << ", path " << paths[path]);
       REQUIRE(captured[0].size() == captured[1].size());
       for (std::size_t v = 0; v < captured[0].size(); ++v) {
         INFO("view " << v << " of pair " << captured[0][v].pair);
