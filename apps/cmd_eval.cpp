@@ -5,6 +5,7 @@
 #include "peelcd/eval/classes.h"
 
 #include <algorithm>
+#include <cmath>
 #include <ctime>
 
 namespace peelcd::cli {
@@ -151,15 +152,21 @@ int run_calibrate(const CalibrateArgs& a) {
     std::printf("\nconservative coverage at budget %d (image stage ms, and its GPU passes' ms by timer queries; "
                 "medians, in turns):\n", budget);
     std::printf("%-28s %10s %10s %10s %10s\n", "scene", "raster", "compute", "raster GPU", "compute GPU");
-    double sum[2] = {0.0, 0.0};
+    // The choice by the geometric mean of compute / raster over the scenes: every scene weighs
+    // the same, whatever its size (a sum would be the largest scene's choice).
+    double log_ratio = 0.0;
+    std::size_t timed = 0;
     for (const VariantRow& r : rows) {
       std::printf("%-28s %10.3f %10.3f %10.3f %10.3f\n", r.scene.c_str(), r.ms[0], r.ms[1], r.gpu_ms[0], r.gpu_ms[1]);
-      sum[0] += r.ms[0];
-      sum[1] += r.ms[1];
+      if (r.ms[0] > 0.0 && r.ms[1] > 0.0) {
+        log_ratio += std::log(r.ms[1] / r.ms[0]);
+        ++timed;
+      }
     }
-    fitted.coverage = sum[1] < sum[0] ? "compute" : "raster";
-    std::printf("coverage: raster %.3f ms, compute %.3f ms over the scenes: %s (--coverage auto follows the file)\n",
-                sum[0], sum[1], fitted.coverage.c_str());
+    const double ratio = timed ? std::exp(log_ratio / double(timed)) : 1.0;
+    fitted.coverage = ratio < 1.0 ? "compute" : "raster";
+    std::printf("coverage: compute / raster %.3f (geometric mean over %zu scenes): %s (--coverage auto follows the "
+                "file)\n", ratio, timed, fitted.coverage.c_str());
   }
   std::vector<int> large_stacks;
   for (const int n : a.large)

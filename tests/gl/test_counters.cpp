@@ -113,6 +113,43 @@ TEST_CASE("GL counters: the batched conservative frame is a count pass and a fil
   }
 }
 
+TEST_CASE("GL counters: coverage auto rasterizes unless the cost models say compute", "[gl][counters][coverage]") {
+  // GlOptions::coverage auto (the default) follows CostModels::coverage (a calibration file's
+  // choice): a conservative frame of draws, or of dispatches alone, with the same PCS.
+  DetectOptions opt;
+  opt.stage = Stage::image;
+  opt.views = 3;
+  auto ball = std::make_shared<const Mesh>(make_uv_sphere(Vec3::Zero(), 1.0, 10, 14));
+  for (const Resolve resolve : {Resolve::host, Resolve::gpu}) {
+    gl::GlOptions o;
+    o.resolve = resolve;
+    REQUIRE(o.coverage == Coverage::automatic);
+    test_pipeline().set_gl_options(o);
+    const FrameResult raster = test_pipeline().detect(two_rigid_balls(ball, 1.5), opt);
+    CostModels models;
+    models.source = "test";
+    models.image = test_pipeline().stage().cost();
+    models.exact = exact_path_cost();
+    models.coverage = "compute";
+    test_pipeline().stage().set_cost_models(models);
+    const FrameResult compute = test_pipeline().detect(two_rigid_balls(ball, 1.5), opt);
+    test_pipeline().stage().clear_cost_models();
+    const FrameResult again = test_pipeline().detect(two_rigid_balls(ball, 1.5), opt);
+    test_pipeline().set_gl_options(gl::GlOptions{});
+    INFO("resolve " << to_string(resolve));
+    REQUIRE(raster.rois_peeled == 3);
+    CHECK(raster.gl_draws == 2);   // the count and fill draws
+    CHECK(compute.gl_draws == 0);  // the count and fill dispatches instead
+    CHECK(compute.gl_dispatches == raster.gl_dispatches + 2);
+    CHECK(again.gl_draws == 2);
+    REQUIRE(compute.pairs.size() == raster.pairs.size());
+    for (std::size_t i = 0; i < raster.pairs.size(); ++i) {
+      CHECK(compute.pairs[i].pcs == raster.pairs[i].pcs);
+      CHECK(compute.pairs[i].colliding.size() == raster.pairs[i].colliding.size());
+    }
+  }
+}
+
 TEST_CASE("GL counters: draws, dispatches and readbacks per frame do not depend on the number of ROIs", "[gl][counters]") {
   // A pile of 4 balls (a few ROIs) and of 400 (about 1,800), the image stage forced, both image
   // modes (conservative, point sampling with the default single-pass peeler), both resolves:
