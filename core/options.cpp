@@ -191,11 +191,16 @@ std::string check_option(const OptionSpec& spec, const OptionValue& value) {
     case K::number: {
       if (!std::holds_alternative<double>(value)) return "must be a number";
       const double x = num(value);
-      char got[48];
-      std::snprintf(got, sizeof got, ", got %.17g", x);
-      if (!std::isfinite(x)) return std::string("must be finite") + got;
-      if (spec.kind == K::integer && x != std::floor(x)) return std::string("must be a whole number") + got;
-      if (x < spec.min || x > spec.max) return spec.range + std::string(got);
+      // The value is printed only into a problem (every frame validates its options: a valid
+      // one costs comparisons alone).
+      const auto got = [x] {
+        char text[48];
+        std::snprintf(text, sizeof text, ", got %.17g", x);
+        return std::string(text);
+      };
+      if (!std::isfinite(x)) return "must be finite" + got();
+      if (spec.kind == K::integer && x != std::floor(x)) return "must be a whole number" + got();
+      if (x < spec.min || x > spec.max) return spec.range + got();
       return {};
     }
   }

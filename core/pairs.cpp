@@ -40,25 +40,33 @@ void sort_unique_pairs(std::vector<std::uint64_t>& keys, std::vector<std::uint64
 
 void sort_contacts(std::vector<Contact>& contacts, ContactSortScratch& scratch) {
   const std::size_t n = contacts.size();
+  const auto before = [](const Contact& x, const Contact& y) {
+    return x.tri_a < y.tri_a || (x.tri_a == y.tri_a && x.tri_b < y.tri_b);
+  };
+  // In order already (one pass; a path that found them in order pays nothing more).
+  if (std::is_sorted(contacts.begin(), contacts.end(), before)) return;
   std::uint32_t max_a = 0, max_b = 0;
-  if (n >= kRadixContacts)
-    for (const Contact& c : contacts) max_a = std::max(max_a, c.tri_a), max_b = std::max(max_b, c.tri_b);
+  for (const Contact& c : contacts) max_a = std::max(max_a, c.tri_a), max_b = std::max(max_b, c.tri_b);
   // A key per contact: (tri_a, tri_b, its place) in one 64-bit word, when they fit.
   const int place_bits = detail::bit_width(n - 1), b_bits = detail::bit_width(max_b),
             key_bits = detail::bit_width(max_a) + b_bits;
-  if (n < kRadixContacts || place_bits + key_bits > 64) {
-    std::sort(contacts.begin(), contacts.end(), [](const Contact& x, const Contact& y) {
-      return x.tri_a < y.tri_a || (x.tri_a == y.tri_a && x.tri_b < y.tri_b);
-    });
+  if (place_bits + key_bits > 64) {
+    std::sort(contacts.begin(), contacts.end(), before);
     return;
   }
   std::vector<std::uint64_t>& keys = scratch.keys;
   std::vector<std::uint64_t>& spare = scratch.spare;
   keys.resize(n);
-  spare.resize(n);
   for (std::size_t i = 0; i < n; ++i)
     keys[i] = (((std::uint64_t(contacts[i].tri_a) << b_bits) | contacts[i].tri_b) << place_bits) | i;
-  detail::radix_sort_bits(keys, spare, place_bits, place_bits + key_bits);  // by the index bits: keys in order
+  // The keys sorted (by comparison when few, else by their index bits), then each contact
+  // moved once: a contact is 64 bytes, a key 8.
+  if (n < kRadixContacts) {
+    std::sort(keys.begin(), keys.end());
+  } else {
+    spare.resize(n);
+    detail::radix_sort_bits(keys, spare, place_bits, place_bits + key_bits);
+  }
   std::vector<Contact>& sorted = scratch.sorted;
   sorted.resize(n);
   const std::uint64_t place = (std::uint64_t(1) << place_bits) - 1;

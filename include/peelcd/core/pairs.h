@@ -55,9 +55,10 @@ inline std::uint32_t pair_b(std::uint64_t p) { return std::uint32_t(p & 0xffffff
 // four below 2^22), std::sort for short lists. `scratch` is reused storage.
 void sort_unique_pairs(std::vector<std::uint64_t>& keys, std::vector<std::uint64_t>& scratch);
 
-// Contacts by (tri_a, tri_b): a pair's contacts in the order every path gives them. Large sets
-// (kRadixContacts or more) are sorted by their indices' bits, radix 2^11, a contact moved once
-// (about 4x faster than a comparison sort of the contacts at thousands of contacts).
+// Contacts by (tri_a, tri_b): a pair's contacts in the order every path gives them. A 64-bit key
+// per contact is sorted (by comparison below kRadixContacts, else by its indices' bits, radix
+// 2^11) and each contact moved once (about 4x faster than a comparison sort of the contacts at
+// thousands of contacts).
 constexpr std::size_t kRadixContacts = 1024;
 struct ContactSortScratch {  // kept by a caller that sorts every frame (no allocation once grown)
   std::vector<std::uint64_t> keys, spare;
