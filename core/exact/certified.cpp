@@ -6,9 +6,7 @@
 namespace peelcd {
 namespace exact_detail {
 
-int orientation_sign(const Vec3& p, const Vec3& q, const Vec3& r, const Vec3& s) {
-  const int certain = certain_orientation(p, q, r, s);
-  if (certain != 0) return -certain;
+int exact_orientation_sign(const Vec3& p, const Vec3& q, const Vec3& r, const Vec3& s) {
   return int(CGAL::orientation(to_cgal(p), to_cgal(q), to_cgal(r), to_cgal(s)));
 }
 

@@ -106,10 +106,16 @@ PEELCD_ALWAYS_INLINE bool certain_plane_sides(const TriangleCorners& plane, cons
 inline bool all_zero(const int s[3]) { return s[0] == 0 && s[1] == 0 && s[2] == 0; }
 inline bool one_open_side(const int s[3]) { return s[0] != 0 && s[0] == s[1] && s[1] == s[2]; }
 
+// CGAL's orientation(p, q, r, s) as -1, 0, +1, exactly (slow; orientation_sign() first).
+int exact_orientation_sign(const Vec3& p, const Vec3& q, const Vec3& r, const Vec3& s);
 // CGAL's orientation(p, q, r, s) as -1, 0, +1 (positive: s on the positive side of the oriented
 // plane pqr): certified in double where the bound allows (Shewchuk's det has the opposite sign),
-// CGAL's exact predicate otherwise.
-int orientation_sign(const Vec3& p, const Vec3& q, const Vec3& r, const Vec3& s);
+// CGAL's exact predicate otherwise. Inline: every couple that crosses both planes runs it twice.
+inline int orientation_sign(const Vec3& p, const Vec3& q, const Vec3& r, const Vec3& s) {
+  const int certain = certain_orientation(p, q, r, s);
+  if (__builtin_expect(certain != 0, 1)) return -certain;
+  return exact_orientation_sign(p, q, r, s);
+}
 // The sides certain_plane_sides() left at 0, decided by CGAL (exact; rare, and slow).
 void exact_plane_sides(const TriangleCorners& plane, const TriangleCorners& t, int side[3]);
 // Every side of `t`'s corners against `plane`'s plane: certified, else exact.
