@@ -68,7 +68,8 @@ void World::set_pose(BodyId id, const Eigen::Affine3d& pose) {
   const ExclusiveUse exclusive(impl_->owner, "peelcd::World");
   Body& b = impl_->body(id, "set_pose");
   if (!b.is_rigid) throw std::invalid_argument("peelcd::World::set_pose(): " + label_of(b.name, id) + " is deforming");
-  check_pose(pose, label_of(b.name, id));
+  if (const std::string problem = pose_problem(pose); !problem.empty())  // the label only then
+    throw std::invalid_argument("peelcd::World: " + label_of(b.name, id) + ": its pose " + problem);
   b.set_pose(pose);
 }
 
@@ -77,24 +78,29 @@ namespace {
 // frame's lanes (the waving 1.3M-triangle spheres' 650k vertices a body).
 constexpr std::size_t kSplitVertices = 65536;
 
-// Throws unless `vertices` fit deforming body `b` (the same count).
-void check_count(const Body& b, const std::string& label, const std::vector<Vec3>& vertices) {
-  if (b.is_rigid) throw std::invalid_argument("peelcd::World::set_vertices(): " + label + " is rigid (use set_pose)");
+// Throws unless `vertices` fit deforming body `b` (the same count). Its label is built only
+// into an error (a steady frame allocates nothing).
+void check_count(const Body& b, BodyId id, const std::vector<Vec3>& vertices) {
+  if (b.is_rigid)
+    throw std::invalid_argument("peelcd::World::set_vertices(): " + label_of(b.name, id) + " is rigid (use set_pose)");
   if (vertices.size() != b.mesh.vertices.size())
-    throw std::invalid_argument("peelcd::World::set_vertices(): " + label + " has " + std::to_string(b.mesh.vertices.size()) +
-                                " vertices, given " + std::to_string(vertices.size()) + " (a new topology: set_mesh)");
+    throw std::invalid_argument("peelcd::World::set_vertices(): " + label_of(b.name, id) + " has " +
+                                std::to_string(b.mesh.vertices.size()) + " vertices, given " +
+                                std::to_string(vertices.size()) + " (a new topology: set_mesh)");
 }
 
 // Checks `vertices` finite and rounds them into b's tree in one pass (Bvh::load_vertices), in
-// `parts` parts over the World's lanes (w: World::Impl, in_parts()), copying them to `copy`
-// (when not null); throws at the first vertex that is not finite, the body's vertices and tree
-// as they were (its floats to be rounded again by the refit).
+// `parts` parts over the World's lanes (w: World::Impl, in_parts(); its part_bad and part_boxes
+// hold each part's first bad vertex and box), copying them to `copy` (when not null); throws at
+// the first vertex that is not finite, the body's vertices and tree as they were (its floats to
+// be rounded again by the refit).
 template <class Lanes>
-void load_vertices(Lanes& w, Body& b, const std::string& label, const std::vector<Vec3>& vertices, Vec3* copy,
-                   std::size_t parts) {
+void load_vertices(Lanes& w, Body& b, BodyId id, const std::vector<Vec3>& vertices, Vec3* copy, std::size_t parts) {
   const std::size_t n = vertices.size();
-  std::vector<std::size_t> first_bad(parts, n);
-  std::vector<Aabb> boxes(parts);
+  std::vector<std::size_t>& first_bad = w.part_bad;
+  std::vector<Aabb>& boxes = w.part_boxes;
+  first_bad.assign(parts, n);
+  boxes.assign(parts, Aabb{});
   w.in_parts(parts, [&](std::size_t k) {
     boxes[k] = b.tree.load_vertices(vertices, copy, n * k / parts, n * (k + 1) / parts, first_bad[k]);
   });
@@ -103,10 +109,10 @@ void load_vertices(Lanes& w, Body& b, const std::string& label, const std::vecto
   for (std::size_t k = parts; k-- > 0;)
     if (first_bad[k] < n * (k + 1) / parts) v = first_bad[k];
   if (v < n)
-    throw std::invalid_argument("peelcd::World::set_vertices(): " + label + ": vertex " + std::to_string(v) + " " +
-                                coordinate_problem(vertices[v], false));
+    throw std::invalid_argument("peelcd::World::set_vertices(): " + label_of(b.name, id) + ": vertex " +
+                                std::to_string(v) + " " + coordinate_problem(vertices[v], false));
   Aabb box;
-  for (const Aabb& p : boxes) box.lo = box.lo.cwiseMin(p.lo), box.hi = box.hi.cwiseMax(p.hi);
+  for (std::size_t k = 0; k < parts; ++k) box.lo = box.lo.cwiseMin(boxes[k].lo), box.hi = box.hi.cwiseMax(boxes[k].hi);
   b.loaded_box = box;
   b.points_loaded = true;
 }
@@ -119,10 +125,9 @@ std::size_t World::Impl::vertex_parts(std::size_t n) const {
 void World::set_vertices(BodyId id, const std::vector<Vec3>& vertices) {
   const ExclusiveUse exclusive(impl_->owner, "peelcd::World");
   Body& b = impl_->body(id, "set_vertices");
-  const std::string label = label_of(b.name, id);
-  check_count(b, label, vertices);
+  check_count(b, id, vertices);
   b.spare_vertices.resize(vertices.size());
-  load_vertices(*impl_, b, label, vertices, b.spare_vertices.data(), impl_->vertex_parts(vertices.size()));
+  load_vertices(*impl_, b, id, vertices, b.spare_vertices.data(), impl_->vertex_parts(vertices.size()));
   b.mesh.vertices.swap(b.spare_vertices);
   b.refit_pending = true;
 }
@@ -130,9 +135,8 @@ void World::set_vertices(BodyId id, const std::vector<Vec3>& vertices) {
 void World::set_vertices(BodyId id, std::vector<Vec3>&& vertices) {
   const ExclusiveUse exclusive(impl_->owner, "peelcd::World");
   Body& b = impl_->body(id, "set_vertices");
-  const std::string label = label_of(b.name, id);
-  check_count(b, label, vertices);
-  load_vertices(*impl_, b, label, vertices, nullptr, impl_->vertex_parts(vertices.size()));
+  check_count(b, id, vertices);
+  load_vertices(*impl_, b, id, vertices, nullptr, impl_->vertex_parts(vertices.size()));
   b.mesh.vertices = std::move(vertices);
   b.refit_pending = true;
 }

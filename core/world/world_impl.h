@@ -320,6 +320,8 @@ struct World::Impl {
   unsigned frame_lanes = 1;
   ContactDetail detail = ContactDetail::segments;  // this frame's DetectOptions::contacts
   std::size_t vertex_parts(std::size_t n) const;  // the parts set_vertices() splits n vertices in
+  std::vector<std::size_t> part_bad;  // set_vertices(): each part's first bad vertex and box
+  std::vector<Aabb> part_boxes;
   // fn(k) for k in [0, parts), one part a lane (parts <= the pool's lanes).
   template <class Fn>
   void in_parts(std::size_t parts, Fn&& fn) {

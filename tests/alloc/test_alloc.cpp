@@ -5,6 +5,7 @@
 // Counted: every operator new in this process (replaced below). Not counted: the GL driver's
 // own malloc calls inside GL functions, which peelcd does not control.
 #include "peelcd/core/primitives.h"
+#include "peelcd/core/world/world.h"
 #include "peelcd/gl/pipeline.h"
 #include "peelcd/gl_osmesa/osmesa_context.h"
 
@@ -78,6 +79,46 @@ TEST_CASE("a steady stream of frames allocates nothing", "[alloc]") {
       CHECK(after - before == 0);
       REQUIRE(result.pairs.size() == 2);
       contacts += result.pairs[0].colliding.size() + result.pairs[1].colliding.size();
+    }
+    CHECK(contacts > 0);
+  }
+}
+
+TEST_CASE("a World's steady frames allocate nothing: poses and vertices set, contacts found", "[alloc][world]") {
+  // Named bodies (names past the small-string buffer: a label built per call would allocate),
+  // a rigid ball posed every frame, a deforming sphere given new vertices, a static sphere.
+  World world;
+  auto ball = std::make_shared<const Mesh>(make_uv_sphere(Vec3(0, 0, 0), 0.6, 12, 24));
+  const Mesh small = make_uv_sphere(Vec3(0.9, 0.3, 0.1), 0.5, 12, 24);
+  const BodyId big = world.add_rigid(std::make_shared<const Mesh>(make_uv_sphere(Vec3(0, 0, 0), 1.0, 16, 32)),
+                                     Eigen::Affine3d::Identity(), "the big static sphere in the middle");
+  const BodyId moving = world.add_rigid(ball, Eigen::Affine3d::Identity(), "a rigid ball that moves every frame");
+  const BodyId soft = world.add_deforming(small, "a deforming sphere that breathes");
+  std::vector<Vec3> vertices = small.vertices;
+  const auto move = [&](int f) {
+    const int phase = f % 5;  // period 5
+    world.set_pose(moving, Eigen::Affine3d(Eigen::Translation3d(-0.9 + 0.03 * phase, -0.4, 0.2)));
+    for (std::size_t i = 0; i < small.vertices.size(); ++i) vertices[i] = small.vertices[i] * (1.0 + 0.02 * phase);
+    world.set_vertices(soft, vertices);
+    world.set_pose(big, Eigen::Affine3d::Identity());
+  };
+  for (const ContactDetail detail : {ContactDetail::segments, ContactDetail::pairs}) {
+    DetectOptions opt;
+    opt.contacts = detail;
+    FrameResult result;
+    for (int f = 0; f < 5; ++f) {  // warm-up: one period
+      move(f);
+      world.collide(opt, result);
+    }
+    std::size_t contacts = 0;
+    for (int f = 5; f < 10; ++f) {
+      const std::size_t before = g_allocations.load();
+      move(f);
+      world.collide(opt, result);
+      const std::size_t after = g_allocations.load();
+      INFO("contacts " << to_string(detail) << ", frame " << f);
+      CHECK(after - before == 0);
+      for (const PairResult& p : result.pairs) contacts += p.colliding.size();
     }
     CHECK(contacts > 0);
   }
