@@ -21,9 +21,12 @@ void check_mesh(const Mesh& m, const std::string& label) {
     fail(" has 2^31 - 1 or more triangles or vertices; IDs hold 31 bits");
 }
 
-void check_pose(const Eigen::Affine3d& pose, const std::string& label) {
+// Throws unless `pose` is finite and invertible; label() names the body, called only into an
+// error (set_pose() runs every frame and allocates nothing).
+template <class Label>
+void check_pose(const Eigen::Affine3d& pose, const Label& label) {
   if (const std::string problem = pose_problem(pose); !problem.empty())
-    throw std::invalid_argument("peelcd::World: " + label + ": its pose " + problem);
+    throw std::invalid_argument("peelcd::World: " + label() + ": its pose " + problem);
 }
 
 }  // namespace
@@ -38,7 +41,7 @@ BodyId World::add_rigid(std::shared_ptr<const Mesh> shape, const Eigen::Affine3d
   const std::string label = label_of(name, BodyId(impl_->bodies.size()));
   if (!shape) throw std::invalid_argument("peelcd::World: " + label + ": no shape");
   check_mesh(*shape, label);
-  check_pose(pose, label);
+  check_pose(pose, [&] { return label; });
   Body b;
   b.is_rigid = true;
   b.name = std::move(name);
@@ -68,8 +71,7 @@ void World::set_pose(BodyId id, const Eigen::Affine3d& pose) {
   const ExclusiveUse exclusive(impl_->owner, "peelcd::World");
   Body& b = impl_->body(id, "set_pose");
   if (!b.is_rigid) throw std::invalid_argument("peelcd::World::set_pose(): " + label_of(b.name, id) + " is deforming");
-  if (const std::string problem = pose_problem(pose); !problem.empty())  // the label only then
-    throw std::invalid_argument("peelcd::World: " + label_of(b.name, id) + ": its pose " + problem);
+  check_pose(pose, [&] { return label_of(b.name, id); });
   b.set_pose(pose);
 }
 
