@@ -13,6 +13,10 @@ export UBSAN_OPTIONS=print_stacktrace=1:halt_on_error=1
 # The adversarial narrow-phase test runs 100,000 cases in the plain build; 10,000 here, where
 # each is ~10x slower, check the same code for memory and UB errors.
 export PEELCD_ADVERSARIAL_CASES=10000
+# The long sweeps against exact references (proximity and depth over the geometry classes, the
+# World's far poses, compute coverage against the rasterizer) run every third case here
+# (tests/stride.h); the plain build runs every case.
+export PEELCD_TEST_STRIDE=3
 # The GL test cases run on OSMesa here; the plain build runs them on the three stacks. Over EGL
 # (llvmpipe, zink) the same cases run the same peelcd code through another driver (2/3 of the
 # instrumented suite's time); peelcd's EGL code runs instrumented in the contexts tests, the

@@ -199,12 +199,52 @@ struct Posed {
   }
 };
 
+// The corner ids of a leaf's lanes, lane by lane (structure of arrays, as the leaf's boxes):
+// vertex indices, or their representatives where `rep` is not null. sharing(c) gives the lanes
+// whose triangle shares an id with corners `c` as bits (lane i: bit i), compared eight at once.
+struct LeafCornerIds {
+  alignas(16) std::uint32_t v[3][kBvhLeafSize];
+  LeafCornerIds(const Tri* corners, std::uint32_t count, const std::uint32_t* rep) {
+    for (std::uint32_t lane = 0; lane < kBvhLeafSize; ++lane)
+      for (int k = 0; k < 3; ++k) {
+        const std::uint32_t c = lane < count ? corners[lane][k] : 0u;  // empty lanes: masked off by their boxes
+        v[k][lane] = rep && lane < count ? rep[c] : c;
+      }
+  }
+  unsigned sharing(const std::uint32_t c[3]) const {
+#if defined(__SSE2__) || defined(_M_X64)
+    __m128i lo = _mm_setzero_si128(), hi = _mm_setzero_si128();
+    for (int i = 0; i < 3; ++i) {
+      const __m128i x = _mm_set1_epi32(int(c[i]));
+      for (int k = 0; k < 3; ++k) {
+        lo = _mm_or_si128(lo, _mm_cmpeq_epi32(x, _mm_load_si128(reinterpret_cast<const __m128i*>(v[k]))));
+        hi = _mm_or_si128(hi, _mm_cmpeq_epi32(x, _mm_load_si128(reinterpret_cast<const __m128i*>(v[k] + 4))));
+      }
+    }
+    return unsigned(_mm_movemask_ps(_mm_castsi128_ps(lo))) | unsigned(_mm_movemask_ps(_mm_castsi128_ps(hi))) << 4;
+#else
+    unsigned mask = 0;
+    for (std::uint32_t lane = 0; lane < kBvhLeafSize; ++lane) {
+      bool same = false;
+      for (int i = 0; i < 3; ++i)
+        for (int k = 0; k < 3; ++k) same |= c[i] == v[k][lane];
+      mask |= unsigned(same) << lane;
+    }
+    return mask;
+#endif
+  }
+};
+
 // One tree against itself: a node against itself pushes its children each against itself and
 // against each other (if their boxes overlap); a leaf against itself pairs each lane with the
-// lanes after it; other pairs descend as SameFrame's.
+// lanes after it; other pairs descend as SameFrame's. With `drop_adjacent`, couples that share
+// a corner (vertex indices, or their representatives `rep` where not null) are dropped in the
+// leaf-pair visit, eight at once, and never reach fn.
 struct Self {
   using Entry = BvhNodePair;
   const Bvh& tree;
+  bool drop_adjacent = false;
+  const std::uint32_t* rep = nullptr;
   bool admit(BvhNodePair start, Entry& e) const {
     e = start;
     return !tree.empty();
@@ -212,10 +252,24 @@ struct Self {
   template <class Fn>
   void leaves(const Entry& e, const BvhNode& x, const BvhNode& y, Fn& fn) const {
     const BvhLeaf& lx = tree.leaf(x);
-    if (e.first == e.second)  // lanes after u (empty lanes never overlap)
-      leaf_couples(lx, x.count, lx, [&](std::uint32_t u, FBox& box) { return box = lx.box(u), ~0u << (u + 1); }, fn);
-    else
-      leaf_couples(lx, x.count, tree.leaf(y), [&](std::uint32_t u, FBox& box) { return box = lx.box(u), ~0u; }, fn);
+    const bool same = e.first == e.second;
+    if (!drop_adjacent) {
+      if (same)  // lanes after u (empty lanes never overlap)
+        leaf_couples(lx, x.count, lx, [&](std::uint32_t u, FBox& box) { return box = lx.box(u), ~0u << (u + 1); }, fn);
+      else
+        leaf_couples(lx, x.count, tree.leaf(y), [&](std::uint32_t u, FBox& box) { return box = lx.box(u), ~0u; }, fn);
+      return;
+    }
+    const BvhLeaf& ly = tree.leaf(y);
+    const LeafCornerIds ids(tree.leaf_corners(y), y.count, rep);
+    const Tri* cx = tree.leaf_corners(x);
+    for (std::uint32_t u = 0; u < x.count; ++u) {
+      unsigned m = overlap_mask(lx.box(u), ly) & (same ? ~0u << (u + 1) : ~0u);
+      if (m == 0) continue;
+      std::uint32_t c[3];
+      for (int k = 0; k < 3; ++k) c[k] = rep ? rep[cx[u][k]] : cx[u][k];
+      for (m &= ~ids.sharing(c); m;) fn(lx.tri[u], ly.tri[take_lane(m)]);
+    }
   }
   void descend(const Entry& e, std::vector<Entry>& stack, std::size_t& top) const {
     if (e.first != e.second) return descend_same_frame(tree, tree, e.first, e.second, stack, top);
@@ -282,6 +336,16 @@ std::size_t bvh_self_traverse(const Bvh& tree, std::vector<BvhNodePair>& stack, 
   return bvh_detail::traverse_pairs(bvh_detail::Self{tree}, tree, tree, BvhNodePair{0u, 0u}, stack, fn);
 }
 
+// bvh_self_traverse() without the couples that share a corner: vertex indices (rep null:
+// SelfAdjacency::index), or their representatives rep[v] (vertex_representatives()), decided in
+// the leaf-pair visit for eight couples at once (triangles_adjacent()'s answer). The tree's
+// build triangles are the mesh's.
+template <class Fn>
+std::size_t bvh_self_traverse_apart(const Bvh& tree, const std::uint32_t* rep, std::vector<BvhNodePair>& stack,
+                                    Fn&& fn) {
+  return bvh_detail::traverse_pairs(bvh_detail::Self{tree, true, rep}, tree, tree, BvhNodePair{0u, 0u}, stack, fn);
+}
+
 // Every candidate self couple of `mesh` (two triangles whose closed boxes overlap and that are
 // not adjacent) through the kept tree `st`, brought to `mesh` first and traversed against itself
 // (no n^2): fn(t, u) with t < u, in traversal order. Returns the node pairs visited.
@@ -289,8 +353,7 @@ template <class Fn>
 std::size_t self_overlap_visit(const Mesh& mesh, SelfTree& st, const std::vector<std::uint32_t>& rep, Fn&& fn) {
   st.update(mesh);
   const std::uint32_t* r = representatives_or_null(rep);
-  return bvh_self_traverse(st.tree, st.stack, [&](std::uint32_t x, std::uint32_t y) {
-    if (triangles_adjacent(mesh, r, x, y)) return;
+  return bvh_self_traverse_apart(st.tree, r, st.stack, [&](std::uint32_t x, std::uint32_t y) {
     if (x < y)
       fn(x, y);
     else

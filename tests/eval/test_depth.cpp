@@ -8,6 +8,7 @@
 #include "peelcd/core/exact/relation.h"
 #include "peelcd/eval/classes.h"
 #include "peelcd/io/mesh_io.h"
+#include "stride.h"  // PEELCD_TEST_STRIDE: the sanitizer stage runs every Nth case of the long sweeps
 
 #include <CGAL/Exact_predicates_exact_constructions_kernel.h>
 #include <catch2/catch.hpp>
@@ -120,7 +121,10 @@ TEST_CASE("proximity on the depth classes: every listed distance is the exact on
     }
     return std::sqrt(CGAL::to_double(best));
   };
-  for (const DepthClass& c : depth_classes()) {
+  const std::vector<DepthClass> classes = depth_classes();
+  for (std::size_t i = 0; i < classes.size(); ++i) {
+    if (test::stride_skips(i)) continue;
+    const DepthClass& c = classes[i];
     INFO(c.scene.name);
     const Mesh& a = c.scene.objects[0].mesh;
     const Mesh& b = c.scene.objects[1].mesh;
@@ -171,9 +175,11 @@ TEST_CASE("depth: within 1.05x of a 300-direction search on real meshes at sever
                                                        {"dragon_3k.obj", "fish_2k.obj"}};
   const Vec3 moves[] = {Vec3(0.35, 0.1, -0.05), Vec3(-0.1, 0.3, 0.25)};
   double worst = 0.0;
+  std::size_t case_index = 0;
   for (const auto& [na, nb] : pairs) {
     const Mesh a = unit_mesh(na), b0 = unit_mesh(nb);
     for (int k = 0; k < 2; ++k) {
+      if (test::stride_skips(case_index++)) continue;
       const Eigen::Matrix3d R = Eigen::AngleAxisd(0.6 + 0.9 * k, Vec3(1, 2 - k, 3).normalized()).toRotationMatrix();
       Mesh b = b0;
       for (Vec3& v : b.vertices) v = R * v + moves[k];

@@ -8,6 +8,7 @@
 #include "peelcd/eval/classes.h"
 #include "peelcd/eval/scenes.h"
 #include "peelcd/core/world/world.h"
+#include "stride.h"  // PEELCD_TEST_STRIDE: the sanitizer stage runs every Nth case of the long sweeps
 
 #include <catch2/catch.hpp>
 
@@ -735,7 +736,9 @@ TEST_CASE("conservative mode serves proximity: no pair within the margin missed,
       gl::GlOptions o;
       o.resolve = resolve;
       test_pipeline().set_gl_options(o);
-      for (GeometryClass g : scenes) {
+      for (std::size_t i = 0; i < scenes.size(); ++i) {
+        if (test::stride_skips(i)) continue;
+        GeometryClass g = scenes[i];
         if (rigid)
           for (Object& object : g.objects)
             object.rigid = RigidMotion{std::make_shared<const Mesh>(object.mesh), Eigen::Affine3d::Identity()};
@@ -751,7 +754,7 @@ TEST_CASE("conservative mode serves proximity: no pair within the margin missed,
       }
       test_pipeline().set_gl_options(gl::GlOptions{});
     }
-  CHECK(within > 1000);
+  CHECK(within > 1000 / test::stride());
 }
 
 TEST_CASE("coverage by compute: the rasterizer's layers and PCS bit for bit, one view and batched", "[conservative][coverage]") {
@@ -791,9 +794,10 @@ TEST_CASE("coverage by compute: the rasterizer's layers and PCS bit for bit, one
     c.opt.margin = 2e-2 * test::scene_size(g);
     cases.push_back(c);
   }
-  std::size_t views = 0, contacts = 0;
+  std::size_t views = 0, contacts = 0, case_index = 0;
   for (int path = 0; path < 4; ++path)
     for (const Case& c : cases) {
+      if (test::stride_skips(case_index++)) continue;
       std::vector<CapturedView> captured[2];
       FrameResult frames[2];
       for (const Coverage coverage : {Coverage::raster, Coverage::compute}) {
@@ -834,6 +838,6 @@ TEST_CASE("coverage by compute: the rasterizer's layers and PCS bit for bit, one
         contacts += frames[0].pairs[i].colliding.size();
       }
     }
-  CHECK(views > 50);
+  CHECK(views > 50 / test::stride());
   CHECK(contacts > 0);
 }

@@ -4,6 +4,7 @@
 #include "peelcd/core/exact/bvh.h"
 #include "exact/bvh_traverse.h"  // the library's own traversals (core/ is on this target's path)
 #include "peelcd/core/primitives.h"
+#include "peelcd/core/exact/self.h"
 
 #include <catch2/catch.hpp>
 
@@ -281,6 +282,45 @@ TEST_CASE("Bvh: the self traversal gives every couple of distinct triangles whos
     grown.hi += Vec3::Constant(1e-6);
     REQUIRE(grown.overlaps(triangle_bounds(m, y)));
   }
+}
+
+TEST_CASE("Bvh: the self traversal without adjacent couples drops exactly those sharing a corner", "[bvh][self]") {
+  // bvh_self_traverse_apart() against bvh_self_traverse() and triangles_adjacent(): by index
+  // (rep null) and by position (a soup whose triangles share no index, welded by their
+  // representatives), on a folded sheet, a crumpled cloth and the soup of the crumpled cloth.
+  std::vector<Mesh> meshes{make_folded_sheet(12, 0.3, 0.2), make_crumpled_cloth(10, 0.4)};
+  Mesh soup;  // every triangle its own three vertices
+  for (const Tri& f : meshes[1].triangles) {
+    const std::uint32_t base = std::uint32_t(soup.vertices.size());
+    for (int k = 0; k < 3; ++k) soup.vertices.push_back(meshes[1].vertices[f[k]]);
+    soup.triangles.push_back({base, base + 1, base + 2});
+  }
+  meshes.push_back(soup);
+  for (std::size_t i = 0; i < meshes.size(); ++i)
+    for (const SelfAdjacency adjacency : {SelfAdjacency::index, SelfAdjacency::position}) {
+      INFO("mesh " << i << ", adjacency " << int(adjacency));
+      const Mesh& m = meshes[i];
+      std::vector<std::uint32_t> reps;
+      vertex_representatives(m, adjacency, reps);
+      const std::uint32_t* rep = adjacency == SelfAdjacency::index ? nullptr : reps.data();
+      Bvh t;
+      t.build(m.vertices, m.triangles);
+      std::vector<BvhNodePair> stack;
+      std::set<std::pair<std::uint32_t, std::uint32_t>> want, got;
+      std::size_t adjacent = 0;
+      bvh_self_traverse(t, stack, [&](std::uint32_t x, std::uint32_t y) {
+        if (triangles_adjacent(m, rep, x, y))
+          ++adjacent;
+        else
+          want.emplace(std::min(x, y), std::max(x, y));
+      });
+      bvh_self_traverse_apart(t, rep, stack, [&](std::uint32_t x, std::uint32_t y) {
+        REQUIRE(got.emplace(std::min(x, y), std::max(x, y)).second);
+      });
+      CHECK((adjacent > 0) == (i != 2 || adjacency == SelfAdjacency::position));  // the soup shares no index
+      CHECK(!want.empty());
+      CHECK(got == want);
+    }
 }
 
 TEST_CASE("Bvh: two trees in one frame, traversed on float boxes, give every couple of overlapping boxes", "[bvh]") {

@@ -172,6 +172,8 @@ class Bvh {
   const BvhLeaf& leaf(const BvhNode& node) const { return leaves_[node.first]; }
   std::uint32_t parent(std::uint32_t node) const { return parents_[node]; }  // the root's is itself (0)
   const std::vector<std::uint32_t>& order() const { return order_; }  // triangles, leaf by leaf
+  // A leaf's triangles (node.count of them, lane by lane) as the build's corner indices.
+  const Tri* leaf_corners(const BvhNode& node) const { return corners_.data() + leaf_first_[node.first]; }
   FBox triangle_box(std::uint32_t t) const { return leaves_[nodes_[leaf_of_[t]].first].box(lane_of_[t]); }
   std::size_t depth() const { return depth_; }
   // How far refits have loosened the tree: its internal nodes' summed extents (x + y + z of
