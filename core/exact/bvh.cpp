@@ -12,6 +12,14 @@ double extents(const FBox& b) { return (double(b.hi[0]) - b.lo[0]) + (double(b.h
 
 }  // namespace
 
+// The partitions move each triangle's centroid with its index (no indirection in the centroid
+// box's pass or in nth_element's comparisons): the same comparisons as on indices, so the same
+// order and tree, in about half the time. order_ is written at the leaves.
+struct Bvh::BuildItem {
+  double c[3];
+  std::uint32_t t;
+};
+
 void Bvh::build(const std::vector<Vec3>& vertices, const std::vector<Tri>& triangles) {
   const std::size_t n = triangles.size();
   nodes_.clear();
@@ -36,12 +44,13 @@ void Bvh::build(const std::vector<Vec3>& vertices, const std::vector<Tri>& trian
     unused_.resize(used.size());
     for (std::size_t v = 0; v < used.size(); ++v) unused_[v] = !used[v];
   }
-  std::vector<Vec3> centroids(n);
+  std::vector<BuildItem> items(n);
   std::vector<FBox> boxes(n);
   for (std::size_t t = 0; t < n; ++t) {
     const Aabb b = triangle_bounds(vertices, triangles[t]);
     boxes[t] = FBox::enclosing(b);
-    centroids[t] = b.center();
+    const Vec3 c = b.center();
+    items[t] = BuildItem{{c.x(), c.y(), c.z()}, std::uint32_t(t)};
     box_.extend(b.lo);
     box_.extend(b.hi);
   }
@@ -50,7 +59,7 @@ void Bvh::build(const std::vector<Vec3>& vertices, const std::vector<Tri>& trian
   leaves_.reserve(nodes_.capacity() / 2 + 1);
   leaf_first_.clear();
   leaf_first_.reserve(leaves_.capacity());
-  build_node(0, std::uint32_t(n), 0, 1, centroids, boxes);
+  build_node(0, std::uint32_t(n), 0, 1, items, boxes);
   corners_.resize(n);
   for (std::size_t k = 0; k < n; ++k) corners_[k] = triangles[order_[k]];
   dirty_.assign(nodes_.size(), 0);
@@ -61,7 +70,7 @@ void Bvh::build(const std::vector<Vec3>& vertices, const std::vector<Tri>& trian
 }
 
 std::uint32_t Bvh::build_node(std::uint32_t begin, std::uint32_t end, std::uint32_t parent, std::size_t level,
-                              std::vector<Vec3>& centroids, const std::vector<FBox>& boxes) {
+                              std::vector<BuildItem>& items, const std::vector<FBox>& boxes) {
   const std::uint32_t index = std::uint32_t(nodes_.size());
   nodes_.emplace_back();
   parents_.push_back(parent);
@@ -72,7 +81,8 @@ std::uint32_t Bvh::build_node(std::uint32_t begin, std::uint32_t end, std::uint3
     FBox box;
     for (std::uint32_t lane = 0; lane < kBvhLeafSize; ++lane) {
       const bool used = begin + lane < end;
-      const std::uint32_t t = used ? order_[begin + lane] : 0u;
+      const std::uint32_t t = used ? items[begin + lane].t : 0u;
+      if (used) order_[begin + lane] = t;
       leaf.tri[lane] = t;
       leaf.set(lane, used ? boxes[t] : empty);
       if (!used) continue;
@@ -87,21 +97,22 @@ std::uint32_t Bvh::build_node(std::uint32_t begin, std::uint32_t end, std::uint3
     leaf_first_.push_back(begin);
     return index;
   }
-  Aabb cbox;
-  for (std::uint32_t i = begin; i < end; ++i) cbox.extend(centroids[order_[i]]);
+  double lo[3] = {items[begin].c[0], items[begin].c[1], items[begin].c[2]}, hi[3] = {lo[0], lo[1], lo[2]};
+  for (std::uint32_t i = begin + 1; i < end; ++i)
+    for (int k = 0; k < 3; ++k) lo[k] = std::min(lo[k], items[i].c[k]), hi[k] = std::max(hi[k], items[i].c[k]);
   int axis = 0;
-  cbox.extent().maxCoeff(&axis);
+  Vec3(hi[0] - lo[0], hi[1] - lo[1], hi[2] - lo[2]).maxCoeff(&axis);
   // Full leaves: the left child takes half of the leaves a count needs, kBvhLeafSize triangles each.
   const std::uint32_t leaves = (end - begin + kBvhLeafSize - 1) / kBvhLeafSize;
   const std::uint32_t mid = begin + (leaves + 1) / 2 * kBvhLeafSize;
   // Ties broken by index: the same tree on every machine.
-  std::nth_element(order_.begin() + begin, order_.begin() + mid, order_.begin() + end,
-                   [&](std::uint32_t a, std::uint32_t b) {
-                     const double ca = centroids[a][axis], cb = centroids[b][axis];
-                     return ca < cb || (ca == cb && a < b);
+  std::nth_element(items.begin() + begin, items.begin() + mid, items.begin() + end,
+                   [axis](const BuildItem& a, const BuildItem& b) {
+                     const double ca = a.c[axis], cb = b.c[axis];
+                     return ca < cb || (ca == cb && a.t < b.t);
                    });
-  build_node(begin, mid, index, level + 1, centroids, boxes);  // the left child: index + 1
-  const std::uint32_t right = build_node(mid, end, index, level + 1, centroids, boxes);
+  build_node(begin, mid, index, level + 1, items, boxes);  // the left child: index + 1
+  const std::uint32_t right = build_node(mid, end, index, level + 1, items, boxes);
   nodes_[index].first = right;
   nodes_[index].count = 0;
   FBox box = nodes_[index + 1].box;

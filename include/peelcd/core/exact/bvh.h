@@ -195,8 +195,9 @@ class Bvh {
   void query(const Aabb& box, std::vector<std::uint32_t>& out) const;
 
  private:
+  struct BuildItem;  // a triangle's centroid and index, moved as one by the build's partitions
   std::uint32_t build_node(std::uint32_t begin, std::uint32_t end, std::uint32_t parent, std::size_t level,
-                           std::vector<Vec3>& centroids, const std::vector<FBox>& boxes);
+                           std::vector<BuildItem>& items, const std::vector<FBox>& boxes);
   void refit_node(std::uint32_t n);
   template <bool Load>
   Aabb round_vertices(const std::vector<Vec3>& vertices, Vec3* copy, std::size_t begin, std::size_t end,
