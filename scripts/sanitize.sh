@@ -14,7 +14,8 @@ export UBSAN_OPTIONS=print_stacktrace=1:halt_on_error=1
 # each is ~10x slower, check the same code for memory and UB errors.
 export PEELCD_ADVERSARIAL_CASES=10000
 # The long sweeps against exact references (proximity and depth over the geometry classes, the
-# World's far poses, compute coverage against the rasterizer) run every third case here
+# World's far poses, compute coverage against the rasterizer, the GPU selection, the pairs-only
+# request, the volume's random poses) run every third case here
 # (tests/stride.h); the plain build runs every case.
 export PEELCD_TEST_STRIDE=3
 # The GL test cases run on OSMesa here; the plain build runs them on the three stacks. Over EGL
