@@ -14,7 +14,8 @@ double extents(const FBox& b) { return (double(b.hi[0]) - b.lo[0]) + (double(b.h
 
 // The partitions move each triangle's centroid with its index (no indirection in the centroid
 // box's pass or in nth_element's comparisons): the same comparisons as on indices, so the same
-// order and tree, in about half the time. order_ is written at the leaves.
+// order and tree, faster (a 100k-triangle build: 31-32 ms against 37-39 ms through the indices).
+// order_ is written at the leaves.
 struct Bvh::BuildItem {
   double c[3];
   std::uint32_t t;
