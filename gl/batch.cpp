@@ -377,6 +377,7 @@ void GlImageStage::Impl::cover_batch_pass(const BatchRun& run, bool count_only) 
   const std::size_t groups = (run.host_entries + run.invocations + 63) / 64;
   if (groups == 0) return;
   const std::size_t gx = std::min<std::size_t>(groups, 65535), gy = (groups + gx - 1) / gx;
+  ensure_cover_programs();
   const CoverProgram& program = cover_batch[count_only ? 1 : 0];
   gl.UseProgram(program.id);
   gl.BindBufferBase(GL_SHADER_STORAGE_BUFFER, 10, batch.command);

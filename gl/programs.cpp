@@ -81,19 +81,7 @@ void GlImageStage::Impl::build_programs() {
     cons_deep[filter].texels = gl.GetUniformLocation(cons_deep[filter].id, "texels");
     cons_deep[filter].row_base = gl.GetUniformLocation(cons_deep[filter].id, "row_base");
   }
-  // The compute path's coverage (GlOptions::coverage compute), one-view and batched.
-  cover.id = link({stage(GL_COMPUTE_SHADER, shaders::conservative_cover_comp, "conservative_cover.comp")},
-                  "conservative coverage by compute");
-  // Batched: a program for the count pass and one for the fill pass (a uniform switch between
-  // two dispatches of one program was not picked up by zink over lavapipe, Mesa 22.3).
-  for (int count = 0; count < 2; ++count) {
-    const std::string defines = std::string(batch_define) + "#define PEELCD_COUNT_ONLY " + (count ? "true" : "false") + "\n";
-    cover_batch[count].id = link({stage(GL_COMPUTE_SHADER, shaders::conservative_cover_comp,
-                                        count ? "conservative_cover.comp (PEELCD_BATCH, count pass)"
-                                              : "conservative_cover.comp (PEELCD_BATCH, fill pass)",
-                                        defines.c_str())},
-                                 "batched conservative coverage by compute");
-  }
+  link_cover_programs();
   point_batch.id = link({stage(GL_VERTEX_SHADER, shaders::peel_vert, "peel.vert (PEELCD_BATCH)", batch_define),
                               stage(GL_FRAGMENT_SHADER, shaders::abuffer_frag, "abuffer.frag (PEELCD_BATCH)", batch_define)},
                              "point-sampled batch");
@@ -104,6 +92,30 @@ void GlImageStage::Impl::build_programs() {
       link({stage(GL_COMPUTE_SHADER, shaders::batch_select_comp, "batch_select.comp")},
            "batch select");
   prefix_sum.id = link({stage(GL_COMPUTE_SHADER, shaders::prefix_sum_comp, "prefix_sum.comp")}, "prefix sum");
+}
+
+// The compute path's coverage (GlOptions::coverage compute), one-view and batched, with the
+// share threshold as a define (a constant the compiler folds; the programs are linked again when
+// the option changes).
+void GlImageStage::Impl::link_cover_programs() {
+  const std::string share = "#define PEELCD_COVER_SHARE " + std::to_string(options.cover_share_texels) + "u\n";
+  const auto stage = [&](const char* name, const std::string& defines) {
+    return compile(GL_COMPUTE_SHADER, shader_source(shaders::conservative_cover_comp, defines.c_str()).c_str(), name);
+  };
+  for (CoverProgram* c : {&cover, &cover_batch[0], &cover_batch[1]})
+    if (c->id != 0) gl.DeleteProgram(c->id), c->id = 0;
+  cover.id = link({stage("conservative_cover.comp", share)}, "conservative coverage by compute");
+  // Batched: a program for the count pass and one for the fill pass (a uniform switch between
+  // two dispatches of one program was not picked up by zink over lavapipe, Mesa 22.3).
+  for (int count = 0; count < 2; ++count) {
+    const std::string defines = share + "#define PEELCD_BATCH\n#define PEELCD_COUNT_ONLY " + (count ? "true" : "false") + "\n";
+    cover_batch[count].id = link({stage(count ? "conservative_cover.comp (PEELCD_BATCH, count pass)"
+                                              : "conservative_cover.comp (PEELCD_BATCH, fill pass)",
+                                        defines)},
+                                 "batched conservative coverage by compute");
+    cover_batch[count].row = gl.GetUniformLocation(cover_batch[count].id, "row");
+  }
+  cover_share_linked = options.cover_share_texels;
 }
 
 // Every program's uniform locations, by the names in its sources.
@@ -151,7 +163,6 @@ void GlImageStage::Impl::locate_uniforms() {
   cons_resolve.emit = gl.GetUniformLocation(cons_resolve.id, "emit_layer");
   cons_batch.count_only = gl.GetUniformLocation(cons_batch.id, "count_only");
   cons_batch.viewport = gl.GetUniformLocation(cons_batch.id, "viewport");
-  for (CoverProgram* c : {&cover_batch[0], &cover_batch[1]}) c->row = gl.GetUniformLocation(c->id, "row");
   point_batch.viewport = gl.GetUniformLocation(point_batch.id, "viewport");
   point_batch.count_only = gl.GetUniformLocation(point_batch.id, "count_only");
   point_batch_resolve.texels = gl.GetUniformLocation(point_batch_resolve.id, "texels");

@@ -232,6 +232,7 @@ bool GlImageStage::Impl::peel_conservative(const PeelJob& job, PeelResult& out, 
   float grow_x = 0.0f, grow_z = 0.0f;
   conservative::grow_of(job.grow, view.texel(), 2.0 * view.half_depth, grow_x, grow_z);
   if (compute_coverage()) {
+    ensure_cover_programs();
     gl.UseProgram(cover.id);
     for (int slot = 0; slot < 2; ++slot) cover_one_view(slot, m, n, view_slots, grow_x, grow_z);
     // The GPU resolve reads the k-buffer through buffer textures: the dispatches submitted first

@@ -400,6 +400,13 @@ struct GlImageStage::Impl {
 
   // programs.cpp
   void build_programs();
+  // The compute coverage's three programs, built for options.cover_share_texels (their define):
+  // again when that changed since (ensure_cover_programs(), called with the context current).
+  void link_cover_programs();
+  void ensure_cover_programs() {
+    if (cover_share_linked != options.cover_share_texels) link_cover_programs();
+  }
+  unsigned cover_share_linked = ~0u;
   void locate_uniforms();
   void create_objects();
   void check(const char* where);

@@ -9,6 +9,12 @@
 // resolves sort away, as they do the rasterizer's). The rasterizer's fixed-function work (clip,
 // setup, coverage) is replaced by a loop over the box: for a device whose raster engine is the
 // bottleneck (docs/backends.md, "Raster or compute for coverage").
+// A triangle whose box holds more than PEELCD_COVER_SHARE texels (the program's define,
+// GlOptions::cover_share_texels) does not walk it alone: its window coordinates and margins go
+// to the workgroup's shared memory, and the 64 invocations of the group walk the boxes of all
+// such triangles of the group together, texel by texel (a large triangle would otherwise keep
+// its invocation, and on a GPU its warp, busy for the whole box while the others wait). Every
+// texel runs the same cover_texel() on the same values: the same fragments.
 // PEELCD_BATCH: the draw's entries (shaders/batch.inc), the triangle count from the indirect
 // draw's command (the selection passes append to it). Otherwise: one object of a one-view draw,
 // its corners (x, y, z float bits, ID) and, for a rigid shape, the selected triangles' indices.
@@ -35,9 +41,20 @@ layout(std430, binding = 20) readonly buffer Params {
 #ifdef PEELCD_BATCH
 uniform uint row;  // invocations a row of the dispatch (the x groups times 64)
 #endif
+#ifndef PEELCD_COVER_SHARE
+#define PEELCD_COVER_SHARE 16u
+#endif
 
 #define PEELCD_COVER_STORE
 #include "conservative.inc"
+
+// The group's shared triangles: what cover_texel() and cover_store() need, and where each one's
+// texels start in the group's run of them (start[64] is the run's length).
+shared vec3 share_x[64], share_y[64], share_z[64];
+shared vec2 share_margin[64];
+shared ivec4 share_box[64];   // first texel (i, j) of the box, its width, the view's resolution
+shared uvec4 share_store[64];  // first texel of the view in the k-buffer, the view's texels, object, order
+shared uint share_start[65];
 
 void main() {
 #ifndef PEELCD_BATCH
@@ -47,41 +64,91 @@ void main() {
   bool indexed = flags.x != 0u;
   float grow_texels = uintBitsToFloat(flags.z), grow_depth = uintBitsToFloat(flags.w);
 #endif
+  uint lane = gl_LocalInvocationIndex;
   uint k = gl_GlobalInvocationID.y * row + gl_GlobalInvocationID.x;
+  // No invocation returns before the barriers below: those past the draw's triangles, or whose
+  // triangle no texel can hold, share nothing.
+  uint shared_texels = 0u;
   vec3 local[3], mag[3];
 #ifdef PEELCD_BATCH
-  if (k >= command[0] / 3u) return;
-  uvec4 e = entries[k];
+  bool live = k < command[0] / 3u;
+  uvec4 e = live ? entries[k] : uvec4(0u);
   uint view = e.y >> 1, object_bit = e.y & 1u;
-  mat4 roi_from_object = views[view].roi_from_object[object_bit];
-  for (uint c = 0u; c < 3u; ++c) cover_corner(entry_position(e, c), roi_from_object, local[c], mag[c]);
-  mat4 clip_from_local = views[view].clip_from_local;
   int resolution = views[view].info.x;
   float grow_texels = views[view].half_box.w;
   float grow_depth = intBitsToFloat(views[view].info.w);
   uint first_texel = uint(views[view].info.y);
   uint order = k;  // the draw's gl_VertexID / 3
-#else
-  if (k >= triangles) return;
-  uint order = indexed ? indices[3u * k] / 3u : k;  // the draw's first corner's gl_VertexID / 3
-  for (uint c = 0u; c < 3u; ++c) {
-    uint v = indexed ? indices[3u * k + c] : 3u * k + c;
-    cover_corner(uintBitsToFloat(corners[v].xyz), roi_from_object, local[c], mag[c]);
+  mat4 clip_from_local = views[view].clip_from_local;
+  if (live) {
+    mat4 roi_from_object = views[view].roi_from_object[object_bit];
+    for (uint c = 0u; c < 3u; ++c) cover_corner(entry_position(e, c), roi_from_object, local[c], mag[c]);
   }
+#else
+  bool live = k < triangles;
+  uint order = live && indexed ? indices[3u * k] / 3u : k;  // the draw's first corner's gl_VertexID / 3
+  if (live)
+    for (uint c = 0u; c < 3u; ++c) {
+      uint v = indexed ? indices[3u * k + c] : 3u * k + c;
+      cover_corner(uintBitsToFloat(corners[v].xyz), roi_from_object, local[c], mag[c]);
+    }
   uint first_texel = 0u;
 #endif
-  float n = float(resolution);
-  vec3 wx, wy, wz;
-  vec2 margin, lo, hi;
-  if (!cover_triangle(local, mag, clip_from_local, n, grow_texels, grow_depth, wx, wy, wz, margin, lo, hi)) return;
-  // Texel i's centre i + 0.5 inside [lo, hi] (lo and hi within [-1, n + 1]), within the view.
-  ivec2 first = max(ivec2(floor(lo - 0.5)), ivec2(0));
-  ivec2 last = min(ivec2(ceil(hi - 0.5)), ivec2(resolution - 1));
   uint texels = uint(resolution) * uint(resolution);
-  for (int j = first.y; j <= last.y; ++j)
-    for (int i = first.x; i <= last.x; ++i) {
-      float zlo, zhi;
-      if (!cover_texel(ivec2(i, j), resolution, wx, wy, wz, margin, zlo, zhi)) continue;
-      cover_store(first_texel + uint(j) * uint(resolution) + uint(i), texels, zlo, zhi, object_bit, order);
+  if (live) {
+    float n = float(resolution);
+    vec3 wx, wy, wz;
+    vec2 margin, lo, hi;
+    if (cover_triangle(local, mag, clip_from_local, n, grow_texels, grow_depth, wx, wy, wz, margin, lo, hi)) {
+      // Texel i's centre i + 0.5 inside [lo, hi] (lo and hi within [-1, n + 1]), within the view.
+      ivec2 first = max(ivec2(floor(lo - 0.5)), ivec2(0));
+      ivec2 last = min(ivec2(ceil(hi - 0.5)), ivec2(resolution - 1));
+      uint box = first.x <= last.x && first.y <= last.y ? uint(last.x - first.x + 1) * uint(last.y - first.y + 1) : 0u;
+      // Shared: up to 2^24 texels (the group's run then fits 32 bits); a larger box (a view
+      // beyond 4096^2) is walked alone.
+      if (box > PEELCD_COVER_SHARE && box <= 16777216u) {
+        share_x[lane] = wx;
+        share_y[lane] = wy;
+        share_z[lane] = wz;
+        share_margin[lane] = margin;
+        share_box[lane] = ivec4(first, last.x - first.x + 1, resolution);
+        share_store[lane] = uvec4(first_texel, texels, object_bit, order);
+        shared_texels = box;
+      } else {
+        for (int j = first.y; j <= last.y; ++j)
+          for (int i = first.x; i <= last.x; ++i) {
+            float zlo, zhi;
+            if (!cover_texel(ivec2(i, j), resolution, wx, wy, wz, margin, zlo, zhi)) continue;
+            cover_store(first_texel + uint(j) * uint(resolution) + uint(i), texels, zlo, zhi, object_bit, order);
+          }
+      }
     }
+  }
+  // The group's shared boxes one after another: start[t] where triangle t's texels begin.
+  share_start[lane + 1u] = shared_texels;
+  memoryBarrierShared();
+  barrier();
+  if (lane == 0u) {
+    share_start[0] = 0u;
+    for (uint t = 1u; t <= 64u; ++t) share_start[t] += share_start[t - 1u];
+  }
+  memoryBarrierShared();
+  barrier();
+  uint run = share_start[64];
+  for (uint s = lane; s < run; s += 64u) {
+    // The triangle t whose texels hold s: the last with start[t] <= s (it has texels: a
+    // triangle without shares the start of the next).
+    uint t = 0u, end = 64u;
+    while (end - t > 1u) {
+      uint mid = (t + end) >> 1;
+      if (share_start[mid] <= s) t = mid; else end = mid;
+    }
+    uint at = s - share_start[t];
+    ivec4 b = share_box[t];
+    uvec4 st = share_store[t];
+    ivec2 ij = b.xy + ivec2(int(at % uint(b.z)), int(at / uint(b.z)));
+    float zlo, zhi;
+    if (!cover_texel(ij, b.w, share_x[t], share_y[t], share_z[t], share_margin[t], zlo, zhi)) continue;
+    cover_store(st.x + uint(ij.y) * uint(b.w) + uint(ij.x), st.y, zlo, zhi, st.z, st.w);
+  }
 }

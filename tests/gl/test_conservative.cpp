@@ -768,7 +768,8 @@ TEST_CASE("coverage by compute: the rasterizer's layers and PCS bit for bit, one
   // (triangles grown by the margin); the one-view path (its deforming objects' corners and its
   // rigid shapes' indices) with both resolves, the batch with the host's selection and resolve,
   // and the batch with the GPU's selection and resolve (the certified filter off: every
-  // overlapping couple).
+  // overlapping couple); the compute pass's texels walked by each triangle's invocation or
+  // shared among its workgroup.
   struct Case {
     std::string name;
     std::vector<Object> objects;
@@ -800,12 +801,16 @@ TEST_CASE("coverage by compute: the rasterizer's layers and PCS bit for bit, one
   std::size_t views = 0, contacts = 0, case_index = 0;
   for (int path = 0; path < 4; ++path)
     for (const Case& c : cases) {
-      if (test::stride_skips(case_index++)) continue;
+      const std::size_t index = case_index++;
+      if (test::stride_skips(index)) continue;
       std::vector<CapturedView> captured[2];
       FrameResult frames[2];
       for (const Coverage coverage : {Coverage::raster, Coverage::compute}) {
         gl::GlOptions o;
         o.coverage = coverage;
+        // Every other case shares every triangle's texels among its workgroup; the others share
+        // only the large triangles' (the default threshold): both walks of the compute pass.
+        if (index % 2) o.cover_share_texels = 0;
         o.batch = path >= 2;
         o.resolve = path == 1 || path == 3 ? Resolve::gpu : Resolve::host;
         o.gpu_select = path == 3;

@@ -91,6 +91,11 @@ struct GlOptions {
   // Conservative views' coverage: the rasterizer or a compute pass (Coverage above); the same
   // layers and PCS. `peelcd calibrate` times both on the device and records the faster.
   Coverage coverage = Coverage::automatic;
+  // Coverage by compute: a triangle whose box holds more texels than this has them walked by the
+  // 64 invocations of its workgroup together rather than by its own (shaders/conservative_cover.comp;
+  // 0: every triangle's). The same fragments either way; a tuning value for devices, not in the
+  // option table below (the command line and scene files keep the default).
+  unsigned cover_share_texels = 16;
 };
 
 // The GL stage's settings, one row each, as the frame's option table (peelcd/core/options.h)
