@@ -368,7 +368,7 @@ void GlImageStage::Impl::count_batch(BatchRun& run, Timings& t) {
 // could have (the host's and every triangle the selection may append; those past the command's
 // count return at once) running the draw's arithmetic (shaders/conservative_cover.comp).
 void GlImageStage::Impl::cover_batch_pass(const BatchRun& run, bool count_only) {
-  if (run.point || !compute_coverage()) {
+  if (run.point || !compute_coverage(run.largest)) {
     gl.UseProgram(run.point ? point_batch.id : cons_batch.id);
     gl.Uniform1i(run.point ? point_batch.count_only : cons_batch.count_only, count_only ? 1 : 0);
     timed_draw([&] { gl.DrawArraysIndirect(GL_TRIANGLES, nullptr); });
@@ -450,7 +450,7 @@ void GlImageStage::Impl::fill_batch(const BatchRun& run) {
   // commands submitted first. zink over lavapipe (Mesa 22.3) left the resolve's texel fetches
   // unordered with the fill dispatch's storage writes under any memory barrier (a draw's are
   // ordered by its render pass); a flush orders them, and costs a submission, no wait.
-  if (!run.point && compute_coverage() && !host_resolve()) gl.Flush();
+  if (!run.point && compute_coverage(run.largest) && !host_resolve()) gl.Flush();
   check("the batched draws");
 }
 

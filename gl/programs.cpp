@@ -98,7 +98,8 @@ void GlImageStage::Impl::build_programs() {
 // share threshold as a define (a constant the compiler folds; the programs are linked again when
 // the option changes).
 void GlImageStage::Impl::link_cover_programs() {
-  const std::string share = "#define PEELCD_COVER_SHARE " + std::to_string(options.cover_share_texels) + "u\n";
+  const int share_texels = cover_share();
+  const std::string share = share_texels < 0 ? std::string() : "#define PEELCD_COVER_SHARE " + std::to_string(share_texels) + "u\n";
   const auto stage = [&](const char* name, const std::string& defines) {
     return compile(GL_COMPUTE_SHADER, shader_source(shaders::conservative_cover_comp, defines.c_str()).c_str(), name);
   };
@@ -115,7 +116,7 @@ void GlImageStage::Impl::link_cover_programs() {
                                  "batched conservative coverage by compute");
     cover_batch[count].row = gl.GetUniformLocation(cover_batch[count].id, "row");
   }
-  cover_share_linked = options.cover_share_texels;
+  cover_share_linked = share_texels;
 }
 
 // Every program's uniform locations, by the names in its sources.

@@ -231,7 +231,7 @@ bool GlImageStage::Impl::peel_conservative(const PeelJob& job, PeelResult& out, 
   const std::array<float, 16> m = view.clip_from_local();
   float grow_x = 0.0f, grow_z = 0.0f;
   conservative::grow_of(job.grow, view.texel(), 2.0 * view.half_depth, grow_x, grow_z);
-  if (compute_coverage()) {
+  if (compute_coverage(n)) {
     ensure_cover_programs();
     gl.UseProgram(cover.id);
     for (int slot = 0; slot < 2; ++slot) cover_one_view(slot, m, n, view_slots, grow_x, grow_z);

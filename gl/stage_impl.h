@@ -404,9 +404,15 @@ struct GlImageStage::Impl {
   // again when that changed since (ensure_cover_programs(), called with the context current).
   void link_cover_programs();
   void ensure_cover_programs() {
-    if (cover_share_linked != options.cover_share_texels) link_cover_programs();
+    if (cover_share_linked != cover_share()) link_cover_programs();
   }
-  unsigned cover_share_linked = ~0u;
+  int cover_share_linked = -2;  // none linked yet
+  // The threshold the programs are built for (below 0: no sharing).
+  int cover_share() const {
+    const int s = options.cover_share_texels;
+    if (s == -1) return software_renderer ? -1 : 16;
+    return s < 0 ? -1 : s;
+  }
   void locate_uniforms();
   void create_objects();
   void check(const char* where);
@@ -504,7 +510,15 @@ struct GlImageStage::Impl {
   // Conservative views covered by the compute pass (GlOptions::coverage; auto: the cost models'
   // choice, the stage's own, `models`).
   const CostModels* models = nullptr;
-  bool compute_coverage() const {
+  // Conservative views of at most `largest` texels a side covered by the compute pass. Not on a
+  // software renderer beyond 255 texels a side: llvmpipe (and lavapipe under zink) ends a shader
+  // invocation's loops after 65,535 iterations of all its loops together (gallivm's loop
+  // limiter), and one invocation walks up to a view's texels (its own triangle's box, or its
+  // share of its group's large boxes, shaders/conservative_cover.comp): such views rasterize
+  // there, with the same fragments.
+  static constexpr int kSoftwareComputeSide = 255;
+  bool compute_coverage(int largest) const {
+    if (software_renderer && largest > kSoftwareComputeSide) return false;
     return options.coverage == Coverage::compute ||
            (options.coverage == Coverage::automatic && models && models->coverage == "compute");
   }

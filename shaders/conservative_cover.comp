@@ -9,8 +9,8 @@
 // resolves sort away, as they do the rasterizer's). The rasterizer's fixed-function work (clip,
 // setup, coverage) is replaced by a loop over the box: for a device whose raster engine is the
 // bottleneck (docs/backends.md, "Raster or compute for coverage").
-// A triangle whose box holds more than PEELCD_COVER_SHARE texels (the program's define,
-// GlOptions::cover_share_texels) does not walk it alone: its window coordinates and margins go
+// With PEELCD_COVER_SHARE defined (GlOptions::cover_share_texels), a triangle whose box holds more
+// than that many texels does not walk it alone: its window coordinates and margins go
 // to the workgroup's shared memory, and the 64 invocations of the group walk the boxes of all
 // such triangles of the group together, texel by texel (a large triangle would otherwise keep
 // its invocation, and on a GPU its warp, busy for the whole box while the others wait). Every
@@ -41,13 +41,11 @@ layout(std430, binding = 20) readonly buffer Params {
 #ifdef PEELCD_BATCH
 uniform uint row;  // invocations a row of the dispatch (the x groups times 64)
 #endif
-#ifndef PEELCD_COVER_SHARE
-#define PEELCD_COVER_SHARE 16u
-#endif
 
 #define PEELCD_COVER_STORE
 #include "conservative.inc"
 
+#ifdef PEELCD_COVER_SHARE
 // The group's shared triangles: what cover_texel() and cover_store() need, and where each one's
 // texels start in the group's run of them (start[64] is the run's length).
 shared vec3 share_x[64], share_y[64], share_z[64];
@@ -55,6 +53,7 @@ shared vec2 share_margin[64];
 shared ivec4 share_box[64];   // first texel (i, j) of the box, its width, the view's resolution
 shared uvec4 share_store[64];  // first texel of the view in the k-buffer, the view's texels, object, order
 shared uint share_start[65];
+#endif
 
 void main() {
 #ifndef PEELCD_BATCH
@@ -66,8 +65,8 @@ void main() {
 #endif
   uint lane = gl_LocalInvocationIndex;
   uint k = gl_GlobalInvocationID.y * row + gl_GlobalInvocationID.x;
-  // No invocation returns before the barriers below: those past the draw's triangles, or whose
-  // triangle no texel can hold, share nothing.
+  // No invocation returns before the barriers below (with PEELCD_COVER_SHARE): those past the
+  // draw's triangles, or whose triangle no texel can hold, share nothing.
   uint shared_texels = 0u;
   vec3 local[3], mag[3];
 #ifdef PEELCD_BATCH
@@ -106,6 +105,7 @@ void main() {
       uint box = first.x <= last.x && first.y <= last.y ? uint(last.x - first.x + 1) * uint(last.y - first.y + 1) : 0u;
       // Shared: up to 2^24 texels (the group's run then fits 32 bits); a larger box (a view
       // beyond 4096^2) is walked alone.
+#ifdef PEELCD_COVER_SHARE
       if (box > PEELCD_COVER_SHARE && box <= 16777216u) {
         share_x[lane] = wx;
         share_y[lane] = wy;
@@ -114,7 +114,9 @@ void main() {
         share_box[lane] = ivec4(first, last.x - first.x + 1, resolution);
         share_store[lane] = uvec4(first_texel, texels, object_bit, order);
         shared_texels = box;
-      } else {
+      } else
+#endif
+      {
         for (int j = first.y; j <= last.y; ++j)
           for (int i = first.x; i <= last.x; ++i) {
             float zlo, zhi;
@@ -124,6 +126,7 @@ void main() {
       }
     }
   }
+#ifdef PEELCD_COVER_SHARE
   // The group's shared boxes one after another: start[t] where triangle t's texels begin.
   share_start[lane + 1u] = shared_texels;
   memoryBarrierShared();
@@ -137,12 +140,16 @@ void main() {
   uint run = share_start[64];
   for (uint s = lane; s < run; s += 64u) {
     // The triangle t whose texels hold s: the last with start[t] <= s (it has texels: a
-    // triangle without shares the start of the next).
-    uint t = 0u, end = 64u;
-    while (end - t > 1u) {
-      uint mid = (t + end) >> 1;
-      if (share_start[mid] <= s) t = mid; else end = mid;
-    }
+    // triangle without shares the start of the next). Six halvings written out: llvmpipe counts
+    // every loop iteration of an invocation against one limit (gl/stage_impl.h,
+    // compute_coverage()), so the walk is the only loop that grows with the view.
+    uint t = 0u;
+    if (share_start[t + 32u] <= s) t += 32u;
+    if (share_start[t + 16u] <= s) t += 16u;
+    if (share_start[t + 8u] <= s) t += 8u;
+    if (share_start[t + 4u] <= s) t += 4u;
+    if (share_start[t + 2u] <= s) t += 2u;
+    if (share_start[t + 1u] <= s) t += 1u;
     uint at = s - share_start[t];
     ivec4 b = share_box[t];
     uvec4 st = share_store[t];
@@ -151,4 +158,5 @@ void main() {
     if (!cover_texel(ij, b.w, share_x[t], share_y[t], share_z[t], share_margin[t], zlo, zhi)) continue;
     cover_store(st.x + uint(ij.y) * uint(b.w) + uint(ij.x), st.y, zlo, zhi, st.z, st.w);
   }
+#endif
 }

@@ -93,9 +93,11 @@ struct GlOptions {
   Coverage coverage = Coverage::automatic;
   // Coverage by compute: a triangle whose box holds more texels than this has them walked by the
   // 64 invocations of its workgroup together rather than by its own (shaders/conservative_cover.comp;
-  // 0: every triangle's). The same fragments either way; a tuning value for devices, not in the
-  // option table below (the command line and scene files keep the default).
-  unsigned cover_share_texels = 16;
+  // 0: every triangle's; below 0: none). -1 (automatic): 16 on a GPU, none on a software renderer
+  // (which runs a group's invocations in turn: there sharing cost 3-6x). The same fragments
+  // either way; a tuning value, not in the option table below (the command line and scene files
+  // keep the default).
+  int cover_share_texels = -1;
 };
 
 // The GL stage's settings, one row each, as the frame's option table (peelcd/core/options.h)
