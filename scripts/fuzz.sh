@@ -13,7 +13,9 @@ if ! command -v clang++ >/dev/null || ! ls /usr/lib/llvm-*/lib/clang/*/lib/linux
   $sudo_cmd apt-get update -q
   DEBIAN_FRONTEND=noninteractive $sudo_cmd apt-get install -y -q --no-install-recommends clang libclang-rt-14-dev
 fi
+# -O1, as libFuzzer's and AddressSanitizer's documentation use (scripts/sanitize.sh says why).
 cmake -S . -B build-fuzz -DPEELCD_PYTHON=OFF -DCMAKE_BUILD_TYPE=RelWithDebInfo -DCMAKE_C_COMPILER=clang -DCMAKE_CXX_COMPILER=clang++ \
+      -DCMAKE_CXX_FLAGS_RELWITHDEBINFO="-O1 -DNDEBUG" -DCMAKE_C_FLAGS_RELWITHDEBINFO="-O1 -DNDEBUG" \
       -DPEELCD_FUZZ=ON -DPEELCD_BUILD_TESTS=OFF
 cmake --build build-fuzz -j "$(nproc)" --target fuzz_scene fuzz_mesh_detect
 export ASAN_OPTIONS=detect_leaks=1
