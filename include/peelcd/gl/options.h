@@ -94,9 +94,9 @@ struct GlOptions {
   // Coverage by compute: a triangle whose box holds more texels than this has them walked by the
   // 64 invocations of its workgroup together rather than by its own (shaders/conservative_cover.comp;
   // 0: every triangle's; below -1: none). -1 (the default): 16 on a GPU, none on a software
-  // renderer (which runs a group's invocations in turn: there sharing cost 3-6x). The same fragments
-  // either way; a tuning value, not in the option table below (the command line and scene files
-  // keep the default).
+  // renderer (which runs a group's invocations in turn: there sharing cost 3-6x). The same
+  // fragments either way; a tuning value, not in the option table below (the command line and
+  // scene files keep the default).
   int cover_share_texels = -1;
 };
 
