@@ -51,7 +51,7 @@ uniform uint row;  // invocations a row of the dispatch (the x groups times 64)
 shared vec3 share_x[64], share_y[64], share_z[64];
 shared vec2 share_margin[64];
 shared ivec4 share_box[64];   // first texel (i, j) of the box, its width, the view's resolution
-shared uvec4 share_store[64];  // first texel of the view in the k-buffer, the view's texels, object, order
+shared uvec3 share_store[64];  // first texel of the view in the k-buffer, object, order
 shared uint share_start[65];
 #endif
 
@@ -112,7 +112,7 @@ void main() {
         share_z[lane] = wz;
         share_margin[lane] = margin;
         share_box[lane] = ivec4(first, last.x - first.x + 1, resolution);
-        share_store[lane] = uvec4(first_texel, texels, object_bit, order);
+        share_store[lane] = uvec3(first_texel, object_bit, order);
         shared_texels = box;
       } else
 #endif
@@ -152,11 +152,11 @@ void main() {
     if (share_start[t + 1u] <= s) t += 1u;
     uint at = s - share_start[t];
     ivec4 b = share_box[t];
-    uvec4 st = share_store[t];
+    uvec3 st = share_store[t];
     ivec2 ij = b.xy + ivec2(int(at % uint(b.z)), int(at / uint(b.z)));
     float zlo, zhi;
     if (!cover_texel(ij, b.w, share_x[t], share_y[t], share_z[t], share_margin[t], zlo, zhi)) continue;
-    cover_store(st.x + uint(ij.y) * uint(b.w) + uint(ij.x), st.y, zlo, zhi, st.z, st.w);
+    cover_store(st.x + uint(ij.y) * uint(b.w) + uint(ij.x), uint(b.w) * uint(b.w), zlo, zhi, st.y, st.z);
   }
 #endif
 }
