@@ -2,6 +2,7 @@
 // they cannot tell), the contact sort and the narrow phase over a pair's candidates.
 #include "peelcd/core/exact/narrow_phase.h"
 
+#include "apart_block.h"
 #include "certified.h"
 #include "exact_kernel.h"
 #include "peelcd/core/aabb.h"
@@ -159,20 +160,27 @@ void narrow_phase(const Mesh& a, const Mesh& b, const std::vector<std::uint64_t>
                   std::vector<Contact>& out, bool boxes_overlap, std::size_t max_contacts, ContactDetail detail) {
   const std::size_t limit = max_contacts ? out.size() + max_contacts : std::size_t(-1);
   ContactTest test{detail};
+  // A block at a time: the couples certainly apart by a plane found in SIMD lanes first
+  // (apart_block.h), the rest tested in candidate order.
+  ApartBlock block;
+  const auto test_left = [&](std::uint32_t ta, std::uint32_t tb, const TriangleCorners& ca, const TriangleCorners& cb) {
+    Contact contact;
+    contact.tri_a = ta;
+    contact.tri_b = tb;
+    if (!test(ca, cb, contact)) return true;
+    out.push_back(contact);
+    return out.size() < limit;
+  };
   for (std::uint64_t c : candidates) {
     const std::uint32_t ta = pair_a(c), tb = pair_b(c);
     // A triangle lies in the box of its corners: disjoint boxes, no contact (exact: comparisons
     // of doubles; boxes that only touch overlap). Skipped when the caller's candidates are
     // pairs of overlapping boxes already.
     if (!boxes_overlap && !triangle_bounds(a, ta).overlaps(triangle_bounds(b, tb))) continue;
-    Contact contact;
-    contact.tri_a = ta;
-    contact.tri_b = tb;
-    if (test(corners(a, ta), corners(b, tb), contact)) {
-      out.push_back(contact);
-      if (out.size() >= limit) return;
-    }
+    block.put(ta, tb, corners(a, ta), corners(b, tb));
+    if (block.full() && !block.drain(test_left)) return;
   }
+  block.drain(test_left);
 }
 
 }  // namespace peelcd

@@ -1,5 +1,6 @@
 #include "peelcd/core/exact/self.h"
 
+#include "apart_block.h"
 #include "bvh_traverse.h"
 
 #include "peelcd/core/exact/bvh.h"
@@ -77,15 +78,20 @@ void self_narrow_phase(const Mesh& mesh, const std::vector<std::uint64_t>& candi
                        std::size_t max_contacts, ContactDetail detail) {
   const std::size_t limit = max_contacts ? out.size() + max_contacts : std::size_t(-1);
   ContactTest test{detail};
-  for (const std::uint64_t c : candidates) {
+  exact_detail::ApartBlock block;  // as narrow_phase(): the planes' test a block at a time first
+  const auto test_left = [&](std::uint32_t ta, std::uint32_t tb, const TriangleCorners& ca, const TriangleCorners& cb) {
     Contact contact;
-    contact.tri_a = pair_a(c);
-    contact.tri_b = pair_b(c);
-    if (test(corners(mesh, contact.tri_a), corners(mesh, contact.tri_b), contact)) {
-      out.push_back(contact);
-      if (out.size() >= limit) return;
-    }
+    contact.tri_a = ta;
+    contact.tri_b = tb;
+    if (!test(ca, cb, contact)) return true;
+    out.push_back(contact);
+    return out.size() < limit;
+  };
+  for (const std::uint64_t c : candidates) {
+    block.put(pair_a(c), pair_b(c), corners(mesh, pair_a(c)), corners(mesh, pair_b(c)));
+    if (block.full() && !block.drain(test_left)) return;
   }
+  block.drain(test_left);
 }
 
 }  // namespace peelcd

@@ -2,6 +2,7 @@
 
 #include "peelcd/core/exact/self.h"
 
+#include "../exact/apart_block.h"
 #include "../exact/bvh_traverse.h"
 
 #include <algorithm>
@@ -119,14 +120,21 @@ void FramePlan::plan_self(const Mesh& mesh, const DetectOptions& opt, PairPlan& 
   if (p.self_tested) {
     p.self_count = 0;
     ContactTest test{opt.contacts};
-    self_overlap_visit(mesh, tree, p.rep, [&](std::uint32_t t, std::uint32_t u) {
-      p.marks[t] = p.marks[u] = 1;
-      ++p.self_count;
+    const auto test_left = [&](std::uint32_t t, std::uint32_t u, const TriangleCorners& ct, const TriangleCorners& cu) {
       Contact contact;
       contact.tri_a = t;
       contact.tri_b = u;
-      if (test(corners(mesh, t), corners(mesh, u), contact)) p.self_contacts.push_back(contact);
+      if (test(ct, cu, contact)) p.self_contacts.push_back(contact);
+      return true;
+    };
+    exact_detail::ApartBlock block;  // the planes' test a block at a time first (narrow_phase())
+    self_overlap_visit(mesh, tree, p.rep, [&](std::uint32_t t, std::uint32_t u) {
+      p.marks[t] = p.marks[u] = 1;
+      ++p.self_count;
+      block.put(t, u, corners(mesh, t), corners(mesh, u));
+      if (block.full()) block.drain(test_left);
     });
+    block.drain(test_left);
   } else {
     self_overlap_pairs(mesh, tree, p.rep, p.self_candidates);
     if (opt.max_contacts) std::sort(p.self_candidates.begin(), p.self_candidates.end());

@@ -264,14 +264,23 @@ void World::Impl::traverse_task(std::size_t k, unsigned lane) {
     const Mesh& m = a.local();
     const std::uint32_t* rep = a.rep_adjacency == SelfAdjacency::index ? nullptr : a.rep.data();  // index: the identity
     ContactTest test{detail};
-    // Couples sharing a corner dropped in the traversal, eight at once.
+    const auto test_left = [&](std::uint32_t x, std::uint32_t y, const TriangleCorners& cx, const TriangleCorners& cy) {
+      Contact contact;
+      contact.tri_a = x;
+      contact.tri_b = y;
+      if (test(cx, cy, contact)) t.contacts.push_back(contact);
+      return true;
+    };
+    // Couples sharing a corner dropped in the traversal, eight at once; the rest tested a block
+    // at a time (as test_task_as()).
+    ApartBlock& block = lane_scratch[lane]->apart;
     t.visited = bvh_self_traverse_apart(a.tree, rep, self_stacks[lane].v, [&](std::uint32_t x, std::uint32_t y) {
       ++t.tested;
-      Contact contact;
-      contact.tri_a = std::min(x, y);
-      contact.tri_b = std::max(x, y);
-      if (test(corners(m, contact.tri_a), corners(m, contact.tri_b), contact)) t.contacts.push_back(contact);
+      if (y < x) std::swap(x, y);
+      block.put(x, y, corners(m, x), corners(m, y));
+      if (block.full()) block.drain(test_left);
     });
+    block.drain(test_left);
     return;
   }
   if (t.kind == TaskKind::small_pair) {  // as the frame API's exact path: one culling round, a sweep
@@ -360,7 +369,7 @@ void World::Impl::test_candidates(const DetectOptions& opt, std::size_t used, un
                    opt.max_contacts, opt.contacts);
       return;
     }
-    test_task(a, b, opt, t);
+    test_task(a, b, opt, t, lane_scratch[lane]->apart);
   });
 }
 
@@ -376,16 +385,16 @@ void World::Impl::test_candidates(const DetectOptions& opt, std::size_t used, un
 // read 14k triangles of A and 13k of B, and the tests took 0.85x their time. Bodies in world
 // space read their corners as they are: there the branches on the kept triangles cost more than
 // the reads (the 1,000-ball pile's tests 1.07x their time kept).
-void World::Impl::test_task(const Body& a, const Body& b, const DetectOptions& opt, Task& t) {
+void World::Impl::test_task(const Body& a, const Body& b, const DetectOptions& opt, Task& t, ApartBlock& block) {
   const std::size_t moved_a = a.is_rigid && !a.world_frame ? 3 : 0, moved_b = b.is_rigid && !b.world_frame ? 3 : 0;
   if (moved_a || moved_b)
-    test_task_as<true>(a, b, opt, t);
+    test_task_as<true>(a, b, opt, t, block);
   else
-    test_task_as<false>(a, b, opt, t);
+    test_task_as<false>(a, b, opt, t, block);
 }
 
 template <bool kKeep>
-void World::Impl::test_task_as(const Body& a, const Body& b, const DetectOptions& opt, Task& t) {
+void World::Impl::test_task_as(const Body& a, const Body& b, const DetectOptions& opt, Task& t, ApartBlock& block) {
   const Mesh& ma = a.local();
   const Mesh& mb = b.local();
   // The candidates' data is read in an order the hardware cannot guess: their triangles are
@@ -420,6 +429,17 @@ void World::Impl::test_task_as(const Body& a, const Body& b, const DetectOptions
   constexpr std::uint32_t kKeptB = kKeep ? 16 : 1;  // B's table: a leaf's eight triangles and the next leaf's
   Corners x, kept_b[kKeptB];
   ContactTest test{opt.contacts};
+  // The couples go to the exact test a block at a time, after the block's planes' test in SIMD
+  // lanes (exact_detail::ApartBlock: the exact test's first step, four couples at once) put
+  // aside those certainly apart; the rest in candidate order. False: the task has enough.
+  const auto test_left = [&](std::uint32_t ta, std::uint32_t tb, const TriangleCorners& ca, const TriangleCorners& cb) {
+    Contact contact;
+    contact.tri_a = ta;
+    contact.tri_b = tb;
+    if (!test(ca, cb, contact)) return true;
+    t.contacts.push_back(contact);
+    return !opt.max_contacts || t.contacts.size() < opt.max_contacts;  // enough for this task
+  };
   for (std::size_t k = 0; k < n; ++k) {
     if (k + kAhead < n) {
       const std::uint64_t f = t.candidates[k + kAhead];
@@ -437,27 +457,29 @@ void World::Impl::test_task_as(const Body& a, const Body& b, const DetectOptions
     }
     const std::uint64_t c = t.candidates[k];
     const std::uint32_t ta = pair_a(c), tb = pair_b(c);
-    Corners& y = kept_b[tb % kKeptB];
-    if (!kKeep || x.tri != ta) {
-      x.load(a, ma, ta);
-      transformed += moved_a;
+    if (!kKeep) {  // world space: the corners as they are
+      const Tri& fa = ma.triangles[ta];
+      const Tri& fb = mb.triangles[tb];
+      block.put(ta, tb, va[fa[0]], va[fa[1]], va[fa[2]], vb[fb[0]], vb[fb[1]], vb[fb[2]]);
+    } else {
+      Corners& y = kept_b[tb % kKeptB];
+      if (x.tri != ta) {
+        x.load(a, ma, ta);
+        transformed += moved_a;
+      }
+      if (y.tri != tb) {
+        y.load(b, mb, tb);
+        transformed += moved_b;
+      }
+      // Posed trees report couples whose boxes were carried through a pose (boxes of boxes):
+      // their own world boxes first. (Two trees in one frame reported couples whose float boxes,
+      // rounded outward, overlap: the exact test decides at once.)
+      if ((x.hi.array() < y.lo.array()).any() || (y.hi.array() < x.lo.array()).any()) continue;
+      block.put(ta, tb, x.c, y.c);
     }
-    if (!kKeep || y.tri != tb) {
-      y.load(b, mb, tb);
-      transformed += moved_b;
-    }
-    // Posed trees report couples whose boxes were carried through a pose (boxes of boxes): their
-    // own world boxes first. Two trees in one frame reported couples whose float boxes, rounded
-    // outward, overlap: the exact test decides at once.
-    if (kKeep && ((x.hi.array() < y.lo.array()).any() || (y.hi.array() < x.lo.array()).any())) continue;
-    Contact contact;
-    contact.tri_a = ta;
-    contact.tri_b = tb;
-    if (test(x.c, y.c, contact)) {
-      t.contacts.push_back(contact);
-      if (opt.max_contacts && t.contacts.size() >= opt.max_contacts) return;  // enough for this task
-    }
+    if (block.full() && !block.drain(test_left)) return;
   }
+  block.drain(test_left);
 }
 
 // Each exact pair's contacts from its tasks, sorted (self pairs through self_pair()).

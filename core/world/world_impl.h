@@ -12,6 +12,7 @@
 #include "peelcd/core/exact/reference.h"
 #include "peelcd/core/exact/self.h"
 #include "peelcd/core/worker_pool.h"
+#include "../exact/apart_block.h"
 
 #include <atomic>
 #include <map>
@@ -249,6 +250,7 @@ struct RegionScratch {
 }  // namespace world_detail
 
 using namespace world_detail;
+using exact_detail::ApartBlock;
 
 struct World::Impl {
   std::atomic<std::thread::id> owner{};  // the thread inside a frame or a change (ExclusiveUse)
@@ -279,6 +281,7 @@ struct World::Impl {
     BoxScratch boxes;
     std::vector<std::uint64_t> sorted;
     ContactSortScratch contacts;  // a pair's contacts sorted (gather_contacts())
+    ApartBlock apart;             // the exact path's couples, a block at a time (test_task())
   };
   std::vector<std::unique_ptr<LaneScratch>> lane_scratch;  // per lane: the small pairs' scan
   std::vector<std::uint64_t> candidates;
@@ -389,9 +392,9 @@ struct World::Impl {
   void traverse_task(std::size_t k, unsigned lane);
   void route_pairs(const DetectOptions& opt, std::size_t used, FrameResult& out);
   void test_candidates(const DetectOptions& opt, std::size_t used, unsigned lanes);
-  void test_task(const Body& a, const Body& b, const DetectOptions& opt, Task& t);
+  void test_task(const Body& a, const Body& b, const DetectOptions& opt, Task& t, ApartBlock& block);
   template <bool kKeep>  // a triangle's corners kept for the couples that follow (test_task())
-  void test_task_as(const Body& a, const Body& b, const DetectOptions& opt, Task& t);
+  void test_task_as(const Body& a, const Body& b, const DetectOptions& opt, Task& t, ApartBlock& block);
   void gather_contacts(FrameResult& out);
   void relate(const DetectOptions& opt, FrameResult& out);
   // A self pair's contacts: its tasks' (in the body's frame), cached for a rigid body, moved to

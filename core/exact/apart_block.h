@@ -1,0 +1,77 @@
+#pragma once
+// Private to the exact narrow phase and the loops that feed it (narrow_phase(), the World's
+// tasks, self-collision): couples of triangles gathered a block at a time, so that the first
+// question of the exact test, "does one triangle lie strictly on one side of the other's
+// plane?", is answered for four couples at once in SIMD lanes before any couple reaches the
+// scalar test. The lanes compute the very expressions certain_plane_sides() computes (certified.h:
+// the same operations in the same order, Shewchuk's bound, no fused multiply-add), so a couple
+// they call apart is one the exact test would reject at its first step, and every other couple
+// goes to the exact test as before: the contacts, their order and their kinds are unchanged.
+#include "peelcd/core/pairs.h"  // TriangleCorners
+
+#include <cstddef>
+#include <cstdint>
+
+namespace peelcd::exact_detail {
+
+class ApartBlock {
+ public:
+  static constexpr std::size_t kSize = 64;  // couples a block holds (a 64-bit mask of answers)
+
+  std::size_t size() const { return n_; }
+  bool full() const { return n_ == kSize; }
+  void clear() { n_ = 0; }
+
+  // Adds the couple of triangles (ta, tb), corners a and b, as the block's next one.
+  void put(std::uint32_t ta, std::uint32_t tb, const TriangleCorners& a, const TriangleCorners& b) {
+    put(ta, tb, a[0], a[1], a[2], b[0], b[1], b[2]);
+  }
+  void put(std::uint32_t ta, std::uint32_t tb, const Vec3& a0, const Vec3& a1, const Vec3& a2, const Vec3& b0,
+           const Vec3& b1, const Vec3& b2) {
+    const std::size_t i = n_++;
+    tri_a_[i] = ta;
+    tri_b_[i] = tb;
+    const Vec3* c[6] = {&a0, &a1, &a2, &b0, &b1, &b2};
+    for (int k = 0; k < 3; ++k)
+      for (int d = 0; d < 3; ++d) {
+        a_[3 * k + d][i] = (*c[k])[d];
+        b_[3 * k + d][i] = (*c[3 + k])[d];
+      }
+  }
+  // Couple i's corners, as put.
+  TriangleCorners a(std::size_t i) const { return corners(a_, i); }
+  TriangleCorners b(std::size_t i) const { return corners(b_, i); }
+
+  // Empties the block: fn(ta, tb, a, b) for each couple apart() leaves, in the order they were
+  // put; stops early, returning false, when fn returns false.
+  template <class Fn>
+  bool drain(Fn&& fn) {
+    const std::size_t m = n_;
+    std::uint64_t left = ~apart() & (m == kSize ? ~std::uint64_t(0) : (std::uint64_t(1) << m) - 1);
+    n_ = 0;
+    for (; left; left &= left - 1) {
+      const std::size_t i = std::size_t(__builtin_ctzll(left));
+      if (!fn(tri_a_[i], tri_b_[i], corners(a_, i), corners(b_, i))) return false;
+    }
+    return true;
+  }
+
+  // Bit i set: couple i is certainly apart, all of one triangle's corners strictly on one side
+  // of the other's plane by signs the double evaluation certifies (either plane: A's, as the
+  // exact test asks first, or B's, as it asks second). Bits at and above size() are 0.
+  std::uint64_t apart();
+
+ private:
+  static TriangleCorners corners(const double (&c)[9][kSize], std::size_t i) {
+    return {Vec3(c[0][i], c[1][i], c[2][i]), Vec3(c[3][i], c[4][i], c[5][i]), Vec3(c[6][i], c[7][i], c[8][i])};
+  }
+  // By coordinate: [3 k + d][i] is corner k's coordinate d of couple i. Not initialized:
+  // apart() zeroes the lanes past size() in the last group of four it reads, so that they
+  // compute on finite numbers (the tests trap floating-point exceptions).
+  alignas(32) double a_[9][kSize];
+  alignas(32) double b_[9][kSize];
+  std::uint32_t tri_a_[kSize], tri_b_[kSize];
+  std::size_t n_ = 0;
+};
+
+}  // namespace peelcd::exact_detail
