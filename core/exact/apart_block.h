@@ -7,6 +7,7 @@
 // the same operations in the same order, Shewchuk's bound, no fused multiply-add), so a couple
 // they call apart is one the exact test would reject at its first step, and every other couple
 // goes to the exact test as before: the contacts, their order and their kinds are unchanged.
+#include "peelcd/core/exact/narrow_phase.h"  // KnownSides
 #include "peelcd/core/pairs.h"  // TriangleCorners
 
 #include <cstddef>
@@ -42,8 +43,9 @@ class ApartBlock {
   TriangleCorners a(std::size_t i) const { return corners(a_, i); }
   TriangleCorners b(std::size_t i) const { return corners(b_, i); }
 
-  // Empties the block: fn(ta, tb, a, b) for each couple apart() leaves, in the order they were
-  // put; stops early, returning false, when fn returns false.
+  // Empties the block: fn(ta, tb, a, b, sides) for each couple apart() leaves, in the order
+  // they were put, `sides` holding the signs the lanes certified (ContactTest takes them instead
+  // of computing them again); stops early, returning false, when fn returns false.
   template <class Fn>
   bool drain(Fn&& fn) {
     const std::size_t m = n_;
@@ -51,14 +53,19 @@ class ApartBlock {
     n_ = 0;
     for (; left; left &= left - 1) {
       const std::size_t i = std::size_t(__builtin_ctzll(left));
-      if (!fn(tri_a_[i], tri_b_[i], corners(a_, i), corners(b_, i))) return false;
+      KnownSides sides;
+      sides.b_known = (known_b_ >> i) & 1;
+      sides.a_known = (known_a_ >> i) & 1;
+      for (int k = 0; k < 3; ++k) sides.b[k] = side_b_[k][i], sides.a[k] = side_a_[k][i];
+      if (!fn(tri_a_[i], tri_b_[i], corners(a_, i), corners(b_, i), sides)) return false;
     }
     return true;
   }
 
   // Bit i set: couple i is certainly apart, all of one triangle's corners strictly on one side
   // of the other's plane by signs the double evaluation certifies (either plane: A's, as the
-  // exact test asks first, or B's, as it asks second). Bits at and above size() are 0.
+  // exact test asks first, or B's, as it asks second). Bits at and above size() are 0. Also
+  // keeps each couple's certified sides for drain().
   std::uint64_t apart();
 
  private:
@@ -71,6 +78,8 @@ class ApartBlock {
   alignas(32) double a_[9][kSize];
   alignas(32) double b_[9][kSize];
   std::uint32_t tri_a_[kSize], tri_b_[kSize];
+  std::int8_t side_b_[3][kSize], side_a_[3][kSize];  // B's corners against A's plane; A's against B's
+  std::uint64_t known_b_ = 0, known_a_ = 0;          // couples whose three sides are certified
   std::size_t n_ = 0;
 };
 

@@ -80,6 +80,21 @@ inline void leaf_couples(const BvhLeaf& la, std::uint32_t count, const BvhLeaf& 
   }
 }
 
+// Two leaves of trees in one frame, each node's box the union of its lanes' (Bvh keeps them so):
+// every couple of lanes whose boxes overlap, fn(tri_a, tri_b) in leaf_couples()'s order. A
+// couple's boxes overlap only where A's lane reaches B's node box and B's lane A's (each box
+// lies in its node's), so those two masks, eight lanes each at once, come first: the lanes of A
+// outside B's box skip their test against B's eight, those of B outside A's box are masked off.
+template <class Fn>
+inline void leaf_pair_couples(const BvhLeaf& la, const FBox& box_a, const BvhLeaf& lb, const FBox& box_b, Fn&& fn) {
+  const unsigned allowed = overlap_mask(box_a, lb);
+  if (allowed == 0) return;
+  for (unsigned us = overlap_mask(box_b, la); us;) {
+    const unsigned u = take_lane(us);
+    for (unsigned m = overlap_mask(la.box(u), lb) & allowed; m;) fn(la.tri[u], lb.tri[take_lane(m)]);
+  }
+}
+
 // The stack is stack[0, top), grown here as needed.
 template <class Entry>
 inline void reserve(std::vector<Entry>& stack, std::size_t top, std::size_t more) {
@@ -131,9 +146,7 @@ struct SameFrame {
   // Invariant: the two nodes' boxes overlap (tested before the push).
   template <class Fn>
   void leaves(const Entry& /*e*/, const BvhNode& x, const BvhNode& y, Fn& fn) const {
-    const BvhLeaf& la = a.leaf(x);
-    // (no test of A's box against B's node first: a branch)
-    leaf_couples(la, x.count, b.leaf(y), [&](std::uint32_t u, FBox& box) { return box = la.box(u), ~0u; }, fn);
+    leaf_pair_couples(a.leaf(x), x.box, b.leaf(y), y.box, fn);
   }
   void descend(const Entry& e, std::vector<Entry>& stack, std::size_t& top) const {
     descend_same_frame(a, b, e.first, e.second, stack, top);
@@ -257,14 +270,20 @@ struct Self {
       if (same)  // lanes after u (empty lanes never overlap)
         leaf_couples(lx, x.count, lx, [&](std::uint32_t u, FBox& box) { return box = lx.box(u), ~0u << (u + 1); }, fn);
       else
-        leaf_couples(lx, x.count, tree.leaf(y), [&](std::uint32_t u, FBox& box) { return box = lx.box(u), ~0u; }, fn);
+        leaf_pair_couples(lx, x.box, tree.leaf(y), y.box, fn);
       return;
     }
     const BvhLeaf& ly = tree.leaf(y);
+    // Two leaves: only A's lanes that reach B's node box, against B's that reach A's (as
+    // leaf_pair_couples()), the corner ids read only when some do.
+    const unsigned allowed = same ? ~0u : overlap_mask(x.box, ly);
+    unsigned us = same ? (1u << x.count) - 1u : overlap_mask(y.box, lx);
+    if (allowed == 0 || us == 0) return;
     const LeafCornerIds ids(tree.leaf_corners(y), y.count, rep);
     const Tri* cx = tree.leaf_corners(x);
-    for (std::uint32_t u = 0; u < x.count; ++u) {
-      unsigned m = overlap_mask(lx.box(u), ly) & (same ? ~0u << (u + 1) : ~0u);
+    while (us) {
+      const unsigned u = take_lane(us);
+      unsigned m = overlap_mask(lx.box(u), ly) & allowed & (same ? ~0u << (u + 1) : ~0u);
       if (m == 0) continue;
       std::uint32_t c[3];
       for (int k = 0; k < 3; ++k) c[k] = rep ? rep[cx[u][k]] : cx[u][k];

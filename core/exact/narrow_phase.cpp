@@ -78,14 +78,18 @@ namespace {
 // answer alike on every couple. Inlined into each entry point, its plane sides too (called out
 // of line, they cost the 400-ball pile's frame a few percent).
 template <bool kClassify>
-PEELCD_ALWAYS_INLINE bool test_pair(const TriangleCorners& ca, const TriangleCorners& cb, Contact& contact) {
+PEELCD_ALWAYS_INLINE bool test_pair(const TriangleCorners& ca, const TriangleCorners& cb, Contact& contact,
+                                    const KnownSides* known = nullptr) {
   // The six corner/plane signs, each once (certified in double, exact where double cannot
   // tell); most candidates end here, one triangle strictly on one side of the other's plane.
   // Where a sign is left to exact arithmetic (a corner on or within rounding of the other's
   // plane: a smooth sheet's neighbours), a plane through an edge may separate the two first.
+  // Signs a block's lanes certified (`known`) are taken as they are: the same values.
   int side_b[3], side_a[3];
   bool edge_planes_tried = false;
-  if (!certain_plane_sides(ca, cb, side_b)) {
+  if (known && known->b_known) {
+    for (int k = 0; k < 3; ++k) side_b[k] = known->b[k];
+  } else if (!certain_plane_sides(ca, cb, side_b)) {
     if (apart_across_an_edge(ca, cb)) return false;
     edge_planes_tried = true;
     exact_plane_sides(ca, cb, side_b);
@@ -94,7 +98,9 @@ PEELCD_ALWAYS_INLINE bool test_pair(const TriangleCorners& ca, const TriangleCor
   // B in A's plane (or A without area): coplanar, whatever A's signs against B's plane are.
   const bool coplanar_b = all_zero(side_b);
   if (!coplanar_b) {
-    if (!certain_plane_sides(cb, ca, side_a)) {
+    if (known && known->a_known) {
+      for (int k = 0; k < 3; ++k) side_a[k] = known->a[k];
+    } else if (!certain_plane_sides(cb, ca, side_a)) {
       if (!edge_planes_tried && apart_across_an_edge(ca, cb)) return false;
       exact_plane_sides(cb, ca, side_a);
     }
@@ -143,16 +149,30 @@ bool triangles_meet(const TriangleCorners& a, const TriangleCorners& b) {
   return test_pair<false>(a, b, unused);
 }
 
-bool ContactTest::operator()(const TriangleCorners& a, const TriangleCorners& b, Contact& contact) {
-  if (detail == ContactDetail::segments || !crossing_seen) {
-    if (!test_pair<true>(a, b, contact)) return false;
-    crossing_seen |= contact.kind == ContactKind::crossing;
+namespace {
+
+PEELCD_ALWAYS_INLINE bool contact_test(ContactTest& t, const TriangleCorners& a, const TriangleCorners& b,
+                                       Contact& contact, const KnownSides* known) {
+  if (t.detail == ContactDetail::segments || !t.crossing_seen) {
+    if (!test_pair<true>(a, b, contact, known)) return false;
+    t.crossing_seen |= contact.kind == ContactKind::crossing;
     return true;
   }
-  if (!test_pair<false>(a, b, contact)) return false;
+  if (!test_pair<false>(a, b, contact, known)) return false;
   contact.p = contact.q = Vec3::Zero();
   contact.kind = ContactKind::unclassified;
   return true;
+}
+
+}  // namespace
+
+bool ContactTest::operator()(const TriangleCorners& a, const TriangleCorners& b, Contact& contact) {
+  return contact_test(*this, a, b, contact, nullptr);
+}
+
+bool ContactTest::operator()(const TriangleCorners& a, const TriangleCorners& b, Contact& contact,
+                             const KnownSides& sides) {
+  return contact_test(*this, a, b, contact, &sides);
 }
 
 
@@ -163,11 +183,12 @@ void narrow_phase(const Mesh& a, const Mesh& b, const std::vector<std::uint64_t>
   // A block at a time: the couples certainly apart by a plane found in SIMD lanes first
   // (apart_block.h), the rest tested in candidate order.
   ApartBlock block;
-  const auto test_left = [&](std::uint32_t ta, std::uint32_t tb, const TriangleCorners& ca, const TriangleCorners& cb) {
+  const auto test_left = [&](std::uint32_t ta, std::uint32_t tb, const TriangleCorners& ca, const TriangleCorners& cb,
+                             const KnownSides& sides) {
     Contact contact;
     contact.tri_a = ta;
     contact.tri_b = tb;
-    if (!test(ca, cb, contact)) return true;
+    if (!test(ca, cb, contact, sides)) return true;
     out.push_back(contact);
     return out.size() < limit;
   };

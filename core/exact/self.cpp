@@ -79,11 +79,12 @@ void self_narrow_phase(const Mesh& mesh, const std::vector<std::uint64_t>& candi
   const std::size_t limit = max_contacts ? out.size() + max_contacts : std::size_t(-1);
   ContactTest test{detail};
   exact_detail::ApartBlock block;  // as narrow_phase(): the planes' test a block at a time first
-  const auto test_left = [&](std::uint32_t ta, std::uint32_t tb, const TriangleCorners& ca, const TriangleCorners& cb) {
+  const auto test_left = [&](std::uint32_t ta, std::uint32_t tb, const TriangleCorners& ca, const TriangleCorners& cb,
+                             const KnownSides& sides) {
     Contact contact;
     contact.tri_a = ta;
     contact.tri_b = tb;
-    if (!test(ca, cb, contact)) return true;
+    if (!test(ca, cb, contact, sides)) return true;
     out.push_back(contact);
     return out.size() < limit;
   };

@@ -120,11 +120,12 @@ void FramePlan::plan_self(const Mesh& mesh, const DetectOptions& opt, PairPlan& 
   if (p.self_tested) {
     p.self_count = 0;
     ContactTest test{opt.contacts};
-    const auto test_left = [&](std::uint32_t t, std::uint32_t u, const TriangleCorners& ct, const TriangleCorners& cu) {
+    const auto test_left = [&](std::uint32_t t, std::uint32_t u, const TriangleCorners& ct, const TriangleCorners& cu,
+                               const KnownSides& sides) {
       Contact contact;
       contact.tri_a = t;
       contact.tri_b = u;
-      if (test(ct, cu, contact)) p.self_contacts.push_back(contact);
+      if (test(ct, cu, contact, sides)) p.self_contacts.push_back(contact);
       return true;
     };
     exact_detail::ApartBlock block;  // the planes' test a block at a time first (narrow_phase())

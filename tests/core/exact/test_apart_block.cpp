@@ -102,13 +102,52 @@ TEST_CASE("the block's planes' test answers as the scalar certified plane sides,
   CHECK(both_ways > 0);
 }
 
+TEST_CASE("the sides a block hands on are the scalar test's own certified signs", "[narrow][apart]") {
+  const auto all = couples(3000, 5);
+  ApartBlock block;
+  std::size_t known_b = 0, known_a = 0, drained = 0;
+  const auto check = [&](std::uint32_t, std::uint32_t, const TriangleCorners& a, const TriangleCorners& b,
+                         const KnownSides& sides) {
+    ++drained;
+    int s[3];
+    if (sides.b_known) {
+      ++known_b;
+      REQUIRE(exact_detail::certain_plane_sides(a, b, s));
+      CHECK((s[0] == sides.b[0] && s[1] == sides.b[1] && s[2] == sides.b[2]));
+      CHECK(sides.b[0] * sides.b[1] * sides.b[2] != 0);
+    }
+    if (sides.a_known) {
+      ++known_a;
+      REQUIRE(exact_detail::certain_plane_sides(b, a, s));
+      CHECK((s[0] == sides.a[0] && s[1] == sides.a[1] && s[2] == sides.a[2]));
+      CHECK(sides.a[0] * sides.a[1] * sides.a[2] != 0);
+    }
+    // The answer with the signs handed on is the answer without them.
+    Contact with, without;
+    ContactTest t1, t2;
+    CHECK(t1(a, b, with, sides) == t2(a, b, without));
+    CHECK((with.kind == without.kind && with.p == without.p && with.q == without.q));
+    return true;
+  };
+  for (std::size_t i = 0; i < all.size(); ++i) {
+    block.put(std::uint32_t(i), 0, all[i].first, all[i].second);
+    if (block.full()) block.drain(check);
+  }
+  block.drain(check);
+  CHECK(drained > 100);
+  CHECK(known_b > drained / 4);  // the lattice and near-plane families leave some unknown
+  CHECK(known_b < drained);
+  CHECK(known_a > 0);
+}
+
 TEST_CASE("drain() hands on the couples not apart, in the order put, and stops when asked", "[narrow][apart]") {
   const auto all = couples(150, 11);
   ApartBlock block;
   for (std::size_t i = 0; i < 40; ++i) block.put(std::uint32_t(i), std::uint32_t(1000 + i), all[i].first, all[i].second);
   const std::uint64_t bits = block.apart();
   std::vector<std::uint32_t> seen;
-  CHECK(block.drain([&](std::uint32_t ta, std::uint32_t tb, const TriangleCorners& a, const TriangleCorners& b) {
+  CHECK(block.drain([&](std::uint32_t ta, std::uint32_t tb, const TriangleCorners& a, const TriangleCorners& b,
+                         const KnownSides&) {
     CHECK(tb == ta + 1000);
     CHECK(a == all[ta].first);
     CHECK(b == all[ta].second);
@@ -123,7 +162,8 @@ TEST_CASE("drain() hands on the couples not apart, in the order put, and stops w
   REQUIRE(expected.size() >= 2);
   for (std::size_t i = 0; i < 40; ++i) block.put(std::uint32_t(i), 0, all[i].first, all[i].second);
   std::size_t calls = 0;
-  CHECK_FALSE(block.drain([&](std::uint32_t, std::uint32_t, const TriangleCorners&, const TriangleCorners&) { return ++calls < 2; }));
+  CHECK_FALSE(block.drain([&](std::uint32_t, std::uint32_t, const TriangleCorners&, const TriangleCorners&,
+                              const KnownSides&) { return ++calls < 2; }));
   CHECK(calls == 2);
   CHECK(block.size() == 0);
 }

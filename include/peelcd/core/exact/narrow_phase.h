@@ -8,6 +8,7 @@
 #include "peelcd/core/pairs.h"
 
 #include <array>
+#include <cstdint>
 #include <vector>
 
 namespace peelcd {
@@ -43,11 +44,22 @@ bool triangles_meet(const TriangleCorners& a, const TriangleCorners& b);
 // first crossing contact and unclassified after it (kind unclassified, segment 0): a pair's
 // relation needs one crossing contact, or, with none, every contact's kind
 // (contact_relation(), touching_relation()).
+// Signs of one triangle's corners against the other's plane already certified (a block's planes'
+// test, core/exact/apart_block.h): b[k], B's corner k against A's plane (+1, -1; 0 only where
+// not certified), valid when b_known; a[k], A's against B's, when a_known. Exactly the signs the
+// test would certify itself.
+struct KnownSides {
+  std::int8_t b[3] = {0, 0, 0}, a[3] = {0, 0, 0};
+  bool b_known = false, a_known = false;
+};
+
 struct ContactTest {
   ContactDetail detail = ContactDetail::segments;
   bool crossing_seen = false;
   // true when the triangles share a point, `contact` filled as said (its indices are the caller's).
   bool operator()(const TriangleCorners& a, const TriangleCorners& b, Contact& contact);
+  // The same with the signs `sides` holds (the same answer, fewer operations).
+  bool operator()(const TriangleCorners& a, const TriangleCorners& b, Contact& contact, const KnownSides& sides);
 };
 
 
