@@ -8,6 +8,10 @@
 
 #include <cstring>
 
+#if defined(__x86_64__)
+#include <immintrin.h>
+#endif
+
 // The helpers below take and return 256-bit vectors; they are always inlined (no call passes
 // one, so the ABI note GCC gives for them does not apply).
 #if defined(__clang__)
@@ -34,66 +38,76 @@ PEELCD_ALWAYS_INLINE V4 abs4(V4 v) {
 PEELCD_ALWAYS_INLINE V4 splat(double d) { return V4{d, d, d, d}; }
 
 // The sides of `t`'s corners against the plane of `p`, four couples at once, as
-// certain_plane_sides(p, t) computes them in its first loop: side[k] is +1, -1 or 0 (not
-// certified) per lane; `certain` has the lanes whose three sides are certified, `one` those
-// whose three lie strictly on one side (all ones per lane).
+// certain_plane_sides(p, t) computes them in its first loop: above[k] and below[k] per lane
+// (all ones where certified so), `one` where all three lie strictly on one side.
 PEELCD_ALWAYS_INLINE void plane_sides(const double (&p)[9][ApartBlock::kSize], const double (&t)[9][ApartBlock::kSize],
-                                      std::size_t i, M4 (&side)[3], M4& certain, M4& one) {
+                                      std::size_t i, M4 (&above)[3], M4 (&below)[3], M4& one) {
   const V4 px = load(&p[0][i]), py = load(&p[1][i]), pz = load(&p[2][i]);
   const V4 e1x = load(&p[3][i]) - px, e1y = load(&p[4][i]) - py, e1z = load(&p[5][i]) - pz;
   const V4 e2x = load(&p[6][i]) - px, e2y = load(&p[7][i]) - py, e2z = load(&p[8][i]) - pz;
   const V4 cx = e1y * e2z - e1z * e2y, cy = e1z * e2x - e1x * e2z, cz = e1x * e2y - e1y * e2x;
   const V4 mx = abs4(e1y * e2z) + abs4(e1z * e2y), my = abs4(e1z * e2x) + abs4(e1x * e2z),
            mz = abs4(e1x * e2y) + abs4(e1y * e2x);
-  M4 all_above = ~M4{}, all_below = ~M4{};
-  certain = ~M4{};
   for (int k = 0; k < 3; ++k) {
     const V4 fx = load(&t[3 * k][i]) - px, fy = load(&t[3 * k + 1][i]) - py, fz = load(&t[3 * k + 2][i]) - pz;
     const V4 det = fx * cx + fy * cy + fz * cz;
     const V4 bound = splat(kOrient3dBound) * (abs4(fx) * mx + abs4(fy) * my + abs4(fz) * mz) + splat(kUnderflowSlack);
-    const M4 above = (M4)(det > bound), below = (M4)(det < -bound);
-    side[k] = below - above;  // true is -1 in a lane: +1 above, -1 below, 0 neither
-    all_above &= above;
-    all_below &= below;
-    certain &= above | below;
+    above[k] = (M4)(det > bound);
+    below[k] = (M4)(det < -bound);
   }
-  one = all_above | all_below;
+  one = (above[0] & above[1] & above[2]) | (below[0] & below[1] & below[2]);
 }
 
-// The block's answers: apart bits returned; the certified sides and which lanes have them.
+// The block's answers as bits, lane i of the block at bit i: what apart() returns, and each
+// corner's certified sides (ApartBlock::Sides). Mask turns four lanes into four bits.
+template <class Mask>
 PEELCD_ALWAYS_INLINE std::uint64_t apart_lanes(const double (&a)[9][ApartBlock::kSize],
                                                const double (&b)[9][ApartBlock::kSize], std::size_t n,
-                                               std::int8_t (&side_b)[3][ApartBlock::kSize],
-                                               std::int8_t (&side_a)[3][ApartBlock::kSize], std::uint64_t& known_b,
-                                               std::uint64_t& known_a) {
-  std::uint64_t bits = 0, kb = 0, ka = 0;
+                                               ApartBlock::Sides& side_b, ApartBlock::Sides& side_a, Mask mask) {
+  std::uint64_t bits = 0;
+  side_b = side_a = ApartBlock::Sides{};
   for (std::size_t i = 0; i < n; i += 4) {
-    M4 sb[3], sa[3], certain_b, certain_a, one_b, one_a;
-    plane_sides(a, b, i, sb, certain_b, one_b);  // B's corners against A's plane (asked first)
-    plane_sides(b, a, i, sa, certain_a, one_a);  // A's against B's
-    const M4 apart = one_b | one_a;
-    for (int j = 0; j < 4; ++j) {
-      bits |= std::uint64_t(apart[j] != 0) << (i + j);
-      kb |= std::uint64_t(certain_b[j] != 0) << (i + j);
-      ka |= std::uint64_t(certain_a[j] != 0) << (i + j);
-      for (int k = 0; k < 3; ++k) {
-        side_b[k][i + j] = std::int8_t(sb[k][j]);
-        side_a[k][i + j] = std::int8_t(sa[k][j]);
-      }
+    M4 ab[3], bb[3], aa[3], ba[3], one_b, one_a;
+    plane_sides(a, b, i, ab, bb, one_b);  // B's corners against A's plane (asked first)
+    plane_sides(b, a, i, aa, ba, one_a);  // A's against B's
+    bits |= std::uint64_t(mask(one_b | one_a)) << i;
+    side_b.known |= std::uint64_t(mask((ab[0] | bb[0]) & (ab[1] | bb[1]) & (ab[2] | bb[2]))) << i;
+    side_a.known |= std::uint64_t(mask((aa[0] | ba[0]) & (aa[1] | ba[1]) & (aa[2] | ba[2]))) << i;
+    for (int k = 0; k < 3; ++k) {
+      side_b.above[k] |= std::uint64_t(mask(ab[k])) << i;
+      side_b.below[k] |= std::uint64_t(mask(bb[k])) << i;
+      side_a.above[k] |= std::uint64_t(mask(aa[k])) << i;
+      side_a.below[k] |= std::uint64_t(mask(ba[k])) << i;
     }
   }
-  known_b = kb;
-  known_a = ka;
   return n == ApartBlock::kSize ? bits : bits & ((std::uint64_t(1) << n) - 1);
 }
 
+// Four lanes' signs (all ones or zero) as four bits, lane j at bit j.
+struct PortableMask {
+  unsigned operator()(const M4& m) const {
+    return unsigned(m[0] != 0) | unsigned(m[1] != 0) << 1 | unsigned(m[2] != 0) << 2 | unsigned(m[3] != 0) << 3;
+  }
+};
+
 #if defined(__x86_64__) && defined(__GNUC__)
+struct SseMask {  // two 128-bit halves (SSE2: every x86-64)
+  PEELCD_ALWAYS_INLINE unsigned operator()(const M4& m) const {
+    __m128d lo, hi;
+    std::memcpy(&lo, &m, sizeof lo);
+    std::memcpy(&hi, reinterpret_cast<const char*>(&m) + sizeof lo, sizeof hi);
+    return unsigned(_mm_movemask_pd(lo)) | unsigned(_mm_movemask_pd(hi)) << 2;
+  }
+};
+struct Avx2Mask {
+  __attribute__((target("avx2"))) unsigned operator()(const M4& m) const {
+    return unsigned(_mm256_movemask_pd(reinterpret_cast<__m256d>(m)));
+  }
+};
 __attribute__((target("avx2"))) std::uint64_t apart_avx2(const double (&a)[9][ApartBlock::kSize],
                                                          const double (&b)[9][ApartBlock::kSize], std::size_t n,
-                                                         std::int8_t (&side_b)[3][ApartBlock::kSize],
-                                                         std::int8_t (&side_a)[3][ApartBlock::kSize],
-                                                         std::uint64_t& known_b, std::uint64_t& known_a) {
-  return apart_lanes(a, b, n, side_b, side_a, known_b, known_a);
+                                                         ApartBlock::Sides& side_b, ApartBlock::Sides& side_a) {
+  return apart_lanes(a, b, n, side_b, side_a, Avx2Mask{});
 }
 const bool kHasAvx2 = [] {
   __builtin_cpu_init();
@@ -107,9 +121,11 @@ std::uint64_t ApartBlock::apart() {
   for (std::size_t i = n_; i % 4 != 0; ++i)
     for (int c = 0; c < 9; ++c) a_[c][i] = b_[c][i] = 0.0;
 #if defined(__x86_64__) && defined(__GNUC__)
-  if (kHasAvx2) return apart_avx2(a_, b_, n_, side_b_, side_a_, known_b_, known_a_);
+  if (kHasAvx2) return apart_avx2(a_, b_, n_, side_b_, side_a_);
+  return apart_lanes(a_, b_, n_, side_b_, side_a_, SseMask{});
+#else
+  return apart_lanes(a_, b_, n_, side_b_, side_a_, PortableMask{});
 #endif
-  return apart_lanes(a_, b_, n_, side_b_, side_a_, known_b_, known_a_);
 }
 
 }  // namespace peelcd::exact_detail

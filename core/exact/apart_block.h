@@ -54,13 +54,24 @@ class ApartBlock {
     for (; left; left &= left - 1) {
       const std::size_t i = std::size_t(__builtin_ctzll(left));
       KnownSides sides;
-      sides.b_known = (known_b_ >> i) & 1;
-      sides.a_known = (known_a_ >> i) & 1;
-      for (int k = 0; k < 3; ++k) sides.b[k] = side_b_[k][i], sides.a[k] = side_a_[k][i];
+      side_b_.get(i, sides.b, sides.b_known);
+      side_a_.get(i, sides.a, sides.a_known);
       if (!fn(tri_a_[i], tri_b_[i], corners(a_, i), corners(b_, i), sides)) return false;
     }
     return true;
   }
+
+  // Three corners' certified sides against a plane, couple i at bit i: above, below (neither:
+  // not certified).
+  struct Sides {
+    std::uint64_t above[3] = {0, 0, 0}, below[3] = {0, 0, 0};
+    std::uint64_t known = 0;  // all three certified
+    // Couple i's signs, and whether all three are certified.
+    void get(std::size_t i, std::int8_t (&side)[3], bool& all) const {
+      for (int k = 0; k < 3; ++k) side[k] = std::int8_t(int(above[k] >> i & 1) - int(below[k] >> i & 1));
+      all = known >> i & 1;
+    }
+  };
 
   // Bit i set: couple i is certainly apart, all of one triangle's corners strictly on one side
   // of the other's plane by signs the double evaluation certifies (either plane: A's, as the
@@ -78,8 +89,7 @@ class ApartBlock {
   alignas(32) double a_[9][kSize];
   alignas(32) double b_[9][kSize];
   std::uint32_t tri_a_[kSize], tri_b_[kSize];
-  std::int8_t side_b_[3][kSize], side_a_[3][kSize];  // B's corners against A's plane; A's against B's
-  std::uint64_t known_b_ = 0, known_a_ = 0;          // couples whose three sides are certified
+  Sides side_b_, side_a_;  // B's corners against A's plane; A's against B's
   std::size_t n_ = 0;
 };
 

@@ -108,8 +108,8 @@ inline void reserve(std::vector<Entry>& stack, std::size_t top, std::size_t more
 // first out; asking only for kept ones would branch on the overlap again); a child's right
 // child (its left one is next to it) is asked for in any case, ahead of the child's own descent
 // (for a leaf, whose `first` is a leaf index, the hint is wasted, which costs less than a branch).
-inline void descend_same_frame(const Bvh& a, const Bvh& b, std::uint32_t i, std::uint32_t j,
-                               std::vector<BvhNodePair>& stack, std::size_t& top) {
+PEELCD_ALWAYS_INLINE void descend_same_frame(const Bvh& a, const Bvh& b, std::uint32_t i, std::uint32_t j,
+                                             std::vector<BvhNodePair>& stack, std::size_t& top) {
   reserve(stack, top, 2);
   const auto& na = a.nodes();
   const auto& nb = b.nodes();
