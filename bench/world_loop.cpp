@@ -1,0 +1,97 @@
+// peelcd_world_loop: the World alone on a scene file, frame after frame, for profilers and for
+// the question the bench's turns cannot answer: what a frame costs with its data in cache
+// (frames back to back) and with it evicted (--cold: 64 MB written between frames, as other
+// work between two frames of a program would). The scene's objects are rigid bodies at their
+// file poses, brought to each frame by set_pose() as `peelcd bench` brings them; one thread.
+//
+//   peelcd_world_loop SCENE [--frames N] [--pairs] [--cold]
+//
+// Prints the median frame (and its first quartile), the World's boxes and exact steps
+// (Timings::aabb, Timings::cpu) and the contacts found. Under valgrind --tool=callgrind, the
+// difference of two runs with different --frames is the instructions of that many frames.
+#include "peelcd/core/world/world.h"
+#include "peelcd/io/scene.h"
+
+#include <algorithm>
+#include <chrono>
+#include <cstdio>
+#include <cstdlib>
+#include <cstring>
+#include <exception>
+#include <string>
+#include <vector>
+
+using namespace peelcd;
+
+namespace {
+
+double median(std::vector<double> v, double q = 0.5) {
+  std::sort(v.begin(), v.end());
+  return v.empty() ? 0.0 : v[std::size_t(double(v.size() - 1) * q)];
+}
+
+int usage(const char* why) {
+  std::fprintf(stderr, "peelcd_world_loop: %s\nusage: peelcd_world_loop SCENE [--frames N] [--pairs] [--cold]\n", why);
+  return 2;
+}
+
+}  // namespace
+
+int main(int argc, char** argv) {
+  std::string path;
+  long frames = 300;
+  bool pairs = false, cold = false;
+  for (int i = 1; i < argc; ++i) {
+    if (!std::strcmp(argv[i], "--pairs")) {
+      pairs = true;
+    } else if (!std::strcmp(argv[i], "--cold")) {
+      cold = true;
+    } else if (!std::strcmp(argv[i], "--frames")) {
+      if (i + 1 == argc) return usage("--frames needs a count");
+      char* end = nullptr;
+      frames = std::strtol(argv[++i], &end, 10);
+      if (*end != '\0' || frames < 1 || frames > 10000000) return usage("--frames: a count from 1 to 10,000,000");
+    } else if (path.empty() && argv[i][0] != '-') {
+      path = argv[i];
+    } else {
+      return usage((std::string("unknown argument '") + argv[i] + "'").c_str());
+    }
+  }
+  if (path.empty()) return usage("no scene file");
+  try {
+    std::vector<Object> objects = load_objects(load_scene(path));
+    World world;
+    std::vector<BodyId> ids;
+    std::vector<std::shared_ptr<const Mesh>> shapes;
+    for (const Object& o : objects) {
+      shapes.push_back(std::make_shared<const Mesh>(o.mesh));
+      ids.push_back(world.add_rigid(shapes.back(), Eigen::Affine3d::Identity(), o.name));
+    }
+    DetectOptions opt;
+    opt.threads = 1;
+    if (pairs) opt.contacts = ContactDetail::pairs;
+    FrameResult result;
+    std::vector<char> other(cold ? std::size_t(64) << 20 : 0);
+    std::vector<double> ms, boxes, exact;
+    std::size_t contacts = 0;
+    for (long f = 0; f < frames; ++f) {
+      for (std::size_t i = 0; i < other.size(); i += 64) other[i] = char(other[i] + 1);
+      const auto t0 = std::chrono::steady_clock::now();
+      for (const BodyId id : ids) world.set_pose(id, Eigen::Affine3d::Identity());
+      world.collide(opt, result);
+      ms.push_back(std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - t0).count());
+      boxes.push_back(result.timings.aabb);
+      exact.push_back(result.timings.cpu);
+      for (const PairResult& p : result.pairs) contacts += p.colliding.size();
+    }
+    std::printf("%s: %ld frames%s%s, one thread\n", path.c_str(), frames, pairs ? ", pairs only" : "",
+                cold ? ", 64 MB written between frames" : "");
+    std::printf("frame: median %.4f ms, first quartile %.4f ms; boxes %.4f ms, exact %.4f ms (medians)\n", median(ms),
+                median(ms, 0.25), median(boxes), median(exact));
+    std::printf("contacts: %zu over the frames (%.1f a frame)\n", contacts, double(contacts) / double(frames));
+    return 0;
+  } catch (const std::exception& e) {
+    std::fprintf(stderr, "peelcd_world_loop: %s\n", e.what());
+    return 1;
+  }
+}
