@@ -12,6 +12,7 @@
 
 #include <cstddef>
 #include <cstdint>
+#include <vector>
 
 namespace peelcd::exact_detail {
 
@@ -91,6 +92,24 @@ class ApartBlock {
   std::uint32_t tri_a_[kSize], tri_b_[kSize];
   Sides side_b_, side_a_;  // B's corners against A's plane; A's against B's
   std::size_t n_ = 0;
+};
+
+// What most loops drain a block into: each couple left tested by `test`, its contact (its
+// triangles' indices as put) appended to `out`; false, ending the drain, once `out` holds
+// `limit` contacts.
+struct TestInto {
+  ContactTest& test;
+  std::vector<Contact>& out;
+  std::size_t limit = std::size_t(-1);
+  bool operator()(std::uint32_t ta, std::uint32_t tb, const TriangleCorners& a, const TriangleCorners& b,
+                  const KnownSides& sides) const {
+    Contact contact;
+    contact.tri_a = ta;
+    contact.tri_b = tb;
+    if (!test(a, b, contact, sides)) return true;
+    out.push_back(contact);
+    return out.size() < limit;
+  }
 };
 
 }  // namespace peelcd::exact_detail

@@ -183,15 +183,7 @@ void narrow_phase(const Mesh& a, const Mesh& b, const std::vector<std::uint64_t>
   // A block at a time: the couples certainly apart by a plane found in SIMD lanes first
   // (apart_block.h), the rest tested in candidate order.
   ApartBlock block;
-  const auto test_left = [&](std::uint32_t ta, std::uint32_t tb, const TriangleCorners& ca, const TriangleCorners& cb,
-                             const KnownSides& sides) {
-    Contact contact;
-    contact.tri_a = ta;
-    contact.tri_b = tb;
-    if (!test(ca, cb, contact, sides)) return true;
-    out.push_back(contact);
-    return out.size() < limit;
-  };
+  const TestInto test_left{test, out, limit};
   for (std::uint64_t c : candidates) {
     const std::uint32_t ta = pair_a(c), tb = pair_b(c);
     // A triangle lies in the box of its corners: disjoint boxes, no contact (exact: comparisons

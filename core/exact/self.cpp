@@ -79,15 +79,7 @@ void self_narrow_phase(const Mesh& mesh, const std::vector<std::uint64_t>& candi
   const std::size_t limit = max_contacts ? out.size() + max_contacts : std::size_t(-1);
   ContactTest test{detail};
   exact_detail::ApartBlock block;  // as narrow_phase(): the planes' test a block at a time first
-  const auto test_left = [&](std::uint32_t ta, std::uint32_t tb, const TriangleCorners& ca, const TriangleCorners& cb,
-                             const KnownSides& sides) {
-    Contact contact;
-    contact.tri_a = ta;
-    contact.tri_b = tb;
-    if (!test(ca, cb, contact, sides)) return true;
-    out.push_back(contact);
-    return out.size() < limit;
-  };
+  const exact_detail::TestInto test_left{test, out, limit};
   for (const std::uint64_t c : candidates) {
     block.put(pair_a(c), pair_b(c), corners(mesh, pair_a(c)), corners(mesh, pair_b(c)));
     if (block.full() && !block.drain(test_left)) return;

@@ -120,14 +120,7 @@ void FramePlan::plan_self(const Mesh& mesh, const DetectOptions& opt, PairPlan& 
   if (p.self_tested) {
     p.self_count = 0;
     ContactTest test{opt.contacts};
-    const auto test_left = [&](std::uint32_t t, std::uint32_t u, const TriangleCorners& ct, const TriangleCorners& cu,
-                               const KnownSides& sides) {
-      Contact contact;
-      contact.tri_a = t;
-      contact.tri_b = u;
-      if (test(ct, cu, contact, sides)) p.self_contacts.push_back(contact);
-      return true;
-    };
+    const exact_detail::TestInto test_left{test, p.self_contacts};
     exact_detail::ApartBlock block;  // the planes' test a block at a time first (narrow_phase())
     self_overlap_visit(mesh, tree, p.rep, [&](std::uint32_t t, std::uint32_t u) {
       p.marks[t] = p.marks[u] = 1;

@@ -264,14 +264,7 @@ void World::Impl::traverse_task(std::size_t k, unsigned lane) {
     const Mesh& m = a.local();
     const std::uint32_t* rep = a.rep_adjacency == SelfAdjacency::index ? nullptr : a.rep.data();  // index: the identity
     ContactTest test{detail};
-    const auto test_left = [&](std::uint32_t x, std::uint32_t y, const TriangleCorners& cx, const TriangleCorners& cy,
-                               const KnownSides& sides) {
-      Contact contact;
-      contact.tri_a = x;
-      contact.tri_b = y;
-      if (test(cx, cy, contact, sides)) t.contacts.push_back(contact);
-      return true;
-    };
+    const exact_detail::TestInto test_left{test, t.contacts};
     // Couples sharing a corner dropped in the traversal, eight at once; the rest tested a block
     // at a time (as test_task_as()).
     ApartBlock& block = lane_scratch[lane]->apart;
@@ -432,16 +425,9 @@ void World::Impl::test_task_as(const Body& a, const Body& b, const DetectOptions
   ContactTest test{opt.contacts};
   // The couples go to the exact test a block at a time, after the block's planes' test in SIMD
   // lanes (exact_detail::ApartBlock: the exact test's first step, four couples at once) put
-  // aside those certainly apart; the rest in candidate order. False: the task has enough.
-  const auto test_left = [&](std::uint32_t ta, std::uint32_t tb, const TriangleCorners& ca, const TriangleCorners& cb,
-                             const KnownSides& sides) {
-    Contact contact;
-    contact.tri_a = ta;
-    contact.tri_b = tb;
-    if (!test(ca, cb, contact, sides)) return true;
-    t.contacts.push_back(contact);
-    return !opt.max_contacts || t.contacts.size() < opt.max_contacts;  // enough for this task
-  };
+  // aside those certainly apart; the rest in candidate order, until the task has enough
+  // (t.contacts starts empty).
+  const exact_detail::TestInto test_left{test, t.contacts, opt.max_contacts ? opt.max_contacts : std::size_t(-1)};
   for (std::size_t k = 0; k < n; ++k) {
     if (k + kAhead < n) {
       const std::uint64_t f = t.candidates[k + kAhead];
