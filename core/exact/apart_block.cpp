@@ -31,7 +31,7 @@ PEELCD_ALWAYS_INLINE V4 load(const double* p) {
   std::memcpy(&v, p, sizeof v);
   return v;
 }
-PEELCD_ALWAYS_INLINE V4 abs4(V4 v) {
+PEELCD_ALWAYS_INLINE V4 abs4(const V4& v) {
   const M4 magnitude = {0x7fffffffffffffffLL, 0x7fffffffffffffffLL, 0x7fffffffffffffffLL, 0x7fffffffffffffffLL};
   return (V4)((M4)v & magnitude);
 }
