@@ -117,15 +117,14 @@ const bool kHasAvx2 = [] {
 
 }  // namespace
 
-std::uint64_t ApartBlock::apart() {
+std::uint64_t ApartBlock::apart(Lanes lanes) {
   for (std::size_t i = n_; i % 4 != 0; ++i)
     for (int c = 0; c < 9; ++c) a_[c][i] = b_[c][i] = 0.0;
 #if defined(__x86_64__) && defined(__GNUC__)
-  if (kHasAvx2) return apart_avx2(a_, b_, n_, side_b_, side_a_);
-  return apart_lanes(a_, b_, n_, side_b_, side_a_, SseMask{});
-#else
-  return apart_lanes(a_, b_, n_, side_b_, side_a_, PortableMask{});
+  if (lanes == Lanes::best && kHasAvx2) return apart_avx2(a_, b_, n_, side_b_, side_a_);
+  if (lanes != Lanes::portable) return apart_lanes(a_, b_, n_, side_b_, side_a_, SseMask{});
 #endif
+  return apart_lanes(a_, b_, n_, side_b_, side_a_, PortableMask{});
 }
 
 }  // namespace peelcd::exact_detail

@@ -77,8 +77,10 @@ class ApartBlock {
   // Bit i set: couple i is certainly apart, all of one triangle's corners strictly on one side
   // of the other's plane by signs the double evaluation certifies (either plane: A's, as the
   // exact test asks first, or B's, as it asks second). Bits at and above size() are 0. Also
-  // keeps each couple's certified sides for drain().
-  std::uint64_t apart();
+  // keeps each couple's certified sides for drain(). `lanes`: the instruction set (best: AVX2
+  // where the processor has it, else SSE2; the others for tests, which hold them equal).
+  enum class Lanes { best, sse2, portable };
+  std::uint64_t apart(Lanes lanes = Lanes::best);
 
  private:
   static TriangleCorners corners(const double (&c)[9][kSize], std::size_t i) {

@@ -78,7 +78,12 @@ TEST_CASE("the block's planes' test answers as the scalar certified plane sides,
     const std::size_t m = std::min<std::size_t>(all.size() - at, 1 + rng() % ApartBlock::kSize);  // partial blocks too
     for (std::size_t i = 0; i < m; ++i) block.put(std::uint32_t(at + i), 0, all[at + i].first, all[at + i].second);
     REQUIRE(block.size() == m);
+    // The same answers from every instruction set (the default last: its sides are kept).
+    const std::uint64_t sse2 = block.apart(ApartBlock::Lanes::sse2);
+    const std::uint64_t portable = block.apart(ApartBlock::Lanes::portable);
     const std::uint64_t bits = block.apart();
+    REQUIRE(sse2 == bits);
+    REQUIRE(portable == bits);
     if (m < ApartBlock::kSize) REQUIRE((bits >> m) == 0);
     for (std::size_t i = 0; i < m; ++i) {
       const auto& [a, b] = all[at + i];
