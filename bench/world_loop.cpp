@@ -1,15 +1,18 @@
 // peelcd_world_loop: the World alone on a scene file, frame after frame, for profilers and for
 // the question the bench's turns cannot answer: what a frame costs with its data in cache
 // (frames back to back) and with it evicted (--cold: 64 MB written between frames, as other
-// work between two frames of a program would). The scene's objects are rigid bodies at their
-// file poses, brought to each frame by set_pose() as `peelcd bench` brings them; one thread.
+// work between two frames of a program would). A scene file's objects are rigid bodies at their
+// file poses, brought to each frame by set_pose() as `peelcd bench` brings them; `--spheres S`
+// takes `peelcd bench spheres --stacks S` instead (two crossing rigid spheres, turning: the
+// posed traversal), its frames over and over. One thread.
 //
-//   peelcd_world_loop SCENE [--frames N] [--pairs] [--cold]
+//   peelcd_world_loop SCENE|--spheres STACKS [--frames N] [--pairs] [--cold]
 //
 // Prints the median frame (and its first quartile), the World's boxes and exact steps
 // (Timings::aabb, Timings::cpu) and the contacts found. Under valgrind --tool=callgrind, the
 // difference of two runs with different --frames is the instructions of that many frames.
 #include "peelcd/core/world/world.h"
+#include "peelcd/eval/scenes.h"
 #include "peelcd/io/scene.h"
 
 #include <algorithm>
@@ -31,7 +34,8 @@ double median(std::vector<double> v, double q = 0.5) {
 }
 
 int usage(const char* why) {
-  std::fprintf(stderr, "peelcd_world_loop: %s\nusage: peelcd_world_loop SCENE [--frames N] [--pairs] [--cold]\n", why);
+  std::fprintf(stderr, "peelcd_world_loop: %s\nusage: peelcd_world_loop SCENE|--spheres STACKS [--frames N] [--pairs] [--cold]\n",
+               why);
   return 2;
 }
 
@@ -39,7 +43,7 @@ int usage(const char* why) {
 
 int main(int argc, char** argv) {
   std::string path;
-  long frames = 300;
+  long frames = 300, stacks = 0;
   bool pairs = false, cold = false;
   for (int i = 1; i < argc; ++i) {
     if (!std::strcmp(argv[i], "--pairs")) {
@@ -51,22 +55,34 @@ int main(int argc, char** argv) {
       char* end = nullptr;
       frames = std::strtol(argv[++i], &end, 10);
       if (*end != '\0' || frames < 1 || frames > 10000000) return usage("--frames: a count from 1 to 10,000,000");
+    } else if (!std::strcmp(argv[i], "--spheres")) {
+      if (i + 1 == argc) return usage("--spheres needs a number of latitude bands");
+      char* end = nullptr;
+      stacks = std::strtol(argv[++i], &end, 10);
+      if (*end != '\0' || stacks < 3 || stacks > 2000) return usage("--spheres: latitude bands from 3 to 2,000");
     } else if (path.empty() && argv[i][0] != '-') {
       path = argv[i];
     } else {
       return usage((std::string("unknown argument '") + argv[i] + "'").c_str());
     }
   }
-  if (path.empty()) return usage("no scene file");
+  if (path.empty() == (stacks == 0)) return usage("a scene file or --spheres, one of them");
   try {
-    std::vector<Object> objects = load_objects(load_scene(path));
+    // The frames: a scene file's one frame (its objects as rigid shapes at the identity), or
+    // the spheres' sequence (kSphereFrames frames, played over and over).
+    constexpr std::size_t kSphereFrames = 12;
+    std::unique_ptr<Sequence> sequence;
+    std::vector<Object> objects;
+    if (stacks) {
+      sequence = make_crossing_spheres(int(stacks), kSphereFrames, /*wave=*/false);
+      sequence->frame(0, objects);
+    } else {
+      objects = load_objects(load_scene(path));
+      for (Object& o : objects) o.rigid = RigidMotion{std::make_shared<const Mesh>(o.mesh), Eigen::Affine3d::Identity()};
+    }
     World world;
     std::vector<BodyId> ids;
-    std::vector<std::shared_ptr<const Mesh>> shapes;
-    for (const Object& o : objects) {
-      shapes.push_back(std::make_shared<const Mesh>(o.mesh));
-      ids.push_back(world.add_rigid(shapes.back(), Eigen::Affine3d::Identity(), o.name));
-    }
+    for (const Object& o : objects) ids.push_back(world.add_rigid(o.rigid->shape, o.rigid->pose, o.name));
     DetectOptions opt;
     opt.threads = 1;
     if (pairs) opt.contacts = ContactDetail::pairs;
@@ -76,15 +92,16 @@ int main(int argc, char** argv) {
     std::size_t contacts = 0;
     for (long f = 0; f < frames; ++f) {
       for (std::size_t i = 0; i < other.size(); i += 64) other[i] = char(other[i] + 1);
+      if (sequence) sequence->frame(std::size_t(f) % kSphereFrames, objects);
       const auto t0 = std::chrono::steady_clock::now();
-      for (const BodyId id : ids) world.set_pose(id, Eigen::Affine3d::Identity());
+      for (std::size_t i = 0; i < ids.size(); ++i) world.set_pose(ids[i], objects[i].rigid->pose);
       world.collide(opt, result);
       ms.push_back(std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - t0).count());
       boxes.push_back(result.timings.aabb);
       exact.push_back(result.timings.cpu);
       for (const PairResult& p : result.pairs) contacts += p.colliding.size();
     }
-    std::printf("%s: %ld frames%s%s, one thread\n", path.c_str(), frames, pairs ? ", pairs only" : "",
+    std::printf("%s: %ld frames%s%s, one thread\n", stacks ? ("spheres, " + std::to_string(stacks) + " stacks").c_str() : path.c_str(), frames, pairs ? ", pairs only" : "",
                 cold ? ", 64 MB written between frames" : "");
     std::printf("frame: median %.4f ms, first quartile %.4f ms; boxes %.4f ms, exact %.4f ms (medians)\n", median(ms),
                 median(ms, 0.25), median(boxes), median(exact));

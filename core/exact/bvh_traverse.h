@@ -188,7 +188,7 @@ struct Posed {
       return box.overlaps(y.box) ? ~0u : 0u;
     }, fn);
   }
-  void descend(const Entry& e, std::vector<Entry>& stack, std::size_t& top) const {
+  PEELCD_ALWAYS_INLINE void descend(const Entry& e, std::vector<Entry>& stack, std::size_t& top) const {
     reserve(stack, top, 2);
     const auto& na = a.nodes();
     const auto& nb = b.nodes();
