@@ -40,9 +40,6 @@ class ApartBlock {
         b_[3 * k + d][i] = (*c[3 + k])[d];
       }
   }
-  // Couple i's corners, as put.
-  TriangleCorners a(std::size_t i) const { return corners(a_, i); }
-  TriangleCorners b(std::size_t i) const { return corners(b_, i); }
 
   // Empties the block: fn(ta, tb, a, b, sides) for each couple apart() leaves, in the order
   // they were put, `sides` holding the signs the lanes certified (ContactTest takes them instead
