@@ -418,6 +418,31 @@ BvhRelation BvhRelation::between(const Eigen::Affine3d& pose_a, const Eigen::Aff
   // up to the linear parts' norms, folded in here).
   r.reach = std::max(pose_a.translation().cwiseAbs().maxCoeff(), pose_b.translation().cwiseAbs().maxCoeff()) *
             std::max({1.0, r.abs_linear.maxCoeff(), r.inv_abs_linear.maxCoeff()});
+  // The float maps (only where every entry is a normal float or zero, so that each rounds to
+  // within 2^-24 of itself, and no product or sum of the traversal can overflow).
+  const auto entry_ok = [](double v) {
+    const double m = std::abs(v);
+    return m == 0.0 || (m >= double(std::numeric_limits<float>::min()) && m <= 1e6);
+  };
+  const auto fill = [&](BvhRelation::FloatMap& f, const Eigen::Matrix3d& l, const Vec3& t) {
+    bool ok = std::abs(t.x()) < kFloatRange && std::abs(t.y()) < kFloatRange && std::abs(t.z()) < kFloatRange;
+    for (int j = 0; j < 3; ++j) {
+      for (int k = 0; k < 3; ++k) {
+        ok = ok && entry_ok(l(k, j));
+        f.col[j][k] = float(l(k, j));
+        f.abs_col[j][k] = std::abs(f.col[j][k]);
+      }
+      f.col[j][3] = f.abs_col[j][3] = 0.0f;
+      f.t[j] = float(t[j]);
+      f.abs_t[j] = std::abs(f.t[j]);
+    }
+    f.t[3] = f.abs_t[3] = 0.0f;
+    f.grow = FBox::up(1e-9 * r.reach) + 1e-37f;
+    return ok;
+  };
+  const bool to_a_ok = fill(r.float_to_a, r.linear, r.translation);
+  const bool to_b_ok = fill(r.float_to_b, r.inv_linear, r.inv_translation);
+  r.float_ok = to_a_ok && to_b_ok && r.reach < kFloatRange;
   return r;
 }
 

@@ -13,6 +13,8 @@
 #include "peelcd/core/exact/bvh.h"
 #include "peelcd/core/exact/self.h"
 
+#include <algorithm>
+#include <cmath>
 #include <cstdint>
 #include <vector>
 
@@ -153,22 +155,105 @@ struct SameFrame {
   }
 };
 
+// How the posed traversal carries a box into the other tree's frame: the box enclosing its
+// image, rounded outward to floats. DoubleCarry goes through BvhRelation's doubles (any pose);
+// FloatCarry computes in floats, four lanes at once, where BvhRelation::float_ok and the trees'
+// boxes allow (bvh_traverse() chooses).
+struct DoubleCarry {
+  const BvhRelation& rel;
+  PEELCD_ALWAYS_INLINE FBox to_a(const FBox& b) const { return FBox::enclosing(rel.to_a(b.aabb())); }
+  PEELCD_ALWAYS_INLINE FBox to_b(const FBox& a) const { return FBox::enclosing(rel.to_b(a.aabb())); }
+};
+
+// The float transform of a box [lo, hi] by p -> L p + t (u = 2^-24, float's unit roundoff; the
+// box's coordinates, L's entries and t bounded as BvhRelation::float_ok and bvh_traverse()
+// require, so nothing overflows and L's nonzero entries are normal floats). With c = (lo + hi) / 2,
+// e = (hi - lo) / 2, a = max(|lo|, |hi|) = |c| + e (exact) and m = |L| a + |t|, the box's image
+// lies in [center - half, center + half] computed as L c + t and |L| e, but for:
+//   c and e rounded: the box moves and shrinks by at most u a, its image by u m;
+//   L and t rounded to floats: u m in the center, u m in the half extent;
+//   the two sums of products (four and three terms): gamma_4 m and gamma_3 m, about 7u m;
+//   the final half + grow and center -/+ it: at most 3.3u m.
+// In all below 14u m; the growth is 2^-19 m = 32u m (m itself computed in floats, a few u
+// low at most), plus the relation's fixed growth (the world coordinates' rounding, `reach`,
+// and 1e-37 for any product that underflows: at most 2^-150 each).
+struct FloatCarry {
+  const BvhRelation::FloatMap& to_a_map;
+  const BvhRelation::FloatMap& to_b_map;
+
+  static PEELCD_ALWAYS_INLINE FBox carry(const FBox& in, const BvhRelation::FloatMap& f) {
+#if defined(__SSE__) || defined(_M_X64)
+    // lo0 lo1 lo2 hi0 and lo2 hi0 hi1 hi2: both loads inside the box's six floats.
+    const __m128 l4 = _mm_loadu_ps(in.lo), h4 = _mm_loadu_ps(in.lo + 2);
+    const __m128 lo = l4, hi = _mm_shuffle_ps(h4, h4, _MM_SHUFFLE(3, 3, 2, 1));  // lane 3: unused
+    const __m128 half_ = _mm_set1_ps(0.5f), sign = _mm_set1_ps(-0.0f);
+    const __m128 c = _mm_mul_ps(_mm_add_ps(lo, hi), half_);
+    const __m128 e = _mm_mul_ps(_mm_sub_ps(hi, lo), half_);
+    const __m128 a = _mm_max_ps(_mm_andnot_ps(sign, lo), _mm_andnot_ps(sign, hi));
+    const __m128 col0 = _mm_load_ps(f.col[0]), col1 = _mm_load_ps(f.col[1]), col2 = _mm_load_ps(f.col[2]);
+    const __m128 abs0 = _mm_load_ps(f.abs_col[0]), abs1 = _mm_load_ps(f.abs_col[1]), abs2 = _mm_load_ps(f.abs_col[2]);
+#define PEELCD_LANE(v, k) _mm_shuffle_ps(v, v, _MM_SHUFFLE(k, k, k, k))
+    const __m128 center = _mm_add_ps(
+        _mm_add_ps(_mm_add_ps(_mm_mul_ps(col0, PEELCD_LANE(c, 0)), _mm_mul_ps(col1, PEELCD_LANE(c, 1))),
+                   _mm_mul_ps(col2, PEELCD_LANE(c, 2))),
+        _mm_load_ps(f.t));
+    const __m128 half = _mm_add_ps(_mm_add_ps(_mm_mul_ps(abs0, PEELCD_LANE(e, 0)), _mm_mul_ps(abs1, PEELCD_LANE(e, 1))),
+                                   _mm_mul_ps(abs2, PEELCD_LANE(e, 2)));
+    const __m128 m = _mm_add_ps(
+        _mm_add_ps(_mm_add_ps(_mm_mul_ps(abs0, PEELCD_LANE(a, 0)), _mm_mul_ps(abs1, PEELCD_LANE(a, 1))),
+                   _mm_mul_ps(abs2, PEELCD_LANE(a, 2))),
+        _mm_load_ps(f.abs_t));
+#undef PEELCD_LANE
+    const __m128 r = _mm_add_ps(half, _mm_add_ps(_mm_mul_ps(m, _mm_set1_ps(0x1p-19f)), _mm_set1_ps(f.grow)));
+    const __m128 olo = _mm_sub_ps(center, r), ohi = _mm_add_ps(center, r);
+    FBox out;
+    alignas(16) float x[4], y[4];
+    _mm_store_ps(x, olo);
+    _mm_store_ps(y, ohi);
+    for (int k = 0; k < 3; ++k) out.lo[k] = x[k], out.hi[k] = y[k];
+    return out;
+#else
+    float c[3], e[3], a[3];
+    for (int j = 0; j < 3; ++j) {
+      c[j] = (in.lo[j] + in.hi[j]) * 0.5f;
+      e[j] = (in.hi[j] - in.lo[j]) * 0.5f;
+      a[j] = std::max(std::abs(in.lo[j]), std::abs(in.hi[j]));
+    }
+    FBox out;
+    for (int k = 0; k < 3; ++k) {
+      const float center = ((f.col[0][k] * c[0] + f.col[1][k] * c[1]) + f.col[2][k] * c[2]) + f.t[k];
+      const float half = (f.abs_col[0][k] * e[0] + f.abs_col[1][k] * e[1]) + f.abs_col[2][k] * e[2];
+      const float m = ((f.abs_col[0][k] * a[0] + f.abs_col[1][k] * a[1]) + f.abs_col[2][k] * a[2]) + f.abs_t[k];
+      const float r = half + (m * 0x1p-19f + f.grow);
+      out.lo[k] = center - r;
+      out.hi[k] = center + r;
+    }
+    return out;
+#endif
+  }
+  PEELCD_ALWAYS_INLINE FBox to_a(const FBox& b) const { return carry(b, to_a_map); }
+  PEELCD_ALWAYS_INLINE FBox to_b(const FBox& a) const { return carry(a, to_b_map); }
+};
+
 // B's tree posed against A's: each entry carries B's node box as seen from A (computed once,
 // when the pair is pushed; descending into A's children keeps it). A node pair is pushed when
 // the boxes overlap in A's frame (and, descending B, in B's too); a couple is reported when A's
-// triangle box overlaps B's leaf in A's frame and, carried into B's frame and rounded outward,
-// B's triangle box there (one transform per triangle of A, B's eight boxes tested at once).
-// Boxes carried through a pose are boxes of boxes: some couples whose own boxes do not overlap
-// are reported (the exact test decides).
+// triangle box overlaps B's leaf in A's frame and, carried into B's frame, B's triangle box
+// there (one transform per triangle of A, B's eight boxes tested at once). Boxes carried
+// through a pose are boxes of boxes: some couples whose own boxes do not overlap are reported
+// (the exact test decides). With rel.identity, boxes are compared as they are.
+template <class Carry>
 struct Posed {
   using Entry = BvhStackEntry;
   const Bvh& a;
   const Bvh& b;
   const BvhRelation& rel;
+  Carry carry;
   bool admit(BvhNodePair start, Entry& e) const {
-    const Aabb yb = rel.to_a(b.nodes()[start.second].box.aabb());
-    e = {start.first, start.second, yb};
-    return rel.overlap(a.nodes()[start.first].box.aabb(), yb, b.nodes()[start.second].box.aabb());
+    const FBox& xa = a.nodes()[start.first].box;
+    const FBox& yb = b.nodes()[start.second].box;
+    e = {start.first, start.second, rel.identity ? yb : carry.to_a(yb)};
+    return xa.overlaps(e.b_in_a) && (rel.identity || carry.to_b(xa).overlaps(yb));
   }
   // Invariant: A's node box overlaps e.b_in_a (tested before the push).
   template <class Fn>
@@ -182,11 +267,21 @@ struct Posed {
       return;
     }
     leaf_couples(la, x.count, b.leaf(y), [&](std::uint32_t u, FBox& box) {
-      const Aabb ba = la.box(u).aabb();
+      const FBox ba = la.box(u);
       if (!ba.overlaps(e.b_in_a)) return 0u;
-      box = FBox::enclosing(rel.to_b(ba));  // A's triangle box seen from B, rounded outward
+      box = carry.to_b(ba);  // A's triangle box seen from B
       return box.overlaps(y.box) ? ~0u : 0u;
     }, fn);
+  }
+  // A pushed pair's lines asked for ahead of its pop: both leaves' for a pair of leaves, else
+  // the right child of each internal node (its left one is next to it).
+  PEELCD_ALWAYS_INLINE void ask_ahead(const BvhNode& x, const BvhNode& y) const {
+    if (x.leaf() & y.leaf()) {
+      prefetch_leaf(a, x), prefetch_leaf(b, y);
+      return;
+    }
+    if (!x.leaf()) prefetch(&a.nodes()[x.first]);
+    if (!y.leaf()) prefetch(&b.nodes()[y.first]);
   }
   PEELCD_ALWAYS_INLINE void descend(const Entry& e, std::vector<Entry>& stack, std::size_t& top) const {
     reserve(stack, top, 2);
@@ -194,19 +289,27 @@ struct Posed {
     const auto& nb = b.nodes();
     const BvhNode& x = na[e.a];
     const BvhNode& y = nb[e.b];
-    if (y.leaf() || (!x.leaf() && double(x.box.max_extent()) >= e.b_in_a.extent().maxCoeff())) {
-      for (const std::uint32_t c : {e.a + 1, x.first})  // B's box is in A's frame either way
-        if (na[c].box.overlaps(e.b_in_a)) stack[top++] = {c, e.b, e.b_in_a};
+    if (y.leaf() || (!x.leaf() && x.box.max_extent() >= e.b_in_a.max_extent())) {
+      for (const std::uint32_t c : {e.a + 1, x.first}) {  // B's box is in A's frame either way
+        if (!na[c].box.overlaps(e.b_in_a)) continue;
+        stack[top++] = {c, e.b, e.b_in_a};
+        ask_ahead(na[c], y);
+      }
     } else if (rel.identity) {
-      for (const std::uint32_t c : {e.b + 1, y.first})
-        if (x.box.overlaps(nb[c].box)) stack[top++] = {e.a, c, nb[c].box.aabb()};
+      for (const std::uint32_t c : {e.b + 1, y.first}) {
+        if (!x.box.overlaps(nb[c].box)) continue;
+        stack[top++] = {e.a, c, nb[c].box};
+        ask_ahead(x, nb[c]);
+      }
     } else {
-      const Aabb x_in_b = rel.to_b(x.box.aabb());
+      const FBox x_in_b = carry.to_b(x.box);
       for (const std::uint32_t c : {e.b + 1, y.first}) {
         const FBox& cb = nb[c].box;
         if (!cb.overlaps(x_in_b)) continue;
-        const Aabb yb = rel.to_a(cb.aabb());
-        if (x.box.overlaps(yb)) stack[top++] = {e.a, c, yb};
+        const FBox yb = carry.to_a(cb);
+        if (!x.box.overlaps(yb)) continue;
+        stack[top++] = {e.a, c, yb};
+        ask_ahead(x, nb[c]);
       }
     }
   }
@@ -333,10 +436,19 @@ std::size_t traverse_pairs(const Frame& frame, const Bvh& a, const Bvh& b, BvhNo
 
 // Every couple (triangle of a, triangle of b) under the node pair `start` whose boxes overlap
 // (B's through `rel`): fn(tri_a, tri_b). `stack` is scratch. Returns the node pairs visited.
+// Boxes are carried in floats (bvh_detail::FloatCarry) where the relation and both trees'
+// magnitudes allow, else in doubles: the same guarantee, a few couples more or fewer.
 template <class Fn>
 std::size_t bvh_traverse(const Bvh& a, const Bvh& b, const BvhRelation& rel, BvhNodePair start,
                          std::vector<BvhStackEntry>& stack, Fn&& fn) {
-  return bvh_detail::traverse_pairs(bvh_detail::Posed{a, b, rel}, a, b, start, stack, fn);
+  const auto small = [](const Aabb& box) {
+    return box.lo.cwiseAbs().maxCoeff() < BvhRelation::kFloatRange && box.hi.cwiseAbs().maxCoeff() < BvhRelation::kFloatRange;
+  };
+  if (!rel.identity && rel.float_ok && small(a.box()) && small(b.box()))
+    return bvh_detail::traverse_pairs(
+        bvh_detail::Posed<bvh_detail::FloatCarry>{a, b, rel, {rel.float_to_a, rel.float_to_b}}, a, b, start, stack, fn);
+  return bvh_detail::traverse_pairs(bvh_detail::Posed<bvh_detail::DoubleCarry>{a, b, rel, {rel}}, a, b, start, stack,
+                                    fn);
 }
 
 // bvh_traverse() for two trees in one frame (BvhRelation::identity): float boxes compared as

@@ -249,6 +249,14 @@ TEST_CASE("Bvh: the traversal of two posed trees finds every couple of overlappi
       // a box) may add some.
       REQUIRE(std::includes(got.begin(), got.end(), want.begin(), want.end()));
       CHECK(got.size() <= 4 * want.size() + 64);
+      // The boxes carried in floats (the path taken here) or in doubles: both find them.
+      REQUIRE(rel.float_ok);
+      std::set<std::pair<std::uint32_t, std::uint32_t>> in_doubles;
+      const bvh_detail::Posed<bvh_detail::DoubleCarry> doubles{ta, *tree, rel, {rel}};
+      auto add = [&](std::uint32_t x, std::uint32_t y) { REQUIRE(in_doubles.emplace(x, y).second); };
+      bvh_detail::traverse_pairs(doubles, ta, *tree, BvhNodePair{0u, 0u}, stack, add);
+      REQUIRE(std::includes(in_doubles.begin(), in_doubles.end(), want.begin(), want.end()));
+      CHECK(in_doubles.size() <= 4 * want.size() + 64);
       // Split into tasks: the same couples, each once.
       std::vector<BvhNodePair> tasks;
       bvh_split(ta, *tree, rel, 6, tasks);
@@ -259,6 +267,65 @@ TEST_CASE("Bvh: the traversal of two posed trees finds every couple of overlappi
       CHECK(split == got);
     }
   }
+}
+
+TEST_CASE("Bvh: a box carried through a pose in floats encloses its image, at every scale", "[bvh]") {
+  // Boxes from 1e-30 to 1e25 across, near and far from the origin, through rotations, scales
+  // and shears; the carried box against the eight corners' images in long double (through the
+  // relation's double maps, whose own rounding is far below the float bound), and not much
+  // larger than their box.
+  std::mt19937_64 rng(58);
+  std::uniform_real_distribution<double> unit(-1.0, 1.0);
+  std::uniform_int_distribution<int> exponent(-30, 25);
+  std::size_t carried = 0;
+  for (int trial = 0; trial < 400; ++trial) {
+    Eigen::Affine3d pa = pose(3.0 * unit(rng), Vec3(unit(rng), unit(rng), 1.0), Vec3(unit(rng), unit(rng), unit(rng)) * std::pow(10.0, exponent(rng) / 3));
+    Eigen::Affine3d pb = pose(3.0 * unit(rng), Vec3(1.0, unit(rng), unit(rng)), Vec3(unit(rng), unit(rng), unit(rng)) * std::pow(10.0, exponent(rng) / 3));
+    if (trial % 3 == 1) pb.linear() *= std::pow(10.0, unit(rng) * 3.0);  // a scale
+    if (trial % 3 == 2) pa.linear()(0, 1) += 2.0 * unit(rng);           // a shear
+    const BvhRelation rel = BvhRelation::between(pa, pb);
+    REQUIRE(rel.float_ok);
+    const bvh_detail::FloatCarry carry{rel.float_to_a, rel.float_to_b};
+    for (int k = 0; k < 8; ++k) {
+      const double size = std::pow(10.0, exponent(rng)), offset = std::pow(10.0, exponent(rng));
+      Aabb box;
+      for (int c = 0; c < 2; ++c) box.extend(Vec3(unit(rng), unit(rng), unit(rng)) * size + Vec3::Constant(offset * unit(rng)));
+      const FBox fb = FBox::enclosing(box);
+      for (const bool into_b : {false, true}) {
+        const FBox got = into_b ? carry.to_b(fb) : carry.to_a(fb);
+        const Eigen::Matrix3d& l = into_b ? rel.inv_linear : rel.linear;
+        const Vec3& t = into_b ? rel.inv_translation : rel.translation;
+        long double lo[3], hi[3], mag[3];
+        for (int d = 0; d < 3; ++d) lo[d] = INFINITY, hi[d] = -INFINITY, mag[d] = std::abs((long double)t[d]);
+        for (int corner = 0; corner < 8; ++corner) {
+          const double p[3] = {corner & 1 ? fb.hi[0] : fb.lo[0], corner & 2 ? fb.hi[1] : fb.lo[1], corner & 4 ? fb.hi[2] : fb.lo[2]};
+          for (int d = 0; d < 3; ++d) {
+            long double v = t[d];
+            for (int j = 0; j < 3; ++j) v += (long double)l(d, j) * p[j];
+            lo[d] = std::min(lo[d], v), hi[d] = std::max(hi[d], v);
+          }
+        }
+        for (int d = 0; d < 3; ++d) {
+          for (int j = 0; j < 3; ++j)
+            mag[d] += std::abs((long double)l(d, j)) * std::max(std::abs(fb.lo[j]), std::abs(fb.hi[j]));
+          REQUIRE(got.lo[d] <= lo[d]);
+          REQUIRE(got.hi[d] >= hi[d]);
+          // Grown by at most 2^-19 of the magnitudes, the relation's fixed growth and the float
+          // roundings (a few more 2^-24).
+          const long double slack = mag[d] * 0x1p-18L + 2.0L * rel.float_to_a.grow + 2.0L * rel.float_to_b.grow;
+          REQUIRE(got.hi[d] - hi[d] <= slack);
+          REQUIRE(lo[d] - got.lo[d] <= slack);
+        }
+        ++carried;
+      }
+    }
+  }
+  CHECK(carried == 400 * 8 * 2);
+  // Out of the floats' range, the traversal carries in doubles.
+  Eigen::Affine3d big = Eigen::Affine3d::Identity();
+  big.linear() *= 2e6;
+  CHECK_FALSE(BvhRelation::between(Eigen::Affine3d::Identity(), big).float_ok);
+  CHECK_FALSE(BvhRelation::between(Eigen::Affine3d::Identity(), Eigen::Affine3d(Eigen::Translation3d(1e31, 0, 0))).float_ok);
 }
 
 TEST_CASE("Bvh: the self traversal gives every couple of distinct triangles whose boxes overlap, once", "[bvh]") {

@@ -251,6 +251,24 @@ struct BvhRelation {
     return a.overlaps(b_in_a) && (identity || to_b(a).overlaps(b));
   }
   static BvhRelation between(const Eigen::Affine3d& pose_a, const Eigen::Affine3d& pose_b);
+
+  // The two maps again in floats, for the posed traversal's box transforms four lanes at once
+  // (bvh_traverse.h: FloatCarry, which states the error bound): columns of the linear part and
+  // of its magnitudes, the translation and its magnitude (lane 3 zero), and the growth every
+  // carried box gets besides its relative one (`reach`'s, and the floats' underflow).
+  struct FloatMap {
+    alignas(16) float col[3][4];
+    alignas(16) float abs_col[3][4];
+    alignas(16) float t[4];
+    alignas(16) float abs_t[4];
+    float grow = 0.0f;
+  };
+  FloatMap float_to_a, float_to_b;
+  // Whether the float maps may be used: every entry of the linear parts 0 or a normal float up
+  // to 1e6, the translations and `reach` below 1e30 (the traversal also checks the trees'
+  // boxes: below 1e30 in magnitude, so no sum or product overflows).
+  bool float_ok = false;
+  static constexpr double kFloatRange = 1e30;
   // Inlined: the traversals call it at every node pair.
   PEELCD_ALWAYS_INLINE static Aabb moved(const Aabb& box, const Eigen::Matrix3d& linear, const Eigen::Matrix3d& abs_linear,
                     const Vec3& translation, double reach) {
@@ -273,7 +291,7 @@ using BvhNodePair = std::pair<std::uint32_t, std::uint32_t>;
 // pair is pushed; descending into A's children keeps it).
 struct BvhStackEntry {
   std::uint32_t a, b;
-  Aabb b_in_a;
+  FBox b_in_a;  // rounded outward
 };
 
 // Splits the traversal of (a, b) into at least `tasks` independent node pairs where the trees
