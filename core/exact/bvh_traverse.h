@@ -163,6 +163,11 @@ struct DoubleCarry {
   const BvhRelation& rel;
   PEELCD_ALWAYS_INLINE FBox to_a(const FBox& b) const { return FBox::enclosing(rel.to_a(b.aabb())); }
   PEELCD_ALWAYS_INLINE FBox to_b(const FBox& a) const { return FBox::enclosing(rel.to_b(a.aabb())); }
+  // The lanes `lanes` (bits) of `leaf` carried into B's frame, lane by lane into `out`; the
+  // other lanes of `out` empty.
+  void leaf_to_b(const BvhLeaf& leaf, unsigned lanes, BvhLeaf& out) const {
+    for (std::uint32_t u = 0; u < kBvhLeafSize; ++u) out.set(u, (lanes >> u) & 1u ? to_b(leaf.box(u)) : FBox{});
+  }
 };
 
 // The float transform of a box [lo, hi] by p -> L p + t (u = 2^-24, float's unit roundoff; the
@@ -233,6 +238,42 @@ struct FloatCarry {
   }
   PEELCD_ALWAYS_INLINE FBox to_a(const FBox& b) const { return carry(b, to_a_map); }
   PEELCD_ALWAYS_INLINE FBox to_b(const FBox& a) const { return carry(a, to_b_map); }
+  // All eight lanes of `leaf` carried into B's frame at once (lanes as structure of arrays: the
+  // same operations in the same order as carry(), so each lane's box equals carry()'s bit for
+  // bit); the lanes outside `lanes` (bits; empty lanes hold infinities) are carried as zero
+  // boxes, never read by the caller.
+  void leaf_to_b(const BvhLeaf& leaf, unsigned lanes, BvhLeaf& out) const {
+    const BvhRelation::FloatMap& f = to_b_map;
+#if defined(__SSE__) || defined(_M_X64)
+    const __m128 half_ = _mm_set1_ps(0.5f), sign = _mm_set1_ps(-0.0f), fixed = _mm_set1_ps(f.grow);
+    for (int h = 0; h < 2; ++h) {
+      const __m128i bits = _mm_and_si128(_mm_set1_epi32(int(lanes >> (4 * h))), _mm_setr_epi32(1, 2, 4, 8));
+      const __m128 valid = _mm_castsi128_ps(_mm_cmpeq_epi32(bits, _mm_setr_epi32(1, 2, 4, 8)));
+      __m128 c[3], e[3], a[3];
+      for (int j = 0; j < 3; ++j) {
+        const __m128 lo = _mm_and_ps(valid, _mm_load_ps(leaf.lo[j] + 4 * h));
+        const __m128 hi = _mm_and_ps(valid, _mm_load_ps(leaf.hi[j] + 4 * h));
+        c[j] = _mm_mul_ps(_mm_add_ps(lo, hi), half_);
+        e[j] = _mm_mul_ps(_mm_sub_ps(hi, lo), half_);
+        a[j] = _mm_max_ps(_mm_andnot_ps(sign, lo), _mm_andnot_ps(sign, hi));
+      }
+      for (int k = 0; k < 3; ++k) {
+        const __m128 l0 = _mm_set1_ps(f.col[0][k]), l1 = _mm_set1_ps(f.col[1][k]), l2 = _mm_set1_ps(f.col[2][k]);
+        const __m128 m0 = _mm_set1_ps(f.abs_col[0][k]), m1 = _mm_set1_ps(f.abs_col[1][k]), m2 = _mm_set1_ps(f.abs_col[2][k]);
+        const __m128 center = _mm_add_ps(
+            _mm_add_ps(_mm_add_ps(_mm_mul_ps(l0, c[0]), _mm_mul_ps(l1, c[1])), _mm_mul_ps(l2, c[2])), _mm_set1_ps(f.t[k]));
+        const __m128 half = _mm_add_ps(_mm_add_ps(_mm_mul_ps(m0, e[0]), _mm_mul_ps(m1, e[1])), _mm_mul_ps(m2, e[2]));
+        const __m128 m = _mm_add_ps(_mm_add_ps(_mm_add_ps(_mm_mul_ps(m0, a[0]), _mm_mul_ps(m1, a[1])), _mm_mul_ps(m2, a[2])),
+                                    _mm_set1_ps(f.abs_t[k]));
+        const __m128 r = _mm_add_ps(half, _mm_add_ps(_mm_mul_ps(m, _mm_set1_ps(0x1p-19f)), fixed));
+        _mm_store_ps(out.lo[k] + 4 * h, _mm_sub_ps(center, r));
+        _mm_store_ps(out.hi[k] + 4 * h, _mm_add_ps(center, r));
+      }
+    }
+#else
+    for (std::uint32_t u = 0; u < kBvhLeafSize; ++u) out.set(u, (lanes >> u) & 1u ? carry(leaf.box(u), f) : FBox{});
+#endif
+  }
 };
 
 // B's tree posed against A's: each entry carries B's node box as seen from A (computed once,
@@ -266,12 +307,17 @@ struct Posed {
       }, fn);
       return;
     }
-    leaf_couples(la, x.count, b.leaf(y), [&](std::uint32_t u, FBox& box) {
-      const FBox ba = la.box(u);
-      if (!ba.overlaps(e.b_in_a)) return 0u;
-      box = carry.to_b(ba);  // A's triangle box seen from B
-      return box.overlaps(y.box) ? ~0u : 0u;
-    }, fn);
+    // A's lanes that reach B's leaf box in A's frame, carried into B's frame together; of
+    // those, the ones whose carried box reaches B's leaf box there, each against B's eight.
+    const unsigned reach = overlap_mask(e.b_in_a, la);
+    if (reach == 0) return;
+    BvhLeaf carried;
+    carry.leaf_to_b(la, reach, carried);
+    const BvhLeaf& lb = b.leaf(y);
+    for (unsigned us = reach & overlap_mask(y.box, carried); us;) {
+      const unsigned u = take_lane(us);
+      for (unsigned m = overlap_mask(carried.box(u), lb); m;) fn(la.tri[u], lb.tri[take_lane(m)]);
+    }
   }
   // A pushed pair's lines asked for ahead of its pop: both leaves' for a pair of leaves, else
   // the right child of each internal node (its left one is next to it).

@@ -9,6 +9,7 @@
 #include <catch2/catch.hpp>
 
 #include <algorithm>
+#include <cstring>
 #include <random>
 #include <set>
 
@@ -321,6 +322,39 @@ TEST_CASE("Bvh: a box carried through a pose in floats encloses its image, at ev
     }
   }
   CHECK(carried == 400 * 8 * 2);
+  // A leaf's lanes carried together equal each lane carried alone, bit for bit; lanes outside
+  // the mask (empty ones among them: infinities) are skipped.
+  std::size_t lanes_checked = 0;
+  for (int trial = 0; trial < 200; ++trial) {
+    Eigen::Affine3d pb = pose(3.0 * unit(rng), Vec3(1.0, unit(rng), unit(rng)), Vec3(unit(rng), unit(rng), unit(rng)) * 10.0);
+    if (trial % 2) pb.linear() *= 3.7;
+    const BvhRelation rel = BvhRelation::between(pose(unit(rng), Vec3(0, 0, 1), Vec3::Zero()), pb);
+    const bvh_detail::FloatCarry carry{rel.float_to_a, rel.float_to_b};
+    const double scale = std::pow(10.0, exponent(rng) / 2);
+    BvhLeaf leaf;
+    const std::uint32_t count = 1 + std::uint32_t(trial % kBvhLeafSize);
+    for (std::uint32_t u = 0; u < kBvhLeafSize; ++u) {
+      Aabb box;
+      for (int c = 0; c < 2; ++c) box.extend(Vec3(unit(rng), unit(rng), unit(rng)) * scale);
+      leaf.set(u, u < count ? FBox::enclosing(box) : FBox{});
+      leaf.tri[u] = u;
+    }
+    const unsigned lanes = ((1u << count) - 1u) & unsigned(rng());
+    BvhLeaf together, in_doubles;
+    carry.leaf_to_b(leaf, lanes, together);
+    bvh_detail::DoubleCarry{rel}.leaf_to_b(leaf, lanes, in_doubles);
+    for (std::uint32_t u = 0; u < count; ++u) {
+      if (!((lanes >> u) & 1u)) continue;
+      const FBox alone = carry.to_b(leaf.box(u)), d = bvh_detail::DoubleCarry{rel}.to_b(leaf.box(u));
+      for (int k = 0; k < 3; ++k) {
+        REQUIRE(std::memcmp(&together.lo[k][u], &alone.lo[k], sizeof(float)) == 0);
+        REQUIRE(std::memcmp(&together.hi[k][u], &alone.hi[k], sizeof(float)) == 0);
+        REQUIRE((in_doubles.lo[k][u] == d.lo[k] && in_doubles.hi[k][u] == d.hi[k]));
+      }
+      ++lanes_checked;
+    }
+  }
+  CHECK(lanes_checked > 300);
   // Out of the floats' range, the traversal carries in doubles.
   Eigen::Affine3d big = Eigen::Affine3d::Identity();
   big.linear() *= 2e6;
