@@ -181,7 +181,10 @@ struct DoubleCarry {
 //   the final half + grow and center -/+ it: at most 3.3u m.
 // In all below 14u m; the growth is 2^-19 m = 32u m (m itself computed in floats, a few u
 // low at most), plus the relation's fixed growth (the world coordinates' rounding, `reach`,
-// and 1e-37 for any product that underflows: at most 2^-150 each).
+// and 1e-37 for any product that underflows: at most 2^-150 each). The rest of the growth
+// covers the relation's own doubles (an inverse pose loses cond x 2^-53, below 1e-12 for the
+// poses the World traverses posed: kPosedConditionLimit). The test holds carried boxes
+// against their corners' images in long double, at scales from 1e-30 to 1e25.
 struct FloatCarry {
   const BvhRelation::FloatMap& to_a_map;
   const BvhRelation::FloatMap& to_b_map;
