@@ -243,7 +243,7 @@ struct FloatCarry {
   PEELCD_ALWAYS_INLINE FBox to_b(const FBox& a) const { return carry(a, to_b_map); }
   // All eight lanes of `leaf` carried into B's frame at once (lanes as structure of arrays: the
   // same operations in the same order as carry(), so each lane's box equals carry()'s bit for
-  // bit); the lanes outside `lanes` (bits; empty lanes hold infinities) are carried as zero
+  // bit, in builds that do not fuse multiply-adds, as the project's do not); the lanes outside `lanes` (bits; empty lanes hold infinities) are carried as zero
   // boxes, never read by the caller.
   void leaf_to_b(const BvhLeaf& leaf, unsigned lanes, BvhLeaf& out) const {
     const BvhRelation::FloatMap& f = to_b_map;
