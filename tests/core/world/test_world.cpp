@@ -314,6 +314,39 @@ TEST_CASE("World: touching bodies far from the origin, every pose: exactly the r
   CHECK(contacts > 0);
 }
 
+TEST_CASE("World: scaled rigid bodies, boxes carried in floats or in doubles: exactly the reference's pairs", "[world]") {
+  // A scaled by `scale`, B by `scale` x `relative` more: while the relative pose's entries stay
+  // within 1e6 the posed traversal carries its boxes in floats, past it in doubles
+  // (BvhRelation::float_ok); both find the reference's pairs (B's sheet touches A's edge line).
+  auto sheet = std::make_shared<const Mesh>(make_grid(Vec3(0, 0, 0), Vec3(1, 0, 0), Vec3(0, 1, 0), 66, 66));
+  std::size_t contacts = 0;
+  const std::pair<double, double> scales[] = {{1e-3, 1.0}, {1.0, 1.0}, {1e3, 1e-3}, {1.0, 5e5}, {1.0, 2e6}};
+  for (const auto& [scale, relative] : scales) {
+    Eigen::Affine3d pa = Eigen::Affine3d::Identity();
+    pa.translate(Vec3(0.3, -0.2, 0.1) * scale);
+    pa.rotate(Eigen::AngleAxisd(0.7, Vec3(1, 2, 3).normalized()));
+    pa.scale(scale);
+    Eigen::Affine3d pb = pa * Eigen::Translation3d(0.5, 0.0, 0.0) * Eigen::AngleAxisd(M_PI / 2, Vec3::UnitX()) *
+                         Eigen::AngleAxisd(0.1, Vec3::UnitZ());
+    pb.scale(relative);
+    CHECK(BvhRelation::between(pa, pb).float_ok == (relative <= 1e6));
+    World world;
+    const BodyId a = world.add_rigid(sheet, pa, "a");
+    const BodyId b = world.add_rigid(sheet, pb, "b");
+    DetectOptions opt;
+    opt.stage = Stage::exact;
+    const FrameResult& r = world.collide(opt);
+    CHECK(world.stats().node_pairs > 0);  // the trees' traversal through the poses
+    const std::vector<std::uint64_t> want = reference(world, a, b);
+    INFO("scale " << scale << ", relative " << relative);
+    const PairResult* p = find_pair(r, a, b);
+    CHECK((p ? keys(*p) : std::vector<std::uint64_t>{}) == want);
+    CHECK(!want.empty());
+    contacts += want.size();
+  }
+  CHECK(contacts > 0);
+}
+
 // set_vertices refits at the next collide(), split over the frame's threads for a large body;
 // tree() asked for in between sees the refitted tree. Two threads and one give the same pairs.
 TEST_CASE("World: deferred refits, between frames and split over threads", "[world]") {
