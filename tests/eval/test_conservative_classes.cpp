@@ -9,6 +9,7 @@
 #include "random_contacts.h"
 
 #include <catch2/catch.hpp>
+#include "fixtures.h"
 
 #include <cstdlib>
 
@@ -17,10 +18,7 @@ using namespace peelcd::test;
 
 namespace {
 
-Detector& cpu_detector() {
-  static Detector d(std::make_shared<CpuImageStage>());
-  return d;
-}
+using test::cpu_detector;
 
 long env_count(const char* name, long fallback) {
   const char* v = std::getenv(name);

@@ -11,15 +11,13 @@
 #include <cstdio>
 
 #include <catch2/catch.hpp>
+#include "fixtures.h"
 
 using namespace peelcd;
 
 namespace {
 
-Detector& cpu_detector() {
-  static Detector d(std::make_shared<CpuImageStage>());
-  return d;
-}
+using test::cpu_detector;
 
 // Every scene of the classes, with what it asks (self on its objects; depth on the depth classes).
 struct Case {

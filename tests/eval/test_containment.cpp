@@ -13,14 +13,12 @@
 #include <random>
 
 #include <catch2/catch.hpp>
+#include "fixtures.h"
 
 using namespace peelcd;
 
 namespace {
-Detector& cpu_detector() {
-  static Detector d(std::make_shared<CpuImageStage>());
-  return d;
-}
+using test::cpu_detector;
 }  // namespace
 
 TEST_CASE("containment classes: the relation the construction gives, on both stages", "[containment]") {

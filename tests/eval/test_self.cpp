@@ -14,6 +14,7 @@
 #include "peelcd/eval/classes.h"
 
 #include <catch2/catch.hpp>
+#include "fixtures.h"
 
 #include <algorithm>
 #include <random>
@@ -22,10 +23,7 @@ using namespace peelcd;
 
 namespace {
 
-Detector& cpu_detector() {
-  static Detector d(std::make_shared<CpuImageStage>());
-  return d;
-}
+using test::cpu_detector;
 
 std::vector<std::uint64_t> self_pairs_found(const FrameResult& f, std::size_t object) {
   std::vector<std::uint64_t> out;

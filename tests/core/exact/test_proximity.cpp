@@ -11,6 +11,7 @@
 
 #include <CGAL/Exact_predicates_exact_constructions_kernel.h>
 #include <catch2/catch.hpp>
+#include "fixtures.h"
 
 #include <algorithm>
 
@@ -70,12 +71,7 @@ std::vector<std::pair<std::uint32_t, std::uint32_t>> listed(const Proximity& p) 
   return out;
 }
 
-Object object(std::string name, Mesh m) {
-  Object o;
-  o.name = std::move(name);
-  o.mesh = std::move(m);
-  return o;
-}
+using test::object;
 
 }  // namespace
 

@@ -8,6 +8,7 @@
 #include "peelcd/core/exact/reference.h"
 
 #include <catch2/catch.hpp>
+#include "fixtures.h"
 
 #include <memory>
 
@@ -36,12 +37,7 @@ class RecordingStage : public ImageStage {
   CpuImageStage inner_;
 };
 
-Object object(std::string name, Mesh mesh) {
-  Object o;
-  o.name = std::move(name);
-  o.mesh = std::move(mesh);
-  return o;
-}
+using test::object;
 
 // Three spheres in a row, each crossing the next; a fourth far away.
 std::vector<Object> row_of_spheres() {
