@@ -22,13 +22,6 @@ double median_of(std::vector<double> v) {
   return v.empty() ? 0.0 : v[v.size() / 2];
 }
 
-Object object(const std::string& name, Mesh mesh) {
-  Object o;
-  o.name = name;
-  o.mesh = std::move(mesh);
-  return o;
-}
-
 // Least squares y ~ X c with c >= 0: a negative coefficient is dropped (set to 0) and the rest
 // refitted, until none is negative.
 Eigen::VectorXd fit_nonnegative(const Eigen::MatrixXd& x, const Eigen::VectorXd& y) {
@@ -62,15 +55,15 @@ std::vector<std::pair<std::string, std::vector<Object>>> calibration_scenes(cons
   for (const int k : {8, 16, 32, 64, 128}) {
     for (const double gap : {1.9, 1.2}) {  // centres 1.9 (shallow) or 1.2 (deep) radii apart
       std::vector<Object> s;
-      s.push_back(object("a", uv_sphere(Vec3(0, 0, 0), 1.0, 2 * k, k)));
-      s.push_back(object("b", uv_sphere(Vec3(gap, 0.1, 0.05), 1.0, 2 * k, k)));
+      s.push_back(named_object("a", uv_sphere(Vec3(0, 0, 0), 1.0, 2 * k, k)));
+      s.push_back(named_object("b", uv_sphere(Vec3(gap, 0.1, 0.05), 1.0, 2 * k, k)));
       scenes.emplace_back("spheres " + std::to_string(4 * k * k) + (gap > 1.5 ? " shallow" : " deep"), std::move(s));
     }
   }
   for (const int k : {16, 48}) {
     std::vector<Object> s;
-    s.push_back(object("a", uv_sphere(Vec3(0, 0, 0), 1.0, 2 * k, k)));
-    s.push_back(object("copy", uv_sphere(Vec3(0, 0, 0), 1.0, 2 * k, k)));
+    s.push_back(named_object("a", uv_sphere(Vec3(0, 0, 0), 1.0, 2 * k, k)));
+    s.push_back(named_object("copy", uv_sphere(Vec3(0, 0, 0), 1.0, 2 * k, k)));
     scenes.emplace_back("sphere and copy " + std::to_string(4 * k * k), std::move(s));
   }
   const Mesh bunny = load_mesh(meshes_dir + "/bunny_3k.obj");
@@ -80,8 +73,8 @@ std::vector<std::pair<std::string, std::vector<Object>>> calibration_scenes(cons
   for (const double dx : {0.8, 0.6, 0.4}) {
     t.translate = Vec3(dx, -0.5, 0.0);
     std::vector<Object> s;
-    s.push_back(object("bunny", bunny));
-    s.push_back(object("dragon", transformed(dragon, t)));
+    s.push_back(named_object("bunny", bunny));
+    s.push_back(named_object("dragon", transformed(dragon, t)));
     scenes.emplace_back("bunny dragon dx " + std::to_string(dx).substr(0, 3), std::move(s));
   }
   return scenes;

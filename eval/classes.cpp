@@ -11,13 +11,6 @@
 namespace peelcd {
 namespace {
 
-Object object(std::string name, Mesh mesh) {
-  Object o;
-  o.name = std::move(name);
-  o.mesh = std::move(mesh);
-  return o;
-}
-
 // Appends `m` to `into` (one object made of several pieces).
 void append(Mesh& into, const Mesh& m) {
   const auto base = std::uint32_t(into.vertices.size());
@@ -62,9 +55,7 @@ Mesh knotted_tube(int along, int around, double r) {
 }
 
 Object self_object(std::string name, Mesh mesh) {
-  Object o;
-  o.name = std::move(name);
-  o.mesh = std::move(mesh);
+  Object o = named_object(std::move(name), std::move(mesh));
   o.self = true;
   return o;
 }
@@ -107,7 +98,7 @@ std::vector<GeometryClass> self_classes() {
   // Beside another object: the self pairs and the inter-object pairs of a frame together.
   out.push_back({"self: fold on a ball", "a folded sheet through itself lying on a ball it also crosses",
                  {self_object("cloth", moved(make_folded_sheet(20, 0.1, 0.2), tilt)),
-                  object("ball", uv_sphere(tilt * Vec3(0.5, 0.5, -0.25), 0.3, 24, 12))}});
+                  named_object("ball", uv_sphere(tilt * Vec3(0.5, 0.5, -0.25), 0.3, 24, 12))}});
   return out;
 }
 
@@ -137,7 +128,7 @@ std::vector<DepthClass> depth_classes() {
   std::vector<DepthClass> out;
   const auto two = [](const char* name, const char* what, Mesh a, Mesh b, double expected) {
     DepthClass c;
-    c.scene = {name, what, {object("a", std::move(a)), object("b", std::move(b))}};
+    c.scene = {name, what, {named_object("a", std::move(a)), named_object("b", std::move(b))}};
     c.expected = expected;
     return c;
   };
@@ -158,7 +149,7 @@ std::vector<ContainmentClass> containment_classes() {
   std::vector<ContainmentClass> out;
   const auto two = [](const char* name, const char* what, Mesh a, Mesh b, Relation r) {
     ContainmentClass c;
-    c.scene = {name, what, {object("a", std::move(a)), object("b", std::move(b))}};
+    c.scene = {name, what, {named_object("a", std::move(a)), named_object("b", std::move(b))}};
     c.expected = r;
     return c;
   };
@@ -236,20 +227,20 @@ std::vector<GeometryClass> geometry_classes(int grid_side) {
 
   out.push_back({"crossing boxes",
                  "two axis-aligned boxes, a bar through a cube: every face edge-on along a world axis",
-                 {object("cube", box_mesh(Vec3(-1, -1, -1), Vec3(1, 1, 1))),
-                  object("bar", box_mesh(Vec3(-2, -0.3, -0.4), Vec3(2, 0.5, 0.3)))}});
+                 {named_object("cube", box_mesh(Vec3(-1, -1, -1), Vec3(1, 1, 1))),
+                  named_object("bar", box_mesh(Vec3(-2, -0.3, -0.4), Vec3(2, 0.5, 0.3)))}});
   out.push_back({"touching boxes", "two boxes face to face: coincident faces, no penetration",
-                 {object("left", box_mesh(Vec3(0, 0, 0), Vec3(1, 1, 1))),
-                  object("right", box_mesh(Vec3(1, 0.25, 0.25), Vec3(2, 1.25, 1.25)))}});
+                 {named_object("left", box_mesh(Vec3(0, 0, 0), Vec3(1, 1, 1))),
+                  named_object("right", box_mesh(Vec3(1, 0.25, 0.25), Vec3(2, 1.25, 1.25)))}});
   out.push_back({"box on floor",
                  "a box resting on a tessellated floor (coincident faces) and a ball sunk into it",
-                 {object("floor", floor_mesh(20, -2, 2, -2, 2, 0)),
-                  object("box", box_mesh(Vec3(-0.5, -0.5, 0), Vec3(0.5, 0.5, 1))),
-                  object("ball", uv_sphere(Vec3(1.2, 1.1, 0.25), 0.4, 24, 12))}});
+                 {named_object("floor", floor_mesh(20, -2, 2, -2, 2, 0)),
+                  named_object("box", box_mesh(Vec3(-0.5, -0.5, 0), Vec3(0.5, 0.5, 1))),
+                  named_object("ball", uv_sphere(Vec3(1.2, 1.1, 0.25), 0.4, 24, 12))}});
   {
     const Mesh s = moved(uv_sphere(Vec3(0, 0, 0), 1.0, 48, 24), tilt);
     out.push_back({"coincident copy", "a mesh and its copy at the same pose: every surface coincident",
-                   {object("sphere", s), object("copy", s)}});
+                   {named_object("sphere", s), named_object("copy", s)}});
   }
   {
     // Zero-area triangles: segments (a, b, b) and collinear triples through the cube's faces, and
@@ -268,13 +259,13 @@ std::vector<GeometryClass> geometry_classes(int grid_side) {
       d.triangles.push_back({p, p, p});
     }
     out.push_back({"degenerate triangles", "segments, collinear triples and points crossing or lying on a cube's faces",
-                   {object("cube", moved(box_mesh(Vec3(-1, -1, -1), Vec3(1, 1, 1)), tilt)),
-                    object("slivers", moved(d, tilt))}});
+                   {named_object("cube", moved(box_mesh(Vec3(-1, -1, -1), Vec3(1, 1, 1)), tilt)),
+                    named_object("slivers", moved(d, tilt))}});
   }
   {
     Mesh needle = box_mesh(Vec3(-1.5, 0.3, 0.2), Vec3(1.5, 0.3001, 0.2001));
     out.push_back({"needle", "a needle 1e-4 wide through a sphere: thinner than any texel",
-                   {object("sphere", uv_sphere(Vec3(0, 0, 0), 1.0, 32, 16)), object("needle", needle)}});
+                   {named_object("sphere", uv_sphere(Vec3(0, 0, 0), 1.0, 32, 16)), named_object("needle", needle)}});
   }
   {
     // Two perpendicular open sheets crossing each other (self-intersecting, open) and an open
@@ -286,7 +277,7 @@ std::vector<GeometryClass> geometry_classes(int grid_side) {
     Mesh half = uv_sphere(Vec3(0.3, 0.2, 0.0), 0.7, 24, 12);
     half.triangles.resize(half.triangles.size() / 2);  // the lower half: open along the equator
     out.push_back({"open self-intersecting", "two crossing open sheets (one object) and an open half sphere",
-                   {object("sheets", moved(sheets, tilt)), object("half sphere", moved(half, tilt))}});
+                   {named_object("sheets", moved(sheets, tilt)), named_object("half sphere", moved(half, tilt))}});
   }
   {
     GeometryClass g{"crowded grid",
@@ -295,7 +286,7 @@ std::vector<GeometryClass> geometry_classes(int grid_side) {
                     {}};
     for (int j = 0; j < grid_side; ++j)
       for (int i = 0; i < grid_side; ++i)
-        g.objects.push_back(object("ball " + std::to_string(j * grid_side + i),
+        g.objects.push_back(named_object("ball " + std::to_string(j * grid_side + i),
                                    uv_sphere(Vec3(0.99 * i, 0.99 * j, 0.01 * ((i * 7 + j * 3) % 5)), 0.5, 16, 8)));
     out.push_back(std::move(g));
   }

@@ -53,7 +53,6 @@ namespace {
 // One view's record in the views buffer (shaders/batch.inc, std430: mat4 clip, mat4 poses[2],
 // ivec4 info, vec4 half_box, vec4 box_lo, vec4 box_hi).
 constexpr std::size_t kViewWords = 16 + 32 + 4 + 4 + 4 + 4;
-constexpr std::size_t kEntry = 4 * sizeof(std::uint32_t);  // a draw entry or selection job
 // The selection's contact grid (shaders/batch_select.comp): per view and object, 16^3 cells'
 // bits and one word that marks them all.
 constexpr std::size_t kGridWords = 16 * 16 * 16 / 32 + 1;
@@ -294,9 +293,9 @@ void GlImageStage::Impl::upload_batch(const BatchRun& run) {
   upload_positions();
   upload_batch_buffer(batch.views, batch.views_capacity, batch.view_data.data(), batch.view_data.size() * sizeof(float),
                       0, false);
-  upload_batch_buffer(batch.entries, batch.entries_capacity, batch.entry_data.data(), run.host_entries * kEntry,
-                      (run.host_entries + run.invocations) * kEntry, true);
-  upload_batch_buffer(batch.jobs, batch.jobs_capacity, batch.job_data.data(), batch.job_data.size() * kEntry, 0, false);
+  upload_batch_buffer(batch.entries, batch.entries_capacity, batch.entry_data.data(), run.host_entries * kBatchEntryBytes,
+                      (run.host_entries + run.invocations) * kBatchEntryBytes, true);
+  upload_batch_buffer(batch.jobs, batch.jobs_capacity, batch.job_data.data(), batch.job_data.size() * kBatchEntryBytes, 0, false);
   const std::uint32_t command[4] = {std::uint32_t(3 * run.host_entries), 1u, 0u, 0u};
   upload_buffer(batch.command, 0, sizeof command, command);
 }
@@ -308,7 +307,7 @@ void GlImageStage::Impl::upload_batch(const BatchRun& run) {
 void GlImageStage::Impl::select_batch(const BatchRun& run) {
   upload_batch_buffer(batch.regions, batch.regions_capacity, batch.region_data.data(),
                       batch.region_data.size() * sizeof(std::uint32_t), 0, false);
-  upload_batch_buffer(batch.staged, batch.staged_capacity, nullptr, 0, (run.invocations + 1) * kEntry, false);
+  upload_batch_buffer(batch.staged, batch.staged_capacity, nullptr, 0, (run.invocations + 1) * kBatchEntryBytes, false);
   const std::uint32_t staged_header[4] = {0, 0, 0, 0};
   upload_buffer(batch.staged, 0, sizeof staged_header, staged_header);
   const std::size_t grid_bytes = run.take * 2 * kGridWords * sizeof(std::uint32_t);  // cleared: no cell marked

@@ -8,9 +8,6 @@
 #include <limits>
 
 namespace peelcd::gl {
-namespace {
-constexpr std::size_t kEntry = 4 * sizeof(std::uint32_t);  // a draw entry
-}  // namespace
 
 // The host resolve of a filled batch: the selection's entries' IDs read back (by draw order),
 // the packed k-buffer mapped, each view's part resolved (core/image/kbuffer.cpp). Returns the
@@ -20,7 +17,7 @@ double GlImageStage::Impl::resolve_batch_on_host(const PeelJob* jobs, PeelResult
   if (run.selected) {
     const auto t_entries = Clock::now();
     batch.entry_data.resize(run.host_entries + run.selected);
-    read_buffer(batch.entries, GLintptr(run.host_entries * kEntry), GLsizeiptr(run.selected * kEntry),
+    read_buffer(batch.entries, GLintptr(run.host_entries * kBatchEntryBytes), GLsizeiptr(run.selected * kBatchEntryBytes),
                 batch.entry_data.data() + run.host_entries);
     t.readback += ms_since(t_entries);
     for (std::size_t k = run.host_entries; k < batch.entry_data.size(); ++k) batch.ids.push_back(batch.entry_data[k][2]);

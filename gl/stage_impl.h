@@ -184,6 +184,10 @@ struct PrefixSumProgram {
   GLint texels = -1, blocks = -1, pass = -1;
 };
 
+// The bytes of a batch's draw entry or selection job (four 32-bit words; batch.cpp writes them,
+// batch_resolve.cpp reads the selected ones back).
+constexpr std::size_t kBatchEntryBytes = 4 * sizeof(std::uint32_t);
+
 // The batched views' state (batch.cpp), owned by the batch: its GL buffers (grown, reused) and
 // the host's copies of what it uploads or reads back.
 struct BatchState {

@@ -1,6 +1,7 @@
 // The reports of an explanation (peelcd/oracle/explain.h): JSON, text, and the page with one
 // zoomed picture per view. The trace itself is explain.cpp.
 #include "peelcd/oracle/explain.h"
+#include "text_file.h"
 
 #include "explain_words.h"
 
@@ -177,18 +178,6 @@ std::string explain_text(const Explanation& e) {
 
 namespace {
 
-std::string escape(const std::string& in) {
-  std::string out;
-  for (const char c : in) {
-    if (c == '<') out += "&lt;";
-    else if (c == '>') out += "&gt;";
-    else if (c == '&') out += "&amp;";
-    else if (c == '"') out += "&quot;";
-    else out += c;
-  }
-  return out;
-}
-
 // The zoomed crop of one view: layer-0 depth in grey, A's triangle's texels red, B's blue, both
 // magenta, texels whose test reported the pair green; the triangles outlined, the segment yellow.
 Rgb view_picture(const ViewReport& v) {
@@ -258,12 +247,12 @@ void write_explain_page(const Explanation& e, const std::string& dir) {
   try {
     fs::create_directories(tmp);
     std::ostringstream h;
-    h << "<!doctype html>\n<html><head><meta charset=\"utf-8\"><title>peelcd explain: " << escape(e.name_a) << ":"
-      << e.query.tri_a << " x " << escape(e.name_b) << ":" << e.query.tri_b << "</title>\n<style>body{font-family:sans-serif;"
+    h << "<!doctype html>\n<html><head><meta charset=\"utf-8\"><title>peelcd explain: " << html_escape(e.name_a) << ":"
+      << e.query.tri_a << " x " << html_escape(e.name_b) << ":" << e.query.tri_b << "</title>\n<style>body{font-family:sans-serif;"
       << "margin:1.5em;background:#fafafa}pre{background:#fff;border:1px solid #ccc;padding:.8em;overflow-x:auto}"
       << "figure{display:inline-block;margin:0 1.5em 1.5em 0;vertical-align:top}img{image-rendering:pixelated;"
       << "border:1px solid #888}.verdict{font-size:1.2em;font-weight:bold}</style></head><body>\n";
-    h << "<h1>peelcd explain</h1>\n<p class=\"verdict\">" << escape(e.verdict_line) << "</p>\n";
+    h << "<h1>peelcd explain</h1>\n<p class=\"verdict\">" << html_escape(e.verdict_line) << "</p>\n";
     h << "<p>Pictures: layer 0's depth in grey (near = light), the texels A's triangle covers alone (the rasterization "
          "model) tinted red, B's blue, both magenta; texels where the pair's test passed green; A's triangle outlined "
          "red, B's blue, the intersection segment yellow; black dots are texel centres.</p>\n";
@@ -272,10 +261,10 @@ void write_explain_page(const Explanation& e, const std::string& dir) {
       write_png((tmp / name).string(), view_picture(v));
       h << "<figure><img src=\"" << name << "\" alt=\"view " << v.view << "\"><figcaption>view " << v.view << ": texels ("
         << v.crop_x << ".." << v.crop_x + v.crop_w - 1 << ", " << v.crop_y << ".." << v.crop_y + v.crop_h - 1 << ") of "
-        << v.resolution << "&sup2;<br>" << escape(to_string(v.reason)) << ": " << escape(v.summary)
+        << v.resolution << "&sup2;<br>" << html_escape(to_string(v.reason)) << ": " << html_escape(v.summary)
         << "</figcaption></figure>\n";
     }
-    h << "<h2>Report</h2>\n<pre>" << escape(explain_text(e)) << "</pre>\n</body></html>\n";
+    h << "<h2>Report</h2>\n<pre>" << html_escape(explain_text(e)) << "</pre>\n</body></html>\n";
     std::ofstream(tmp / "index.html") << h.str();
     std::ofstream(tmp / "explain.json") << to_json(e).dump(2) << "\n";
     if (fs::exists(root)) fs::remove(root);

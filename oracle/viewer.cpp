@@ -1,4 +1,5 @@
 #include "peelcd/oracle/viewer.h"
+#include "text_file.h"
 
 #include <algorithm>
 #include <iterator>
@@ -25,20 +26,6 @@ std::string base64_bytes(const std::vector<std::uint8_t>& bytes) {
 namespace {
 
 std::string base64(const std::vector<std::uint8_t>& bytes) { return base64_bytes(bytes); }
-
-std::string escape(const std::string& s) {
-  std::string out;
-  for (char c : s) {
-    switch (c) {
-      case '<': out += "&lt;"; break;
-      case '>': out += "&gt;"; break;
-      case '&': out += "&amp;"; break;
-      case '"': out += "&quot;"; break;
-      default: out += c;
-    }
-  }
-  return out;
-}
 
 // The page's script: the status self-check (every layer image decoded, no script error, a texel
 // read back), the per-texel readout on hover and click, the search of a triangle or an ID pair,
@@ -200,8 +187,8 @@ namespace {
 // missed pairs (with a reference) and its colliding pairs.
 void write_roi_section(std::ostringstream& h, const DumpPair& p, std::size_t& view_index) {
   h << "<section class=\"roi\" data-colliding=\"" << p.colliding.size() << "\""
-    << (p.has_reference ? " data-reference=\"1\"" : "") << " id=\"" << escape(p.dir) << "\">\n";
-  h << "<h2>" << escape(p.name_a) << " (A) &times; " << escape(p.name_b) << " (B)</h2>\n";
+    << (p.has_reference ? " data-reference=\"1\"" : "") << " id=\"" << html_escape(p.dir) << "\">\n";
+  h << "<h2>" << html_escape(p.name_a) << " (A) &times; " << html_escape(p.name_b) << " (B)</h2>\n";
   h << "<p>epsilon " << p.epsilon << " &middot; PCS " << p.pcs.size() << " ID pairs &middot; "
     << p.colliding.size() << " colliding triangle pairs</p>\n";
   for (const DumpView& v : p.views) {
@@ -221,7 +208,7 @@ void write_roi_section(std::ostringstream& h, const DumpPair& p, std::size_t& vi
       // The preview is depth | IDs side by side (2n x n texels on 512 x 256 pixels); the canvas
       // over it takes the search's outlines.
       h << "<figure><img class=\"layer\" data-view=\"" << view_index << "\" data-layer=\"" << k << "\" alt=\""
-        << escape(alt) << "\" src=\"data:image/png;base64,"
+        << html_escape(alt) << "\" src=\"data:image/png;base64,"
         << base64(encode_png(layer_preview(v.layers[k], v.resolution, marks))) << "\">"
         << "<canvas class=\"mark\" data-view=\"" << view_index << "\" data-layer=\"" << k
         << "\" width=\"512\" height=\"256\"></canvas>"
@@ -243,10 +230,10 @@ void write_roi_section(std::ostringstream& h, const DumpPair& p, std::size_t& vi
       for (const DumpPair::Missed& x : p.missed)
         if (x.tri_a == m[0] && x.tri_b == m[1]) why = &x;
       const std::string line = why ? why->verdict + ": " + why->why : "";
-      h << "<tr class=\"pair missed\" data-a=\"" << m[0] << "\" data-b=\"" << m[1] << "\" data-why=\"" << escape(line)
+      h << "<tr class=\"pair missed\" data-a=\"" << m[0] << "\" data-b=\"" << m[1] << "\" data-why=\"" << html_escape(line)
         << "\"" << row_ids(p, m[0], m[1]) << "><td>" << m[0] << "</td><td>" << m[1] << "</td><td>"
-        << (why ? "<b>" + escape(why->verdict) + "</b> " + escape(why->why) : std::string("(not explained in this dump)"))
-        << "</td><td><code>peelcd explain SCENE --pair " << escape(p.name_a) << ":" << m[0] << "," << escape(p.name_b)
+        << (why ? "<b>" + html_escape(why->verdict) + "</b> " + html_escape(why->why) : std::string("(not explained in this dump)"))
+        << "</td><td><code>peelcd explain SCENE --pair " << html_escape(p.name_a) << ":" << m[0] << "," << html_escape(p.name_b)
         << ":" << m[1] << " --out DIR</code></td></tr>\n";
     }
     h << "</table></details>\n";
@@ -256,9 +243,9 @@ void write_roi_section(std::ostringstream& h, const DumpPair& p, std::size_t& vi
   for (std::size_t i = 0; i < p.colliding.size(); ++i)
     h << "<tr class=\"pair\" data-a=\"" << p.colliding[i][0] << "\" data-b=\"" << p.colliding[i][1] << "\""
       << row_ids(p, p.colliding[i][0], p.colliding[i][1]) << "><td>"
-      << p.colliding[i][0] << "</td><td>" << p.colliding[i][1] << "</td><td>" << escape(p.kinds[i])
-      << "</td><td><code>peelcd explain SCENE --pair " << escape(p.name_a) << ":" << p.colliding[i][0] << ","
-      << escape(p.name_b) << ":" << p.colliding[i][1] << "</code></td></tr>\n";
+      << p.colliding[i][0] << "</td><td>" << p.colliding[i][1] << "</td><td>" << html_escape(p.kinds[i])
+      << "</td><td><code>peelcd explain SCENE --pair " << html_escape(p.name_a) << ":" << p.colliding[i][0] << ","
+      << html_escape(p.name_b) << ":" << p.colliding[i][1] << "</code></td></tr>\n";
   h << "</table></details>\n";
   h << "</section>\n";
 }
@@ -282,7 +269,7 @@ std::string viewer_html(const Dump& d) {
   std::size_t view_index = 0;
   for (const DumpPair& p : d.pairs)
     for (const DumpView& v : p.views) {
-      h << (view_index++ ? ",\n" : "\n") << "{dir:\"" << escape(v.dir) << "\",n:" << v.resolution
+      h << (view_index++ ? ",\n" : "\n") << "{dir:\"" << html_escape(v.dir) << "\",n:" << v.resolution
         << ",conservative:" << (v.conservative ? "true" : "false") << ",eps:" << v.epsilon_window;
       if (embed) {
         h << ",layers:[";
@@ -294,10 +281,10 @@ std::string viewer_html(const Dump& d) {
       h << "}";
     }
   h << "];\n" << kViewerScript << "</script></head><body>\n";
-  h << "<h1>peelcd layer dump</h1>\n<p class=\"meta\">" << escape(d.renderer) << " &middot; "
-    << escape(d.gl_version) << " &middot; backend " << escape(d.backend) << " &middot; shaders "
-    << escape(d.shader_hash) << "<br>options " << escape(d.options.dump());
-  if (!d.gl_options.is_null()) h << "<br>GL stage " << escape(d.gl_options.dump());
+  h << "<h1>peelcd layer dump</h1>\n<p class=\"meta\">" << html_escape(d.renderer) << " &middot; "
+    << html_escape(d.gl_version) << " &middot; backend " << html_escape(d.backend) << " &middot; shaders "
+    << html_escape(d.shader_hash) << "<br>options " << html_escape(d.options.dump());
+  if (!d.gl_options.is_null()) h << "<br>GL stage " << html_escape(d.gl_options.dump());
   h << "</p>\n";
   h << "<p id=\"status\" data-status=\"pending\">viewer: loading</p>\n";
   // The tools: readout, search, filter.
@@ -322,7 +309,7 @@ std::string viewer_html(const Dump& d) {
     for (const DumpPair& p : d.pairs) {
       std::size_t layers = 0;
       for (const DumpView& v : p.views) layers += v.layers.size();
-      h << "<tr><td><a href=\"#" << escape(p.dir) << "\">" << escape(p.name_a) << " &times; " << escape(p.name_b)
+      h << "<tr><td><a href=\"#" << html_escape(p.dir) << "\">" << html_escape(p.name_a) << " &times; " << html_escape(p.name_b)
         << "</a></td><td>" << p.views.size() << "</td><td>" << layers << "</td><td>" << p.pcs.size() << "</td><td>"
         << p.colliding.size() << "</td><td>";
       if (p.has_reference)

@@ -11,13 +11,7 @@
 
 namespace peelcd::test {
 
-// An object of `mesh`, named, neither rigid nor moving.
-inline Object object(std::string name, Mesh mesh) {
-  Object o;
-  o.name = std::move(name);
-  o.mesh = std::move(mesh);
-  return o;
-}
+inline Object object(std::string name, Mesh mesh) { return named_object(std::move(name), std::move(mesh)); }
 
 // One detector over the CPU image stage for the test program.
 inline Detector& cpu_detector() {

@@ -8,6 +8,7 @@
 #include <memory>
 #include <optional>
 #include <string>
+#include <utility>
 #include <vector>
 
 namespace peelcd {
@@ -66,6 +67,14 @@ struct Object {
   // Test the object against itself too (self-collision; DetectOptions::self asks it for all).
   bool self = false;
 };
+
+// An object named `name` of `mesh`, neither rigid nor moving nor asking for self-collision.
+inline Object named_object(std::string name, Mesh mesh) {
+  Object o;
+  o.name = std::move(name);
+  o.mesh = std::move(mesh);
+  return o;
+}
 
 // The world-space mesh an object's triangles are drawn from: a moving mesh's source, else its own.
 inline const Mesh& drawn_mesh(const Object& o) { return o.moving && o.moving->source ? *o.moving->source : o.mesh; }
