@@ -122,7 +122,7 @@ PEELCD_ALWAYS_INLINE void descend_same_frame(const Bvh& a, const Bvh& b, std::ui
       const bool keep = na[c].box.overlaps(y.box);
       stack[top] = {c, j};
       top += keep;
-      if (na[c].leaf() & y.leaf()) prefetch_leaf(a, na[c]), prefetch_leaf(b, y);
+      if (int(na[c].leaf()) & int(y.leaf())) prefetch_leaf(a, na[c]), prefetch_leaf(b, y);
       prefetch(&na[na[c].first]);
     }
   } else {
@@ -130,7 +130,7 @@ PEELCD_ALWAYS_INLINE void descend_same_frame(const Bvh& a, const Bvh& b, std::ui
       const bool keep = x.box.overlaps(nb[c].box);
       stack[top] = {i, c};
       top += keep;
-      if (x.leaf() & nb[c].leaf()) prefetch_leaf(a, x), prefetch_leaf(b, nb[c]);
+      if (int(x.leaf()) & int(nb[c].leaf())) prefetch_leaf(a, x), prefetch_leaf(b, nb[c]);
       prefetch(&nb[nb[c].first]);
     }
   }
@@ -325,7 +325,7 @@ struct Posed {
   // A pushed pair's lines asked for ahead of its pop: both leaves' for a pair of leaves, else
   // the right child of each internal node (its left one is next to it).
   PEELCD_ALWAYS_INLINE void ask_ahead(const BvhNode& x, const BvhNode& y) const {
-    if (x.leaf() & y.leaf()) {
+    if (int(x.leaf()) & int(y.leaf())) {
       prefetch_leaf(a, x), prefetch_leaf(b, y);
       return;
     }
