@@ -3,15 +3,10 @@
 // programs compile several files to one translation unit, so a helper two files need lives here).
 #include "peelcd/core/image/cpu_stage.h"
 #include "peelcd/core/image/detector.h"
-#include "peelcd/core/mesh.h"
 
 #include <memory>
-#include <string>
-#include <utility>
 
 namespace peelcd::test {
-
-inline Object object(std::string name, Mesh mesh) { return named_object(std::move(name), std::move(mesh)); }
 
 // One detector over the CPU image stage for the test program.
 inline Detector& cpu_detector() {

@@ -11,7 +11,6 @@
 
 #include <CGAL/Exact_predicates_exact_constructions_kernel.h>
 #include <catch2/catch.hpp>
-#include "fixtures.h"
 
 #include <algorithm>
 
@@ -71,7 +70,6 @@ std::vector<std::pair<std::uint32_t, std::uint32_t>> listed(const Proximity& p) 
   return out;
 }
 
-using test::object;
 
 }  // namespace
 
@@ -134,8 +132,8 @@ TEST_CASE("proximity: one object's pairs within the margin, none sharing a verte
 }
 
 TEST_CASE("proximity: objects within the margin are a pair of the frame, on both paths and in the World", "[proximity]") {
-  const std::vector<Object> objects = {object("a", make_uv_sphere(Vec3(0, 0, 0), 1.0, 12, 16)),
-                                       object("b", make_box(Vec3(1.02, -0.3, -0.3), Vec3(2, 0.3, 0.3)))};
+  const std::vector<Object> objects = {named_object("a", make_uv_sphere(Vec3(0, 0, 0), 1.0, 12, 16)),
+                                       named_object("b", make_box(Vec3(1.02, -0.3, -0.3), Vec3(2, 0.3, 0.3)))};
   const double margin = 0.05;
   const auto want = brute(objects[0].mesh, objects[1].mesh, margin);
   REQUIRE_FALSE(want.empty());

@@ -8,7 +8,6 @@
 #include "peelcd/core/exact/reference.h"
 
 #include <catch2/catch.hpp>
-#include "fixtures.h"
 
 #include <memory>
 
@@ -37,13 +36,12 @@ class RecordingStage : public ImageStage {
   CpuImageStage inner_;
 };
 
-using test::object;
 
 // Three spheres in a row, each crossing the next; a fourth far away.
 std::vector<Object> row_of_spheres() {
   std::vector<Object> v;
-  for (int i = 0; i < 3; ++i) v.push_back(object("s" + std::to_string(i), make_uv_sphere(Vec3(1.5 * i, 0.1 * i, 0), 1.0, 14, 18)));
-  v.push_back(object("far", make_box(Vec3(20, 20, 20), Vec3(21, 21, 21))));
+  for (int i = 0; i < 3; ++i) v.push_back(named_object("s" + std::to_string(i), make_uv_sphere(Vec3(1.5 * i, 0.1 * i, 0), 1.0, 14, 18)));
+  v.push_back(named_object("far", make_box(Vec3(20, 20, 20), Vec3(21, 21, 21))));
   return v;
 }
 
