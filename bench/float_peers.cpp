@@ -24,7 +24,8 @@
 #include <string>
 
 namespace peelcd::bench {
-namespace {
+// A named namespace: the peers' Impl classes (external linkage) hold these.
+namespace float_peers_detail {
 
 // A body's float geometry: vertices (x, y, z), triangles (3 indices), self adjacency.
 struct FloatMesh {
@@ -47,6 +48,10 @@ struct FloatMesh {
       for (int k = 0; k < 3; ++k) t[3 * i + std::size_t(k)] = ts[i][std::size_t(k)];
   }
 };
+
+}  // namespace float_peers_detail
+using float_peers_detail::FloatMesh;
+namespace {
 
 // The triangle pairs of one object pair, collected from a traversal's candidate batches (the
 // float test; self: no triangle with itself, none sharing a vertex, each couple once).

@@ -111,6 +111,43 @@ std::vector<VariantRow> time_variants(Detector& detector, const std::string& mes
   return rows;
 }
 
+std::vector<VariantRow> time_world_variants(Detector& detector, int repeat, int variants,
+                                            const std::function<void(int)>& use) {
+  std::vector<std::pair<std::string, std::unique_ptr<Sequence>>> scenes;
+  // Each setting one untimed frame (buffers grow, shapes upload), then `repeat` frames in turns.
+  const std::size_t frames = std::size_t(variants) * std::size_t(repeat + 1);
+  scenes.emplace_back("World: 200-ball pile", make_crowd(200, frames));
+  scenes.emplace_back("World: waving spheres 2x82k", make_crossing_spheres(144, frames, /*wave=*/true));
+  std::vector<VariantRow> rows;
+  for (const auto& [name, seq] : scenes) {
+    DetectOptions opt;
+    opt.stage = Stage::image;  // every pair drawn: the route the setting changes
+    World world(detector.stage_ptr());
+    std::vector<Object> objects;
+    std::vector<BodyId> bodies;
+    VariantRow row;
+    row.scene = name;
+    std::vector<std::vector<double>> ms(static_cast<std::size_t>(variants)), gpu(ms);
+    std::size_t f = 0;
+    for (int i = -1; i < repeat; ++i)
+      for (int k = 0; k < variants; ++k) {
+        use(k);
+        seq->frame(f++, objects);
+        sync_bodies(world, objects, bodies);
+        const FrameResult& r = world.collide(opt);
+        if (i < 0) continue;
+        ms[std::size_t(k)].push_back(r.timings.total);
+        gpu[std::size_t(k)].push_back(r.timings.gpu_raster + r.timings.gpu_compute);
+      }
+    for (int k = 0; k < variants; ++k) {
+      row.ms.push_back(median_of(ms[std::size_t(k)]));
+      row.gpu_ms.push_back(median_of(gpu[std::size_t(k)]));
+    }
+    rows.push_back(row);
+  }
+  return rows;
+}
+
 Calibration calibrate(Detector& detector, const std::string& meshes_dir, const std::vector<int>& budgets, int repeat) {
   Calibration cal;
   const auto scenes = calibration_scenes(meshes_dir);

@@ -512,7 +512,8 @@ struct GlImageStage::Impl {
   // GPU, the certified filter, GPU selection); other views need a second to batch with.
   bool batched_alone(const PeelJob& job) const { return job.conservative && !host_resolve(); }
   // Conservative views covered by the compute pass (GlOptions::coverage; auto: the cost models'
-  // choice, the stage's own, `models`).
+  // choice, the stage's own, `models`, where calibrate timed one; else compute on a GPU and
+  // raster on a software renderer: docs/backends.md, "Which is chosen").
   const CostModels* models = nullptr;
   // Conservative views of at most `largest` texels a side covered by the compute pass. Not on a
   // software renderer beyond 255 texels a side: llvmpipe (and lavapipe under zink) ends a shader
@@ -523,8 +524,9 @@ struct GlImageStage::Impl {
   static constexpr int kSoftwareComputeSide = 255;
   bool compute_coverage(int largest) const {
     if (software_renderer && largest > kSoftwareComputeSide) return false;
-    return options.coverage == Coverage::compute ||
-           (options.coverage == Coverage::automatic && models && models->coverage == "compute");
+    if (options.coverage != Coverage::automatic) return options.coverage == Coverage::compute;
+    if (models && !models->coverage.empty()) return models->coverage == "compute";
+    return !software_renderer;
   }
   bool host_resolve() const {
     return options.resolve == Resolve::host || (options.resolve == Resolve::automatic && software_renderer);

@@ -1,8 +1,8 @@
 #!/usr/bin/env bash
 # The GPU path checked and measured in one command, on the EGL backend:
 #   1. the golden suite on the hardware tier (--quick: the exact tier on llvmpipe), with the
-#      GPU resolve (--resolve gpu) and with the host resolve, and (not --quick) with the coverage
-#      by compute;
+#      GPU resolve (--resolve gpu) and with the host resolve (--coverage auto: by compute on a
+#      GPU), and (not --quick) with the rasterizer's coverage;
 #   2. the deep-texel scenes of the GPU resolve (a 1-texel tile on the default scene, both
 #      resolves, every PCS compared with the certified filter off; with it, nothing missed);
 #   3. run-to-run determinism: the same frames twice, batched with GPU selection and the GPU
@@ -113,14 +113,15 @@ say "host: $(uname -srm), $(nproc) cores"
 say "binary: $(basename "$bin"), peelcd $("$bin" --version 2>/dev/null | cut -d' ' -f2)"
 
 # 1. The goldens, both resolves (the GPU resolve is what a GPU runs by default), then the
-# conservative coverage by compute (--coverage compute: the same layers as the rasterizer's).
+# conservative coverage by the rasterizer (auto is the compute pass on a GPU: the same layers).
 for resolve in gpu host; do
   step "golden compare, $tier tier, --resolve $resolve" "golden_$resolve.txt" \
     "$bin" golden compare --backend egl --tier "$tier" --resolve "$resolve" --report "$out/golden-report-$resolve"
 done
-if [ "$quick" != 1 ]; then  # on llvmpipe ctest runs it ("golden ...: coverage by compute")
-  step "golden compare, $tier tier, --coverage compute" "golden_compute.txt" \
-    "$bin" golden compare --backend egl --tier "$tier" --coverage compute --report "$out/golden-report-compute"
+if [ "$quick" != 1 ]; then  # on llvmpipe ctest runs both ("golden ...: coverage by compute")
+  # --coverage auto is compute on a GPU (without a cost file): the rasterizer's path by name.
+  step "golden compare, $tier tier, --coverage raster" "golden_raster.txt" \
+    "$bin" golden compare --backend egl --tier "$tier" --coverage raster --report "$out/golden-report-raster"
 fi
 
 # 2. Deep texels: every drawn triangle of both meshes in one texel (a 1-texel tile), the GPU
@@ -157,12 +158,12 @@ else
   # queries, bytes uploaded, candidates to the host's exact test).
   step "bench, waving spheres 1.3M" "bench_spheres_wave_1m.txt" "$bin" bench spheres-wave --stacks 570 --backend egl --frames 4 --threads 1 --short
   step "bench, 1,000-ball pile" "bench_pile1000.txt" "$bin" bench crowd --objects 1000 --backend egl --frames 4 --threads 1 --short
-  # The same deforming scenes with the conservative coverage by compute (no draw): the image-work
-  # tables' raster and compute columns against the runs above.
-  step "bench, waving spheres 1.3M, --coverage compute" "bench_spheres_wave_1m_compute.txt" \
-    "$bin" bench spheres-wave --stacks 570 --backend egl --frames 4 --threads 1 --short --coverage compute
-  step "bench, 1,000-ball pile, --coverage compute" "bench_pile1000_compute.txt" \
-    "$bin" bench crowd --objects 1000 --backend egl --frames 4 --threads 1 --short --coverage compute
+  # The same deforming scenes with the conservative coverage by the rasterizer (the runs above:
+  # auto, the compute pass on a GPU): the image-work tables' raster and compute columns.
+  step "bench, waving spheres 1.3M, --coverage raster" "bench_spheres_wave_1m_raster.txt" \
+    "$bin" bench spheres-wave --stacks 570 --backend egl --frames 4 --threads 1 --short --coverage raster
+  step "bench, 1,000-ball pile, --coverage raster" "bench_pile1000_raster.txt" \
+    "$bin" bench crowd --objects 1000 --backend egl --frames 4 --threads 1 --short --coverage raster
 fi
 
 # 5. The router's cost models of this device, written where detect --costs, $PEELCD_COSTS and

@@ -70,12 +70,17 @@ std::vector<std::uint64_t> exact_pair_reference(const std::vector<Object>& objec
   return exact_colliding_pairs(objects[ia].mesh, objects[ib].mesh);
 }
 
-namespace {
-// A triangle's closed box for the sweep below.
+// A triangle's closed box for the sweep below (a named namespace: BoxScratch::Impl, a class with
+// external linkage, holds vectors of it).
+namespace reference_sweep {
 struct SweepBox {
   double lo[3], hi[3];
   std::uint32_t tri;
 };
+}  // namespace reference_sweep
+using reference_sweep::SweepBox;
+
+namespace {
 
 SweepBox sweep_box(const Mesh& m, std::uint32_t t) {
   SweepBox b;

@@ -420,6 +420,15 @@ expect("bench --scaling" 0 "peelcd default, 2 threads +[0-9.]+ +[0-9.]+ +0.00% +
 expect("bench --scaling: not for self" 2 "--scaling times the World rows of the pair scenes, not cloth-self" bench cloth-self --scaling 2)
 expect("calibrate help" 0 "cost models" calibrate --help)
 expect("calibrate: large meshes" 0 "large meshes.*stacks +triangles.*\n +10 +720 .*\n +16 +1920 .*ratio: measured / predicted" calibrate --backend cpu --repeat 1 --budgets 16 --large 10 16)
+# The coverage compared on the GL stage (OSMesa here): the frame API's one-pair scenes and the
+# World's frames, raster and compute in turns; the World's choice written into the cost file.
+expect("calibrate: the coverage on the World's frames" 0
+       "World: 200-ball pile +[0-9.]+ +[0-9.]+ .*World: waving spheres 2x82k +[0-9.]+ +[0-9.]+ .*coverage: compute / raster [0-9.]+ on the World's frames \\(geometric mean over 2 scenes; [0-9.]+ over the frame API's 15 one-pair scenes\\): (raster|compute) .*cost models written"
+       calibrate --backend osmesa --repeat 1 --budgets 32 --large 0 --write-costs ${WORK}/costs_coverage.json)
+file(READ ${WORK}/costs_coverage.json costs_coverage)
+if(NOT costs_coverage MATCHES "\"coverage\": \"(raster|compute)\"")
+  message(SEND_ERROR "calibrate --write-costs: no coverage in the file\n${costs_coverage}")
+endif()
 expect("bench: bad peeler" 2 "--peeler: unknown value \"magic\"" detect ${scene} --peeler magic)
 
 # peelcd explain (docs/debugging.md): one pair's walk and verdict; detect --explain-misses.

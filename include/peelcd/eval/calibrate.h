@@ -48,6 +48,13 @@ struct VariantRow {
 std::vector<VariantRow> time_variants(Detector& detector, const std::string& meshes_dir, int budget, int repeat,
                                       int variants, const std::function<void(int)>& use);
 
+// The same on the World's image route (Stage::image, every pair drawn; batched where the World
+// batches): a pile of 200 balls (rigid and deforming) and two crossing waving spheres of 82,368
+// triangles each, `repeat` frames of each setting in turns after one untimed frame each; the
+// World's frame ms (`World::collide`'s timings.total: the bodies are brought outside it).
+std::vector<VariantRow> time_world_variants(Detector& detector, int repeat, int variants,
+                                            const std::function<void(int)>& use);
+
 // Large meshes (two crossing rigid spheres, make_crossing_spheres(), at `stacks` bands): what the
 // routers predict against what the frame takes, through the frame API (Stage::automatic: the
 // route's predicted ms, its scan included, against the frame's total) and through the World (its

@@ -26,7 +26,8 @@ enum class Resolve { automatic, gpu, host };
 // (shaders/conservative.inc): for a device whose raster engine is the bottleneck
 // (docs/backends.md, "Raster or compute for coverage"). automatic: the one `peelcd calibrate
 // --write-costs` timed faster on this device and renderer when the stage routes by such a file
-// (CostModels::coverage), else raster. Point-sampled views always rasterize.
+// (CostModels::coverage), else compute on a GPU (the faster on the World's batched frames of an
+// NVIDIA H200) and raster on a software renderer. Point-sampled views always rasterize.
 enum class Coverage { automatic, raster, compute };
 
 inline const char* to_string(Peeler peeler) { return peeler == Peeler::abuffer ? "abuffer" : "multipass"; }
@@ -158,7 +159,8 @@ inline const std::vector<GlOptionSpec>& gl_option_table() {
        }},
       {"coverage", "--coverage",
        "How conservative views find the texels a triangle touches: raster (the rasterizer), compute (a compute "
-       "pass, the same layers) or auto (the faster by the cost models of peelcd calibrate, else raster)",
+       "pass, the same layers) or auto (the faster by the cost models of peelcd calibrate, else compute on a GPU and raster "
+       "on a software renderer)",
        "auto,raster,compute", [](const GlOptions& o) { return std::string(to_string(o.coverage)); },
        [](GlOptions& o, const std::string& v) {
          const auto c = parse_coverage(v);
