@@ -277,6 +277,18 @@ void World::batch_image_pairs(std::optional<bool> together) {
   impl_->batch_pairs = together;
 }
 
+void World::time_routes(std::optional<bool> timed) {
+  PEELCD_WORLD_GUARD;
+  impl_->time_routes_opt = timed;
+  impl_->route_timer = RouteTimer{};
+}
+
+bool World::comparing_routes() const {
+  PEELCD_WORLD_GUARD;
+  const bool timed = impl_->time_routes_opt ? *impl_->time_routes_opt : !impl_->stage->runs_on_cpu();
+  return timed && impl_->route_timer.comparing();
+}
+
 Mesh World::world_mesh(BodyId id) const {
   PEELCD_WORLD_GUARD;
   const Body& b = impl_->body(id);

@@ -80,7 +80,33 @@ void World::Impl::self_pair(Body& a, std::size_t first, std::size_t last, PairRe
       }
 }
 
+// Stage::automatic where the image route is the resident one (conservative, no margin, batched)
+// and the stage's work runs on a GPU, unless World::time_routes() said otherwise.
+bool World::Impl::timing_routes(const DetectOptions& opt) const {
+  if (opt.stage != Stage::automatic || !resident_route(opt)) return false;
+  return time_routes_opt ? *time_routes_opt : !stage->runs_on_cpu();
+}
+
 void World::Impl::collide(const DetectOptions& opt, FrameResult& out) {
+  if (!timing_routes(opt)) {
+    stats.route_comparing = false;
+    collide_frame(opt, out);
+    return;
+  }
+  const bool image = route_timer.next() == RouteTimer::image;
+  stats.route_comparing = route_timer.comparing();
+  if (image) {
+    image_opt = opt;  // assigned: the strings' storage kept from frame to frame
+    image_opt.stage = Stage::image;
+    collide_frame(image_opt, out);
+    ++stats.image_route_frames;
+  } else {
+    collide_frame(opt, out);
+  }
+  route_timer.record(out.timings.total, pairs.size());
+}
+
+void World::Impl::collide_frame(const DetectOptions& opt, FrameResult& out) {
   validate_options(opt, stage->max_resolution());
   const auto t_total = Clock::now();
   out.reset_counters();

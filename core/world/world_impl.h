@@ -3,6 +3,7 @@
 // the API (bodies added, moved, removed); world_frame.cpp a frame (World::collide()).
 
 #include "peelcd/core/world/world.h"
+#include "route_timer.h"
 #include "peelcd/core/image/planner.h"
 #include "peelcd/core/image/id_map.h"
 #include "peelcd/core/image/image_stage.h"
@@ -383,6 +384,12 @@ struct World::Impl {
   }
 
   void collide(const DetectOptions& opt, FrameResult& out);
+  void collide_frame(const DetectOptions& opt, FrameResult& out);  // one frame on opt's stage
+  // Stage::automatic on the resident route of a GPU: the routes timed (route_timer.h).
+  std::optional<bool> time_routes_opt;  // World::time_routes()
+  bool timing_routes(const DetectOptions& opt) const;
+  RouteTimer route_timer;
+  DetectOptions image_opt;  // the frame's options with Stage::image (its storage kept)
   // The steps of collide(), in order.
   void find_pairs(const DetectOptions& opt, unsigned lanes);
   void count_pairs();

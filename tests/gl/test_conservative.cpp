@@ -728,6 +728,74 @@ TEST_CASE("the World's resident image route puts a deforming body's refit off, a
   (void)rigid;
 }
 
+TEST_CASE("the World times its routes under Stage::automatic: both timed, every frame exact", "[conservative][world]") {
+  // A waving sheet across a row of rigid balls, the resident route batched, Stage::automatic
+  // with the routes timed (World::time_routes(true): on a software renderer they are not by
+  // default): the first six frames compare the routed path and the image route (an untimed
+  // frame and two timed each), later frames run the choice; every frame's contacts are the
+  // exact reference's whichever route ran it. Unset on a software renderer, or false: never
+  // the image route under Stage::automatic (the router's models send these pairs to the exact
+  // path there).
+  const auto ball = std::make_shared<const Mesh>(make_uv_sphere(Vec3::Zero(), 0.6, 12, 24));
+  const Mesh flat = make_grid(Vec3(-0.5, -1.5, -1.5), Vec3(0, 3, 0), Vec3(0, 0, 3), 12, 12);
+  const auto pose_of = [](int i, int frame) {
+    Eigen::Affine3d p = Eigen::Affine3d::Identity();
+    p.translate(Vec3(0.02 * frame, 1.0 * i - 1.0, 0.1 * i));
+    p.rotate(Eigen::AngleAxisd(0.2 * frame + i, Vec3(1, 2, 3).normalized()));
+    return p;
+  };
+  const auto sheet_at = [&](int frame) {
+    Mesh m = flat;
+    for (Vec3& v : m.vertices) v.x() += 0.1 * std::sin(1.7 * v.y() + 0.9 * v.z() + frame);
+    return m;
+  };
+  for (const int setting : {1, 0, -1}) {  // time_routes(true), (false), unset
+    INFO("time_routes " << setting);
+    gl::GlOptions go;
+    go.resolve = Resolve::gpu;  // the production path, also where GL runs on the CPU
+    World world(make_image_stage(test_backend(), go));
+    world.batch_image_pairs(true);
+    if (setting >= 0) world.time_routes(setting == 1);
+    std::vector<BodyId> balls;
+    for (int i = 0; i < 3; ++i) balls.push_back(world.add_rigid(ball, pose_of(i, 0)));
+    const BodyId sheet = world.add_deforming(flat);
+    DetectOptions opt;  // Stage::automatic
+    const int frames = setting == 1 ? 12 : 4;
+    std::size_t found = 0;
+    for (int frame = 0; frame < frames; ++frame) {
+      INFO("frame " << frame);
+      for (int i = 0; i < 3; ++i) world.set_pose(balls[std::size_t(i)], pose_of(i, frame));
+      const Mesh current = sheet_at(frame);
+      world.set_vertices(sheet, current.vertices);
+      const bool comparing = world.comparing_routes();
+      const std::size_t image_frames = world.stats().image_route_frames;
+      const FrameResult& f = world.collide(opt);
+      const bool image = world.stats().image_route_frames > image_frames;
+      CHECK(world.stats().route_comparing == comparing);
+      if (setting == 1 && frame < 6) {
+        CHECK(comparing);
+        CHECK(image == (frame >= 3));  // three frames routed, then three on the image route
+      }
+      if (setting != 1) CHECK_FALSE(image);
+      for (const PairResult& p : f.pairs) {
+        const Mesh ma = p.object_a == sheet ? current : posed(*ball, pose_of(int(p.object_a), frame));
+        const Mesh mb = p.object_b == sheet ? current : posed(*ball, pose_of(int(p.object_b), frame));
+        INFO("pair " << p.object_a << "-" << p.object_b << (image ? ", image route" : ", routed"));
+        CHECK(couples_of(p) == exact_colliding_pairs(ma, mb));
+        if (image) CHECK_FALSE(p.exact_stage);
+        found += p.colliding.size();
+      }
+    }
+    CHECK(found > 0);
+    if (setting == 1) {
+      CHECK_FALSE(world.comparing_routes());  // a choice after the comparison
+      CHECK(world.stats().image_route_frames >= 3);
+    } else {
+      CHECK(world.stats().image_route_frames == 0);
+    }
+  }
+}
+
 TEST_CASE("conservative mode serves proximity: no pair within the margin missed, one view and batched", "[conservative][proximity]") {
   // Triangles grown by half the margin (PeelJob::grow) in the geometry shader, the batch's view
   // records and the GPU's selection: one view drawn alone, three batched with the host's and the

@@ -59,6 +59,10 @@ struct WorldStats {
   std::size_t node_pairs = 0;       // node pairs visited by the traversals, last frame
   std::size_t candidates = 0;       // triangle couples whose boxes overlap, last frame
   std::size_t vertices_transformed = 0;  // rigid bodies' world vertices computed, last frame
+  // Routes timed (World::time_routes()): frames whose pairs all went to the image route, and
+  // whether the last frame belonged to a comparison of the two routes rather than to a choice.
+  std::size_t image_route_frames = 0;
+  bool route_comparing = false;
 };
 
 class World {
@@ -132,6 +136,20 @@ class World {
   // softpipe, swrast, the CPU stage). Together, the pairs of two rigid bodies are drawn from their
   // shapes, resident on the stage (docs/backends.md).
   void batch_image_pairs(std::optional<bool> together);
+
+  // Stage::automatic where the image route is the resident one (batched, conservative, no
+  // margin): the router's per-pair models decide after the traversal, which the image route
+  // would skip, so they cannot see what it saves. With routes timed, the World runs its frames
+  // on the routed path or with every pair on the image route (as Stage::image), times each over
+  // a few frames of its own, keeps the faster and times the other again now and then
+  // (docs/backends.md, "The World times its routes"). The contacts are the same either way;
+  // the pairs' route, candidates and predictions follow the route taken. Unset: timed where
+  // the stage's work runs on a GPU (not ImageStage::runs_on_cpu()), not elsewhere.
+  void time_routes(std::optional<bool> timed);
+  // The next frame belongs to a comparison of the routes (a route being timed), not to a
+  // choice: true from the start until the first choice (false where routes are not timed:
+  // time_routes(false), or unset on a stage that runs on the CPU).
+  bool comparing_routes() const;
 
  private:
   struct Impl;
