@@ -453,8 +453,8 @@ void SuiteRun::print_table(bool heap_kept) const {
               "trees (World), host resolve lanes); llvmpipe %s; freed memory %s\n",
               threads_, lp ? (std::string("LP_NUM_THREADS=") + lp).c_str() : "its default (one per core)",
               heap_kept ? "kept in the process (mallopt)" : "returned as the allocator decides");
-  std::printf("World: %.0f candidate couples per frame (mean, default row; its routes timed: %zu of %zu timed frames on "
-              "the image route); frame API router: %zu of %zu ROIs to the exact CPU path over the timed frames\n",
+  std::printf("World: %.0f candidate couples per frame (mean, default row; on the image route in %zu of %zu timed "
+              "frames); frame API router: %zu of %zu ROIs to the exact CPU path over the timed frames\n",
               suite_.frames ? double(world_candidates_) / double(suite_.frames) : 0.0, world_image_frames_,
               suite_.frames, rois_exact_, rois_);
   std::printf("%-38s %10s %9s %8s %7s %8s %8s %8s %8s\n", "method", "median ms", "stage ms", "miss", "false", "x CGAL",
