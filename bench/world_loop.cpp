@@ -4,9 +4,11 @@
 // work between two frames of a program would). A scene file's objects are rigid bodies at their
 // file poses, brought to each frame by set_pose() as `peelcd bench` brings them; `--spheres S`
 // takes `peelcd bench spheres --stacks S` instead (two crossing rigid spheres, turning: the
-// posed traversal), its frames over and over. One thread.
+// posed traversal), its frames over and over; `--crowd N` the pile of `peelcd bench crowd
+// --objects N` (rigid balls by set_pose, every fifth ball deforming by set_vertices). One
+// thread, or `--threads T` (DetectOptions::threads).
 //
-//   peelcd_world_loop SCENE|--spheres STACKS [--frames N] [--pairs] [--cold]
+//   peelcd_world_loop SCENE|--spheres STACKS|--crowd N [--frames N] [--threads T] [--pairs] [--cold]
 //
 // Prints the median frame (and its first quartile), the World's boxes and exact steps
 // (Timings::aabb, Timings::cpu) and the contacts found. Under valgrind --tool=callgrind, the
@@ -34,7 +36,8 @@ double median(std::vector<double> v, double q = 0.5) {
 }
 
 int usage(const char* why) {
-  std::fprintf(stderr, "peelcd_world_loop: %s\nusage: peelcd_world_loop SCENE|--spheres STACKS [--frames N] [--pairs] [--cold]\n",
+  std::fprintf(stderr, "peelcd_world_loop: %s\nusage: peelcd_world_loop SCENE|--spheres STACKS|--crowd N [--frames N] [--threads T] "
+               "[--pairs] [--cold]\n",
                why);
   return 2;
 }
@@ -43,7 +46,7 @@ int usage(const char* why) {
 
 int main(int argc, char** argv) {
   std::string path;
-  long frames = 300, stacks = 0;
+  long frames = 300, stacks = 0, crowd = 0, threads = 1;
   bool pairs = false, cold = false;
   for (int i = 1; i < argc; ++i) {
     if (!std::strcmp(argv[i], "--pairs")) {
@@ -60,21 +63,32 @@ int main(int argc, char** argv) {
       char* end = nullptr;
       stacks = std::strtol(argv[++i], &end, 10);
       if (*end != '\0' || stacks < 3 || stacks > 2000) return usage("--spheres: latitude bands from 3 to 2,000");
+    } else if (!std::strcmp(argv[i], "--crowd")) {
+      if (i + 1 == argc) return usage("--crowd needs a number of balls");
+      char* end = nullptr;
+      crowd = std::strtol(argv[++i], &end, 10);
+      if (*end != '\0' || crowd < 2 || crowd > 5000) return usage("--crowd: balls from 2 to 5,000");
+    } else if (!std::strcmp(argv[i], "--threads")) {
+      if (i + 1 == argc) return usage("--threads needs a count");
+      char* end = nullptr;
+      threads = std::strtol(argv[++i], &end, 10);
+      if (*end != '\0' || threads < 0 || threads > 64) return usage("--threads: 0 (one per core) to 64");
     } else if (path.empty() && argv[i][0] != '-') {
       path = argv[i];
     } else {
       return usage((std::string("unknown argument '") + argv[i] + "'").c_str());
     }
   }
-  if (path.empty() == (stacks == 0)) return usage("a scene file or --spheres, one of them");
+  if (int(!path.empty()) + int(stacks != 0) + int(crowd != 0) != 1) return usage("a scene file, --spheres or --crowd, one of them");
   try {
     // The frames: a scene file's one frame (its objects as rigid shapes at the identity), or
     // the spheres' sequence (kSphereFrames frames, played over and over).
     constexpr std::size_t kSphereFrames = 12;
     std::unique_ptr<Sequence> sequence;
     std::vector<Object> objects;
-    if (stacks) {
-      sequence = make_crossing_spheres(int(stacks), kSphereFrames, /*wave=*/false);
+    if (stacks || crowd) {
+      sequence = stacks ? make_crossing_spheres(int(stacks), kSphereFrames, /*wave=*/false)
+                        : make_crowd(std::size_t(crowd), kSphereFrames);
       sequence->frame(0, objects);
     } else {
       objects = load_objects(load_scene(path));
@@ -82,9 +96,10 @@ int main(int argc, char** argv) {
     }
     World world;
     std::vector<BodyId> ids;
-    for (const Object& o : objects) ids.push_back(world.add_rigid(o.rigid->shape, o.rigid->pose, o.name));
+    for (const Object& o : objects)
+      ids.push_back(o.rigid ? world.add_rigid(o.rigid->shape, o.rigid->pose, o.name) : world.add_deforming(o.mesh, o.name));
     DetectOptions opt;
-    opt.threads = 1;
+    opt.threads = unsigned(threads);
     if (pairs) opt.contacts = ContactDetail::pairs;
     FrameResult result;
     std::vector<char> other(cold ? std::size_t(64) << 20 : 0);
@@ -94,15 +109,21 @@ int main(int argc, char** argv) {
       for (std::size_t i = 0; i < other.size(); i += 64) other[i] = char(other[i] + 1);
       if (sequence) sequence->frame(std::size_t(f) % kSphereFrames, objects);
       const auto t0 = std::chrono::steady_clock::now();
-      for (std::size_t i = 0; i < ids.size(); ++i) world.set_pose(ids[i], objects[i].rigid->pose);
+      for (std::size_t i = 0; i < ids.size(); ++i) {
+        if (objects[i].rigid) world.set_pose(ids[i], objects[i].rigid->pose);
+        else world.set_vertices(ids[i], objects[i].mesh.vertices);
+      }
       world.collide(opt, result);
       ms.push_back(std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - t0).count());
       boxes.push_back(result.timings.aabb);
       exact.push_back(result.timings.cpu);
       for (const PairResult& p : result.pairs) contacts += p.colliding.size();
     }
-    std::printf("%s: %ld frames%s%s, one thread\n", stacks ? ("spheres, " + std::to_string(stacks) + " stacks").c_str() : path.c_str(), frames, pairs ? ", pairs only" : "",
-                cold ? ", 64 MB written between frames" : "");
+    const std::string what = stacks ? "spheres, " + std::to_string(stacks) + " stacks"
+                             : crowd ? "crowd, " + std::to_string(crowd) + " balls" : path;
+    std::printf("%s: %ld frames%s%s, %s\n", what.c_str(), frames, pairs ? ", pairs only" : "",
+                cold ? ", 64 MB written between frames" : "",
+                threads == 1 ? "one thread" : threads == 0 ? "a thread per core" : (std::to_string(threads) + " threads").c_str());
     std::printf("frame: median %.4f ms, first quartile %.4f ms; boxes %.4f ms, exact %.4f ms (medians)\n", median(ms),
                 median(ms, 0.25), median(boxes), median(exact));
     std::printf("contacts: %zu over the frames (%.1f a frame)\n", contacts, double(contacts) / double(frames));

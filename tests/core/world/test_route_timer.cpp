@@ -74,7 +74,7 @@ TEST_CASE("route timer: the first frame of each stint is not timed", "[world][ro
   CHECK(t.mean(RouteTimer::routed) == 6.0);
 }
 
-TEST_CASE("route timer: a changed choice starts the interval over; the interval is bounded", "[world][route]") {
+TEST_CASE("route timer: a changed choice starts the interval over, and the interval is bounded", "[world][route]") {
   RouteTimer t;
   double image_ms = 5.0;
   const auto ms = [&](RouteTimer::Route r) { return r == RouteTimer::image ? image_ms : 10.0; };
