@@ -107,7 +107,7 @@ FrameResult run_frames(Runner& runner, const std::vector<Object>& objects, const
     Timings m;
     for (double Timings::*f : {&Timings::aabb, &Timings::upload, &Timings::gpu, &Timings::readback, &Timings::cpu,
                                &Timings::total, &Timings::gl_wait, &Timings::gpu_raster, &Timings::gpu_compute,
-                               &Timings::gpu_transfer})
+                               &Timings::gpu_transfer, &Timings::gpu_select, &Timings::gpu_cover})
       m.*f = med(f);
     m.gpu_timed = result.timings.gpu_timed;
     m.gpu_passes_untimed = result.timings.gpu_passes_untimed;
@@ -232,8 +232,8 @@ void print_summary(FILE* human, const DetectArgs& a, const Scene& scene, const s
   if (result.rois_peeled)
     std::fprintf(human, "  host work %.3f (total - GL waits %.3f)\n", t.total - t.gl_wait, t.gl_wait);
   if (t.gpu_timed)
-    std::fprintf(human, "  GPU passes (timer queries): raster %.3f  compute %.3f  transfer %.3f%s\n", t.gpu_raster,
-                 t.gpu_compute, t.gpu_transfer,
+    std::fprintf(human, "  GPU passes (timer queries): raster %.3f  compute %.3f (selection %.3f, coverage %.3f)  transfer %.3f%s\n",
+                 t.gpu_raster, t.gpu_compute, t.gpu_select, t.gpu_cover, t.gpu_transfer,
                  t.gpu_passes_untimed
                      ? ("  (" + std::to_string(t.gpu_passes_untimed) + " passes' results impossible: left out)").c_str()
                      : "");

@@ -88,6 +88,7 @@ enum class Kind { world, frame, cgal, peer, floor_box, floor_culled };
 // tested exactly and the colliding pairs among them.
 struct Split {
   double total = 0, wait = 0, raster = 0, compute = 0, transfer = 0;
+  double select = 0, cover = 0;  // parts of compute: the batch's selection, the compute coverage
   double uploaded = 0, geometry = 0, candidates = 0, colliding = 0, rois_peeled = 0;
   double apart = 0;  // texel couples the GPU's certified filter dropped (FrameResult::gl_couples_apart)
   double boxes = 0, views = 0, stage = 0, readback = 0, exact = 0;  // the host's steps (Timings)
@@ -154,6 +155,8 @@ Split split_of(const FrameResult& r) {
   s.wait = r.timings.gl_wait;
   s.raster = r.timings.gpu_raster;
   s.compute = r.timings.gpu_compute;
+  s.select = r.timings.gpu_select;
+  s.cover = r.timings.gpu_cover;
   s.transfer = r.timings.gpu_transfer;
   s.uploaded = double(r.bytes_uploaded);
   s.geometry = double(r.geometry_bytes);
@@ -533,18 +536,19 @@ void SuiteRun::print_image_work() const {
     if (!r.peelcd() || med(r.split, &Split::rois_peeled) == 0) continue;
     if (!any) {
       std::printf("\nimage work per frame (medians over the frames; the rows above, the same runs):\n");
-      std::printf("%-38s %8s %8s %8s %8s %8s %8s %6s %9s %9s %9s %9s %9s %6s\n", "method", "frame", "host", "GL wait",
-                  "raster", "compute", "transfer", "x dflt", "KB up", "KB mesh", "apart", "cands", "colliding", "c/col");
+      std::printf("%-38s %8s %8s %8s %8s %8s %7s %7s %8s %6s %9s %9s %9s %9s %9s %6s\n", "method", "frame", "host",
+                  "GL wait", "raster", "compute", "select", "cover", "transfer", "x dflt", "KB up", "KB mesh", "apart",
+                  "cands", "colliding", "c/col");
       any = true;
     }
     const double host = med(r.split, &Split::total) - med(r.split, &Split::wait);
     const double colliding = med(r.split, &Split::colliding), candidates = med(r.split, &Split::candidates);
     std::printf("%-38s %8.2f %8.2f %8.2f", r.name.c_str(), med(r.split, &Split::total), host, med(r.split, &Split::wait));
     if (gl_stage_.pass_timing())
-      std::printf(" %8.2f %8.2f %8.2f", med(r.split, &Split::raster), med(r.split, &Split::compute),
-                  med(r.split, &Split::transfer));
+      std::printf(" %8.2f %8.2f %7.2f %7.2f %8.2f", med(r.split, &Split::raster), med(r.split, &Split::compute),
+                  med(r.split, &Split::select), med(r.split, &Split::cover), med(r.split, &Split::transfer));
     else
-      std::printf(" %8s %8s %8s", "-", "-", "-");
+      std::printf(" %8s %8s %7s %7s %8s", "-", "-", "-", "-", "-");
     std::printf(" %6.2f %9.1f %9.1f %9.0f %9.0f %9.0f %6.2f\n", exact_ms > 0 ? host / exact_ms : 0.0,
                 med(r.split, &Split::uploaded) / 1024.0, med(r.split, &Split::geometry) / 1024.0,
                 med(r.split, &Split::apart), candidates, colliding, colliding > 0 ? candidates / colliding : 0.0);
@@ -558,7 +562,8 @@ void SuiteRun::print_image_work() const {
                 untimed);
   std::printf("(frame: the row's median ms; host: frame - GL wait, the host's work outside waits for the GPU (reads back,\n"
               " maps, query results, and memory barriers, where a software renderer finishes its work); raster, compute,\n"
-              " transfer: GPU time of draws, dispatches and uploads/clears/copies by GL timer queries%s; x dflt: host\n"
+              " transfer: GPU time of draws, dispatches and uploads/clears/copies by GL timer queries%s (select, cover:\n"
+              " the parts of compute that select the batch's triangles and cover conservative views); x dflt: host\n"
               " against the default World row's median frame (%.2f ms); KB up: bytes the host wrote into GL buffers, KB\n"
               " mesh: of those, corners, indices and draw entries; apart: texel couples the GPU resolve's certified filter\n"
               " proved apart and did not read back; cands: triangle couples the host tested exactly; c/col: cands per\n"

@@ -145,6 +145,8 @@ void FrameResult::add_image_work(const FrameResult& o) {
   timings.gpu_raster += o.timings.gpu_raster;
   timings.gpu_compute += o.timings.gpu_compute;
   timings.gpu_transfer += o.timings.gpu_transfer;
+  timings.gpu_select += o.timings.gpu_select;
+  timings.gpu_cover += o.timings.gpu_cover;
   timings.gpu_timed = timings.gpu_timed || o.timings.gpu_timed;
   timings.gpu_passes_untimed += o.timings.gpu_passes_untimed;
 }

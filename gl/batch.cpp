@@ -327,7 +327,7 @@ void GlImageStage::Impl::select_batch(const BatchRun& run) {
   gl.Uniform1i(select.conservative, run.point ? 0 : 1);
   for (int pass = 0; pass < 3; ++pass) {
     gl.Uniform1i(select.pass, pass);
-    dispatch(GLuint(gx), GLuint(gy), 1);
+    dispatch(GLuint(gx), GLuint(gy), 1, GpuPass::select);
     barrier(GL_SHADER_STORAGE_BARRIER_BIT | GL_COMMAND_BARRIER_BIT);
   }
 }
@@ -381,7 +381,7 @@ void GlImageStage::Impl::cover_batch_pass(const BatchRun& run, bool count_only) 
   gl.UseProgram(program.id);
   gl.BindBufferBase(GL_SHADER_STORAGE_BUFFER, 10, batch.command);
   gl.Uniform1ui(program.row, GLuint(gx * 64));
-  dispatch(GLuint(gx), GLuint(gy), 1);
+  dispatch(GLuint(gx), GLuint(gy), 1, GpuPass::cover);
 }
 
 // The counts into offsets, the k-buffer sized to hold them all; the triangles drawn (the

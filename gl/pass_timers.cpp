@@ -40,7 +40,13 @@ void PassTimers::collect(Timings& t) {
       ++t.gpu_passes_untimed;
       continue;
     }
-    (kinds_[i] == GpuPass::raster ? t.gpu_raster : kinds_[i] == GpuPass::compute ? t.gpu_compute : t.gpu_transfer) += ms;
+    switch (kinds_[i]) {
+      case GpuPass::raster: t.gpu_raster += ms; break;
+      case GpuPass::transfer: t.gpu_transfer += ms; break;
+      case GpuPass::select: t.gpu_select += ms, t.gpu_compute += ms; break;
+      case GpuPass::cover: t.gpu_cover += ms, t.gpu_compute += ms; break;
+      case GpuPass::compute: t.gpu_compute += ms; break;
+    }
   }
   used_ = 0;
 }

@@ -300,7 +300,7 @@ void GlImageStage::Impl::cover_one_view(int slot, const std::array<float, 16>& c
   gl.BindBufferBase(GL_SHADER_STORAGE_BUFFER, 18, corners);
   gl.BindBufferBase(GL_SHADER_STORAGE_BUFFER, 19, indexed ? ibo[slot] : corners);
   gl.BindBufferRange(GL_SHADER_STORAGE_BUFFER, 20, cover_params, at, sizeof params);
-  dispatch(GLuint(gx), GLuint(gy), 1);
+  dispatch(GLuint(gx), GLuint(gy), 1, GpuPass::cover);
 }
 
 }  // namespace peelcd::gl

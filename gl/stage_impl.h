@@ -58,8 +58,9 @@ struct DeepHeader {
   std::uint32_t row_count, row_capacity, max_blocks, deep_texels;
 };
 
-// The kinds of GPU pass the stage times (Timings::gpu_raster, gpu_compute, gpu_transfer).
-enum class GpuPass { raster, compute, transfer };
+// The kinds of GPU pass the stage times (Timings::gpu_raster, gpu_compute, gpu_transfer); select
+// and cover are compute passes counted apart too (Timings::gpu_select, gpu_cover).
+enum class GpuPass { raster, compute, select, cover, transfer };
 
 // GL_TIME_ELAPSED queries around the stage's passes (pass_timers.cpp), when `on`: begin() before
 // a pass's GL call and end() after it (queries of one target do not nest, so a pass is one call
@@ -272,8 +273,8 @@ struct GlImageStage::Impl {
     draw_call();
     count_draw();
   }
-  void dispatch(GLuint x, GLuint y, GLuint z) {
-    const TimedPass pass(timers, GpuPass::compute);
+  void dispatch(GLuint x, GLuint y, GLuint z, GpuPass kind = GpuPass::compute) {
+    const TimedPass pass(timers, kind);
     gl.DispatchCompute(x, y, z);
     count_dispatch();
   }

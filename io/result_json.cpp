@@ -120,6 +120,8 @@ nlohmann::json to_json(const FrameResult& r, const std::vector<Object>& objects,
     out["timings_ms"]["gpu_raster"] = r.timings.gpu_raster;
     out["timings_ms"]["gpu_compute"] = r.timings.gpu_compute;
     out["timings_ms"]["gpu_transfer"] = r.timings.gpu_transfer;
+    out["timings_ms"]["gpu_select"] = r.timings.gpu_select;
+    out["timings_ms"]["gpu_cover"] = r.timings.gpu_cover;
     out["gpu_passes_untimed"] = r.timings.gpu_passes_untimed;
   }
   if (check) out["check"] = score_json(sum);

@@ -224,11 +224,18 @@ TEST_CASE("GL clocks: pass timing measures the passes and leaves the results alo
           CHECK(t->timings.gpu_raster == 0.0);
           CHECK(t->timings.gpu_compute == 0.0);
           CHECK(t->timings.gpu_transfer == 0.0);
+          CHECK(t->timings.gpu_select == 0.0);
+          CHECK(t->timings.gpu_cover == 0.0);
         }
         for (const FrameResult* t : {&timed, &timed_again}) {
           CHECK(t->timings.gpu_timed);
           CHECK(t->timings.gpu_raster > 0.0);  // every frame draws
           CHECK(t->timings.gpu_compute >= 0.0);
+          // The selection's and the compute coverage's passes are parts of compute (none of the
+          // latter here: the default coverage rasterizes where these tests run, llvmpipe).
+          CHECK(t->timings.gpu_select >= 0.0);
+          CHECK(t->timings.gpu_cover >= 0.0);
+          CHECK(t->timings.gpu_select + t->timings.gpu_cover <= t->timings.gpu_compute * (1 + 1e-12));
           CHECK(t->timings.gl_wait >= 0.0);
           CHECK(t->timings.gl_wait <= t->timings.total);
           // GPU passes in one stage call run one after the other: together no longer than the frame.

@@ -211,7 +211,11 @@ struct Timings {  // milliseconds, as in the paper's tables
   // (dispatches: selection, prefix sums, resolves, PCS tests) and transfer (buffer uploads,
   // clears and copies on the GPU's timeline). All 0 when not timed.
   double gpu_raster = 0, gpu_compute = 0, gpu_transfer = 0;
-  bool gpu_timed = false;  // the three above were measured this frame
+  // Parts of gpu_compute: the batch's triangle selection (its three dispatches) and the
+  // conservative coverage by compute (GlOptions::coverage); the rest of gpu_compute is the
+  // prefix sums, resolves and PCS tests.
+  double gpu_select = 0, gpu_cover = 0;
+  bool gpu_timed = false;  // the GPU times above were measured this frame
   // Passes whose query gave an impossible time (longer than the stage call that issued it: Mesa's
   // llvmpipe reports such for a pass its threads had no work in), left out of the three above.
   std::size_t gpu_passes_untimed = 0;
