@@ -48,31 +48,31 @@ int main(int argc, char** argv) {
   std::string path;
   long frames = 300, stacks = 0, crowd = 0, threads = 1;
   bool pairs = false, cold = false;
+  struct Count {
+    const char* flag;
+    long* value;
+    long lo, hi;
+    const char* what;
+  };
+  const Count counts[] = {{"--frames", &frames, 1, 10000000, "a count from 1 to 10,000,000"},
+                          {"--spheres", &stacks, 3, 2000, "latitude bands from 3 to 2,000"},
+                          {"--crowd", &crowd, 2, 5000, "balls from 2 to 5,000"},
+                          {"--threads", &threads, 0, 64, "0 (one per core) to 64"}};
+  const auto count_option = [&](const char* arg) -> const Count* {
+    for (const Count& c : counts)
+      if (!std::strcmp(arg, c.flag)) return &c;
+    return nullptr;
+  };
   for (int i = 1; i < argc; ++i) {
     if (!std::strcmp(argv[i], "--pairs")) {
       pairs = true;
     } else if (!std::strcmp(argv[i], "--cold")) {
       cold = true;
-    } else if (!std::strcmp(argv[i], "--frames")) {
-      if (i + 1 == argc) return usage("--frames needs a count");
+    } else if (const Count* c = count_option(argv[i])) {
       char* end = nullptr;
-      frames = std::strtol(argv[++i], &end, 10);
-      if (*end != '\0' || frames < 1 || frames > 10000000) return usage("--frames: a count from 1 to 10,000,000");
-    } else if (!std::strcmp(argv[i], "--spheres")) {
-      if (i + 1 == argc) return usage("--spheres needs a number of latitude bands");
-      char* end = nullptr;
-      stacks = std::strtol(argv[++i], &end, 10);
-      if (*end != '\0' || stacks < 3 || stacks > 2000) return usage("--spheres: latitude bands from 3 to 2,000");
-    } else if (!std::strcmp(argv[i], "--crowd")) {
-      if (i + 1 == argc) return usage("--crowd needs a number of balls");
-      char* end = nullptr;
-      crowd = std::strtol(argv[++i], &end, 10);
-      if (*end != '\0' || crowd < 2 || crowd > 5000) return usage("--crowd: balls from 2 to 5,000");
-    } else if (!std::strcmp(argv[i], "--threads")) {
-      if (i + 1 == argc) return usage("--threads needs a count");
-      char* end = nullptr;
-      threads = std::strtol(argv[++i], &end, 10);
-      if (*end != '\0' || threads < 0 || threads > 64) return usage("--threads: 0 (one per core) to 64");
+      const long n = i + 1 < argc ? std::strtol(argv[++i], &end, 10) : 0;
+      if (!end || *end != '\0' || n < c->lo || n > c->hi) return usage((std::string(c->flag) + ": " + c->what).c_str());
+      *c->value = n;
     } else if (path.empty() && argv[i][0] != '-') {
       path = argv[i];
     } else {

@@ -80,6 +80,33 @@ std::vector<std::pair<std::string, std::vector<Object>>> calibration_scenes(cons
   return scenes;
 }
 
+namespace {
+
+// `repeat` frames of each of `variants` settings in turns, after one untimed frame each (buffers
+// grow, shapes upload): frame() runs one frame with the setting use(k) applied and returns its
+// time and its GPU passes' time; the row holds the medians.
+VariantRow time_in_turns(const std::string& scene, int repeat, int variants, const std::function<void(int)>& use,
+                         const std::function<std::pair<double, double>()>& frame) {
+  VariantRow row;
+  row.scene = scene;
+  std::vector<std::vector<double>> ms(static_cast<std::size_t>(variants)), gpu(ms);
+  for (int i = -1; i < repeat; ++i)
+    for (int k = 0; k < variants; ++k) {
+      use(k);
+      const auto [frame_ms, gpu_ms] = frame();
+      if (i < 0) continue;
+      ms[std::size_t(k)].push_back(frame_ms);
+      gpu[std::size_t(k)].push_back(gpu_ms);
+    }
+  for (int k = 0; k < variants; ++k) {
+    row.ms.push_back(median_of(ms[std::size_t(k)]));
+    row.gpu_ms.push_back(median_of(gpu[std::size_t(k)]));
+  }
+  return row;
+}
+
+}  // namespace
+
 std::vector<VariantRow> time_variants(Detector& detector, const std::string& meshes_dir, int budget, int repeat,
                                       int variants, const std::function<void(int)>& use) {
   std::vector<VariantRow> rows;
@@ -88,25 +115,10 @@ std::vector<VariantRow> time_variants(Detector& detector, const std::string& mes
     DetectOptions opt;
     opt.budget = budget;
     opt.stage = Stage::image;
-    VariantRow row;
-    row.scene = name;
-    std::vector<std::vector<double>> ms(static_cast<std::size_t>(variants)), gpu(ms);
-    for (int k = 0; k < variants; ++k) {  // untimed: buffers grow, shapes upload
-      use(k);
+    rows.push_back(time_in_turns(name, repeat, variants, use, [&] {
       detector.detect(objects, opt, r);
-    }
-    for (int i = 0; i < repeat; ++i)
-      for (int k = 0; k < variants; ++k) {
-        use(k);
-        detector.detect(objects, opt, r);
-        ms[std::size_t(k)].push_back(r.timings.total - r.timings.aabb);
-        gpu[std::size_t(k)].push_back(r.timings.gpu_raster + r.timings.gpu_compute);
-      }
-    for (int k = 0; k < variants; ++k) {
-      row.ms.push_back(median_of(ms[std::size_t(k)]));
-      row.gpu_ms.push_back(median_of(gpu[std::size_t(k)]));
-    }
-    rows.push_back(row);
+      return std::pair(r.timings.total - r.timings.aabb, r.timings.gpu_raster + r.timings.gpu_compute);
+    }));
   }
   return rows;
 }
@@ -114,7 +126,6 @@ std::vector<VariantRow> time_variants(Detector& detector, const std::string& mes
 std::vector<VariantRow> time_world_variants(Detector& detector, int repeat, int variants,
                                             const std::function<void(int)>& use) {
   std::vector<std::pair<std::string, std::unique_ptr<Sequence>>> scenes;
-  // Each setting one untimed frame (buffers grow, shapes upload), then `repeat` frames in turns.
   const std::size_t frames = std::size_t(variants) * std::size_t(repeat + 1);
   scenes.emplace_back("World: 200-ball pile", make_crowd(200, frames));
   scenes.emplace_back("World: waving spheres 2x82k", make_crossing_spheres(144, frames, /*wave=*/true));
@@ -125,25 +136,13 @@ std::vector<VariantRow> time_world_variants(Detector& detector, int repeat, int 
     World world(detector.stage_ptr());
     std::vector<Object> objects;
     std::vector<BodyId> bodies;
-    VariantRow row;
-    row.scene = name;
-    std::vector<std::vector<double>> ms(static_cast<std::size_t>(variants)), gpu(ms);
     std::size_t f = 0;
-    for (int i = -1; i < repeat; ++i)
-      for (int k = 0; k < variants; ++k) {
-        use(k);
-        seq->frame(f++, objects);
-        sync_bodies(world, objects, bodies);
-        const FrameResult& r = world.collide(opt);
-        if (i < 0) continue;
-        ms[std::size_t(k)].push_back(r.timings.total);
-        gpu[std::size_t(k)].push_back(r.timings.gpu_raster + r.timings.gpu_compute);
-      }
-    for (int k = 0; k < variants; ++k) {
-      row.ms.push_back(median_of(ms[std::size_t(k)]));
-      row.gpu_ms.push_back(median_of(gpu[std::size_t(k)]));
-    }
-    rows.push_back(row);
+    rows.push_back(time_in_turns(name, repeat, variants, use, [&] {
+      seq->frame(f++, objects);
+      sync_bodies(world, objects, bodies);
+      const FrameResult& r = world.collide(opt);
+      return std::pair(r.timings.total, r.timings.gpu_raster + r.timings.gpu_compute);
+    }));
   }
   return rows;
 }
