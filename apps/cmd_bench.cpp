@@ -22,6 +22,7 @@ struct BenchArgs {
   std::string backend = kDefaultBackend;
   unsigned threads = 0;  // 0: the machine's (at most 8)
   unsigned scaling = 0;  // > 0: the default World row again with this many threads
+  bool time_routes = false;  // World::time_routes(true) for the World rows (else unset)
   bool short_rows = false;
   bool audit = false;
   bool no_gpu_timers = false;
@@ -129,6 +130,7 @@ int run_bench(const BenchArgs& a) {
   suite.res = a.res;
   suite.threads = threads;
   suite.scaling_threads = a.scaling;
+  if (a.time_routes) suite.time_routes = true;
   suite.short_rows = a.short_rows;
   suite.audit = a.audit;
   suite.gpu_timers = !a.no_gpu_timers;
@@ -187,6 +189,10 @@ std::vector<Command> add_bench_commands(CLI::App& app) {
   benchmark->add_option("--scaling", be.scaling, "Time the default World row again with N threads, side by side with "
                                                   "the others on the same frames, and print its ratio to the default row")
       ->check(CLI::Range(1, 64));
+  benchmark->add_flag("--time-routes", be.time_routes,
+                      "Time the World's two routes under stage auto on any stage (World::time_routes(true)); by "
+                      "default they are timed where the stage runs on a GPU, and only on the resident image route "
+                      "(batched: a GPU, or --resolve gpu)");
   benchmark->add_option("--frames", be.frames, "Frames (of the test scene; repeats of a scene file)")
       ->check(kPositive)->capture_default_str();
   benchmark->add_option("--res", be.res, "Texture size per ROI for peelcd; 0 = share the 512^2 budget with "

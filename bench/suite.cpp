@@ -306,7 +306,10 @@ void SuiteRun::add_rows() {
   }
   for (Row& r : rows_) {
     r.phase_ms.assign(std::size_t(std::max(1, suite_.phases)), {});
-    if (r.kind == Kind::world) r.world = std::make_unique<World>(suite_.stage);
+    if (r.kind == Kind::world) {
+      r.world = std::make_unique<World>(suite_.stage);
+      if (suite_.time_routes) r.world->time_routes(suite_.time_routes);
+    }
   }
 }
 

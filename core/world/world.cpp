@@ -281,11 +281,15 @@ void World::time_routes(std::optional<bool> timed) {
   PEELCD_WORLD_GUARD;
   impl_->time_routes_opt = timed;
   impl_->route_timer = RouteTimer{};
+  impl_->routes_timed.reset();
 }
 
 bool World::comparing_routes() const {
   PEELCD_WORLD_GUARD;
-  const bool timed = impl_->time_routes_opt ? *impl_->time_routes_opt : !impl_->stage->runs_on_cpu();
+  // Before a frame: whether routes will be timed where the options allow it; after one: whether
+  // they were in the last frame (a margin, point sampling or views one at a time do not time them).
+  const bool timed = impl_->routes_timed ? *impl_->routes_timed
+                                         : impl_->time_routes_opt ? *impl_->time_routes_opt : !impl_->stage->runs_on_cpu();
   return timed && impl_->route_timer.comparing();
 }
 

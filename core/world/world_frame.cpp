@@ -88,7 +88,8 @@ bool World::Impl::timing_routes(const DetectOptions& opt) const {
 }
 
 void World::Impl::collide(const DetectOptions& opt, FrameResult& out) {
-  if (!timing_routes(opt)) {
+  routes_timed = timing_routes(opt);
+  if (!*routes_timed) {
     stats.route_comparing = false;
     collide_frame(opt, out);
     return;

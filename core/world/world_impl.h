@@ -389,6 +389,7 @@ struct World::Impl {
   std::optional<bool> time_routes_opt;  // World::time_routes()
   bool timing_routes(const DetectOptions& opt) const;
   RouteTimer route_timer;
+  std::optional<bool> routes_timed;  // the last frame's routes were timed (none before a frame)
   DetectOptions image_opt;  // the frame's options with Stage::image (its storage kept)
   // The steps of collide(), in order.
   void find_pairs(const DetectOptions& opt, unsigned lanes);

@@ -417,6 +417,14 @@ expect("bench spheres-wave" 0 "World, stage auto. +[0-9.]+ +[0-9.]+ +0.00% +0 .*
 expect("bench crowd" 0 "crowd, 1 frames, 8 objects.*CGAL, cropped" bench crowd --objects 8 --frames 1)
 expect("bench --scaling" 0 "peelcd default, 2 threads +[0-9.]+ +[0-9.]+ +0.00% +0 .*scaling: the default World with 2 threads / with 1, the same frames side by side: [0-9.]+"
        bench spheres-wave --stacks 21 --frames 2 --short --threads 1 --scaling 2)
+# The World's timed routes forced on (OSMesa with the GPU's resolve: the resident route, batched):
+# the default rows warmed until they chose, every frame exact, the header says on how many timed
+# frames the default row took the image route; without the flag the default row never does here.
+expect("bench --time-routes" 0
+       "on the image route in [0-3] of 3 timed frames.*peelcd default .World, stage auto. +[0-9.]+ +[0-9.]+ +0.00% +0 .*pairs only .stage auto. +[0-9.]+ +[0-9.]+ +0.00% +0 "
+       bench crowd --objects 12 --frames 3 --short --resolve gpu --time-routes --threads 1)
+expect("bench: routes not timed on a software renderer" 0 "on the image route in 0 of 2 timed frames"
+       bench crowd --objects 12 --frames 2 --short --resolve gpu --threads 1)
 expect("bench --scaling: not for self" 2 "--scaling times the World rows of the pair scenes, not cloth-self" bench cloth-self --scaling 2)
 expect("calibrate help" 0 "cost models" calibrate --help)
 expect("calibrate: large meshes" 0 "large meshes.*stacks +triangles.*\n +10 +720 .*\n +16 +1920 .*ratio: measured / predicted" calibrate --backend cpu --repeat 1 --budgets 16 --large 10 16)

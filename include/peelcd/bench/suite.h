@@ -13,6 +13,7 @@
 #include "peelcd/core/exact/reference.h"
 
 #include <functional>
+#include <optional>
 #include <memory>
 #include <string>
 #include <vector>
@@ -32,6 +33,8 @@ struct Suite {
   // > 0: the default World row again with this many threads, timed side by side with the
   // others (its ratio to the default row, same frames, printed under the table).
   unsigned scaling_threads = 0;
+  // The World rows' World::time_routes() (unset: timed on a GPU, not on a software renderer).
+  std::optional<bool> time_routes;
   bool short_rows = false;
   // A row of Embree set up as a plain user writes it (PlainEmbree), and each Embree row's ratio
   // to it printed under the table (docs/performance.md, "The peers").

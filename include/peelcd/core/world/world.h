@@ -147,8 +147,9 @@ class World {
   // the stage's work runs on a GPU (not ImageStage::runs_on_cpu()), not elsewhere.
   void time_routes(std::optional<bool> timed);
   // The next frame belongs to a comparison of the routes (a route being timed), not to a
-  // choice: true from the start until the first choice (false where routes are not timed:
-  // time_routes(false), or unset on a stage that runs on the CPU).
+  // choice: true from the start until the first choice; false where routes are not timed
+  // (time_routes(false), or unset on a stage that runs on the CPU) or the last frame's options
+  // did not time them (a margin, point sampling, views one at a time, a forced stage).
   bool comparing_routes() const;
 
  private:
