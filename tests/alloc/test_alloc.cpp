@@ -45,9 +45,9 @@ TEST_CASE("a steady stream of frames allocates nothing", "[alloc]") {
   const Mesh big = make_uv_sphere(Vec3(0, 0, 0), 1.0, 16, 32);
   auto ball = std::make_shared<const Mesh>(make_uv_sphere(Vec3(0, 0, 0), 0.6, 12, 24));
   std::vector<Object> objects(3);
-  objects[0] = {"big", big, {}};
-  objects[1] = {"small", make_uv_sphere(Vec3(0.9, 0.3, 0.1), 0.5, 12, 24), {}};
-  objects[2] = {"ball", *ball, RigidMotion{ball, Eigen::Affine3d::Identity()}};
+  objects[0] = {"big", big, {}, {}};
+  objects[1] = {"small", make_uv_sphere(Vec3(0.9, 0.3, 0.1), 0.5, 12, 24), {}, {}};
+  objects[2] = {"ball", *ball, RigidMotion{ball, Eigen::Affine3d::Identity()}, {}};
   const Mesh small = objects[1].mesh;
   const auto move = [&](int f) {
     const int phase = f % 5;  // period 5

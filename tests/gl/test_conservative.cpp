@@ -140,7 +140,7 @@ TEST_CASE("a conservative view no k-buffer can hold goes to the exact CPU path",
   DetectOptions opt;
   opt.stage = Stage::image;  // the image stage is what this checks
   opt.resolution = 1024;
-  const FrameResult f = test_pipeline().detect({{"a", a, {}}, {"b", b, {}}}, opt);
+  const FrameResult f = test_pipeline().detect({{"a", a, {}, {}}, {"b", b, {}, {}}}, opt);
   REQUIRE(f.pairs.size() == 1);
   if (test_pipeline().renderer().find("llvmpipe") != std::string::npos) CHECK(f.views_exhaustive == 1);
   const Score s = score(exact_colliding_pairs(a, b), f.pairs[0].colliding);

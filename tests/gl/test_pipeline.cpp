@@ -9,7 +9,7 @@ using namespace peelcd::test;
 
 namespace {
 
-std::vector<Object> two(const Mesh& a, const Mesh& b) { return {{"a", a, {}}, {"b", b, {}}}; }
+std::vector<Object> two(const Mesh& a, const Mesh& b) { return {{"a", a, {}, {}}, {"b", b, {}, {}}}; }
 
 // Runs the pipeline and the CPU model of the image stage on the same ROI and options.
 struct Run {
@@ -210,7 +210,7 @@ TEST_CASE("repeated frames reuse GL objects and give identical answers", "[gl]")
 TEST_CASE("many ROIs share the texture budget", "[gl]") {
   std::vector<Object> objects;
   for (int i = 0; i < 6; ++i)  // a row of overlapping spheres: 5 ROIs
-    objects.push_back({"s" + std::to_string(i), make_uv_sphere(Vec3(1.5 * i, 0, 0), 1.0, 8, 16), {}});
+    objects.push_back({"s" + std::to_string(i), make_uv_sphere(Vec3(1.5 * i, 0, 0), 1.0, 8, 16), {}, {}});
   DetectOptions share = point_sampling();
   share.edge_texels = 0;  // every ROI takes its share of the budget
   const FrameResult f = test_pipeline().detect(objects, share);
@@ -262,7 +262,7 @@ TEST_CASE("a rigid object's shape is uploaded once, then moved by its pose", "[g
     Mesh world;
     world.triangles = ball->triangles;
     for (const Vec3& v : ball->vertices) world.vertices.push_back(pose * v);
-    std::vector<Object> objects = {{"big", big, {}}, {"ball", world, {}}};
+    std::vector<Object> objects = {{"big", big, {}, {}}, {"ball", world, {}, {}}};
     if (rigid) objects[1].rigid = RigidMotion{ball, pose};
     return std::make_pair(test_pipeline().detect(objects, opt), objects);
   };

@@ -94,8 +94,8 @@ TEST_CASE("depth resolution: parallel surfaces just above and below one float ul
   opt.views = 1;
   opt.peel = PeelMode::full;
   const double ulp_world = std::ldexp(1.0, -24) * 2.0 * std::sqrt(2.0);
-  const PairResult above = test_pipeline().detect({{"a", plane(0), {}}, {"b", plane(8 * ulp_world * std::sqrt(2.0)), {}}}, opt).pairs.at(0);
-  const PairResult below = test_pipeline().detect({{"a", plane(0), {}}, {"b", plane(0.05 * ulp_world * std::sqrt(2.0)), {}}}, opt).pairs.at(0);
+  const PairResult above = test_pipeline().detect({{"a", plane(0), {}, {}}, {"b", plane(8 * ulp_world * std::sqrt(2.0)), {}, {}}}, opt).pairs.at(0);
+  const PairResult below = test_pipeline().detect({{"a", plane(0), {}, {}}, {"b", plane(0.05 * ulp_world * std::sqrt(2.0)), {}, {}}}, opt).pairs.at(0);
   CHECK(above.layers == 2);  // 8 ulps apart: two layers
   // 0.05 ulp apart: the same float depth. Both surfaces still become layers (a tie between
   // different objects is kept), and the two planes are a PCS at depth difference 0.
@@ -103,7 +103,7 @@ TEST_CASE("depth resolution: parallel surfaces just above and below one float ul
   CHECK(below.pcs_count > 0);
   // Alternate peeling keeps the tie too, whichever object goes first.
   opt.peel = PeelMode::alternate;
-  const PairResult alt = test_pipeline().detect({{"a", plane(0), {}}, {"b", plane(0.05 * ulp_world * std::sqrt(2.0)), {}}}, opt).pairs.at(0);
+  const PairResult alt = test_pipeline().detect({{"a", plane(0), {}, {}}, {"b", plane(0.05 * ulp_world * std::sqrt(2.0)), {}, {}}}, opt).pairs.at(0);
   CHECK(alt.layers == 2);
   CHECK(alt.pcs_count > 0);
 }
@@ -124,7 +124,7 @@ TEST_CASE("triangle IDs above 2^24 survive (stored as integer bits, not float va
   opt.ids = IdMode::paper;
   opt.resolution = 128;
   opt.views = 1;
-  const PairResult r = test_pipeline().detect({{"a", a, {}}, {"b", b, {}}}, opt).pairs.at(0);
+  const PairResult r = test_pipeline().detect({{"a", a, {}, {}}, {"b", b, {}, {}}}, opt).pairs.at(0);
   REQUIRE_FALSE(r.pcs.empty());
   for (const IdPair& p : r.pcs) {
     CHECK(p.a >= base);

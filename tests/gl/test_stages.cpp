@@ -78,7 +78,7 @@ TEST_CASE("the GL stage shares ownership of its context and gives the caller's c
   std::weak_ptr<CountingContext> alive = counting;
   const Mesh a = make_uv_sphere(Vec3(0, 0, 0), 1.0, 12, 24);
   const Mesh b = make_uv_sphere(Vec3(1.2, 0.3, 0.1), 0.8, 12, 24);
-  const std::vector<Object> objects = {{"a", a, {}}, {"b", b, {}}};
+  const std::vector<Object> objects = {{"a", a, {}, {}}, {"b", b, {}, {}}};
   {
     gl::Pipeline pipeline(counting);
     CHECK(counting->current == counting->restored);  // construction gave the context back
@@ -110,8 +110,8 @@ TEST_CASE("an OSMesa context the caller had current is current again after a fra
   REQUIRE(mine);
   std::vector<unsigned char> buffer(16 * 16 * 4);
   REQUIRE(OSMesaMakeCurrent(mine, buffer.data(), GL_UNSIGNED_BYTE, 16, 16));
-  const std::vector<Object> objects = {{"a", make_uv_sphere(Vec3(0, 0, 0), 1.0, 8, 16), {}},
-                                       {"b", make_uv_sphere(Vec3(1.2, 0.3, 0.1), 0.8, 8, 16), {}}};
+  const std::vector<Object> objects = {{"a", make_uv_sphere(Vec3(0, 0, 0), 1.0, 8, 16), {}, {}},
+                                       {"b", make_uv_sphere(Vec3(1.2, 0.3, 0.1), 0.8, 8, 16), {}, {}}};
   DetectOptions opt;
   opt.stage = Stage::image;  // the image stage is what this checks
   opt.resolution = 32;
