@@ -34,8 +34,8 @@ class RouteTimer {
 
   // The frame just run on next()'s route took `ms` and had `pairs` pairs.
   void record(double ms, std::size_t pairs) {
-    if (stint_ > 0) add(route_, ms);
-    ++stint_;
+    if (!untimed_) add(route_, ms);
+    untimed_ = false;
     if (!comparing_) {
       if (pairs * 2 < pairs_at_choice_ || pairs > 2 * pairs_at_choice_) {  // the scene changed: both again
         comparing_ = true;
@@ -75,7 +75,7 @@ class RouteTimer {
   static Route other(Route r) { return r == image ? routed : image; }
   void switch_to(Route r) {
     route_ = r;
-    stint_ = 0;  // its first frame untimed
+    untimed_ = true;  // its first frame (uploads, refits put off or caught up) not timed
   }
   void add(Route r, double ms) {  // the last kTimedFrames frames kept
     ms_[r][slot_[r]] = ms;
@@ -85,7 +85,7 @@ class RouteTimer {
 
   Route route_ = routed, choice_ = routed;
   bool comparing_ = true, decided_ = false;
-  std::size_t stint_ = 0;  // frames run on route_ since it was switched to
+  bool untimed_ = true;  // the next frame is the first on route_ since it was switched to
   int count_[2] = {0, 0};  // timed frames of each route kept (at most kTimedFrames)
   int slot_[2] = {0, 0};   // where each route's next timed frame goes
   double ms_[2][kTimedFrames] = {};
