@@ -5,10 +5,11 @@
 // file poses, brought to each frame by set_pose() as `peelcd bench` brings them; `--spheres S`
 // takes `peelcd bench spheres --stacks S` instead (two crossing rigid spheres, turning: the
 // posed traversal), its frames over and over; `--crowd N` the pile of `peelcd bench crowd
-// --objects N` (rigid balls by set_pose, every fifth ball deforming by set_vertices). One
+// --objects N` (rigid balls by set_pose, every fifth ball deforming by set_vertices); `--wave S`
+// `peelcd bench spheres-wave --stacks S` (the spheres deforming: set_vertices and refits). One
 // thread, or `--threads T` (DetectOptions::threads).
 //
-//   peelcd_world_loop SCENE|--spheres STACKS|--crowd N [--frames N] [--threads T] [--pairs] [--cold]
+//   peelcd_world_loop SCENE|--spheres STACKS|--wave STACKS|--crowd N [--frames N] [--threads T] [--pairs] [--cold]
 //
 // Prints the median frame (and its first quartile), the World's boxes and exact steps
 // (Timings::aabb, Timings::cpu) and the contacts found. Under valgrind --tool=callgrind, the
@@ -36,7 +37,7 @@ double median(std::vector<double> v, double q = 0.5) {
 }
 
 int usage(const char* why) {
-  std::fprintf(stderr, "peelcd_world_loop: %s\nusage: peelcd_world_loop SCENE|--spheres STACKS|--crowd N [--frames N] [--threads T] "
+  std::fprintf(stderr, "peelcd_world_loop: %s\nusage: peelcd_world_loop SCENE|--spheres STACKS|--wave STACKS|--crowd N [--frames N] [--threads T] "
                "[--pairs] [--cold]\n",
                why);
   return 2;
@@ -46,7 +47,7 @@ int usage(const char* why) {
 
 int main(int argc, char** argv) {
   std::string path;
-  long frames = 300, stacks = 0, crowd = 0, threads = 1;
+  long frames = 300, stacks = 0, wave = 0, crowd = 0, threads = 1;
   bool pairs = false, cold = false;
   struct Count {
     const char* flag;
@@ -56,6 +57,7 @@ int main(int argc, char** argv) {
   };
   const Count counts[] = {{"--frames", &frames, 1, 10000000, "a count from 1 to 10,000,000"},
                           {"--spheres", &stacks, 3, 2000, "latitude bands from 3 to 2,000"},
+                          {"--wave", &wave, 3, 2000, "latitude bands from 3 to 2,000"},
                           {"--crowd", &crowd, 2, 5000, "balls from 2 to 5,000"},
                           {"--threads", &threads, 0, 64, "0 (one per core) to 64"}};
   const auto count_option = [&](const char* arg) -> const Count* {
@@ -79,15 +81,17 @@ int main(int argc, char** argv) {
       return usage((std::string("unknown argument '") + argv[i] + "'").c_str());
     }
   }
-  if (int(!path.empty()) + int(stacks != 0) + int(crowd != 0) != 1) return usage("a scene file, --spheres or --crowd, one of them");
+  if (int(!path.empty()) + int(stacks != 0) + int(wave != 0) + int(crowd != 0) != 1)
+    return usage("a scene file, --spheres, --wave or --crowd, one of them");
   try {
     // The frames: a scene file's one frame (its objects as rigid shapes at the identity), or
     // the spheres' sequence (kSphereFrames frames, played over and over).
     constexpr std::size_t kSphereFrames = 12;
     std::unique_ptr<Sequence> sequence;
     std::vector<Object> objects;
-    if (stacks || crowd) {
+    if (stacks || wave || crowd) {
       sequence = stacks ? make_crossing_spheres(int(stacks), kSphereFrames, /*wave=*/false)
+                 : wave ? make_crossing_spheres(int(wave), kSphereFrames, /*wave=*/true)
                         : make_crowd(std::size_t(crowd), kSphereFrames);
       sequence->frame(0, objects);
     } else {
@@ -120,6 +124,7 @@ int main(int argc, char** argv) {
       for (const PairResult& p : result.pairs) contacts += p.colliding.size();
     }
     const std::string what = stacks ? "spheres, " + std::to_string(stacks) + " stacks"
+                             : wave  ? "waving spheres, " + std::to_string(wave) + " stacks"
                              : crowd ? "crowd, " + std::to_string(crowd) + " balls" : path;
     std::printf("%s: %ld frames%s%s, %s\n", what.c_str(), frames, pairs ? ", pairs only" : "",
                 cold ? ", 64 MB written between frames" : "",

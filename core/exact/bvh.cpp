@@ -25,6 +25,9 @@ void Bvh::build(const std::vector<Vec3>& vertices, const std::vector<Tri>& trian
   const std::size_t n = triangles.size();
   nodes_.clear();
   leaves_.clear();
+  wide_.clear();
+  wide_of_.clear();
+  slot_of_.clear();
   leaf_node_.clear();
   corners_.clear();
   parents_.clear();
@@ -37,6 +40,8 @@ void Bvh::build(const std::vector<Vec3>& vertices, const std::vector<Tri>& trian
   std::iota(order_.begin(), order_.end(), 0u);
   vertex_boxes_.resize(vertices.size());
   unused_.clear();
+  ++changes_;
+  wide_fresh_ = true;  // (its boxes are the build's)
   if (n == 0) return;
   std::vector<std::uint8_t> used(vertices.size(), 0);
   for (const Tri& f : triangles)
@@ -64,6 +69,10 @@ void Bvh::build(const std::vector<Vec3>& vertices, const std::vector<Tri>& trian
   corners_.resize(n);
   for (std::size_t k = 0; k < n; ++k) corners_[k] = triangles[order_[k]];
   dirty_.assign(nodes_.size(), 0);
+  wide_of_.assign(nodes_.size(), kBvhWideNone);
+  slot_of_.assign(nodes_.size(), kBvhWideNone);
+  wide_.reserve(nodes_.size() / 3 + 1);
+  if (!nodes_[0].leaf()) build_wide(0);
   size_ = 0.0;
   for (const BvhNode& node : nodes_)
     if (!node.leaf()) size_ += extents(node.box);
@@ -120,6 +129,46 @@ std::uint32_t Bvh::build_node(std::uint32_t begin, std::uint32_t end, std::uint3
   box.merge(nodes_[right].box);
   nodes_[index].box = box;
   return index;
+}
+
+// Depth first, as the binary nodes: a wide node's children after it.
+std::uint32_t Bvh::build_wide(std::uint32_t node) {
+  const std::uint32_t w = std::uint32_t(wide_.size());
+  wide_.emplace_back();
+  wide_of_[node] = w;
+  std::uint32_t slots[4], used = 0;
+  for (const std::uint32_t c : {node + 1, nodes_[node].first}) {
+    if (nodes_[c].leaf()) {
+      slots[used++] = c;
+    } else {
+      slots[used++] = c + 1;
+      slots[used++] = nodes_[c].first;
+    }
+  }
+  const FBox empty;
+  for (std::uint32_t k = 0; k < 4; ++k) {
+    const FBox& box = k < used ? nodes_[slots[k]].box : empty;
+    for (int j = 0; j < 3; ++j) wide_[w].lo[j][k] = box.lo[j], wide_[w].hi[j][k] = box.hi[j];
+    wide_[w].child[k] = kBvhWideNone;
+  }
+  wide_[w].node = node;
+  for (std::uint32_t k = 0; k < used; ++k) {
+    const std::uint32_t s = slots[k];
+    slot_of_[s] = 4 * w + k;
+    const std::uint32_t child = nodes_[s].leaf() ? (kBvhWideLeaf | s) : build_wide(s);  // (wide_ may grow)
+    wide_[w].child[k] = child;
+  }
+  return w;
+}
+
+void Bvh::sync_wide() {
+  for (BvhWideNode& w : wide_)
+    for (std::uint32_t k = 0; k < 4 && w.child[k] != kBvhWideNone; ++k) {
+      const std::uint32_t c = w.child[k];
+      const FBox& box = nodes_[(c & kBvhWideLeaf) ? (c & ~kBvhWideLeaf) : wide_[c].node].box;
+      for (int j = 0; j < 3; ++j) w.lo[j][k] = box.lo[j], w.hi[j][k] = box.hi[j];
+    }
+  wide_fresh_ = true;
 }
 
 void Bvh::refit_node(std::uint32_t i) {
@@ -333,6 +382,8 @@ void Bvh::refit_nodes(const Aabb& exact) {
     size += extents(box);
   }
   size_ = size;
+  wide_fresh_ = false;
+  ++changes_;
 }
 
 void Bvh::refit(const std::vector<Vec3>& vertices, const std::vector<Tri>& triangles,
@@ -363,8 +414,10 @@ void Bvh::refit(const std::vector<Vec3>& vertices, const std::vector<Tri>& trian
   std::sort(stack_.begin(), stack_.end(), std::greater<>());
   for (const std::uint32_t n : stack_) {
     refit_node(n);
+    if (wide_fresh_) set_slot(n);
     dirty_[n] = 0;
   }
+  ++changes_;
   if (recompute) {
     box_ = Aabb{};
     for (const Tri& f : triangles)

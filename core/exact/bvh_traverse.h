@@ -454,6 +454,132 @@ struct Self {
   }
 };
 
+// The slots of wide node `w` whose boxes overlap `box` (closed), as bits (slot i: bit i). Unused
+// slots never do.
+inline unsigned overlap_mask(const FBox& box, const BvhWideNode& w) {
+#if defined(__SSE__) || defined(_M_X64)
+  __m128 ok = _mm_castsi128_ps(_mm_set1_epi32(-1));
+  for (int k = 0; k < 3; ++k)
+    ok = _mm_and_ps(ok, _mm_and_ps(_mm_cmple_ps(_mm_set1_ps(box.lo[k]), _mm_load_ps(w.hi[k])),
+                                   _mm_cmple_ps(_mm_load_ps(w.lo[k]), _mm_set1_ps(box.hi[k]))));
+  return unsigned(_mm_movemask_ps(ok));
+#else
+  unsigned mask = 0;
+  for (int i = 0; i < 4; ++i) {
+    bool ok = true;
+    for (int k = 0; k < 3; ++k) ok = ok && box.lo[k] <= w.hi[k][i] && w.lo[k][i] <= box.hi[k];
+    mask |= unsigned(ok) << i;
+  }
+  return mask;
+#endif
+}
+
+inline FBox slot_box(const BvhWideNode& w, unsigned i) {
+  FBox b;
+  for (int k = 0; k < 3; ++k) b.lo[k] = w.lo[k][i], b.hi[k] = w.hi[k][i];
+  return b;
+}
+
+// A reference of the wide traversal: a wide node's index, or kBvhWideLeaf | a leaf's node.
+inline bool is_leaf_ref(std::uint32_t r) { return (r & kBvhWideLeaf) != 0; }
+inline std::uint32_t leaf_ref_node(std::uint32_t r) { return r & ~kBvhWideLeaf; }
+
+// Binary node n as references into the wide view: itself (a leaf, or a wide node's), or its two
+// children (an internal node at an odd depth, whose children are slots).
+inline unsigned wide_refs(const Bvh& t, std::uint32_t n, std::uint32_t out[2]) {
+  const auto& nodes = t.nodes();
+  unsigned k = 0;
+  const auto ref = [&](std::uint32_t c) { return nodes[c].leaf() ? kBvhWideLeaf | c : t.wide_of(c); };
+  if (nodes[n].leaf() || t.wide_of(n) != kBvhWideNone) {
+    out[k++] = ref(n);
+  } else {
+    out[k++] = ref(n + 1);
+    out[k++] = ref(nodes[n].first);
+  }
+  return k;
+}
+
+inline const FBox& ref_box(const Bvh& t, std::uint32_t r) {
+  return t.nodes()[is_leaf_ref(r) ? leaf_ref_node(r) : t.wide()[r].node].box;
+}
+
+// Asks for a pushed reference's lines ahead of its pop: a leaf's node (its box and its leaf's
+// index), a wide node's two lines.
+PEELCD_ALWAYS_INLINE void ask_ahead_wide(const Bvh& t, std::uint32_t r) {
+  if (is_leaf_ref(r)) {
+    prefetch(&t.nodes()[leaf_ref_node(r)]);
+  } else {
+    const char* p = reinterpret_cast<const char*>(&t.wide()[r]);
+    prefetch(p);
+    prefetch(p + 64);
+  }
+}
+
+// Two trees in one frame through their wide views: a pair of wide nodes tests each of A's four
+// slots against B's four at once and pushes the overlapping child pairs (both trees descend); a
+// leaf against a wide node tests its box against the node's four slots; two leaves go to
+// leaf_pair_couples() as in the binary traversal. The same couples as SameFrame's (the leaf
+// visit decides them; the node tests only prune, on the same boxes). Returns the reference pairs
+// visited.
+template <class Fn>
+std::size_t traverse_same_frame_wide(const Bvh& a, const Bvh& b, BvhNodePair start, std::vector<BvhNodePair>& stack,
+                                     Fn& fn) {
+  if (a.empty() || b.empty()) return 0;
+  std::uint32_t ra[2], rb[2];
+  const unsigned ka = wide_refs(a, start.first, ra), kb = wide_refs(b, start.second, rb);
+  reserve(stack, 0, 64);
+  std::size_t top = 0, visited = 0;
+  for (unsigned i = 0; i < ka; ++i)
+    for (unsigned j = 0; j < kb; ++j)
+      if (ref_box(a, ra[i]).overlaps(ref_box(b, rb[j]))) stack[top++] = {ra[i], rb[j]};
+  if (top == 0) return 1;
+  const auto& na = a.nodes();
+  const auto& nb = b.nodes();
+  const auto& wa = a.wide();
+  const auto& wb = b.wide();
+  while (top != 0) {
+    const BvhNodePair e = stack[--top];
+    ++visited;
+    const std::uint32_t x = e.first, y = e.second;
+    if (is_leaf_ref(x) && is_leaf_ref(y)) {
+      const BvhNode& lx = na[leaf_ref_node(x)];
+      const BvhNode& ly = nb[leaf_ref_node(y)];
+      leaf_pair_couples(a.leaf(lx), lx.box, b.leaf(ly), ly.box, fn);
+      continue;
+    }
+    reserve(stack, top, 16);
+    if (is_leaf_ref(x)) {
+      const BvhWideNode& w = wb[y];
+      for (unsigned m = overlap_mask(na[leaf_ref_node(x)].box, w); m;) {
+        const std::uint32_t c = w.child[take_lane(m)];
+        stack[top++] = {x, c};
+        ask_ahead_wide(b, c);
+      }
+    } else if (is_leaf_ref(y)) {
+      const BvhWideNode& u = wa[x];
+      for (unsigned m = overlap_mask(nb[leaf_ref_node(y)].box, u); m;) {
+        const std::uint32_t c = u.child[take_lane(m)];
+        stack[top++] = {c, y};
+        ask_ahead_wide(a, c);
+      }
+    } else {
+      const BvhWideNode& u = wa[x];
+      const BvhWideNode& w = wb[y];
+      for (unsigned i = 0; i < 4 && u.child[i] != kBvhWideNone; ++i) {
+        unsigned m = overlap_mask(slot_box(u, i), w);
+        if (m == 0) continue;
+        ask_ahead_wide(a, u.child[i]);
+        while (m) {
+          const std::uint32_t c = w.child[take_lane(m)];
+          stack[top++] = {u.child[i], c};
+          ask_ahead_wide(b, c);
+        }
+      }
+    }
+  }
+  return visited;
+}
+
 // The kernel: every node pair under `start` that the frame admits, popped last in, first out;
 // two leaves go to the frame's leaf-pair visit, other pairs to its descent. Returns the node
 // pairs visited.
@@ -501,10 +627,12 @@ std::size_t bvh_traverse(const Bvh& a, const Bvh& b, const BvhRelation& rel, Bvh
 }
 
 // bvh_traverse() for two trees in one frame (BvhRelation::identity): float boxes compared as
-// they are, the stack of node pairs alone. The same couples.
+// they are, the stack of node pairs alone, through the trees' wide views where both are fresh
+// (Bvh::wide_fresh()), else their binary nodes. The same couples.
 template <class Fn>
 std::size_t bvh_traverse_same_frame(const Bvh& a, const Bvh& b, BvhNodePair start, std::vector<BvhNodePair>& stack,
                                     Fn&& fn) {
+  if (a.wide_fresh() && b.wide_fresh()) return bvh_detail::traverse_same_frame_wide(a, b, start, stack, fn);
   return bvh_detail::traverse_pairs(bvh_detail::SameFrame{a, b}, a, b, start, stack, fn);
 }
 

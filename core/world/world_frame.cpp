@@ -122,6 +122,7 @@ void World::Impl::collide_frame(const DetectOptions& opt, FrameResult& out) {
   find_pairs(opt, lanes);
   defer_refits(lanes);
   const std::size_t used = plan_tasks(lanes);
+  keep_wide_views();
   mark_untraversed(opt);
   traverse(used, lanes);
   out.timings.aabb = ms_since(t0);
@@ -261,6 +262,17 @@ std::size_t World::Impl::plan_tasks(unsigned lanes) {
     }
   }
   return used;
+}
+
+// Once a frame, after the trees are brought to it: each paired body's tree in its traversal's
+// frame syncs its wide view when it has not changed since the last frame (Bvh::keep_wide_if_still():
+// a still body's trees are traversed 4-wide, a tree refitted every frame stays binary).
+void World::Impl::keep_wide_views() {
+  for (std::size_t k = 0; k < ids.size(); ++k) {
+    Body& b = bodies[ids[k]];
+    if (pairs_of[k] == 0 || (b.world_frame && !b.world_tree_fresh)) continue;
+    b.frame_tree().keep_wide_if_still();
+  }
 }
 
 // Every task's candidates (self tasks: their contacts, each couple tested as the traversal

