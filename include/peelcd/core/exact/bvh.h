@@ -196,8 +196,8 @@ class Bvh {
   // The 4-wide view (BvhWideNode; empty when the root is a leaf), its root at 0. Its layout is
   // made by every build; its boxes equal the binary nodes' while wide_fresh(): after a build,
   // a partial refit of a fresh view, or sync_wide(). A whole refit leaves them stale (copying
-  // every box again costs a tree refitted every frame more than its traversal gains: 7% of the
-  // waving 330k-triangle spheres' frame against 1% back); keep_wide_if_still() syncs a tree that
+  // every box again costs a tree refitted every frame more than its traversal gains: about 7%
+  // of the waving 330k-triangle spheres' frame against under 1% back); keep_wide_if_still() syncs a tree that
   // has not changed since its last call (the World calls it once a frame for the trees it
   // traverses in one frame). wide_of(n): the wide node binary node n stands for, or
   // kBvhWideNone (a leaf, or an internal node at an odd depth: its children are its parent's
