@@ -195,8 +195,9 @@ void Bvh::refit(const std::vector<Vec3>& vertices, const std::vector<Tri>&) {
 // a vertex's three coordinates are rounded together by FBox::down()'s and up()'s formula, the
 // same bits; a coordinate at or past 1e37 (or infinite) takes their scalar path. Loading
 // (`Load`): each vertex checked finite first (the first that is not: `bad`, and the pass stops
-// there) and copied to `copy` (when not null).
-template <bool Load>
+// there) and copied to `copy` (when not null). Without `Round` (loading only), no vertex box is
+// written.
+template <bool Load, bool Round>
 Aabb Bvh::round_vertices(const std::vector<Vec3>& vertices, Vec3* copy, std::size_t begin, std::size_t end,
                          std::size_t& bad) {
   Aabb exact;
@@ -233,7 +234,7 @@ Aabb Bvh::round_vertices(const std::vector<Vec3>& vertices, Vec3* copy, std::siz
         _mm_store_sd(copy[v].data() + 2, z);
       }
     }
-    {
+    if (Round) {
       const __m128 a = _mm_and_ps(f, magnitude);
       const __m128 e = _mm_add_ps(_mm_mul_ps(a, rel), tiny);
       if (__builtin_expect(_mm_movemask_ps(_mm_cmpge_ps(a, big)) != 0, 0)) {
@@ -268,7 +269,8 @@ Aabb Bvh::round_vertices(const std::vector<Vec3>& vertices, Vec3* copy, std::siz
       }
       if (copy) copy[v] = p;
     }
-    for (int k = 0; k < 3; ++k) vertex_boxes_[v].lo[k] = FBox::down(p[k]), vertex_boxes_[v].hi[k] = FBox::up(p[k]);
+    if (Round)
+      for (int k = 0; k < 3; ++k) vertex_boxes_[v].lo[k] = FBox::down(p[k]), vertex_boxes_[v].hi[k] = FBox::up(p[k]);
     if (!unused_.empty() && unused_[v]) continue;
     exact.lo = exact.lo.cwiseMin(p);
     exact.hi = exact.hi.cwiseMax(p);
@@ -279,12 +281,13 @@ Aabb Bvh::round_vertices(const std::vector<Vec3>& vertices, Vec3* copy, std::siz
 
 Aabb Bvh::refit_vertices(const std::vector<Vec3>& vertices, std::size_t begin, std::size_t end) {
   std::size_t bad;
-  return round_vertices<false>(vertices, nullptr, begin, end, bad);
+  return round_vertices<false, true>(vertices, nullptr, begin, end, bad);
 }
 
 Aabb Bvh::load_vertices(const std::vector<Vec3>& vertices, Vec3* copy, std::size_t begin, std::size_t end,
-                        std::size_t& bad) {
-  return round_vertices<true>(vertices, copy, begin, end, bad);
+                        std::size_t& bad, bool round) {
+  return round ? round_vertices<true, true>(vertices, copy, begin, end, bad)
+               : round_vertices<true, false>(vertices, copy, begin, end, bad);
 }
 
 // Each lane's box from its corners' vertex boxes (min and max of floats: no rounding), the

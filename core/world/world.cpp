@@ -98,13 +98,17 @@ void check_count(const Body& b, BodyId id, const std::vector<Vec3>& vertices) {
 // be rounded again by the refit).
 template <class Lanes>
 void load_vertices(Lanes& w, Body& b, BodyId id, const std::vector<Vec3>& vertices, Vec3* copy, std::size_t parts) {
+  // Rounded into the tree only where the last refit came: a body whose refit is still pending
+  // (put off by the resident image route, which draws it from its vertices) is likely to put
+  // it off again, and its refit, if one comes, rounds them then (Bvh::refit_vertices()).
+  const bool round = !b.refit_pending;
   const std::size_t n = vertices.size();
   std::vector<std::size_t>& first_bad = w.part_bad;
   std::vector<Aabb>& boxes = w.part_boxes;
   first_bad.assign(parts, n);
   boxes.assign(parts, Aabb{});
   w.in_parts(parts, [&](std::size_t k) {
-    boxes[k] = b.tree.load_vertices(vertices, copy, n * k / parts, n * (k + 1) / parts, first_bad[k]);
+    boxes[k] = b.tree.load_vertices(vertices, copy, n * k / parts, n * (k + 1) / parts, first_bad[k], round);
   });
   b.points_loaded = false;
   std::size_t v = n;  // the first part's bad vertex (each part's is its end when it has none)
@@ -117,6 +121,7 @@ void load_vertices(Lanes& w, Body& b, BodyId id, const std::vector<Vec3>& vertic
   for (std::size_t k = 0; k < parts; ++k) box.lo = box.lo.cwiseMin(boxes[k].lo), box.hi = box.hi.cwiseMax(boxes[k].hi);
   b.loaded_box = box;
   b.points_loaded = true;
+  b.points_rounded = round;
 }
 }  // namespace
 

@@ -22,7 +22,7 @@ void World::Impl::refit_pending(unsigned lanes, bool all) {
     const std::size_t nv = b.mesh.vertices.size(), nl = b.tree.leaves();
     refit_bodies.push_back({&b, refit_chunks.size(), refit_chunks.size() + parts, false});
     for (std::size_t k = 0; k < parts; ++k) {
-      if (b.points_loaded)  // rounded by set_vertices(): no vertex range
+      if (b.points_loaded && b.points_rounded)  // rounded by set_vertices(): no vertex range
         refit_chunks.push_back({refit_bodies.size() - 1, 0, 0, nl * k / parts, nl * (k + 1) / parts,
                                 k == 0 ? b.loaded_box : Aabb{}});
       else

@@ -104,11 +104,13 @@ struct Body {
   // a view the stage cannot resolve).
   bool refit_deferred = false;
   bool tree_current() const { return !refit_pending; }
-  // Deforming: set_vertices() checked, rounded (Bvh::load_vertices) and copied the vertices in
-  // one pass: the pending refit starts from those floats (`loaded_box`: the exact box of the
-  // used vertices). The copy goes to `spare_vertices`, swapped with the mesh's once all are
-  // checked (a refused call leaves the body as it was).
+  // Deforming: set_vertices() checked, rounded (Bvh::load_vertices; see points_rounded) and
+  // copied the vertices in one pass: the pending refit starts from those floats (`loaded_box`:
+  // the exact box of the used vertices). The copy goes to `spare_vertices`, swapped with the
+  // mesh's once all are checked (a refused call leaves the body as it was).
   bool points_loaded = false;
+  // With points_loaded: the load rounded them into the tree too (else the refit rounds them).
+  bool points_rounded = false;
   Aabb loaded_box;
   std::vector<Vec3> spare_vertices;
   // Deforming: the triangles using each vertex (CSR), built on the first move_vertices().

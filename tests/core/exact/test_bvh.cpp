@@ -286,6 +286,40 @@ TEST_CASE("Bvh: vertices loaded in ranges (checked, rounded, copied: the World's
   }
 }
 
+TEST_CASE("Bvh: vertices loaded without rounding: checked, copied and boxed; the refit from refit_vertices() as a whole refit", "[bvh]") {
+  Mesh m = make_uv_sphere(Vec3(0, 0, 0), 1.0, 200, 400);  // past 65,536 vertices: the streamed stores
+  Bvh loaded, whole;
+  loaded.build(m.vertices, m.triangles);
+  whole.build(m.vertices, m.triangles);
+  for (Vec3& v : m.vertices) v = 0.7 * v + Vec3(0.2 * v.z(), -0.1, 0.3 * v.y() * v.y());
+  const std::size_t nv = m.vertices.size();
+  std::vector<Vec3> copy(nv, Vec3::Zero());
+  std::size_t at = 0;
+  std::vector<Vec3> bad = m.vertices;
+  bad[nv / 3].x() = NAN;
+  loaded.load_vertices(bad, copy.data(), 0, nv, at, /*round=*/false);
+  CHECK(at == nv / 3);
+  const Aabb box = loaded.load_vertices(m.vertices, copy.data(), 0, nv, at, /*round=*/false);
+  CHECK(at == nv);
+  CHECK(copy == m.vertices);
+  CHECK(box.lo == bounds(m).lo);
+  CHECK(box.hi == bounds(m).hi);
+  // Unrounded: a refit from the vertex boxes alone would not see the new vertices.
+  loaded.refit_leaves(m.vertices, 0, loaded.leaves());
+  const FBox stale = loaded.triangle_box(0), fresh = FBox::enclosing(triangle_bounds(m, 0));
+  bool same = true;
+  for (int k = 0; k < 3; ++k) same = same && stale.lo[k] == fresh.lo[k] && stale.hi[k] == fresh.hi[k];
+  CHECK_FALSE(same);
+  const Aabb exact = loaded.refit_vertices(m.vertices, 0, nv);
+  loaded.refit_leaves(m.vertices, 0, loaded.leaves());
+  loaded.refit_nodes(exact);
+  whole.refit(m.vertices, m.triangles);
+  for (std::size_t i = 0; i < whole.nodes().size(); ++i) {
+    REQUIRE(loaded.nodes()[i].box.aabb().lo == whole.nodes()[i].box.aabb().lo);
+    REQUIRE(loaded.nodes()[i].box.aabb().hi == whole.nodes()[i].box.aabb().hi);
+  }
+}
+
 TEST_CASE("Bvh: a refit rounds every corner outward at every scale, as a build does", "[bvh]") {
   // A grid whose vertices are scaled through subnormals, float's limit and past it (infinite
   // float boxes), so that the refit's vector path and its scalar fallback both run.

@@ -173,8 +173,10 @@ class Bvh {
   // first vertex with a coordinate not finite the pass stops and `bad` is its index (else
   // `end`). Returns the exact box of the vertices loaded that the triangles use. Until every
   // range is loaded without a bad vertex, the next refit must start from refit_vertices().
+  // Without `round`, the vertices are checked, copied and boxed but not rounded (a caller whose
+  // refit may not come: the next refit, if any, starts from refit_vertices()).
   Aabb load_vertices(const std::vector<Vec3>& vertices, Vec3* copy, std::size_t begin, std::size_t end,
-                     std::size_t& bad);
+                     std::size_t& bad, bool round = true);
   // Only the boxes of `changed` triangles (any order, repeats allowed), their leaves and their
   // ancestors: O(changed * depth).
   void refit(const std::vector<Vec3>& vertices, const std::vector<Tri>& triangles,
@@ -241,7 +243,7 @@ class Bvh {
     BvhWideNode& w = wide_[s >> 2];
     for (int k = 0; k < 3; ++k) w.lo[k][s & 3u] = nodes_[n].box.lo[k], w.hi[k][s & 3u] = nodes_[n].box.hi[k];
   }
-  template <bool Load>
+  template <bool Load, bool Round>
   Aabb round_vertices(const std::vector<Vec3>& vertices, Vec3* copy, std::size_t begin, std::size_t end,
                       std::size_t& bad);
   std::vector<BvhNode> nodes_;
