@@ -286,7 +286,7 @@ TEST_CASE("Bvh: vertices loaded in ranges (checked, rounded, copied: the World's
   }
 }
 
-TEST_CASE("Bvh: vertices loaded without rounding: checked, copied and boxed; the refit from refit_vertices() as a whole refit", "[bvh]") {
+TEST_CASE("Bvh: vertices loaded without rounding are checked, copied and boxed, and refit from refit_vertices() as a whole refit does", "[bvh]") {
   Mesh m = make_uv_sphere(Vec3(0, 0, 0), 1.0, 200, 400);  // past 65,536 vertices: the streamed stores
   Bvh loaded, whole;
   loaded.build(m.vertices, m.triangles);
