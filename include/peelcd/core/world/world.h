@@ -56,7 +56,8 @@ struct WorldStats {
   std::size_t builds = 0;           // trees built (add_*, set_mesh)
   std::size_t full_refits = 0;      // whole-tree refits done (set_vertices, many moved vertices)
   std::size_t partial_refits = 0;   // refits of the changed triangles' paths only
-  std::size_t node_pairs = 0;       // node pairs visited by the traversals, last frame
+  std::size_t node_pairs = 0;       // node pairs visited by the traversals, last frame (a 4-wide traversal
+                                    // counts pairs of wide nodes and leaves: fewer for the same couples)
   std::size_t candidates = 0;       // triangle couples whose boxes overlap, last frame
   std::size_t vertices_transformed = 0;  // rigid bodies' world vertices computed, last frame
   // Routes timed (World::time_routes()): frames whose pairs all went to the image route, and
