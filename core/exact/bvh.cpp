@@ -41,7 +41,7 @@ void Bvh::build(const std::vector<Vec3>& vertices, const std::vector<Tri>& trian
   vertex_boxes_.resize(vertices.size());
   unused_.clear();
   ++changes_;
-  wide_fresh_ = true;  // (its boxes are the build's)
+  wide_fresh_ = true;  // (empty, or synced below)
   if (n == 0) return;
   std::vector<std::uint8_t> used(vertices.size(), 0);
   for (const Tri& f : triangles)
@@ -73,6 +73,7 @@ void Bvh::build(const std::vector<Vec3>& vertices, const std::vector<Tri>& trian
   slot_of_.assign(nodes_.size(), kBvhWideNone);
   wide_.reserve(nodes_.size() / 3 + 1);
   if (!nodes_[0].leaf()) build_wide(0);
+  sync_wide();
   size_ = 0.0;
   for (const BvhNode& node : nodes_)
     if (!node.leaf()) size_ += extents(node.box);
@@ -145,10 +146,8 @@ std::uint32_t Bvh::build_wide(std::uint32_t node) {
       slots[used++] = nodes_[c].first;
     }
   }
-  const FBox empty;
   for (std::uint32_t k = 0; k < 4; ++k) {
-    const FBox& box = k < used ? nodes_[slots[k]].box : empty;
-    for (int j = 0; j < 3; ++j) wide_[w].lo[j][k] = box.lo[j], wide_[w].hi[j][k] = box.hi[j];
+    put_slot(wide_[w], k, FBox{});  // unused slots stay empty; sync_wide() fills the others
     wide_[w].child[k] = kBvhWideNone;
   }
   wide_[w].node = node;
@@ -165,8 +164,7 @@ void Bvh::sync_wide() {
   for (BvhWideNode& w : wide_)
     for (std::uint32_t k = 0; k < 4 && w.child[k] != kBvhWideNone; ++k) {
       const std::uint32_t c = w.child[k];
-      const FBox& box = nodes_[(c & kBvhWideLeaf) ? (c & ~kBvhWideLeaf) : wide_[c].node].box;
-      for (int j = 0; j < 3; ++j) w.lo[j][k] = box.lo[j], w.hi[j][k] = box.hi[j];
+      put_slot(w, k, nodes_[(c & kBvhWideLeaf) ? (c & ~kBvhWideLeaf) : wide_[c].node].box);
     }
   wide_fresh_ = true;
 }

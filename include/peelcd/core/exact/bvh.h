@@ -236,12 +236,13 @@ class Bvh {
                            std::vector<BuildItem>& items, const std::vector<FBox>& boxes);
   void refit_node(std::uint32_t n);
   std::uint32_t build_wide(std::uint32_t node);  // the wide node for internal `node` and those under it
+  static void put_slot(BvhWideNode& w, std::uint32_t slot, const FBox& box) {
+    for (int k = 0; k < 3; ++k) w.lo[k][slot] = box.lo[k], w.hi[k][slot] = box.hi[k];
+  }
   // Binary node n's box into its wide slot (if it is one; the view fresh).
   void set_slot(std::uint32_t n) {
     const std::uint32_t s = slot_of_[n];
-    if (s == kBvhWideNone) return;
-    BvhWideNode& w = wide_[s >> 2];
-    for (int k = 0; k < 3; ++k) w.lo[k][s & 3u] = nodes_[n].box.lo[k], w.hi[k][s & 3u] = nodes_[n].box.hi[k];
+    if (s != kBvhWideNone) put_slot(wide_[s >> 2], s & 3u, nodes_[n].box);
   }
   template <bool Load, bool Round>
   Aabb round_vertices(const std::vector<Vec3>& vertices, Vec3* copy, std::size_t begin, std::size_t end,
