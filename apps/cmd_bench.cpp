@@ -187,7 +187,8 @@ std::vector<Command> add_bench_commands(CLI::App& app) {
                                                  "(LP_NUM_THREADS); 0 = one per core, at most 8")
       ->check(CLI::Range(0, 64))->capture_default_str();
   benchmark->add_option("--scaling", be.scaling, "Time the default World row again with N threads, side by side with "
-                                                  "the others on the same frames, and print its ratio to the default row")
+                                                  "the others on the same frames, then the two World rows alone over the "
+                                                  "frames, alternating, and print the ratio of each")
       ->check(CLI::Range(1, 64));
   benchmark->add_flag("--time-routes", be.time_routes,
                       "Time the World's two routes under stage auto on any stage (World::time_routes(true)); by "
