@@ -32,7 +32,8 @@ scene=fixtures/scenes/bunny_dragon.json
 ./build/peelcd bench crowd --objects 1000 --frames 8 --threads 1 --short --scaling 2 > "$out/bench_pile1000.txt"
 # (--audit: Embree as a plain user writes it, beside the bench's Embree rows.)
 # (--scaling 2: the World again with two threads, side by side with the others, then the two
-# World rows alone over the frames, alternating: the threads table's World rows.) The large scenes again with one thread per core, for the peers' two-thread times.
+# World rows alone over the frames, alternating: the threads table's World rows.) The large
+# scenes again with one thread per core, for the peers' two-thread times.
 ./build/peelcd bench spheres --stacks 570 --frames 4 --short > "$out/bench_spheres_1m_2threads.txt"
 ./build/peelcd bench spheres-wave --stacks 570 --frames 4 --short > "$out/bench_spheres_1m_wave_2threads.txt"
 ./build/peelcd bench crowd --objects 1000 --frames 4 --short > "$out/bench_pile1000_2threads.txt"

@@ -88,9 +88,9 @@ def audit_table(d, scenes):
 
 
 def threads_table(d, scenes):
-    """Per large scene: the World with one thread and with two in one run (its --scaling pass: the
-    two alone, alternating frame by frame); each peer with one thread and with one per core, from
-    the two runs."""
+    """Per large scene: the World with one thread and with two in one run, twice (its --scaling
+    pass: the two alone, alternating frame by frame; and its rows side by side with the others);
+    each peer with one thread and with one per core, from the two runs."""
     rows = ["| scene | method | 1 thread ms | 2 threads ms | ratio | measured |", "|---|---|---|---|---|---|"]
     for label, one, two in scenes:
         b1, b2 = bench_methods(d + "/" + one + ".txt"), bench_methods(d + "/" + two + ".txt")
