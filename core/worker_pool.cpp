@@ -6,6 +6,7 @@ namespace peelcd {
 
 WorkerPool::WorkerPool(unsigned lanes) {
   if (lanes == 0) lanes = std::max(1u, std::min(8u, std::thread::hardware_concurrency()));
+  ranges_ = std::vector<Range>(lanes);
   for (unsigned i = 1; i < lanes; ++i) workers_.emplace_back([this, i] { work(i); });
 }
 

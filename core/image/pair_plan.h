@@ -59,7 +59,8 @@ struct PairLane {
 };
 
 // body(i, lane) for every i in [0, n): on the calling thread, or spread over a pool's lanes
-// (pairs taken one at a time from a shared counter) when opt.threads asks for more than one.
+// (WorkerPool::for_each(): a lane's own range of pairs first) when opt.threads asks for more
+// than one.
 // Each pair's work touches only its own plan or result and the lane's scratch.
 class PairLoop {
  public:
@@ -75,11 +76,7 @@ class PairLoop {
       for (std::size_t i = 0; i < n; ++i) body(i, *lanes_[0]);
       return;
     }
-    std::atomic<std::size_t> next{0};
-    auto job = [&](unsigned lane) {
-      for (std::size_t i = next.fetch_add(1); i < n; i = next.fetch_add(1)) body(i, *lanes_[lane]);
-    };
-    pool_->run(job);
+    pool_->for_each(n, [&](std::size_t i, unsigned lane) { body(i, *lanes_[lane]); });
   }
 
  private:

@@ -352,11 +352,7 @@ struct World::Impl {
       for (std::size_t i = 0; i < n; ++i) fn(i, 0u);
       return;
     }
-    std::atomic<std::size_t> next{0};
-    auto job = [&](unsigned lane) {
-      for (std::size_t i = next.fetch_add(1); i < n; i = next.fetch_add(1)) fn(i, lane);
-    };
-    pool->run(job);
+    pool->for_each(n, fn);  // (a task or body keeps its lane from loop to loop and frame to frame)
   }
 
   // The deferred whole-tree refits (World::set_vertices, many moved vertices): every pending
