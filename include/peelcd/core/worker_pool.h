@@ -32,9 +32,9 @@ class WorkerPool {
   // others' last items, back to front. So the same n gives item i the same lane from call to
   // call, stolen items aside: what an item's work wrote in one loop (a task's candidates, a
   // body's world copy) is read in the next from the cache of the core that wrote it. Taking
-  // items from one shared counter instead put each on either lane at random, and cost the
-  // World's 1,000-ball pile 15-28% more CPU time per frame at 2 threads than at one
-  // (docs/performance.md, "Threads").
+  // items from one shared counter instead puts each on either lane at random: the World's
+  // 1,000-ball pile at 2 threads took 0.62-0.73x its one-thread frame that way against
+  // 0.50-0.61x (docs/performance.md, "Threads").
   template <class F>
   void for_each(std::size_t n, F&& fn) {
     const unsigned lanes = this->lanes();
