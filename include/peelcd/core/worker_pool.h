@@ -38,11 +38,11 @@ class WorkerPool {
   template <class F>
   void for_each(std::size_t n, F&& fn) {
     const unsigned lanes = this->lanes();
-    if (lanes == 1 || n <= 1 || n > kMaxItems) {  // (n past 32 bits: one shared counter)
-      if (lanes == 1 || n <= 1) {
-        for (std::size_t i = 0; i < n; ++i) fn(i, 0u);
-        return;
-      }
+    if (lanes == 1 || n <= 1) {
+      for (std::size_t i = 0; i < n; ++i) fn(i, 0u);
+      return;
+    }
+    if (n > kMaxItems) {  // (past 32 bits: one shared counter)
       std::atomic<std::size_t> next{0};
       auto job = [&](unsigned lane) {
         for (std::size_t i = next.fetch_add(1); i < n; i = next.fetch_add(1)) fn(i, lane);

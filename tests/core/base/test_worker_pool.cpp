@@ -6,9 +6,9 @@
 #include <catch2/catch.hpp>
 
 #include <atomic>
+#include <stdexcept>
 #include <thread>
 #include <vector>
-#include <stdexcept>
 
 using namespace peelcd;
 
