@@ -80,7 +80,7 @@ PEELCD_ALWAYS_INLINE std::uint64_t apart_lanes(const double (&a)[9][ApartBlock::
       side_a.below[k] |= std::uint64_t(mask(ba[k])) << i;
     }
   }
-  return n == ApartBlock::kSize ? bits : bits & ((std::uint64_t(1) << n) - 1);
+  return n == 64 ? bits : bits & ((std::uint64_t(1) << n) - 1);
 }
 
 // Four lanes' signs (all ones or zero) as four bits, lane j at bit j.

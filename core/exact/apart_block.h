@@ -18,7 +18,7 @@ namespace peelcd::exact_detail {
 
 class ApartBlock {
  public:
-  static constexpr std::size_t kSize = 64;  // couples a block holds (a 64-bit mask of answers)
+  static constexpr std::size_t kSize = 64;  // couples a block holds (at most 64: a 64-bit mask of answers)
 
   std::size_t size() const { return n_; }
   bool full() const { return n_ == kSize; }
@@ -47,7 +47,7 @@ class ApartBlock {
   template <class Fn>
   bool drain(Fn&& fn) {
     const std::size_t m = n_;
-    std::uint64_t left = ~apart() & (m == kSize ? ~std::uint64_t(0) : (std::uint64_t(1) << m) - 1);
+    std::uint64_t left = ~apart() & (m == 64 ? ~std::uint64_t(0) : (std::uint64_t(1) << m) - 1);
     n_ = 0;
     for (; left; left &= left - 1) {
       const std::size_t i = std::size_t(__builtin_ctzll(left));
@@ -92,6 +92,7 @@ class ApartBlock {
   Sides side_b_, side_a_;  // B's corners against A's plane; A's against B's
   std::size_t n_ = 0;
 };
+static_assert(ApartBlock::kSize <= 64 && ApartBlock::kSize % 4 == 0, "a block's answers are one 64-bit mask, four lanes at a time");
 
 // What most loops drain a block into: each couple left tested by `test`, its contact (its
 // triangles' indices as put) appended to `out`; false, ending the drain, once `out` holds

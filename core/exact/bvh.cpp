@@ -154,7 +154,7 @@ std::uint32_t Bvh::build_wide(std::uint32_t node) {
   for (std::uint32_t k = 0; k < used; ++k) {
     const std::uint32_t s = slots[k];
     slot_of_[s] = 4 * w + k;
-    const std::uint32_t child = nodes_[s].leaf() ? (kBvhWideLeaf | s) : build_wide(s);  // (wide_ may grow)
+    const std::uint32_t child = nodes_[s].leaf() ? (kBvhWideLeaf | nodes_[s].first) : build_wide(s);  // (wide_ may grow)
     wide_[w].child[k] = child;
   }
   return w;
@@ -164,8 +164,9 @@ void Bvh::sync_wide() {
   for (BvhWideNode& w : wide_)
     for (std::uint32_t k = 0; k < 4 && w.child[k] != kBvhWideNone; ++k) {
       const std::uint32_t c = w.child[k];
-      put_slot(w, k, nodes_[(c & kBvhWideLeaf) ? (c & ~kBvhWideLeaf) : wide_[c].node].box);
+      put_slot(w, k, nodes_[(c & kBvhWideLeaf) ? leaf_node_[c & ~kBvhWideLeaf] : wide_[c].node].box);
     }
+  for (std::size_t l = 0; l < leaves_.size(); ++l) leaves_[l].bound = nodes_[leaf_node_[l]].box;
   wide_fresh_ = true;
 }
 

@@ -480,16 +480,16 @@ inline FBox slot_box(const BvhWideNode& w, unsigned i) {
   return b;
 }
 
-// A reference of the wide traversal: a wide node's index, or kBvhWideLeaf | a leaf's node.
+// A reference of the wide traversal: a wide node's index, or kBvhWideLeaf | a leaf's index.
 inline bool is_leaf_ref(std::uint32_t r) { return (r & kBvhWideLeaf) != 0; }
-inline std::uint32_t leaf_ref_node(std::uint32_t r) { return r & ~kBvhWideLeaf; }
+inline std::uint32_t leaf_ref_index(std::uint32_t r) { return r & ~kBvhWideLeaf; }
 
 // Binary node n as references into the wide view: itself (a leaf, or a wide node's), or its two
 // children (an internal node at an odd depth, whose children are slots).
 inline unsigned wide_refs(const Bvh& t, std::uint32_t n, std::uint32_t out[2]) {
   const auto& nodes = t.nodes();
   unsigned k = 0;
-  const auto ref = [&](std::uint32_t c) { return nodes[c].leaf() ? kBvhWideLeaf | c : t.wide_of(c); };
+  const auto ref = [&](std::uint32_t c) { return nodes[c].leaf() ? kBvhWideLeaf | nodes[c].first : t.wide_of(c); };
   if (nodes[n].leaf() || t.wide_of(n) != kBvhWideNone) {
     out[k++] = ref(n);
   } else {
@@ -500,14 +500,24 @@ inline unsigned wide_refs(const Bvh& t, std::uint32_t n, std::uint32_t out[2]) {
 }
 
 inline const FBox& ref_box(const Bvh& t, std::uint32_t r) {
-  return t.nodes()[is_leaf_ref(r) ? leaf_ref_node(r) : t.wide()[r].node].box;
+  return is_leaf_ref(r) ? t.leaf_at(leaf_ref_index(r)).bound : t.nodes()[t.wide()[r].node].box;
 }
 
-// Asks for a pushed reference's lines ahead of its pop: a leaf's node (its box and its leaf's
-// index), a wide node's two lines.
-PEELCD_ALWAYS_INLINE void ask_ahead_wide(const Bvh& t, std::uint32_t r) {
+// The slots of `w` whose children are leaves (bits).
+PEELCD_ALWAYS_INLINE unsigned leaf_slots(const BvhWideNode& w) {
+  unsigned m = 0;
+  for (unsigned k = 0; k < 4; ++k) m |= unsigned(w.child[k] != kBvhWideNone && is_leaf_ref(w.child[k])) << k;
+  return m;
+}
+
+// Asks for a pushed reference's lines ahead of its pop: a wide node's two lines; a leaf's
+// whole four when it is paired with a leaf (`whole`: its triangles' boxes are read next), else
+// its last line (its bound, tested against the other's node).
+PEELCD_ALWAYS_INLINE void ask_ahead_wide(const Bvh& t, std::uint32_t r, bool whole) {
   if (is_leaf_ref(r)) {
-    prefetch(&t.nodes()[leaf_ref_node(r)]);
+    const char* p = reinterpret_cast<const char*>(&t.leaf_at(leaf_ref_index(r)));
+    if (whole) prefetch(p), prefetch(p + 64), prefetch(p + 128);
+    prefetch(p + 192);
   } else {
     const char* p = reinterpret_cast<const char*>(&t.wide()[r]);
     prefetch(p);
@@ -533,8 +543,6 @@ std::size_t traverse_same_frame_wide(const Bvh& a, const Bvh& b, BvhNodePair sta
     for (unsigned j = 0; j < kb; ++j)
       if (ref_box(a, ra[i]).overlaps(ref_box(b, rb[j]))) stack[top++] = {ra[i], rb[j]};
   if (top == 0) return 1;
-  const auto& na = a.nodes();
-  const auto& nb = b.nodes();
   const auto& wa = a.wide();
   const auto& wb = b.wide();
   while (top != 0) {
@@ -542,25 +550,27 @@ std::size_t traverse_same_frame_wide(const Bvh& a, const Bvh& b, BvhNodePair sta
     ++visited;
     const std::uint32_t x = e.first, y = e.second;
     if (is_leaf_ref(x) && is_leaf_ref(y)) {
-      const BvhNode& lx = na[leaf_ref_node(x)];
-      const BvhNode& ly = nb[leaf_ref_node(y)];
-      leaf_pair_couples(a.leaf(lx), lx.box, b.leaf(ly), ly.box, fn);
+      const BvhLeaf& lx = a.leaf_at(leaf_ref_index(x));
+      const BvhLeaf& ly = b.leaf_at(leaf_ref_index(y));
+      leaf_pair_couples(lx, lx.bound, ly, ly.bound, fn);
       continue;
     }
     reserve(stack, top, 16);
     if (is_leaf_ref(x)) {
       const BvhWideNode& w = wb[y];
-      for (unsigned m = overlap_mask(na[leaf_ref_node(x)].box, w); m;) {
+      for (unsigned m = overlap_mask(a.leaf_at(leaf_ref_index(x)).bound, w); m;) {
         const std::uint32_t c = w.child[take_lane(m)];
         stack[top++] = {x, c};
-        ask_ahead_wide(b, c);
+        ask_ahead_wide(b, c, true);
+        if (is_leaf_ref(c)) ask_ahead_wide(a, x, true);
       }
     } else if (is_leaf_ref(y)) {
       const BvhWideNode& u = wa[x];
-      for (unsigned m = overlap_mask(nb[leaf_ref_node(y)].box, u); m;) {
+      for (unsigned m = overlap_mask(b.leaf_at(leaf_ref_index(y)).bound, u); m;) {
         const std::uint32_t c = u.child[take_lane(m)];
         stack[top++] = {c, y};
-        ask_ahead_wide(a, c);
+        ask_ahead_wide(a, c, true);
+        if (is_leaf_ref(c)) ask_ahead_wide(b, y, true);
       }
     } else {
       const BvhWideNode& u = wa[x];
@@ -568,11 +578,12 @@ std::size_t traverse_same_frame_wide(const Bvh& a, const Bvh& b, BvhNodePair sta
       for (unsigned i = 0; i < 4 && u.child[i] != kBvhWideNone; ++i) {
         unsigned m = overlap_mask(slot_box(u, i), w);
         if (m == 0) continue;
-        ask_ahead_wide(a, u.child[i]);
+        const std::uint32_t ci = u.child[i];
+        ask_ahead_wide(a, ci, (m & leaf_slots(w)) != 0);
         while (m) {
           const std::uint32_t c = w.child[take_lane(m)];
-          stack[top++] = {u.child[i], c};
-          ask_ahead_wide(b, c);
+          stack[top++] = {ci, c};
+          ask_ahead_wide(b, c, is_leaf_ref(ci));
         }
       }
     }

@@ -71,6 +71,7 @@ void World::set_pose(BodyId id, const Eigen::Affine3d& pose) {
   const ExclusiveUse exclusive(impl_->owner, "peelcd::World");
   Body& b = impl_->body(id, "set_pose");
   if (!b.is_rigid) throw std::invalid_argument("peelcd::World::set_pose(): " + label_of(b.name, id) + " is deforming");
+  if (pose.matrix() == b.pose.matrix()) return;  // the pose it has (checked when it was set)
   check_pose(pose, [&] { return label_of(b.name, id); });
   b.set_pose(pose);
 }

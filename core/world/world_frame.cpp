@@ -325,8 +325,13 @@ void World::Impl::traverse_task(std::size_t k, unsigned lane) {
     t.visited = 0;
     return;
   }
-  const BvhRelation rel = BvhRelation::between(a.frame_pose(), b.frame_pose());
   const auto take = [&](std::uint32_t ta, std::uint32_t tb) { t.candidates.push_back(pack_pair(ta, tb)); };
+  // Two trees in one frame (two world-space copies, or one pose for both) need no relation.
+  if ((a.world_frame && b.world_frame) || a.frame_pose().matrix() == b.frame_pose().matrix()) {
+    t.visited = bvh_traverse_same_frame(a.frame_tree(), b.frame_tree(), t.start, self_stacks[lane].v, take);
+    return;
+  }
+  const BvhRelation rel = BvhRelation::between(a.frame_pose(), b.frame_pose());
   t.visited = rel.identity ? bvh_traverse_same_frame(a.frame_tree(), b.frame_tree(), t.start, self_stacks[lane].v, take)
                            : bvh_traverse(a.frame_tree(), b.frame_tree(), rel, t.start, stacks[lane].v, take);
 }

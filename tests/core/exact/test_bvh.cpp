@@ -45,10 +45,17 @@ std::set<std::pair<std::uint32_t, std::uint32_t>> scan(const Mesh& a, const Eige
 
 // The tree's wide view against its binary nodes: every wide node stands for an internal node
 // whose slots are its grandchildren (a leaf child its own slot), each slot's box its node's box,
-// each leaf and each even-depth internal node in exactly one slot (the root excepted).
+// each leaf and each even-depth internal node in exactly one slot (the root excepted), a leaf's
+// slot naming its leaf, and every leaf's bound its node's box.
 void check_wide(const Bvh& t) {
   const auto& nodes = t.nodes();
   const auto& wide = t.wide();
+  for (const BvhNode& n : nodes)
+    if (n.leaf())
+      for (int j = 0; j < 3; ++j) {
+        REQUIRE(t.leaf(n).bound.lo[j] == n.box.lo[j]);
+        REQUIRE(t.leaf(n).bound.hi[j] == n.box.hi[j]);
+      }
   if (nodes.empty() || nodes[0].leaf()) {
     REQUIRE(wide.empty());
     return;
@@ -76,7 +83,7 @@ void check_wide(const Bvh& t) {
       }
       const std::uint32_t n = want[k];
       ++seen[n];
-      REQUIRE(x.child[k] == (nodes[n].leaf() ? (kBvhWideLeaf | n) : t.wide_of(n)));
+      REQUIRE(x.child[k] == (nodes[n].leaf() ? (kBvhWideLeaf | nodes[n].first) : t.wide_of(n)));
       for (int j = 0; j < 3; ++j) {
         REQUIRE(x.lo[j][k] == nodes[n].box.lo[j]);
         REQUIRE(x.hi[j][k] == nodes[n].box.hi[j]);

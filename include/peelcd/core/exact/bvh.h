@@ -111,10 +111,13 @@ struct BvhNode {
 // A leaf's triangles and their boxes, lane by lane (structure of arrays: one box is tested
 // against all of a leaf's at once); lanes past the leaf's count hold empty boxes, which overlap
 // nothing.
-struct alignas(64) BvhLeaf {  // (its boxes on three whole cache lines)
+struct alignas(64) BvhLeaf {  // (its boxes on three whole cache lines, its triangles and bound on the fourth)
   float lo[3][kBvhLeafSize];
   float hi[3][kBvhLeafSize];
   std::uint32_t tri[kBvhLeafSize];
+  // The leaf's node box while the tree's wide view is fresh (Bvh::wide_fresh()): the wide
+  // traversal reads a leaf here, one line from its triangles, never its binary node.
+  FBox bound;
 
   FBox box(std::uint32_t lane) const {
     FBox b;
@@ -126,12 +129,13 @@ struct alignas(64) BvhLeaf {  // (its boxes on three whole cache lines)
   }
 };
 static_assert(kBvhLeafSize == 8, "BvhLeaf's tests are written for 8 lanes");
+static_assert(sizeof(BvhLeaf) == 256, "a BvhLeaf is four cache lines");
 
 // Four children's boxes together (a 4-wide view of the binary tree, kept by Bvh alongside it):
 // a wide node stands for a binary internal node at an even depth, its slots for that node's
 // grandchildren (or a child that is a leaf), their boxes lane by lane so that one box is tested
 // against all four at once. A slot's child is a wide node's index, or kBvhWideLeaf | a leaf's
-// binary node index; an unused slot holds an empty box (it overlaps nothing) and kBvhWideNone.
+// index (Bvh::leaf_at(); its box is the leaf's `bound`); an unused slot holds an empty box (it overlaps nothing) and kBvhWideNone.
 // Two cache lines a node: the traversal of two trees in one frame (bvh_traverse_same_frame())
 // reads two levels of boxes from them where the binary tree spreads them over up to six nodes.
 constexpr std::uint32_t kBvhWideLeaf = 0x80000000u;
@@ -189,6 +193,7 @@ class Bvh {
   Aabb box() const { return nodes_.empty() ? Aabb{} : box_; }
   const std::vector<BvhNode>& nodes() const { return nodes_; }
   const BvhLeaf& leaf(const BvhNode& node) const { return leaves_[node.first]; }
+  const BvhLeaf& leaf_at(std::uint32_t l) const { return leaves_[l]; }
   std::uint32_t parent(std::uint32_t node) const { return parents_[node]; }  // the root's is itself (0)
   const std::vector<std::uint32_t>& order() const { return order_; }  // triangles, leaf by leaf
   // A leaf's triangles (node.count of them, lane by lane) as the build's corner indices.
@@ -239,10 +244,12 @@ class Bvh {
   static void put_slot(BvhWideNode& w, std::uint32_t slot, const FBox& box) {
     for (int k = 0; k < 3; ++k) w.lo[k][slot] = box.lo[k], w.hi[k][slot] = box.hi[k];
   }
-  // Binary node n's box into its wide slot (if it is one; the view fresh).
+  // Binary node n's box into its wide slot (if it is one) and, a leaf, into its leaf's bound
+  // (the view fresh).
   void set_slot(std::uint32_t n) {
     const std::uint32_t s = slot_of_[n];
     if (s != kBvhWideNone) put_slot(wide_[s >> 2], s & 3u, nodes_[n].box);
+    if (nodes_[n].leaf()) leaves_[nodes_[n].first].bound = nodes_[n].box;
   }
   template <bool Load, bool Round>
   Aabb round_vertices(const std::vector<Vec3>& vertices, Vec3* copy, std::size_t begin, std::size_t end,
