@@ -40,16 +40,18 @@ PEELCD_ALWAYS_INLINE V4 splat(double d) { return V4{d, d, d, d}; }
 // The sides of `t`'s corners against the plane of `p`, four couples at once, as
 // certain_plane_sides(p, t) computes them in its first loop: above[k] and below[k] per lane
 // (all ones where certified so), `one` where all three lie strictly on one side.
-PEELCD_ALWAYS_INLINE void plane_sides(const double (&p)[9][ApartBlock::kSize], const double (&t)[9][ApartBlock::kSize],
-                                      std::size_t i, M4 (&above)[3], M4 (&below)[3], M4& one) {
-  const V4 px = load(&p[0][i]), py = load(&p[1][i]), pz = load(&p[2][i]);
-  const V4 e1x = load(&p[3][i]) - px, e1y = load(&p[4][i]) - py, e1z = load(&p[5][i]) - pz;
-  const V4 e2x = load(&p[6][i]) - px, e2y = load(&p[7][i]) - py, e2z = load(&p[8][i]) - pz;
+PEELCD_ALWAYS_INLINE void plane_sides(const ApartBlock::Coords& pb, const ApartBlock::Coords& tb, std::size_t i,
+                                      M4 (&above)[3], M4 (&below)[3], M4& one) {
+  const double(&p)[9][4] = pb[i / 4];
+  const double(&t)[9][4] = tb[i / 4];
+  const V4 px = load(p[0]), py = load(p[1]), pz = load(p[2]);
+  const V4 e1x = load(p[3]) - px, e1y = load(p[4]) - py, e1z = load(p[5]) - pz;
+  const V4 e2x = load(p[6]) - px, e2y = load(p[7]) - py, e2z = load(p[8]) - pz;
   const V4 cx = e1y * e2z - e1z * e2y, cy = e1z * e2x - e1x * e2z, cz = e1x * e2y - e1y * e2x;
   const V4 mx = abs4(e1y * e2z) + abs4(e1z * e2y), my = abs4(e1z * e2x) + abs4(e1x * e2z),
            mz = abs4(e1x * e2y) + abs4(e1y * e2x);
   for (int k = 0; k < 3; ++k) {
-    const V4 fx = load(&t[3 * k][i]) - px, fy = load(&t[3 * k + 1][i]) - py, fz = load(&t[3 * k + 2][i]) - pz;
+    const V4 fx = load(t[3 * k]) - px, fy = load(t[3 * k + 1]) - py, fz = load(t[3 * k + 2]) - pz;
     const V4 det = fx * cx + fy * cy + fz * cz;
     const V4 bound = splat(kOrient3dBound) * (abs4(fx) * mx + abs4(fy) * my + abs4(fz) * mz) + splat(kUnderflowSlack);
     above[k] = (M4)(det > bound);
@@ -61,8 +63,7 @@ PEELCD_ALWAYS_INLINE void plane_sides(const double (&p)[9][ApartBlock::kSize], c
 // The block's answers as bits, lane i of the block at bit i: what apart() returns, and each
 // corner's certified sides (ApartBlock::Sides). Mask turns four lanes into four bits.
 template <class Mask>
-PEELCD_ALWAYS_INLINE std::uint64_t apart_lanes(const double (&a)[9][ApartBlock::kSize],
-                                               const double (&b)[9][ApartBlock::kSize], std::size_t n,
+PEELCD_ALWAYS_INLINE std::uint64_t apart_lanes(const ApartBlock::Coords& a, const ApartBlock::Coords& b, std::size_t n,
                                                ApartBlock::Sides& side_b, ApartBlock::Sides& side_a, Mask mask) {
   std::uint64_t bits = 0;
   side_b = side_a = ApartBlock::Sides{};
@@ -104,8 +105,8 @@ struct Avx2Mask {
     return unsigned(_mm256_movemask_pd(reinterpret_cast<__m256d>(m)));
   }
 };
-__attribute__((target("avx2"))) std::uint64_t apart_avx2(const double (&a)[9][ApartBlock::kSize],
-                                                         const double (&b)[9][ApartBlock::kSize], std::size_t n,
+__attribute__((target("avx2"))) std::uint64_t apart_avx2(const ApartBlock::Coords& a, const ApartBlock::Coords& b,
+                                                         std::size_t n,
                                                          ApartBlock::Sides& side_b, ApartBlock::Sides& side_a) {
   return apart_lanes(a, b, n, side_b, side_a, Avx2Mask{});
 }
@@ -119,7 +120,7 @@ const bool kHasAvx2 = [] {
 
 std::uint64_t ApartBlock::apart(Lanes lanes) {
   for (std::size_t i = n_; i % 4 != 0; ++i)
-    for (int c = 0; c < 9; ++c) a_[c][i] = b_[c][i] = 0.0;
+    for (int c = 0; c < 9; ++c) a_[i / 4][c][i % 4] = b_[i / 4][c][i % 4] = 0.0;
 #if defined(__x86_64__) && defined(__GNUC__)
   if (lanes == Lanes::best && kHasAvx2) return apart_avx2(a_, b_, n_, side_b_, side_a_);
   if (lanes != Lanes::portable) return apart_lanes(a_, b_, n_, side_b_, side_a_, SseMask{});

@@ -19,6 +19,7 @@ namespace peelcd::exact_detail {
 class ApartBlock {
  public:
   static constexpr std::size_t kSize = 64;  // couples a block holds (at most 64: a 64-bit mask of answers)
+  using Coords = double[kSize / 4][9][4];  // a block's corners of one side (below)
 
   std::size_t size() const { return n_; }
   bool full() const { return n_ == kSize; }
@@ -36,8 +37,8 @@ class ApartBlock {
     const Vec3* c[6] = {&a0, &a1, &a2, &b0, &b1, &b2};
     for (int k = 0; k < 3; ++k)
       for (int d = 0; d < 3; ++d) {
-        a_[3 * k + d][i] = (*c[k])[d];
-        b_[3 * k + d][i] = (*c[3 + k])[d];
+        a_[i / 4][3 * k + d][i % 4] = (*c[k])[d];
+        b_[i / 4][3 * k + d][i % 4] = (*c[3 + k])[d];
       }
   }
 
@@ -80,14 +81,17 @@ class ApartBlock {
   std::uint64_t apart(Lanes lanes = Lanes::best);
 
  private:
-  static TriangleCorners corners(const double (&c)[9][kSize], std::size_t i) {
-    return {Vec3(c[0][i], c[1][i], c[2][i]), Vec3(c[3][i], c[4][i], c[5][i]), Vec3(c[6][i], c[7][i], c[8][i])};
+  static TriangleCorners corners(const Coords& c, std::size_t i) {
+    const double(&g)[9][4] = c[i / 4];
+    const std::size_t l = i % 4;
+    return {Vec3(g[0][l], g[1][l], g[2][l]), Vec3(g[3][l], g[4][l], g[5][l]), Vec3(g[6][l], g[7][l], g[8][l])};
   }
-  // By coordinate: [3 k + d][i] is corner k's coordinate d of couple i. Not initialized:
-  // apart() zeroes the lanes past size() in the last group of four it reads, so that they
-  // compute on finite numbers (the tests trap floating-point exceptions).
-  alignas(32) double a_[9][kSize];
-  alignas(32) double b_[9][kSize];
+  // Four couples a group, by coordinate: [i / 4][3 k + d][i % 4] is corner k's coordinate d of
+  // couple i (a couple's 18 numbers on a few neighbouring lines, a group's lanes together for the
+  // SIMD loads). Not initialized: apart() zeroes the lanes past size() in the last group of four
+  // it reads, so that they compute on finite numbers (the tests trap floating-point exceptions).
+  alignas(32) Coords a_;
+  alignas(32) Coords b_;
   std::uint32_t tri_a_[kSize], tri_b_[kSize];
   Sides side_b_, side_a_;  // B's corners against A's plane; A's against B's
   std::size_t n_ = 0;
