@@ -160,6 +160,15 @@ std::uint32_t Bvh::build_wide(std::uint32_t node) {
   return w;
 }
 
+void Bvh::prefetch_wide() const {
+  const auto ask = [](const void* data, std::size_t bytes) {
+    const char* c = static_cast<const char*>(data);
+    for (std::size_t i = 0; i < bytes; i += 64) __builtin_prefetch(c + i);
+  };
+  ask(wide_.data(), wide_.size() * sizeof(BvhWideNode));
+  ask(leaves_.data(), leaves_.size() * sizeof(BvhLeaf));
+}
+
 void Bvh::sync_wide() {
   for (BvhWideNode& w : wide_)
     for (std::uint32_t k = 0; k < 4 && w.child[k] != kBvhWideNone; ++k) {

@@ -213,6 +213,11 @@ class Bvh {
   std::uint32_t wide_of(std::uint32_t node) const { return wide_of_[node]; }
   bool wide_fresh() const { return wide_fresh_; }
   void sync_wide();
+  // What the wide traversal reads (the wide view and the leaves), in bytes; and a request for it
+  // in address order (prefetches, no result): a small tree that other work evicted between
+  // frames then arrives as one stream, where the traversal would wait on one line after another.
+  std::size_t wide_bytes() const { return wide_.size() * sizeof(BvhWideNode) + leaves_.size() * sizeof(BvhLeaf); }
+  void prefetch_wide() const;
   void keep_wide_if_still() {
     if (!wide_fresh_ && changes_ == changes_seen_) sync_wide();
     changes_seen_ = changes_;
