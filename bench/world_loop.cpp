@@ -1,7 +1,9 @@
 // peelcd_world_loop: the World alone on a scene file, frame after frame, for profilers and for
 // the question the bench's turns cannot answer: what a frame costs with its data in cache
 // (frames back to back) and with it evicted (--cold: 64 MB written between frames, as other
-// work between two frames of a program would). A scene file's objects are rigid bodies at their
+// work between two frames of a program would; --busy: a sort of 200k random integers between
+// frames besides, which also leaves the branch predictors trained on other code, as the bench's
+// other methods leave them: the bench's World frame costs what a --busy one does). A scene file's objects are rigid bodies at their
 // file poses, brought to each frame by set_pose() as `peelcd bench` brings them; `--spheres S`
 // takes `peelcd bench spheres --stacks S` instead (two crossing rigid spheres, turning: the
 // posed traversal), its frames over and over; `--crowd N` the pile of `peelcd bench crowd
@@ -9,7 +11,7 @@
 // `peelcd bench spheres-wave --stacks S` (the spheres deforming: set_vertices and refits). One
 // thread, or `--threads T` (DetectOptions::threads).
 //
-//   peelcd_world_loop SCENE|--spheres STACKS|--wave STACKS|--crowd N [--frames N] [--threads T] [--pairs] [--cold]
+//   peelcd_world_loop SCENE|--spheres STACKS|--wave STACKS|--crowd N [--frames N] [--threads T] [--pairs] [--cold] [--busy]
 //
 // Prints the median frame (and its first quartile), the World's boxes and exact steps
 // (Timings::aabb, Timings::cpu) and the contacts found. Under valgrind --tool=callgrind, the
@@ -20,6 +22,7 @@
 
 #include <algorithm>
 #include <chrono>
+#include <cstdint>
 #include <cstdio>
 #include <cstdlib>
 #include <cstring>
@@ -38,7 +41,7 @@ double median(std::vector<double> v, double q = 0.5) {
 
 int usage(const char* why) {
   std::fprintf(stderr, "peelcd_world_loop: %s\nusage: peelcd_world_loop SCENE|--spheres STACKS|--wave STACKS|--crowd N [--frames N] [--threads T] "
-               "[--pairs] [--cold]\n",
+               "[--pairs] [--cold] [--busy]\n",
                why);
   return 2;
 }
@@ -48,7 +51,7 @@ int usage(const char* why) {
 int main(int argc, char** argv) {
   std::string path;
   long frames = 300, stacks = 0, wave = 0, crowd = 0, threads = 1;
-  bool pairs = false, cold = false;
+  bool pairs = false, cold = false, busy = false;
   struct Count {
     const char* flag;
     long* value;
@@ -70,6 +73,8 @@ int main(int argc, char** argv) {
       pairs = true;
     } else if (!std::strcmp(argv[i], "--cold")) {
       cold = true;
+    } else if (!std::strcmp(argv[i], "--busy")) {
+      busy = cold = true;
     } else if (const Count* c = count_option(argv[i])) {
       char* end = nullptr;
       const long n = i + 1 < argc ? std::strtol(argv[++i], &end, 10) : 0;
@@ -107,10 +112,21 @@ int main(int argc, char** argv) {
     if (pairs) opt.contacts = ContactDetail::pairs;
     FrameResult result;
     std::vector<char> other(cold ? std::size_t(64) << 20 : 0);
+    std::vector<std::uint32_t> work(busy ? 200000 : 0);
     std::vector<double> ms, boxes, exact;
     std::size_t contacts = 0;
     for (long f = 0; f < frames; ++f) {
       for (std::size_t i = 0; i < other.size(); i += 64) other[i] = char(other[i] + 1);
+      if (busy) {  // other work: a sort of random integers (xorshift, seeded by the frame)
+        std::uint32_t x = std::uint32_t(f) * 2654435761u + 1;
+        for (std::uint32_t& v : work) {
+          x ^= x << 13;
+          x ^= x >> 17;
+          x ^= x << 5;
+          v = x;
+        }
+        std::sort(work.begin(), work.end());
+      }
       if (sequence) sequence->frame(std::size_t(f) % kSphereFrames, objects);
       const auto t0 = std::chrono::steady_clock::now();
       for (std::size_t i = 0; i < ids.size(); ++i) {
@@ -127,7 +143,9 @@ int main(int argc, char** argv) {
                              : wave  ? "waving spheres, " + std::to_string(wave) + " stacks"
                              : crowd ? "crowd, " + std::to_string(crowd) + " balls" : path;
     std::printf("%s: %ld frames%s%s, %s\n", what.c_str(), frames, pairs ? ", pairs only" : "",
-                cold ? ", 64 MB written between frames" : "",
+                busy  ? ", 64 MB written and 200k integers sorted between frames"
+                : cold ? ", 64 MB written between frames"
+                       : "",
                 threads == 1 ? "one thread" : threads == 0 ? "a thread per core" : (std::to_string(threads) + " threads").c_str());
     std::printf("frame: median %.4f ms, first quartile %.4f ms; boxes %.4f ms, exact %.4f ms (medians)\n", median(ms),
                 median(ms, 0.25), median(boxes), median(exact));
