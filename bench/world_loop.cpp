@@ -3,10 +3,10 @@
 // (frames back to back) and with it evicted (--cold: 64 MB written between frames, as other
 // work between two frames of a program would; --busy: a sort of 200k random integers between
 // frames besides, which also leaves the branch predictors trained on other code, as the bench's
-// other methods leave them: the bench's World frame costs what a --busy one does). A scene file's objects are rigid bodies at their
-// file poses, brought to each frame by set_pose() as `peelcd bench` brings them; `--spheres S`
-// takes `peelcd bench spheres --stacks S` instead (two crossing rigid spheres, turning: the
-// posed traversal), its frames over and over; `--crowd N` the pile of `peelcd bench crowd
+// other methods leave them: the bench's World frame costs what a --busy one does). A scene
+// file's objects are rigid bodies at their file poses, brought to each frame by set_pose() as
+// `peelcd bench` brings them; `--spheres S` takes `peelcd bench spheres --stacks S` instead
+// (two crossing rigid spheres, turning: the posed traversal), its frames over and over; `--crowd N` the pile of `peelcd bench crowd
 // --objects N` (rigid balls by set_pose, every fifth ball deforming by set_vertices); `--wave S`
 // `peelcd bench spheres-wave --stacks S` (the spheres deforming: set_vertices and refits). One
 // thread, or `--threads T` (DetectOptions::threads).
