@@ -6,10 +6,10 @@
 // other methods leave them: the bench's World frame costs what a --busy one does). A scene
 // file's objects are rigid bodies at their file poses, brought to each frame by set_pose() as
 // `peelcd bench` brings them; `--spheres S` takes `peelcd bench spheres --stacks S` instead
-// (two crossing rigid spheres, turning: the posed traversal), its frames over and over; `--crowd N` the pile of `peelcd bench crowd
-// --objects N` (rigid balls by set_pose, every fifth ball deforming by set_vertices); `--wave S`
-// `peelcd bench spheres-wave --stacks S` (the spheres deforming: set_vertices and refits). One
-// thread, or `--threads T` (DetectOptions::threads).
+// (two crossing rigid spheres, turning: the posed traversal), its frames over and over; `--crowd N`
+// the pile of `peelcd bench crowd --objects N` (rigid balls by set_pose, every fifth ball deforming
+// by set_vertices); `--wave S` `peelcd bench spheres-wave --stacks S` (the spheres deforming:
+// set_vertices and refits). One thread, or `--threads T` (DetectOptions::threads).
 //
 //   peelcd_world_loop SCENE|--spheres STACKS|--wave STACKS|--crowd N [--frames N] [--threads T] [--pairs] [--cold] [--busy]
 //
