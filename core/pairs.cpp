@@ -6,6 +6,8 @@
 
 namespace peelcd {
 
+static_assert(kRadixContacts == detail::kRadixFrom, "one threshold for the radix sorts");
+
 const char* to_string(ContactKind kind) {
   switch (kind) {
     case ContactKind::crossing: return "crossing";
@@ -18,7 +20,7 @@ const char* to_string(ContactKind kind) {
 }
 
 void sort_unique_pairs(std::vector<std::uint64_t>& keys, std::vector<std::uint64_t>& scratch) {
-  if (keys.size() < 512) {  // a radix pass costs a histogram: not worth it
+  if (keys.size() < kRadixContacts) {  // a radix pass costs a histogram: not worth it
     std::sort(keys.begin(), keys.end());
     keys.erase(std::unique(keys.begin(), keys.end()), keys.end());
     return;

@@ -103,11 +103,12 @@ TEST_CASE("narrow_phase keeps the colliding candidates in candidate order", "[na
 }
 
 TEST_CASE("sort_contacts orders sets of any size by (tri_a, tri_b), each contact moved whole", "[narrow]") {
-  // Sizes on both sides of kRadixContacts; indices that fit one key word with the places (the
+  // Sizes on both sides of kRadixContacts and of the radix sort's change of digit (2,048); indices that fit one key word with the places (the
   // radix path) and indices up to 2^32 - 1 (the comparison sort); repeated couples kept in
   // their input order.
   std::mt19937 rng(7);
-  for (const std::size_t n : {std::size_t(5), kRadixContacts - 1, kRadixContacts, std::size_t(5000), std::size_t(70000)}) {
+  for (const std::size_t n : {std::size_t(5), kRadixContacts - 1, kRadixContacts, std::size_t(228), std::size_t(2047),
+                              std::size_t(2048), std::size_t(5000), std::size_t(70000)}) {
     for (const std::uint32_t range : {std::uint32_t(300), std::uint32_t(1) << 21, std::uint32_t(0xffffffffu)}) {
       std::vector<Contact> contacts(n);
       for (std::size_t i = 0; i < n; ++i) {

@@ -56,9 +56,10 @@ TEST_CASE("PCS expand to de-duplicated candidate pairs T(a) x T(b)", "[ids]") {
 TEST_CASE("candidate pairs sort and de-duplicate like std::sort + std::unique, at every key width", "[ids]") {
   std::mt19937_64 rng(7);
   std::vector<std::uint64_t> scratch;
-  // (triangles of A, of B, keys): short lists (std::sort), 1 to 32 bits per side, many repeats.
+  // (triangles of A, of B, keys): short lists (std::sort), the radix sort's 8-bit digits (below
+  // 2,048 keys) and 11-bit ones, 1 to 32 bits per side, many repeats.
   for (const auto& [na, nb, n] : std::vector<std::tuple<std::uint64_t, std::uint64_t, std::size_t>>{
-           {1, 1, 5000}, {3, 1000, 100}, {574, 1858, 20000}, {1, 1u << 20, 3000}, {1u << 31, 7, 4000},
+           {1, 1, 5000}, {3, 1000, 20}, {3, 1000, 100}, {574, 1858, 300}, {1u << 20, 1u << 20, 1500}, {574, 1858, 20000}, {1, 1u << 20, 3000}, {1u << 31, 7, 4000},
            {std::uint64_t(1) << 32, std::uint64_t(1) << 32, 5000}, {50, 60, 100000}}) {
     std::vector<std::uint64_t> keys;
     for (std::size_t i = 0; i < n; ++i) keys.push_back(pack_pair(std::uint32_t(rng() % na), std::uint32_t(rng() % nb)));
