@@ -12,10 +12,12 @@
 // The SIMD box tests and cache prefetches live here, not in the public header.
 #include "peelcd/core/exact/bvh.h"
 #include "peelcd/core/exact/self.h"
+#include "peelcd/core/pairs.h"
 
 #include <algorithm>
 #include <cmath>
 #include <cstdint>
+#include <type_traits>
 #include <vector>
 
 #if defined(__SSE__) || defined(_M_X64)
@@ -57,6 +59,51 @@ inline unsigned take_lane(unsigned& mask) {
   return lane;
 }
 
+// A sink of couples kept as pack_pair keys, appended to `out` (the World's candidates): a leaf
+// visit hands it a lane of A with B's lanes as a mask (lanes()), and each of B's eight lanes is
+// written with the count advanced by its bit, no branch on which lanes overlap (an untrained
+// predictor guesses those counts badly: where other work ran between frames, as in the bench).
+// The keys gather in a small buffer moved to `out` in bulk; finish() moves the rest. The same
+// couples in the same order as fn(a, b) per lane.
+class CoupleKeys {
+ public:
+  explicit CoupleKeys(std::vector<std::uint64_t>& out) : out_(out) {}
+  CoupleKeys(const CoupleKeys&) = delete;
+  CoupleKeys& operator=(const CoupleKeys&) = delete;
+  void operator()(std::uint32_t a, std::uint32_t b) {
+    if (n_ == kBuffer) finish();
+    buf_[n_++] = pack_pair(a, b);
+  }
+  void lanes(std::uint32_t a, const std::uint32_t (&tris)[kBvhLeafSize], unsigned mask) {
+    if (n_ > kBuffer - kBvhLeafSize) finish();
+    const std::uint64_t hi = pack_pair(a, 0);
+    for (std::uint32_t k = 0; k < kBvhLeafSize; ++k) {
+      buf_[n_] = hi | tris[k];
+      n_ += (mask >> k) & 1u;
+    }
+  }
+  void finish() {
+    out_.insert(out_.end(), buf_, buf_ + n_);
+    n_ = 0;
+  }
+
+ private:
+  static constexpr std::size_t kBuffer = 256;
+  std::vector<std::uint64_t>& out_;
+  std::size_t n_ = 0;
+  std::uint64_t buf_[kBuffer];
+};
+
+// fn(a, tris[lane]) for each lane set in `mask`, lowest first (a CoupleKeys sink takes them at once).
+template <class Fn>
+PEELCD_ALWAYS_INLINE void couples_of_lane(Fn& fn, std::uint32_t a, const std::uint32_t (&tris)[kBvhLeafSize],
+                                          unsigned mask) {
+  if constexpr (std::is_same_v<std::decay_t<Fn>, CoupleKeys>)
+    fn.lanes(a, tris, mask);
+  else
+    while (mask) fn(a, tris[take_lane(mask)]);
+}
+
 // The node indices of a traversal's stack entry.
 inline BvhNodePair node_indices(const BvhNodePair& e) { return e; }
 inline BvhNodePair node_indices(const BvhStackEntry& e) { return {e.a, e.b}; }
@@ -78,7 +125,7 @@ inline void leaf_couples(const BvhLeaf& la, std::uint32_t count, const BvhLeaf& 
     FBox box;
     const unsigned allowed = box_of(u, box);
     if (allowed == 0) continue;
-    for (unsigned m = overlap_mask(box, lb) & allowed; m;) fn(la.tri[u], lb.tri[take_lane(m)]);
+    couples_of_lane(fn, la.tri[u], lb.tri, overlap_mask(box, lb) & allowed);
   }
 }
 
@@ -93,7 +140,7 @@ inline void leaf_pair_couples(const BvhLeaf& la, const FBox& box_a, const BvhLea
   if (allowed == 0) return;
   for (unsigned us = overlap_mask(box_b, la); us;) {
     const unsigned u = take_lane(us);
-    for (unsigned m = overlap_mask(la.box(u), lb) & allowed; m;) fn(la.tri[u], lb.tri[take_lane(m)]);
+    couples_of_lane(fn, la.tri[u], lb.tri, overlap_mask(la.box(u), lb) & allowed);
   }
 }
 
@@ -319,7 +366,7 @@ struct Posed {
     const BvhLeaf& lb = b.leaf(y);
     for (unsigned us = reach & overlap_mask(y.box, carried); us;) {
       const unsigned u = take_lane(us);
-      for (unsigned m = overlap_mask(carried.box(u), lb); m;) fn(la.tri[u], lb.tri[take_lane(m)]);
+      couples_of_lane(fn, la.tri[u], lb.tri, overlap_mask(carried.box(u), lb));
     }
   }
   // A pushed pair's lines asked for ahead of its pop: both leaves' for a pair of leaves, else

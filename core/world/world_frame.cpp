@@ -325,15 +325,16 @@ void World::Impl::traverse_task(std::size_t k, unsigned lane) {
     t.visited = 0;
     return;
   }
-  const auto take = [&](std::uint32_t ta, std::uint32_t tb) { t.candidates.push_back(pack_pair(ta, tb)); };
+  bvh_detail::CoupleKeys take(t.candidates);  // the couples as keys, a leaf lane's at once
   // Two trees in one frame (two world-space copies, or one pose for both) need no relation.
   if ((a.world_frame && b.world_frame) || a.frame_pose().matrix() == b.frame_pose().matrix()) {
     t.visited = bvh_traverse_same_frame(a.frame_tree(), b.frame_tree(), t.start, self_stacks[lane].v, take);
-    return;
+  } else {
+    const BvhRelation rel = BvhRelation::between(a.frame_pose(), b.frame_pose());
+    t.visited = rel.identity ? bvh_traverse_same_frame(a.frame_tree(), b.frame_tree(), t.start, self_stacks[lane].v, take)
+                             : bvh_traverse(a.frame_tree(), b.frame_tree(), rel, t.start, stacks[lane].v, take);
   }
-  const BvhRelation rel = BvhRelation::between(a.frame_pose(), b.frame_pose());
-  t.visited = rel.identity ? bvh_traverse_same_frame(a.frame_tree(), b.frame_tree(), t.start, self_stacks[lane].v, take)
-                           : bvh_traverse(a.frame_tree(), b.frame_tree(), rel, t.start, stacks[lane].v, take);
+  take.finish();
 }
 
 // Per pair: its result started, its tasks found (first_task), its route: self pairs and

@@ -636,6 +636,41 @@ TEST_CASE("Bvh: the wide traversal of two trees in one frame gives the binary tr
   CHECK(couples > 1000);
 }
 
+TEST_CASE("Bvh: a CoupleKeys sink keeps the couples a plain visitor gets, in its order", "[bvh]") {
+  // The World's candidates come through bvh_detail::CoupleKeys (a leaf lane's couples written
+  // at once, buffered): the same keys in the same order as fn(a, b) one by one, on the wide
+  // traversal in one frame and on the posed one, over many more couples than its buffer holds.
+  const Mesh a = make_uv_sphere(Vec3(0, 0, 0), 1.0, 40, 48);
+  const Mesh b = make_uv_sphere(Vec3(0.3, 0.1, 0), 1.0, 37, 45);
+  Bvh ta, tb;
+  ta.build(a.vertices, a.triangles);
+  tb.build(b.vertices, b.triangles);
+  std::vector<BvhNodePair> stack;
+  std::vector<BvhStackEntry> posed_stack;
+  std::vector<std::uint64_t> plain, keys = {pack_pair(7, 9)};  // a sink appends to what is there
+  const auto push = [&](std::uint32_t x, std::uint32_t y) { plain.push_back(pack_pair(x, y)); };
+  plain.push_back(pack_pair(7, 9));
+  bvh_traverse_same_frame(ta, tb, BvhNodePair{0u, 0u}, stack, push);
+  {
+    bvh_detail::CoupleKeys sink(keys);
+    bvh_traverse_same_frame(ta, tb, BvhNodePair{0u, 0u}, stack, sink);
+    sink.finish();
+  }
+  CHECK(plain.size() > 2000);
+  CHECK(keys == plain);
+  const BvhRelation rel = BvhRelation::between(pose(0.4, Vec3(1, 2, 3), Vec3(0.1, 0, 0)), pose(-0.2, Vec3(0, 1, 1), Vec3(0.2, 0.1, 0)));
+  plain.clear();
+  keys.clear();
+  bvh_traverse(ta, tb, rel, BvhNodePair{0u, 0u}, posed_stack, push);
+  {
+    bvh_detail::CoupleKeys sink(keys);
+    bvh_traverse(ta, tb, rel, BvhNodePair{0u, 0u}, posed_stack, sink);
+    sink.finish();
+  }
+  CHECK(plain.size() > 500);
+  CHECK(keys == plain);
+}
+
 TEST_CASE("Bvh: a vertex no triangle uses stays out of the box, built and refitted", "[bvh]") {
   Mesh m = make_box(Vec3(0, 0, 0), Vec3(1, 1, 1));
   const Aabb corners = [&] {
