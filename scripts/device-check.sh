@@ -11,6 +11,8 @@
 #      spheres and the 1,000-ball pile (--quick: the default scene only), one thread per method:
 #      the router's default rows and the image stage forced side by side with the CPU peers, and
 #      the image-work table (host work, GL waits, GPU passes by timer queries, bytes, candidates);
+#      on a machine with 9 or more cores, the large scenes' benches also time the World with 8
+#      threads against one (--scaling 8: side by side, then the two alone, alternating);
 #   5. peelcd calibrate --backend egl --write-costs (the router's cost models of this device and
 #      the faster conservative coverage, raster or compute, in the record as costs.json), then
 #      detect routing by them.
@@ -148,16 +150,19 @@ same "determinism: two runs, the same PCS and pairs" "$out/determinism_1.txt" "$
 if [ "$quick" = 1 ]; then
   step "bench, default scene" "bench_default.txt" "$bin" bench fixtures/scenes/bunny_dragon.json --backend egl --frames 3 --threads 1
 else
+  # The World's 8 threads against its one on the large scenes, where the host has the cores.
+  scaling=()
+  if [ "$(nproc)" -ge 9 ]; then scaling=(--scaling 8); fi
   step "bench, default scene" "bench_default.txt" "$bin" bench fixtures/scenes/bunny_dragon.json --backend egl --frames 30 --threads 1
   step "bench, 400-ball pile" "bench_pile400.txt" "$bin" bench crowd --objects 400 --backend egl --frames 6 --threads 1
   step "bench, 400-ball pile, the GPU's certified filter off" "bench_pile400_unfiltered.txt" \
     "$bin" bench crowd --objects 400 --backend egl --frames 6 --threads 1 --short --no-gpu-filter
-  step "bench, rigid spheres 1.3M" "bench_spheres_1m.txt" "$bin" bench spheres --stacks 570 --backend egl --frames 4 --threads 1 --short
+  step "bench, rigid spheres 1.3M" "bench_spheres_1m.txt" "$bin" bench spheres --stacks 570 --backend egl --frames 4 --threads 1 --short "${scaling[@]}"
   # The deforming scenes, where the image stage should earn its place: the image-work table under
   # each bench says where its frame goes (host work, GL waits, GPU raster/compute/transfer by timer
   # queries, bytes uploaded, candidates to the host's exact test).
-  step "bench, waving spheres 1.3M" "bench_spheres_wave_1m.txt" "$bin" bench spheres-wave --stacks 570 --backend egl --frames 4 --threads 1 --short
-  step "bench, 1,000-ball pile" "bench_pile1000.txt" "$bin" bench crowd --objects 1000 --backend egl --frames 4 --threads 1 --short
+  step "bench, waving spheres 1.3M" "bench_spheres_wave_1m.txt" "$bin" bench spheres-wave --stacks 570 --backend egl --frames 4 --threads 1 --short "${scaling[@]}"
+  step "bench, 1,000-ball pile" "bench_pile1000.txt" "$bin" bench crowd --objects 1000 --backend egl --frames 4 --threads 1 --short "${scaling[@]}"
   # The same deforming scenes with the conservative coverage by the rasterizer (the runs above:
   # auto, the compute pass on a GPU): the image-work tables' raster and compute columns.
   step "bench, waving spheres 1.3M, --coverage raster" "bench_spheres_wave_1m_raster.txt" \
