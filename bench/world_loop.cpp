@@ -113,7 +113,7 @@ int main(int argc, char** argv) {
     FrameResult result;
     std::vector<char> other(cold ? std::size_t(64) << 20 : 0);
     std::vector<std::uint32_t> work(busy ? 200000 : 0);
-    std::vector<double> ms, boxes, exact;
+    std::vector<double> ms, boxes, exact, one_lane, inside;
     std::size_t contacts = 0;
     for (long f = 0; f < frames; ++f) {
       for (std::size_t i = 0; i < other.size(); i += 64) other[i] = char(other[i] + 1);
@@ -137,6 +137,8 @@ int main(int argc, char** argv) {
       ms.push_back(std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - t0).count());
       boxes.push_back(result.timings.aabb);
       exact.push_back(result.timings.cpu);
+      one_lane.push_back(world.stats().one_lane_ms / result.timings.total);
+      inside.push_back(result.timings.total);
       for (const PairResult& p : result.pairs) contacts += p.colliding.size();
     }
     const std::string what = stacks ? "spheres, " + std::to_string(stacks) + " stacks"
@@ -149,7 +151,16 @@ int main(int argc, char** argv) {
                 threads == 1 ? "one thread" : threads == 0 ? "a thread per core" : (std::to_string(threads) + " threads").c_str());
     std::printf("frame: median %.4f ms, first quartile %.4f ms; boxes %.4f ms, exact %.4f ms (medians)\n", median(ms),
                 median(ms, 0.25), median(boxes), median(exact));
-    std::printf("contacts: %zu over the frames (%.1f a frame)\n", contacts, double(contacts) / double(frames));
+    // The share of collide() outside the loops the lanes share (WorldStats::one_lane_ms): with
+    // one thread, what bounds the frame of more (Amdahl).
+    const double serial = median(one_lane);
+    std::printf("collide(): median %.4f ms, %.1f%% of it outside the lanes' loops (median)%s\n", median(inside),
+                100.0 * serial,
+                threads == 1 ? (", so 8 threads take at least " + std::to_string(serial + (1.0 - serial) / 8.0).substr(0, 5) +
+                                "x one").c_str()
+                             : "");
+    std::printf("contacts: %zu over the frames (%.1f a frame); last frame: %zu candidates, %zu node pairs\n", contacts,
+                double(contacts) / double(frames), world.stats().candidates, world.stats().node_pairs);
     return 0;
   } catch (const std::exception& e) {
     std::fprintf(stderr, "peelcd_world_loop: %s\n", e.what());

@@ -12,7 +12,8 @@
 namespace peelcd {
 
 void relate_pairs(std::vector<PairResult>& pairs, const std::function<const Mesh&(std::size_t)>& mesh_of,
-                  const std::vector<Aabb>& boxes, const DetectOptions& options, const std::vector<char>* near_found) {
+                  const std::vector<Aabb>& boxes, const DetectOptions& options, const std::vector<char>* near_found,
+                  RelateLanes* lanes) {
   const int n = options.resolution > 0 ? options.resolution : kVolumeResolution;
   // The margin's trees, one per object, built on its first pair (none without a margin).
   std::map<std::size_t, Bvh> trees;
@@ -24,7 +25,11 @@ void relate_pairs(std::vector<PairResult>& pairs, const std::function<const Mesh
     }
     return it->second;
   };
-  for (std::size_t pi = 0; pi < pairs.size(); ++pi) {
+  // Pair pi related; with `meshes` false, returns false where it needs a mesh or a tree (the
+  // steps before are done again by the call with `meshes` true: they give the same values).
+  const bool reads_meshes = options.margin > 0.0 || options.depth || options.volume;
+  const auto relate_one = [&](std::size_t pi, bool meshes) {
+    if (!meshes && reads_meshes) return false;
     PairResult& p = pairs[pi];
     const bool found = near_found && (*near_found)[pi];
     p.relation_note.clear();
@@ -47,7 +52,7 @@ void relate_pairs(std::vector<PairResult>& pairs, const std::function<const Mesh
         vertex_representatives(mesh_of(p.object_a), options.self_adjacency, rep);
         p.near = near_self_pairs(mesh_of(p.object_a), tree_of(p.object_a), rep, options.margin);
       }
-      continue;
+      return true;
     }
     if (options.margin > 0.0 && !found)
       p.near = near_pairs(mesh_of(p.object_a), mesh_of(p.object_b), tree_of(p.object_b), options.margin);
@@ -60,9 +65,12 @@ void relate_pairs(std::vector<PairResult>& pairs, const std::function<const Mesh
       p.relation = contact_relation(p.colliding);
       note_cap();
       // Touching only, one box within the other: touching from inside is containment.
-      if (p.relation == Relation::touching && within && !capped)
+      if (p.relation == Relation::touching && within && !capped) {
+        if (!meshes) return false;
         p.relation = touching_relation(mesh_of(p.object_a), mesh_of(p.object_b), ba, bb, p.colliding, p.relation_note);
+      }
     } else {
+      if (!meshes) return false;
       p.relation = relate(mesh_of(p.object_a), mesh_of(p.object_b), ba, bb, p.colliding, p.relation_note);
     }
     if (options.depth) {
@@ -79,7 +87,17 @@ void relate_pairs(std::vector<PairResult>& pairs, const std::function<const Mesh
         p.volume = overlap_volume(mesh_of(p.object_a), mesh_of(p.object_b), p.roi, n);
       }
     }
+    return true;
+  };
+  if (!lanes || reads_meshes || pairs.size() < 2) {
+    for (std::size_t pi = 0; pi < pairs.size(); ++pi) relate_one(pi, true);
+    return;
   }
+  std::vector<char>& left = lanes->left;
+  left.assign(pairs.size(), 0);
+  lanes->for_pairs(pairs.size(), [&](std::size_t pi) { left[pi] = !relate_one(pi, false); });
+  for (std::size_t pi = 0; pi < pairs.size(); ++pi)
+    if (left[pi]) relate_one(pi, true);
 }
 
 }  // namespace peelcd

@@ -16,7 +16,7 @@ void FramePlan::find_pairs(const ObjectRefs& objects, const DetectOptions& opt, 
   if (opt.margin > 0.0)  // proximity: boxes within the margin of each other make a pair
     for (Aabb& b : boxes)
       b = b.grown(0.5 * opt.margin);
-  overlapping_pairs(boxes, pairs, order_);
+  overlapping_pairs(boxes, pairs, sweep_);
   if (only)
     pairs.erase(std::remove_if(pairs.begin(), pairs.end(),
                                [&](const IndexPair& p) { return !std::binary_search(only->begin(), only->end(), p); }),

@@ -107,7 +107,7 @@ class FramePlan {
   void plan(const ObjectRefs& objects, const DetectOptions& opt, PairLoop& loop);
 
  private:
-  std::vector<std::size_t> order_;
+  SweepScratch sweep_;
   std::vector<int> needs_, tiles_;
   void reset(std::size_t i, const ObjectRefs& objects, int tile);
   std::vector<SelfTree> self_trees_;  // per object asking for self-collision (self_overlap_pairs())

@@ -112,6 +112,8 @@ void World::Impl::collide_frame(const DetectOptions& opt, FrameResult& out) {
   const auto t_total = Clock::now();
   out.reset_counters();
   stats.node_pairs = stats.candidates = stats.vertices_transformed = 0;
+  loops_ms = 0.0;
+  loops_ms = 0.0;
   const unsigned lanes = lanes_for(opt);
   frame_lanes = lanes;
   detail = opt.contacts;
@@ -145,6 +147,8 @@ void World::Impl::collide_frame(const DetectOptions& opt, FrameResult& out) {
   out.timings.cpu += ms_since(t0);
   out.renderer = stage->renderer();
   out.timings.total = ms_since(t_total);
+  stats.loops_ms = loops_ms;
+  stats.one_lane_ms = std::max(0.0, out.timings.total - loops_ms);
 }
 
 // The broad phase: each body's box (its tree's root, moved by its pose; small rigid bodies
@@ -166,7 +170,7 @@ void World::Impl::find_pairs(const DetectOptions& opt, unsigned lanes) {
                                   " reaches outside the float range (|x| <= 3.4e38) the image stage works in");
     boxes.back() = w.grown(0.5 * opt.margin);  // proximity: boxes within the margin of each other make a pair
   }
-  overlapping_pairs(boxes, pairs, order);
+  overlapping_pairs(boxes, pairs, sweep);
   copy_paired(opt, lanes);
   bool any_self = false;
   for (std::size_t i = 0; i < ids.size(); ++i) {
@@ -350,7 +354,8 @@ void World::Impl::route_pairs(const DetectOptions& opt, std::size_t used, FrameR
   const StageCost exact_cost = world_exact_cost();
   const int tile = opt.resolution > 0 ? opt.resolution : opt.budget;
   to_image.assign(pairs.size(), 0);
-  for (std::size_t p = 0; p < pairs.size(); ++p) {
+  // Each pair on its own (over the lanes: a pile's thousands), the counts summed after.
+  parallel(pairs.size(), frame_lanes, [&](std::size_t p, unsigned) {
     PairResult& r = out.pairs[p];
     std::vector<Contact> colliding = std::move(r.colliding);  // its storage reused frame to frame
     colliding.clear();
@@ -360,11 +365,7 @@ void World::Impl::route_pairs(const DetectOptions& opt, std::size_t used, FrameR
     r.object_b = ids[pairs[p].second];
     r.roi = r.region = intersection(boxes[pairs[p].first], boxes[pairs[p].second]);
     std::size_t n = 0;
-    for (std::size_t k = first_task[p]; k < first_task[p + 1]; ++k) {
-      n += tasks[k].candidates.size();
-      stats.node_pairs += tasks[k].visited;
-    }
-    stats.candidates += n;
+    for (std::size_t k = first_task[p]; k < first_task[p + 1]; ++k) n += tasks[k].candidates.size();
     r.candidates = n;
     if (r.object_a == r.object_b) {  // self: the exact path always (docs/design.md)
       r.exact_stage = true;
@@ -373,24 +374,28 @@ void World::Impl::route_pairs(const DetectOptions& opt, std::size_t used, FrameR
       std::size_t tested = 0;
       for (std::size_t k = first_task[p]; k < first_task[p + 1]; ++k) tested += tasks[k].tested;
       if (opt.stage == Stage::automatic) r.predicted_exact_ms = exact_cost.predict_ms(double(tested), 0.0);
-      continue;
+      return;
     }
     // A margin too wide for the image stage: the exact path, whatever the stage asked.
     if (opt.stage != Stage::exact && margin_too_wide_for_image(opt, r.roi)) {
       r.exact_stage = r.margin_fallback = true;
-      continue;
+      return;
     }
     if (!untraversed.empty() && untraversed[p]) {  // Stage::image, resident: not traversed
       to_image[p] = 1;
-      continue;
+      return;
     }
-    if (n == 0) continue;  // no couple of boxes overlaps: no contact, nothing to test
+    if (n == 0) return;  // no couple of boxes overlaps: no contact, nothing to test
     // The image stage draws at most the candidates' triangles: at most 2n, counted as n.
     const Route route = route_pair(opt, exact_cost, image_cost, 0.0, double(n), tile);
     r.predicted_exact_ms = route.predicted_exact_ms;
     r.predicted_image_ms = route.predicted_image_ms;
     r.exact_stage = route.exact;
     to_image[p] = !route.exact;
+  });
+  for (std::size_t k = 0; k < used; ++k) {
+    stats.node_pairs += tasks[k].visited;
+    stats.candidates += tasks[k].candidates.size();
   }
 }
 
@@ -550,6 +555,12 @@ void World::Impl::relate(const DetectOptions& opt, FrameResult& out) {
   body_boxes.assign(bodies.size(), Aabb{});
   for (std::size_t i = 0; i < ids.size(); ++i) body_boxes[ids[i]] = boxes[i];
   world_meshes.clear();
+  // The pairs related from their contacts alone, over the lanes (a pile's thousands); those that
+  // read a mesh (made here on demand) after, on this thread.
+  if (!relate_lanes.for_pairs)
+    relate_lanes.for_pairs = [this](std::size_t n, const std::function<void(std::size_t)>& fn) {
+      parallel(n, frame_lanes, [&](std::size_t i, unsigned) { fn(i); });
+    };
   relate_pairs(
       out.pairs,
       [&](std::size_t id) -> const Mesh& {
@@ -563,7 +574,7 @@ void World::Impl::relate(const DetectOptions& opt, FrameResult& out) {
         }
         return it->second;
       },
-      body_boxes, opt);
+      body_boxes, opt, nullptr, &relate_lanes);
 }
 
 }  // namespace peelcd

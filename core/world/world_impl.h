@@ -11,11 +11,13 @@
 #include "peelcd/core/broad_phase.h"
 #include "peelcd/core/image/cull.h"
 #include "peelcd/core/exact/reference.h"
+#include "peelcd/core/exact/relation.h"
 #include "peelcd/core/exact/self.h"
 #include "peelcd/core/worker_pool.h"
 #include "../exact/apart_block.h"
 
 #include <atomic>
+#include <chrono>
 #include <map>
 #include <unordered_map>
 #include <optional>
@@ -271,7 +273,7 @@ struct World::Impl {
   std::vector<Aabb> boxes;
   std::vector<BodyId> ids;
   std::vector<std::pair<std::size_t, std::size_t>> pairs;
-  std::vector<std::size_t> order;
+  SweepScratch sweep;  // find_pairs()
   std::vector<Task> tasks;
   std::vector<BvhNodePair> split;
   std::vector<std::size_t> to_copy;     // copy_paired(): the bodies (ids) copied this frame
@@ -295,6 +297,7 @@ struct World::Impl {
   std::vector<std::size_t> first_task;  // pair p's tasks: [first_task[p], first_task[p + 1])
   std::vector<char> to_image;           // pair p goes to the image stage
   std::vector<Aabb> body_boxes;         // per BodyId, this frame's world box
+  RelateLanes relate_lanes;              // relate(): the pairs related over the lanes
   std::map<std::size_t, Mesh> world_meshes;  // large rigid bodies' world meshes a relation needed
   std::unique_ptr<WorkerPool> pool;
 
@@ -348,12 +351,19 @@ struct World::Impl {
     if (stacks.size() < lanes) stacks.resize(lanes);
     if (self_stacks.size() < lanes) self_stacks.resize(lanes);
     while (lane_scratch.size() < lanes) lane_scratch.push_back(std::make_unique<LaneScratch>());
-    if (lanes <= 1 || n <= 1) {
+    if (n <= 1) {  // (one item: on the calling thread, whatever the lanes)
       for (std::size_t i = 0; i < n; ++i) fn(i, 0u);
       return;
     }
-    pool->for_each(n, fn);  // (a task or body keeps its lane from loop to loop and frame to frame)
+    const auto t0 = std::chrono::steady_clock::now();
+    if (lanes <= 1) {
+      for (std::size_t i = 0; i < n; ++i) fn(i, 0u);
+    } else {
+      pool->for_each(n, fn);  // (a task or body keeps its lane from loop to loop and frame to frame)
+    }
+    loops_ms += std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - t0).count();
   }
+  double loops_ms = 0.0;  // this frame's time in parallel()'s loops (WorldStats::loops_ms)
 
   // The deferred whole-tree refits (World::set_vertices, many moved vertices): every pending
   // body's triangle boxes in chunks over the lanes (a large body split in as many chunks as

@@ -86,8 +86,16 @@ double exact_overlap_volume(const Mesh& a, const Mesh& b);
 // objects' meshes: `mesh_of(i)` gives object i's world mesh (called only when needed). With
 // options.margin, also each pair's `near` by a tree search, except for the pairs whose
 // `near_found[i]` is set (their stage found them from its candidates).
+// `lanes`, given: its for_pairs(n, fn) runs fn(i) for i in [0, n), in any order and on any
+// threads; the pairs whose answers come from their contacts alone are related through it, those
+// that read a mesh (mesh_of) or a tree after, on the calling thread, in pair order (`left`:
+// scratch, kept by a caller that relates every frame).
+struct RelateLanes {
+  std::function<void(std::size_t, const std::function<void(std::size_t)>&)> for_pairs;
+  std::vector<char> left;
+};
 void relate_pairs(std::vector<PairResult>& pairs, const std::function<const Mesh&(std::size_t)>& mesh_of,
                   const std::vector<Aabb>& boxes, const DetectOptions& options,
-                  const std::vector<char>* near_found = nullptr);
+                  const std::vector<char>* near_found = nullptr, RelateLanes* lanes = nullptr);
 
 }  // namespace peelcd

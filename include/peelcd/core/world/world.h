@@ -60,6 +60,11 @@ struct WorldStats {
                                     // counts pairs of wide nodes and leaves: fewer for the same couples)
   std::size_t candidates = 0;       // triangle couples whose boxes overlap, last frame
   std::size_t vertices_transformed = 0;  // rigid bodies' world vertices computed, last frame
+  // The last frame's time (ms) in its steps' loops over pairs, tasks or bodies, which spread
+  // over the lanes when threads > 1, and in the steps between them, which run on the calling
+  // thread alone (the whole frame: one_lane_ms + loops_ms, the image stage's work included in
+  // one_lane_ms). With T threads a frame takes at least one_lane_ms + loops_ms / T.
+  double loops_ms = 0.0, one_lane_ms = 0.0;
   // Routes timed (World::time_routes()): frames whose pairs all went to the image route, and
   // whether the last frame belonged to a comparison of the two routes rather than to a choice.
   std::size_t image_route_frames = 0;
