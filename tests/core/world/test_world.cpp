@@ -208,6 +208,68 @@ TEST_CASE("World: the same contacts on 1, 2 and 5 threads", "[world]") {
   CHECK(got[2] == got[0]);
 }
 
+TEST_CASE("World: a pile's pairs, routes and relations the same on 1, 2 and 5 threads", "[world]") {
+  // Many pairs: the broad phase, routing and relations run over the lanes. A row of touching
+  // balls (rigid and deforming) relates from its contacts; a ball inside a large sphere has
+  // no contact and overlapping boxes, so its relation reads the meshes (on the calling thread).
+  auto ball = std::make_shared<const Mesh>(make_uv_sphere(Vec3::Zero(), 0.5, 8, 16));
+  auto shell = std::make_shared<const Mesh>(make_uv_sphere(Vec3::Zero(), 3.0, 24, 48));
+  struct Pair {
+    BodyId a, b;
+    Relation relation;
+    std::size_t candidates;
+    std::vector<std::uint64_t> contacts;
+    bool operator==(const Pair& o) const {
+      return a == o.a && b == o.b && relation == o.relation && candidates == o.candidates && contacts == o.contacts;
+    }
+  };
+  std::vector<std::vector<Pair>> got;
+  BodyId big = 0, inner = 0;
+  for (const unsigned threads : {1u, 2u, 5u}) {
+    World world;
+    std::vector<BodyId> row;
+    for (int k = 0; k < 24; ++k) {
+      const Eigen::Affine3d at = pose(0.3 * k, Vec3(1, 2, 3), Vec3(0.95 * (k % 6), 0.95 * (k / 6), 0.02 * (k % 3)));
+      if (k % 4 == 3) {
+        Mesh m = *ball;
+        for (Vec3& v : m.vertices) v = at * v;
+        row.push_back(world.add_deforming(std::move(m)));
+      } else {
+        row.push_back(world.add_rigid(ball, at));
+      }
+    }
+    big = world.add_rigid(shell, pose(0.0, Vec3(0, 0, 1), Vec3(20, 0, 0)));
+    inner = world.add_rigid(ball, pose(0.4, Vec3(1, 0, 0), Vec3(20.2, 0.1, 0)));
+    DetectOptions opt;
+    opt.stage = Stage::exact;
+    opt.threads = threads;
+    std::vector<Pair> frames;
+    for (int f = 0; f < 2; ++f) {  // the second frame moves the rigid balls of the row
+      if (f == 1)
+        for (int k = 0; k < 24; ++k)
+          if (k % 4 != 3)
+            world.set_pose(row[k], pose(0.3 * k + 0.1, Vec3(1, 2, 3), Vec3(0.95 * (k % 6) + 0.01, 0.95 * (k / 6), 0.0)));
+      const FrameResult& r = world.collide(opt);
+      for (const PairResult& p : r.pairs) frames.push_back({p.object_a, p.object_b, p.relation, p.candidates, keys(p)});
+    }
+    got.push_back(frames);
+  }
+  REQUIRE(got[0].size() > 60);
+  CHECK(got[1] == got[0]);
+  CHECK(got[2] == got[0]);
+  std::size_t crossing = 0, inside = 0;
+  for (const Pair& p : got[0]) {
+    crossing += p.relation == Relation::crossing;
+    if (p.a == big && p.b == inner) {
+      CHECK(p.contacts.empty());
+      CHECK(p.relation == Relation::b_inside_a);
+      ++inside;
+    }
+  }
+  CHECK(crossing > 40);
+  CHECK(inside == 2);
+}
+
 TEST_CASE("World: a frame reads only what lies near the contact", "[world]") {
   // Two spheres touching at a cap, at two mesh sizes (16x the triangles): the candidates grow
   // with the contact's length in triangles (about 4x), not with the meshes; the rigid bodies'
