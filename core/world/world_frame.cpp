@@ -113,7 +113,6 @@ void World::Impl::collide_frame(const DetectOptions& opt, FrameResult& out) {
   out.reset_counters();
   stats.node_pairs = stats.candidates = stats.vertices_transformed = 0;
   loops_ms = 0.0;
-  loops_ms = 0.0;
   const unsigned lanes = lanes_for(opt);
   frame_lanes = lanes;
   detail = opt.contacts;
