@@ -9,13 +9,22 @@
 // (two crossing rigid spheres, turning: the posed traversal), its frames over and over; `--crowd N`
 // the pile of `peelcd bench crowd --objects N` (rigid balls by set_pose, every fifth ball deforming
 // by set_vertices); `--wave S` `peelcd bench spheres-wave --stacks S` (the spheres deforming:
-// set_vertices and refits). One thread, or `--threads T` (DetectOptions::threads).
+// set_vertices and refits). One thread, or `--threads T` (DetectOptions::threads). `--image`:
+// every pair on the resident image route (Stage::image) of the GL stage on EGL with the GPU's
+// resolve and the compute coverage, as `peelcd bench ... --backend egl --resolve gpu --coverage
+// compute` times its "World, image stage" row; it also prints the host steps around the stage
+// (for profiling the host work of the image route; on llvmpipe the stage's own work is the CPU's).
+// `--model L`: the World's lane model (World::model_lanes): each frame planned for L lanes, run
+// on one thread with its loops' items timed; prints what L lanes would take by the work's
+// balance alone, and each loop's items, work, longest item and span (medians over the frames):
+// where the scaling of a frame is lost to uneven work, measurable on a machine with few cores.
 //
-//   peelcd_world_loop SCENE|--spheres STACKS|--wave STACKS|--crowd N [--frames N] [--threads T] [--pairs] [--cold] [--busy]
+//   peelcd_world_loop SCENE|--spheres STACKS|--wave STACKS|--crowd N [--frames N] [--threads T] [--pairs] [--cold] [--busy] [--image] [--model L]
 //
 // Prints the median frame (and its first quartile), the World's boxes and exact steps
 // (Timings::aabb, Timings::cpu) and the contacts found. Under valgrind --tool=callgrind, the
 // difference of two runs with different --frames is the instructions of that many frames.
+#include "peelcd/backends.h"
 #include "peelcd/core/world/world.h"
 #include "peelcd/eval/scenes.h"
 #include "peelcd/io/scene.h"
@@ -41,7 +50,7 @@ double median(std::vector<double> v, double q = 0.5) {
 
 int usage(const char* why) {
   std::fprintf(stderr, "peelcd_world_loop: %s\nusage: peelcd_world_loop SCENE|--spheres STACKS|--wave STACKS|--crowd N [--frames N] [--threads T] "
-               "[--pairs] [--cold] [--busy]\n",
+               "[--pairs] [--cold] [--busy] [--image] [--model L]\n",
                why);
   return 2;
 }
@@ -50,8 +59,8 @@ int usage(const char* why) {
 
 int main(int argc, char** argv) {
   std::string path;
-  long frames = 300, stacks = 0, wave = 0, crowd = 0, threads = 1;
-  bool pairs = false, cold = false, busy = false;
+  long frames = 300, stacks = 0, wave = 0, crowd = 0, threads = 1, model = 0;
+  bool pairs = false, cold = false, busy = false, image = false;
   struct Count {
     const char* flag;
     long* value;
@@ -62,7 +71,8 @@ int main(int argc, char** argv) {
                           {"--spheres", &stacks, 3, 2000, "latitude bands from 3 to 2,000"},
                           {"--wave", &wave, 3, 2000, "latitude bands from 3 to 2,000"},
                           {"--crowd", &crowd, 2, 5000, "balls from 2 to 5,000"},
-                          {"--threads", &threads, 0, 64, "0 (one per core) to 64"}};
+                          {"--threads", &threads, 0, 64, "0 (one per core) to 64"},
+                          {"--model", &model, 2, 256, "lanes from 2 to 256"}};
   const auto count_option = [&](const char* arg) -> const Count* {
     for (const Count& c : counts)
       if (!std::strcmp(arg, c.flag)) return &c;
@@ -73,6 +83,8 @@ int main(int argc, char** argv) {
       pairs = true;
     } else if (!std::strcmp(argv[i], "--cold")) {
       cold = true;
+    } else if (!std::strcmp(argv[i], "--image")) {
+      image = true;
     } else if (!std::strcmp(argv[i], "--busy")) {
       busy = cold = true;
     } else if (const Count* c = count_option(argv[i])) {
@@ -103,17 +115,39 @@ int main(int argc, char** argv) {
       objects = load_objects(load_scene(path));
       for (Object& o : objects) o.rigid = RigidMotion{std::make_shared<const Mesh>(o.mesh), Eigen::Affine3d::Identity()};
     }
-    World world;
+    std::shared_ptr<ImageStage> stage;
+    if (image) {
+#if PEELCD_HAVE_EGL
+      gl::GlOptions gl;
+      gl.resolve = Resolve::gpu;
+      gl.coverage = Coverage::compute;
+      gl.workers = unsigned(threads);
+      stage = make_image_stage("egl", gl);
+#else
+      return usage("--image: this program was built without EGL");
+#endif
+    }
+    World world(stage);
+    if (model) {
+      if (threads != 1) return usage("--model runs on one thread: leave --threads out");
+      world.model_lanes(unsigned(model));
+    }
     std::vector<BodyId> ids;
     for (const Object& o : objects)
       ids.push_back(o.rigid ? world.add_rigid(o.rigid->shape, o.rigid->pose, o.name) : world.add_deforming(o.mesh, o.name));
     DetectOptions opt;
     opt.threads = unsigned(threads);
     if (pairs) opt.contacts = ContactDetail::pairs;
+    if (image) opt.stage = Stage::image;
     FrameResult result;
     std::vector<char> other(cold ? std::size_t(64) << 20 : 0);
     std::vector<std::uint32_t> work(busy ? 200000 : 0);
-    std::vector<double> ms, boxes, exact, one_lane, inside;
+    std::vector<double> ms, boxes, exact, one_lane, inside, upload, calls, readback, waits, modelled, modelled_frame;
+    struct LoopTimes {  // a loop of the lane model over the frames
+      std::string step;
+      std::vector<double> items, total, longest, span;
+    };
+    std::vector<LoopTimes> loops;
     std::size_t contacts = 0;
     for (long f = 0; f < frames; ++f) {
       for (std::size_t i = 0; i < other.size(); i += 64) other[i] = char(other[i] + 1);
@@ -139,18 +173,49 @@ int main(int argc, char** argv) {
       exact.push_back(result.timings.cpu);
       one_lane.push_back(world.stats().one_lane_ms / result.timings.total);
       inside.push_back(result.timings.total);
+      upload.push_back(result.timings.upload);
+      calls.push_back(result.timings.gpu);
+      readback.push_back(result.timings.readback);
+      waits.push_back(result.timings.gl_wait);
       for (const PairResult& p : result.pairs) contacts += p.colliding.size();
+      if (model) {
+        modelled.push_back(world.stats().model_ms / result.timings.total);
+        double wall = 0.0, span = 0.0;  // the whole frame's loops: set_vertices()'s and collide()'s
+        for (const LaneLoop& l : world.lane_loops()) wall += l.wall_ms, span += l.span_ms;
+        modelled_frame.push_back((ms.back() - wall + span) / ms.back());
+        // (loops by their step and order within it: a frame's steps may run some loops twice)
+        std::vector<int> seen;
+        for (const LaneLoop& l : world.lane_loops()) {
+          std::size_t k = 0;
+          int nth = 0;
+          for (const LaneLoop& m : world.lane_loops()) {
+            if (&m == &l) break;
+            nth += std::string(m.step) == l.step;
+          }
+          const std::string key = std::string(l.step) + (nth ? " #" + std::to_string(nth + 1) : "");
+          while (k < loops.size() && loops[k].step != key) ++k;
+          if (k == loops.size()) loops.push_back({key, {}, {}, {}, {}});
+          loops[k].items.push_back(double(l.items));
+          loops[k].total.push_back(l.total_ms);
+          loops[k].longest.push_back(l.longest_ms);
+          loops[k].span.push_back(l.span_ms);
+        }
+      }
     }
     const std::string what = stacks ? "spheres, " + std::to_string(stacks) + " stacks"
                              : wave  ? "waving spheres, " + std::to_string(wave) + " stacks"
                              : crowd ? "crowd, " + std::to_string(crowd) + " balls" : path;
-    std::printf("%s: %ld frames%s%s, %s\n", what.c_str(), frames, pairs ? ", pairs only" : "",
+    std::printf("%s: %ld frames%s%s%s, %s\n", what.c_str(), frames, pairs ? ", pairs only" : "",
+                image ? ", the image route (EGL, GPU resolve, compute coverage)" : "",
                 busy  ? ", 64 MB written and 200k integers sorted between frames"
                 : cold ? ", 64 MB written between frames"
                        : "",
                 threads == 1 ? "one thread" : threads == 0 ? "a thread per core" : (std::to_string(threads) + " threads").c_str());
     std::printf("frame: median %.4f ms, first quartile %.4f ms; boxes %.4f ms, exact %.4f ms (medians)\n", median(ms),
                 median(ms, 0.25), median(boxes), median(exact));
+    if (image)
+      std::printf("image route: views %.4f ms, stage calls %.4f ms (GL waits %.4f), readback %.4f ms (medians)\n",
+                  median(upload), median(calls), median(waits), median(readback));
     // The share of collide() outside the loops the lanes share (WorldStats::one_lane_ms): with
     // one thread, what bounds the frame of more (Amdahl).
     const double serial = median(one_lane);
@@ -159,6 +224,15 @@ int main(int argc, char** argv) {
                 threads == 1 ? (", so 8 threads take at least " + std::to_string(serial + (1.0 - serial) / 8.0).substr(0, 5) +
                                 "x one").c_str()
                              : "");
+    if (model) {
+      std::printf("lane model, %ld lanes: by the work's balance, a frame (poses and vertices set, collide()) at best %.3fx "
+                  "its one-thread time, collide() %.3fx (medians; the loops' spans and the steps between them)\n",
+                  model, median(modelled_frame), median(modelled));
+      std::printf("%-16s %8s %10s %10s %10s %8s %8s\n", "loop", "items", "work ms", "longest", "span ms", "work/L", "frames");
+      for (const LoopTimes& l : loops)
+        std::printf("%-16s %8.0f %10.4f %10.4f %10.4f %8.4f %8zu\n", l.step.c_str(), median(l.items), median(l.total),
+                    median(l.longest), median(l.span), median(l.total) / double(model), l.items.size());
+    }
     std::printf("contacts: %zu over the frames (%.1f a frame); last frame: %zu candidates, %zu node pairs\n", contacts,
                 double(contacts) / double(frames), world.stats().candidates, world.stats().node_pairs);
     return 0;

@@ -401,6 +401,65 @@ void Bvh::refit_nodes(const Aabb& exact) {
   ++changes_;
 }
 
+// Level by level from the root: each internal node of the frontier gives way to its children
+// (and joins the top) while the frontier holds fewer than `want`.
+std::size_t Bvh::plan_parts(std::size_t want) {
+  part_roots_.clear();
+  part_top_.clear();
+  if (nodes_.empty()) return 0;
+  part_roots_.push_back(0);
+  for (bool grew = true; grew && part_roots_.size() < want;) {  // a level at a time
+    grew = false;
+    const std::size_t level = part_roots_.size();
+    for (std::size_t k = 0; k < level && part_roots_.size() < want; ++k) {
+      const std::uint32_t n = part_roots_[k];
+      if (nodes_[n].leaf()) continue;
+      part_top_.push_back(n);
+      part_roots_[k] = n + 1;  // (its place taken by its first child; the other goes last)
+      part_roots_.push_back(nodes_[n].first);
+      grew = true;
+    }
+  }
+  std::sort(part_roots_.begin(), part_roots_.end());
+  std::sort(part_top_.begin(), part_top_.end(), std::greater<>());
+  part_sizes_.assign(part_roots_.size(), 0.0);
+  return part_roots_.size();
+}
+
+// A subtree is the nodes from its root to the last leaf of its rightmost path (depth-first
+// order, the second child's subtree last): swept from the back, children before parents.
+void Bvh::refit_part(std::size_t k) {
+  const std::uint32_t root = part_roots_[k];
+  std::uint32_t end = root;
+  while (!nodes_[end].leaf()) end = nodes_[end].first;
+  double size = 0.0;
+  for (std::size_t i = end + 1; i-- > root;) {
+    BvhNode& node = nodes_[i];
+    if (node.leaf()) continue;
+    FBox box = nodes_[i + 1].box;
+    box.merge(nodes_[node.first].box);
+    node.box = box;
+    size += extents(box);
+  }
+  part_sizes_[k] = size;
+}
+
+void Bvh::refit_top(const Aabb& exact) {
+  box_ = exact;
+  double size = 0.0;
+  for (const double s : part_sizes_) size += s;
+  for (const std::uint32_t i : part_top_) {  // (descending: children first)
+    BvhNode& node = nodes_[i];
+    FBox box = nodes_[i + 1].box;
+    box.merge(nodes_[node.first].box);
+    node.box = box;
+    size += extents(box);
+  }
+  size_ = size;
+  wide_fresh_ = false;
+  ++changes_;
+}
+
 void Bvh::refit(const std::vector<Vec3>& vertices, const std::vector<Tri>& triangles,
                 const std::vector<std::uint32_t>& changed) {
   if (nodes_.empty()) return;

@@ -213,7 +213,7 @@ void World::Impl::resident_image_pairs(const DetectOptions& opt, FrameResult& ou
   // cannot meet there is done: no contact.
   resident_regions.resize(resident_pairs.size());
   if (region_stacks.size() < frame_lanes) region_stacks.resize(frame_lanes);
-  parallel(resident_pairs.size(), frame_lanes, [&](std::size_t i, unsigned lane) {
+  parallel("regions", resident_pairs.size(), frame_lanes, [&](std::size_t i, unsigned lane) {
     const std::size_t p = resident_pairs[i];
     resident_regions[i] = opt.cull == Cull::box ? out.pairs[p].roi  // the paper's: the whole ROI
                                                 : contact_region(p, out.pairs[p].roi, region_stacks[lane]);

@@ -127,7 +127,7 @@ void load_vertices(Lanes& w, Body& b, BodyId id, const std::vector<Vec3>& vertic
 }  // namespace
 
 std::size_t World::Impl::vertex_parts(std::size_t n) const {
-  return n >= kSplitVertices && pool ? std::size_t(frame_lanes) : 1;
+  return n >= kSplitVertices && (pool || model_lanes) ? std::size_t(frame_lanes) : 1;
 }
 
 void World::set_vertices(BodyId id, const std::vector<Vec3>& vertices) {
@@ -277,6 +277,17 @@ const WorldStats& World::stats() const {
 ImageStage& World::stage() {
   PEELCD_WORLD_GUARD;
   return *impl_->stage;
+}
+void World::model_lanes(unsigned lanes) {
+  PEELCD_WORLD_GUARD;
+  impl_->model_lanes = lanes >= 2 ? std::min(lanes, Impl::kMaxModelLanes) : 0;
+  impl_->model_loops.clear();
+  impl_->model_done = true;
+  impl_->stats.model_ms = 0.0;
+}
+const std::vector<LaneLoop>& World::lane_loops() const {
+  PEELCD_WORLD_GUARD;
+  return impl_->model_loops;
 }
 void World::batch_image_pairs(std::optional<bool> together) {
   PEELCD_WORLD_GUARD;

@@ -15,42 +15,56 @@ namespace peelcd {
 void World::Impl::refit_pending(unsigned lanes, bool all) {
   refit_chunks.clear();
   refit_bodies.clear();
+  refit_parts.clear();
   for (Body& b : bodies) {
     if (!b.alive || !b.refit_pending || (!all && b.refit_deferred)) continue;
     b.refit_deferred = false;
-    const std::size_t parts = lanes > 1 && b.mesh.triangles.size() >= kSplitRefitTriangles ? lanes : 1;
+    const bool large = b.mesh.triangles.size() >= kSplitRefitTriangles;
+    const std::size_t chunks = lanes > 1 && large ? lanes : 1;
     const std::size_t nv = b.mesh.vertices.size(), nl = b.tree.leaves();
-    refit_bodies.push_back({&b, refit_chunks.size(), refit_chunks.size() + parts, false});
-    for (std::size_t k = 0; k < parts; ++k) {
+    refit_bodies.push_back({&b, refit_chunks.size(), refit_chunks.size() + chunks, false});
+    for (std::size_t k = 0; k < chunks; ++k) {
       if (b.points_loaded && b.points_rounded)  // rounded by set_vertices(): no vertex range
-        refit_chunks.push_back({refit_bodies.size() - 1, 0, 0, nl * k / parts, nl * (k + 1) / parts,
+        refit_chunks.push_back({refit_bodies.size() - 1, 0, 0, nl * k / chunks, nl * (k + 1) / chunks,
                                 k == 0 ? b.loaded_box : Aabb{}});
       else
         refit_chunks.push_back(
-            {refit_bodies.size() - 1, nv * k / parts, nv * (k + 1) / parts, nl * k / parts, nl * (k + 1) / parts, Aabb{}});
+            {refit_bodies.size() - 1, nv * k / chunks, nv * (k + 1) / chunks, nl * k / chunks, nl * (k + 1) / chunks, Aabb{}});
     }
+    const std::size_t parts = b.tree.plan_parts(large ? kRefitParts : 1);  // (whatever the lanes)
+    for (std::size_t k = parts; k-- > 0;) refit_parts.push_back({refit_bodies.size() - 1, k});  // (back to front, as refit_nodes)
   }
   if (refit_bodies.empty()) return;
   if (std::any_of(refit_chunks.begin(), refit_chunks.end(), [](const RefitChunk& c) { return c.vertex_begin < c.vertex_end; }))
-    parallel(refit_chunks.size(), lanes, [&](std::size_t k, unsigned) {  // the vertices rounded (unless loaded)
+    parallel("refit vertices", refit_chunks.size(), lanes, [&](std::size_t k, unsigned) {  // the vertices rounded (unless loaded)
       RefitChunk& c = refit_chunks[k];
       Body& b = *refit_bodies[c.body].body;
       if (c.vertex_begin < c.vertex_end) c.exact = b.tree.refit_vertices(b.mesh.vertices, c.vertex_begin, c.vertex_end);
     });
-  parallel(refit_chunks.size(), lanes, [&](std::size_t k, unsigned) {  // the leaves from them
+  parallel("refit leaves", refit_chunks.size(), lanes, [&](std::size_t k, unsigned) {  // the leaves from them
     const RefitChunk& c = refit_chunks[k];
     Body& b = *refit_bodies[c.body].body;
     b.tree.refit_leaves(b.mesh.vertices, c.leaf_begin, c.leaf_end);
   });
-  parallel(refit_bodies.size(), lanes, [&](std::size_t k, unsigned) {  // the nodes (or a build)
+  // The nodes, a large tree's in subtrees (the nodes last: the traversal that follows reads
+  // them; refitted with their leaves, subtree by subtree, a frame of the waving 1.3M-triangle
+  // spheres took 0.3 ms more on one thread).
+  parallel("refit nodes", refit_parts.size(), lanes, [&](std::size_t k, unsigned) {
+    refit_bodies[refit_parts[k].body].body->tree.refit_part(refit_parts[k].part);
+  });
+  refit_grown.clear();
+  for (std::size_t k = 0; k < refit_bodies.size(); ++k) {  // the nodes above the subtrees
     RefitBody& r = refit_bodies[k];
     Aabb exact;
     for (std::size_t c = r.first; c < r.last; ++c)
       exact.lo = exact.lo.cwiseMin(refit_chunks[c].exact.lo), exact.hi = exact.hi.cwiseMax(refit_chunks[c].exact.hi);
-    Bvh& tree = r.body->tree;
-    tree.refit_nodes(exact);
+    r.body->tree.refit_top(exact);
     r.body->refit_pending = r.body->points_loaded = false;
-    r.rebuilt = tree.rebuild_if_grown(r.body->mesh.vertices, r.body->mesh.triangles);
+    if (r.body->tree.growth() > kBvhRebuildGrowth) refit_grown.push_back(k);
+  }
+  parallel("rebuild", refit_grown.size(), lanes, [&](std::size_t k, unsigned) {  // grown past the limit: built again
+    RefitBody& r = refit_bodies[refit_grown[k]];
+    r.rebuilt = r.body->tree.rebuild_if_grown(r.body->mesh.vertices, r.body->mesh.triangles);
   });
   stats.full_refits += refit_bodies.size();
   for (const RefitBody& r : refit_bodies) stats.builds += r.rebuilt;
@@ -113,6 +127,8 @@ void World::Impl::collide_frame(const DetectOptions& opt, FrameResult& out) {
   out.reset_counters();
   stats.node_pairs = stats.candidates = stats.vertices_transformed = 0;
   loops_ms = 0.0;
+  model_start();
+  model_first = model_loops.size();
   const unsigned lanes = lanes_for(opt);
   frame_lanes = lanes;
   detail = opt.contacts;
@@ -148,6 +164,55 @@ void World::Impl::collide_frame(const DetectOptions& opt, FrameResult& out) {
   out.timings.total = ms_since(t_total);
   stats.loops_ms = loops_ms;
   stats.one_lane_ms = std::max(0.0, out.timings.total - loops_ms);
+  stats.model_ms = 0.0;
+  if (model_lanes) {
+    stats.model_ms = stats.one_lane_ms;
+    for (std::size_t k = model_first; k < model_loops.size(); ++k) stats.model_ms += model_loops[k].span_ms;
+  }
+  model_done = true;
+}
+
+// The lane model's replay of one loop (model_items: its items' times on this thread): `lanes`
+// lanes start on contiguous ranges of the items, front to back; a lane done with its range
+// takes the others' last items, back to front, trying the next lanes in turn (as
+// WorkerPool::for_each). The lane that is free first takes the next item. The span is the
+// time the last lane finishes.
+void World::Impl::model_loop(const char* step, unsigned lanes) {
+  const std::size_t n = model_items.size();
+  LaneLoop loop;
+  loop.step = step;
+  loop.items = n;
+  for (const double t : model_items) loop.total_ms += t, loop.longest_ms = std::max(loop.longest_ms, t);
+  struct Lane {
+    std::size_t front, back;
+    double t = 0.0;
+    bool done = false;
+  };
+  Lane ls[kMaxModelLanes];
+  lanes = std::min(lanes, kMaxModelLanes);
+  for (unsigned l = 0; l < lanes; ++l) ls[l] = Lane{n * l / lanes, n * (l + 1) / lanes};
+  for (;;) {
+    unsigned l = lanes;
+    for (unsigned k = 0; k < lanes; ++k)
+      if (!ls[k].done && (l == lanes || ls[k].t < ls[l].t)) l = k;
+    if (l == lanes) break;
+    Lane& me = ls[l];
+    if (me.front < me.back) {
+      me.t += model_items[me.front++];
+      continue;
+    }
+    me.done = true;
+    for (unsigned k = 1; k < lanes; ++k) {
+      Lane& victim = ls[(l + k) % lanes];
+      if (victim.front < victim.back) {
+        me.t += model_items[--victim.back];
+        me.done = false;
+        break;
+      }
+    }
+  }
+  for (unsigned l = 0; l < lanes; ++l) loop.span_ms = std::max(loop.span_ms, ls[l].t);
+  model_loops.push_back(loop);
 }
 
 // The broad phase: each body's box (its tree's root, moved by its pose; small rigid bodies
@@ -208,7 +273,7 @@ void World::Impl::copy_paired(const DetectOptions& opt, unsigned lanes) {
   if (to_copy.empty()) return;
   // The copies over the lanes, and the trees of those a traversal will read (in two pairs or
   // more: one pair of a body just copied is scanned, plan_tasks()).
-  parallel(to_copy.size(), lanes, [&](std::size_t c, unsigned) {
+  parallel("copy", to_copy.size(), lanes, [&](std::size_t c, unsigned) {
     Body& b = bodies[ids[to_copy[c]]];
     b.ensure_copy();
     if (pairs_of[to_copy[c]] >= 2) b.ensure_world_tree();
@@ -281,7 +346,7 @@ void World::Impl::keep_wide_views() {
 // Every task's candidates (self tasks: their contacts, each couple tested as the traversal
 // reaches it, adjacent couples dropped), over the lanes.
 void World::Impl::traverse(std::size_t used, unsigned lanes) {
-  parallel(used, lanes, [&](std::size_t k, unsigned lane) {
+  parallel("traverse", used, lanes, [&](std::size_t k, unsigned lane) {
     if (!untraversed.empty() && untraversed[tasks[k].pair]) {  // the image stage's alone (resident_image_pairs())
       Task& t = tasks[k];
       t.candidates.clear();
@@ -354,7 +419,7 @@ void World::Impl::route_pairs(const DetectOptions& opt, std::size_t used, FrameR
   const int tile = opt.resolution > 0 ? opt.resolution : opt.budget;
   to_image.assign(pairs.size(), 0);
   // Each pair on its own (over the lanes: a pile's thousands), the counts summed after.
-  parallel(pairs.size(), frame_lanes, [&](std::size_t p, unsigned) {
+  parallel("route", pairs.size(), frame_lanes, [&](std::size_t p, unsigned) {
     PairResult& r = out.pairs[p];
     std::vector<Contact> colliding = std::move(r.colliding);  // its storage reused frame to frame
     colliding.clear();
@@ -400,7 +465,7 @@ void World::Impl::route_pairs(const DetectOptions& opt, std::size_t used, FrameR
 
 // The exact path's tests over the same tasks (a self task's during its traversal).
 void World::Impl::test_candidates(const DetectOptions& opt, std::size_t used, unsigned lanes) {
-  parallel(used, lanes, [&](std::size_t k, unsigned lane) {
+  parallel("test", used, lanes, [&](std::size_t k, unsigned lane) {
     Task& t = tasks[k];
     if (t.candidates.empty() || to_image[t.pair]) return;
     const Body& a = bodies[ids[pairs[t.pair].first]];
@@ -529,7 +594,7 @@ void World::Impl::gather_contacts(FrameResult& out) {
       for (std::size_t k = first_task[p]; k < first_task[p + 1]; ++k) stats.vertices_transformed += tasks[k].transformed;
   }
   // The contacts, pair by pair over the lanes (each sorted: a pile's thousands of pairs).
-  parallel(pairs.size(), frame_lanes, [&](std::size_t p, unsigned lane) {
+  parallel("gather", pairs.size(), frame_lanes, [&](std::size_t p, unsigned lane) {
     PairResult& r = out.pairs[p];
     ContactSortScratch& scratch = lane_scratch[lane]->contacts;
     if (r.object_a == r.object_b) {
@@ -558,7 +623,7 @@ void World::Impl::relate(const DetectOptions& opt, FrameResult& out) {
   // read a mesh (made here on demand) after, on this thread.
   if (!relate_lanes.for_pairs)
     relate_lanes.for_pairs = [this](std::size_t n, const std::function<void(std::size_t)>& fn) {
-      parallel(n, frame_lanes, [&](std::size_t i, unsigned) { fn(i); });
+      parallel("relate", n, frame_lanes, [&](std::size_t i, unsigned) { fn(i); });
     };
   relate_pairs(
       out.pairs,

@@ -67,6 +67,10 @@ constexpr std::size_t kSplitNodePairsPerLane = 32;
 // A deforming body with this many triangles or more is refitted in one chunk per lane (under it,
 // the chunks cost more than the lanes save).
 constexpr std::size_t kSplitRefitTriangles = 32768;
+// Such a body's tree has its nodes refitted in about this many subtrees (Bvh::plan_parts),
+// whatever the lanes (the waving 1.3M-triangle spheres' nodes took 0.6 ms a body on one lane
+// after their leaves' 0.8 ms on eight: peelcd_world_loop --wave 570 --model 8).
+constexpr std::size_t kRefitParts = 64;
 
 struct Body {
   bool alive = false;
@@ -338,16 +342,18 @@ struct World::Impl {
   // fn(k) for k in [0, parts), one part a lane (parts <= the pool's lanes).
   template <class Fn>
   void in_parts(std::size_t parts, Fn&& fn) {
-    parallel(parts, unsigned(parts), [&](std::size_t k, unsigned) { fn(k); });
+    parallel("parts", parts, unsigned(parts), [&](std::size_t k, unsigned) { fn(k); });
   }
   unsigned lanes_for(const DetectOptions& opt) {
+    if (model_lanes) return model_lanes;  // planned for them, run here (model_loop())
     if (opt.threads == 1) return 1;
     if (!pool || (opt.threads != 0 && pool->lanes() != opt.threads)) pool = std::make_unique<WorkerPool>(opt.threads);
     return pool->lanes();
   }
-  // body(i, lane) for i in [0, n), spread over the pool's lanes when there are several.
+  // body(i, lane) for i in [0, n), spread over the pool's lanes when there are several. `step`
+  // names the loop for the lane model.
   template <class Fn>
-  void parallel(std::size_t n, unsigned lanes, Fn&& fn) {
+  void parallel(const char* step, std::size_t n, unsigned lanes, Fn&& fn) {
     if (stacks.size() < lanes) stacks.resize(lanes);
     if (self_stacks.size() < lanes) self_stacks.resize(lanes);
     while (lane_scratch.size() < lanes) lane_scratch.push_back(std::make_unique<LaneScratch>());
@@ -356,13 +362,37 @@ struct World::Impl {
       return;
     }
     const auto t0 = std::chrono::steady_clock::now();
-    if (lanes <= 1) {
+    if (model_lanes && lanes > 1) {
+      model_start();
+      model_items.resize(n);
+      auto t = t0;
+      for (std::size_t i = 0; i < n; ++i) {
+        fn(i, unsigned(i * lanes / n));  // (its lane's range: as for_each starts it)
+        const auto u = std::chrono::steady_clock::now();
+        model_items[i] = std::chrono::duration<double, std::milli>(u - t).count();
+        t = u;
+      }
+      model_loop(step, lanes);
+      model_loops.back().wall_ms = std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - t0).count();
+    } else if (lanes <= 1) {
       for (std::size_t i = 0; i < n; ++i) fn(i, 0u);
     } else {
       pool->for_each(n, fn);  // (a task or body keeps its lane from loop to loop and frame to frame)
     }
     loops_ms += std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - t0).count();
   }
+  // The lane model (World::model_lanes): 0 off, else the lanes every frame is planned for; each
+  // loop's item times (model_items) replayed on them as WorkerPool::for_each would run them.
+  unsigned model_lanes = 0;
+  static constexpr unsigned kMaxModelLanes = 256;
+  std::vector<double> model_items;
+  std::vector<LaneLoop> model_loops;  // since the last collide() returned (World::lane_loops())
+  bool model_done = true;             // a collide() returned since the last loop: model_loops is past
+  std::size_t model_first = 0;        // this collide()'s first loop in model_loops
+  void model_start() {
+    if (model_done) model_loops.clear(), model_done = false;
+  }
+  void model_loop(const char* step, unsigned lanes);
   double loops_ms = 0.0;  // this frame's time in parallel()'s loops (WorldStats::loops_ms)
 
   // The deferred whole-tree refits (World::set_vertices, many moved vertices): every pending
@@ -373,6 +403,9 @@ struct World::Impl {
     std::size_t vertex_begin, vertex_end, leaf_begin, leaf_end;
     Aabb exact;          // the exact box of its vertices the triangles use
   };
+  struct RefitPart {  // a subtree of a body's tree (Bvh::plan_parts)
+    std::size_t body, part;
+  };
   struct RefitBody {
     Body* body;
     std::size_t first, last;  // its chunks in refit_chunks
@@ -380,6 +413,8 @@ struct World::Impl {
   };
   std::vector<RefitChunk> refit_chunks;
   std::vector<RefitBody> refit_bodies;
+  std::vector<RefitPart> refit_parts;
+  std::vector<std::size_t> refit_grown;  // refit_bodies whose trees grew past kBvhRebuildGrowth
   // The pending refits of the bodies that need their trees this frame (`all`: every body; else
   // those not refit_deferred).
   void refit_pending(unsigned lanes, bool all = true);

@@ -248,6 +248,52 @@ TEST_CASE("Bvh: a refit in ranges (as the World splits it over threads) equals a
   }
 }
 
+TEST_CASE("Bvh: a refit of the nodes by subtrees (plan_parts, refit_part, refit_top) equals a whole refit, whatever the parts", "[bvh]") {
+  Mesh m = make_uv_sphere(Vec3(0, 0, 0), 1.0, 30, 34);
+  Bvh whole;
+  whole.build(m.vertices, m.triangles);
+  Mesh moved = m;
+  for (Vec3& v : moved.vertices) v = 0.8 * v + Vec3(0.3 * v.y(), 0.1, -0.2 * v.x() * v.x());
+  whole.refit(moved.vertices, moved.triangles);
+  double growth_of_64 = -1.0;
+  for (const std::size_t want : {std::size_t(1), std::size_t(2), std::size_t(7), std::size_t(64), std::size_t(100000)}) {
+    CAPTURE(want);
+    Bvh split;
+    split.build(m.vertices, m.triangles);
+    const Aabb exact = split.refit_vertices(moved.vertices, 0, moved.vertices.size());
+    const std::size_t parts = split.plan_parts(want);
+    REQUIRE(parts >= 1);
+    REQUIRE(parts <= std::max<std::size_t>(want, 1));
+    if (want > 1) REQUIRE(parts >= std::min(want, split.leaves()) / 2);  // a level at a time: at least half
+    split.refit_leaves(moved.vertices, 0, split.leaves());
+    for (std::size_t k = parts; k-- > 0;) split.refit_part(k);  // (any order)
+    split.refit_top(exact);
+    for (std::size_t i = 0; i < whole.nodes().size(); ++i) {
+      REQUIRE(split.nodes()[i].box.aabb().lo == whole.nodes()[i].box.aabb().lo);
+      REQUIRE(split.nodes()[i].box.aabb().hi == whole.nodes()[i].box.aabb().hi);
+    }
+    CHECK(split.box().lo == bounds(moved).lo);
+    CHECK(split.box().hi == bounds(moved).hi);
+    CHECK(split.growth() == Approx(whole.growth()).epsilon(1e-12));
+    for (std::uint32_t t = 0; t < moved.triangles.size(); ++t) {
+      const FBox want_box = FBox::enclosing(triangle_bounds(moved, t)), got = split.triangle_box(t);
+      for (int k = 0; k < 3; ++k) REQUIRE((got.lo[k] == want_box.lo[k] && got.hi[k] == want_box.hi[k]));
+    }
+    if (want == 64) {  // the same parts give the same sums, bit for bit
+      Bvh again;
+      again.build(m.vertices, m.triangles);
+      const Aabb e = again.refit_vertices(moved.vertices, 0, moved.vertices.size());
+      REQUIRE(again.plan_parts(64) == parts);
+      again.refit_leaves(moved.vertices, 0, again.leaves());
+      for (std::size_t k = 0; k < parts; ++k) again.refit_part(k);
+      again.refit_top(e);
+      growth_of_64 = split.growth();
+      CHECK(again.growth() == growth_of_64);
+    }
+  }
+  CHECK(growth_of_64 > 0.0);  // (set: the check above ran)
+}
+
 TEST_CASE("Bvh: vertices loaded in ranges (checked, rounded, copied: the World's set_vertices) refit as a whole refit does", "[bvh]") {
   // Large enough (past 65,536 vertices) for the streamed stores and the prefetches.
   Mesh m = make_uv_sphere(Vec3(0, 0, 0), 1.0, 200, 400);

@@ -208,6 +208,45 @@ TEST_CASE("World: the same contacts on 1, 2 and 5 threads", "[world]") {
   CHECK(got[2] == got[0]);
 }
 
+TEST_CASE("World: a large deforming body refitted by subtrees gives the same contacts and builds on 1 and 3 threads", "[world]") {
+  // Over kSplitRefitTriangles: its tree is refitted in subtrees over the lanes (Bvh::plan_parts),
+  // its vertices loaded in parts; a wave grows its tree until it is built again.
+  const Mesh sphere = make_uv_sphere(Vec3::Zero(), 1.0, 130, 132);
+  REQUIRE(sphere.triangles.size() >= 32768);
+  auto ball = std::make_shared<const Mesh>(make_uv_sphere(Vec3::Zero(), 0.4, 16, 24));
+  std::vector<std::vector<std::uint64_t>> got;
+  std::vector<std::size_t> builds;
+  for (const unsigned threads : {1u, 3u}) {
+    World world;
+    const BodyId s = world.add_deforming(sphere);
+    world.add_rigid(ball, pose(0.2, Vec3(0, 1, 1), Vec3(0.9, 0.1, 0.0)));
+    DetectOptions opt;
+    opt.stage = Stage::exact;
+    opt.threads = threads;
+    std::vector<std::uint64_t> all;
+    Mesh m = sphere;
+    for (int f = 0; f < 6; ++f) {
+      for (std::size_t v = 0; v < m.vertices.size(); ++v) {
+        const Vec3& p = sphere.vertices[v];
+        m.vertices[v] = p * (1.0 + 0.08 * f * std::sin(7.0 * p.z() + f));
+      }
+      world.set_vertices(s, m.vertices);
+      const FrameResult& r = world.collide(opt);
+      for (const PairResult& p : r.pairs) {
+        const std::vector<std::uint64_t> k = keys(p);
+        all.push_back(k.size());
+        all.insert(all.end(), k.begin(), k.end());
+      }
+    }
+    got.push_back(all);
+    builds.push_back(world.stats().builds);
+  }
+  REQUIRE(got[0].size() > 6);
+  CHECK(got[1] == got[0]);
+  CHECK(builds[1] == builds[0]);
+  CHECK(builds[0] > 2);  // (built again as the wave grew its boxes: the rebuild's loop ran)
+}
+
 TEST_CASE("World: a pile's pairs, routes and relations the same on 1, 2 and 5 threads", "[world]") {
   // Many pairs: the broad phase, routing and relations run over the lanes. A row of touching
   // balls (rigid and deforming) relates from its contacts; a ball inside a large sphere has
@@ -225,8 +264,9 @@ TEST_CASE("World: a pile's pairs, routes and relations the same on 1, 2 and 5 th
   };
   std::vector<std::vector<Pair>> got;
   BodyId big = 0, inner = 0;
-  for (const unsigned threads : {1u, 2u, 5u}) {
+  for (const unsigned threads : {1u, 2u, 5u, 0u}) {  // (0: one thread, the lane model planning for 5)
     World world;
+    if (threads == 0) world.model_lanes(5);
     std::vector<BodyId> row;
     for (int k = 0; k < 24; ++k) {
       const Eigen::Affine3d at = pose(0.3 * k, Vec3(1, 2, 3), Vec3(0.95 * (k % 6), 0.95 * (k / 6), 0.02 * (k % 3)));
@@ -242,7 +282,7 @@ TEST_CASE("World: a pile's pairs, routes and relations the same on 1, 2 and 5 th
     inner = world.add_rigid(ball, pose(0.4, Vec3(1, 0, 0), Vec3(20.2, 0.1, 0)));
     DetectOptions opt;
     opt.stage = Stage::exact;
-    opt.threads = threads;
+    opt.threads = threads == 0 ? 1 : threads;
     std::vector<Pair> frames;
     for (int f = 0; f < 2; ++f) {  // the second frame moves the rigid balls of the row
       if (f == 1)
@@ -250,13 +290,33 @@ TEST_CASE("World: a pile's pairs, routes and relations the same on 1, 2 and 5 th
           if (k % 4 != 3)
             world.set_pose(row[k], pose(0.3 * k + 0.1, Vec3(1, 2, 3), Vec3(0.95 * (k % 6) + 0.01, 0.95 * (k / 6), 0.0)));
       const FrameResult& r = world.collide(opt);
-      for (const PairResult& p : r.pairs) frames.push_back({p.object_a, p.object_b, p.relation, p.candidates, keys(p)});
+      for (const PairResult& p : r.pairs) frames.push_back({BodyId(p.object_a), BodyId(p.object_b), p.relation, p.candidates, keys(p)});
+      if (threads == 0) {  // the model's loops: each span between the work's share of a lane and the work
+        REQUIRE(world.lane_loops().size() >= 4);
+        double spans = 0.0;
+        for (const LaneLoop& l : world.lane_loops()) {
+          CAPTURE(l.step, l.items, l.total_ms, l.longest_ms, l.span_ms);
+          CHECK(l.items >= 2);
+          CHECK(l.longest_ms <= l.total_ms);
+          CHECK(l.span_ms >= l.longest_ms);
+          CHECK(l.span_ms >= l.total_ms / 5.0 * (1.0 - 1e-9));
+          CHECK(l.span_ms <= l.total_ms * (1.0 + 1e-9));
+          CHECK(l.wall_ms >= l.total_ms);
+          spans += l.span_ms;
+        }
+        CHECK(world.stats().model_ms >= spans);
+        CHECK(world.stats().model_ms <= r.timings.total);
+      } else {
+        CHECK(world.lane_loops().empty());
+        CHECK(world.stats().model_ms == 0.0);
+      }
     }
     got.push_back(frames);
   }
   REQUIRE(got[0].size() > 60);
   CHECK(got[1] == got[0]);
   CHECK(got[2] == got[0]);
+  CHECK(got[3] == got[0]);
   std::size_t crossing = 0, inside = 0;
   for (const Pair& p : got[0]) {
     crossing += p.relation == Relation::crossing;

@@ -171,6 +171,15 @@ class Bvh {
   Aabb refit_vertices(const std::vector<Vec3>& vertices, std::size_t begin, std::size_t end);
   void refit_leaves(const std::vector<Vec3>& vertices, std::size_t begin, std::size_t end);
   void refit_nodes(const Aabb& exact);
+  // The third step split by subtrees, for threads: plan_parts(want) picks about `want`
+  // disjoint subtrees (one, the whole tree, for want <= 1; fewer in a small tree) and returns
+  // their count; refit_part(k) refits subtree k's internal nodes (parts may run concurrently,
+  // after every leaf's refit); refit_top() then the nodes above them, as refit_nodes(exact)
+  // would. The same `want` gives the same parts whatever the threads, so growth() sums in the
+  // same order.
+  std::size_t plan_parts(std::size_t want);
+  void refit_part(std::size_t k);
+  void refit_top(const Aabb& exact);
   // The first step for vertices that are not yet the tree's (a caller that checks new vertices
   // and keeps them in one pass over them): each vertex of [begin, end) of `vertices` checked
   // finite, rounded as refit_vertices() rounds it and, with `copy`, copied to copy[v]; at the
@@ -284,6 +293,10 @@ class Bvh {
   std::vector<std::uint32_t> stack_;    // scratch of the partial refit
   std::size_t depth_ = 0;
   double size_ = 0.0, size_at_build_ = 0.0;  // growth()'s sums
+  // plan_parts(): the subtrees' roots (ascending), their summed extents, the nodes above
+  // them (descending).
+  std::vector<std::uint32_t> part_roots_, part_top_;
+  std::vector<double> part_sizes_;
 };
 
 // B's frame into A's, for the traversal of two trees: p_a = linear * p_b + translation. With

@@ -65,10 +65,25 @@ struct WorldStats {
   // thread alone (the whole frame: one_lane_ms + loops_ms, the image stage's work included in
   // one_lane_ms). With T threads a frame takes at least one_lane_ms + loops_ms / T.
   double loops_ms = 0.0, one_lane_ms = 0.0;
+  // With the lane model on (World::model_lanes(L)): the last frame as L lanes would take it, from
+  // its items' times on one thread: one_lane_ms + each loop's span (LaneLoop::span_ms). A bound
+  // from the work's balance alone (no wake-ups, no memory shared by the lanes). 0 when off.
+  double model_ms = 0.0;
   // Routes timed (World::time_routes()): frames whose pairs all went to the image route, and
   // whether the last frame belonged to a comparison of the two routes rather than to a choice.
   std::size_t image_route_frames = 0;
   bool route_comparing = false;
+};
+
+// A loop of the last frame over pairs, tasks or bodies as the lane model timed it
+// (World::model_lanes()): its items' summed and longest times on one thread, and its span: the
+// time L lanes take to run them in the order WorkerPool::for_each gives them (contiguous ranges,
+// then the others' last items), each item taking its measured time.
+struct LaneLoop {
+  const char* step = "";  // the frame's step ("traverse", "test", ...)
+  std::size_t items = 0;
+  double total_ms = 0.0, longest_ms = 0.0, span_ms = 0.0;
+  double wall_ms = 0.0;  // the loop on this thread, its clocks and replay included
 };
 
 class World {
@@ -133,6 +148,16 @@ class World {
 
   const WorldStats& stats() const;
   ImageStage& stage();
+
+  // Measurement (peelcd_world_loop --model L): with lanes >= 2, each frame is planned for `lanes`
+  // lanes (as DetectOptions::threads = lanes plans it) but runs on the calling thread, each item
+  // of its loops timed, and WorldStats::model_ms and lane_loops() say what `lanes` lanes would
+  // take by the work's balance: how much of a frame's scaling its uneven items cost, measurable
+  // on a machine with fewer cores. 0 or 1: off (the default). The frame's results are the same.
+  void model_lanes(unsigned lanes);
+  // The loops under the lane model since the collide() before the last one returned, in order:
+  // set_vertices()'s splits of a large body's vertices, then the last frame's (empty when off).
+  const std::vector<LaneLoop>& lane_loops() const;
 
   // The pairs routed to the image stage go to it together, in one frame of the stage (one batch
   // of views and a sync, where one at a time costs a sync a pair: the faster on a GPU), or one
