@@ -575,9 +575,17 @@ BvhRelation BvhRelation::between(const Eigen::Affine3d& pose_a, const Eigen::Aff
 
 void bvh_split(const Bvh& a, const Bvh& b, const BvhRelation& rel, std::size_t tasks,
                std::vector<BvhNodePair>& out) {
+  BvhSplitScratch scratch;
+  bvh_split(a, b, rel, tasks, out, scratch);
+}
+
+void bvh_split(const Bvh& a, const Bvh& b, const BvhRelation& rel, std::size_t tasks,
+               std::vector<BvhNodePair>& out, BvhSplitScratch& scratch) {
   out.clear();
   if (a.empty() || b.empty()) return;
-  std::vector<BvhNodePair> level{{0u, 0u}}, next;
+  std::vector<BvhNodePair>& level = scratch.level;
+  std::vector<BvhNodePair>& next = scratch.next;
+  level.assign(1, BvhNodePair{0u, 0u});
   const auto& na = a.nodes();
   const auto& nb = b.nodes();
   while (!level.empty() && out.size() + level.size() < tasks) {

@@ -317,7 +317,7 @@ std::size_t World::Impl::plan_tasks(unsigned lanes) {
       if (lanes > 1 && pairs.size() < kSplitPairsPerLane * std::size_t(lanes) && a.tree_current() && b.tree_current() &&
           a.local().triangles.size() + b.local().triangles.size() >= kSplitTriangles)
         bvh_split(a.frame_tree(), b.frame_tree(), BvhRelation::between(a.frame_pose(), b.frame_pose()),
-                  kSplitNodePairsPerLane * std::size_t(lanes), split);
+                  kSplitNodePairsPerLane * std::size_t(lanes), split, split_scratch);
       else
         split.assign(1, BvhNodePair{0u, 0u});
     }

@@ -375,6 +375,13 @@ struct BvhStackEntry {
 // disjoint dropped, the leaf pairs appended to `tasks_out` like any other).
 void bvh_split(const Bvh& a, const Bvh& b, const BvhRelation& rel, std::size_t tasks,
                std::vector<BvhNodePair>& tasks_out);
+// The same with the walk's levels kept in `scratch` (a caller that splits every frame: no
+// allocation once they have grown).
+struct BvhSplitScratch {
+  std::vector<BvhNodePair> level, next;
+};
+void bvh_split(const Bvh& a, const Bvh& b, const BvhRelation& rel, std::size_t tasks,
+               std::vector<BvhNodePair>& tasks_out, BvhSplitScratch& scratch);
 
 // The pair traversals over these trees (bvh_traverse(), bvh_traverse_same_frame(),
 // bvh_self_traverse()) are the library's own: core/exact/bvh_traverse.h.
