@@ -188,7 +188,8 @@ std::vector<Command> add_bench_commands(CLI::App& app) {
       ->check(CLI::Range(0, 64))->capture_default_str();
   benchmark->add_option("--scaling", be.scaling, "Time the default World row again with N threads, side by side with "
                                                   "the others on the same frames, then the two World rows alone over the "
-                                                  "frames, alternating, and print the ratio of each")
+                                                  "frames, alternating, and print the ratio of each; with --threads 1, "
+                                                  "also the ratio the work's balance alone allows N lanes (the lane model)")
       ->check(CLI::Range(1, 64));
   benchmark->add_flag("--time-routes", be.time_routes,
                       "Time the World's two routes under stage auto on any stage (World::time_routes(true)); by "

@@ -223,6 +223,7 @@ class SuiteRun {
   std::size_t scaling_ = 0;  // the default World row with Suite::scaling_threads (0: none)
   std::size_t pairs_ = 0;    // the default World row asking for pairs only
   std::vector<double> alone_ms_[2];  // scaling_pass(): the default row, the scaling row
+  std::vector<double> modelled_;     // scaling_pass(): the lane model's frame / the frame, per frame
   std::vector<Object> objects_;
   std::string csv_;
   std::size_t rois_ = 0, rois_exact_ = 0, world_candidates_ = 0, triangles_ = 0;
@@ -462,6 +463,23 @@ void SuiteRun::scaling_pass() {
       alone_ms_[i].push_back(pair[i]->result.timings.total);
     }
   }
+  // Then the default row's World under the lane model (World::model_lanes): planned for the
+  // scaling row's threads, run on one, its loops replayed on them: what the work's balance alone
+  // allows, to hold the measured ratio against.
+  Row& base = rows_[0];
+  if (threads_ != 1 || suite_.scaling_threads < 2) return;
+  base.world->model_lanes(suite_.scaling_threads);
+  suite_.frame(0, objects_);
+  run_peelcd(base);
+  for (std::size_t f = 0; f < suite_.frames; ++f) {
+    suite_.frame(f, objects_);
+    run_peelcd(base);
+    double wall = 0.0, span = 0.0;
+    for (const LaneLoop& l : base.world->lane_loops()) wall += l.wall_ms, span += l.span_ms;
+    const double total = base.result.timings.total;  // (the bodies brought to the frame included)
+    if (total > 0.0) modelled_.push_back((total - wall + span) / total);
+  }
+  base.world->model_lanes(0);
 }
 
 void SuiteRun::print_table(bool heap_kept) const {
@@ -528,6 +546,10 @@ void SuiteRun::print_table(bool heap_kept) const {
     std::printf("scaling: the default World with %u threads / with %u, the two alone after the side-by-side frames, "
                 "alternating frame by frame: %.2f (medians %.2f / %.2f ms); side by side with the others (the table): %.2f\n",
                 suite_.scaling_threads, threads_, many / one, many, one, med[scaling_] / med[0]);
+    if (!modelled_.empty())
+      std::printf("scaling by the work's balance alone: %.3f (median; the default World planned for %u lanes, run on one "
+                  "thread with its loops' items timed and replayed on %u lanes: World::model_lanes)\n",
+                  median(modelled_), suite_.scaling_threads, suite_.scaling_threads);
   }
   print_audit(med);
 }

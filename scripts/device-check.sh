@@ -12,7 +12,8 @@
 #      the router's default rows and the image stage forced side by side with the CPU peers, and
 #      the image-work table (host work, GL waits, GPU passes by timer queries, bytes, candidates);
 #      on a machine with 9 or more cores, the large scenes' benches also time the World with 8
-#      threads against one (--scaling 8: side by side, then the two alone, alternating);
+#      threads against one (--scaling 8: side by side, then the two alone, alternating, and the
+#      lane model's bound for 8 lanes by the work's balance, to hold the measured ratio against);
 #   5. peelcd calibrate --backend egl --write-costs (the router's cost models of this device and
 #      the faster conservative coverage, raster or compute, in the record as costs.json), then
 #      detect routing by them.

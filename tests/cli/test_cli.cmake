@@ -415,7 +415,7 @@ expect("bench" 0 "threads: 1 for every method.*World, stage auto.*exact CPU path
 expect("bench spheres" 0 "spheres .1680 triangles each., 2 frames, 2 objects.*World, stage auto. +[0-9.]+ +[0-9.]+ +0.00%" bench spheres --stacks 21 --frames 2 --short)
 expect("bench spheres-wave" 0 "World, stage auto. +[0-9.]+ +[0-9.]+ +0.00% +0 .*FCL 0.7, deforming refit" bench spheres-wave --stacks 21 --frames 2 --short)
 expect("bench crowd" 0 "crowd, 1 frames, 8 objects.*CGAL, cropped" bench crowd --objects 8 --frames 1)
-expect("bench --scaling" 0 "peelcd default, 2 threads +[0-9.]+ +[0-9.]+ +0.00% +0 .*scaling: the default World with 2 threads / with 1, the two alone after the side-by-side frames, alternating frame by frame: [0-9.]+ \\(medians [0-9.]+ / [0-9.]+ ms\\); side by side with the others \\(the table\\): [0-9.]+"
+expect("bench --scaling" 0 "peelcd default, 2 threads +[0-9.]+ +[0-9.]+ +0.00% +0 .*scaling: the default World with 2 threads / with 1, the two alone after the side-by-side frames, alternating frame by frame: [0-9.]+ \\(medians [0-9.]+ / [0-9.]+ ms\\); side by side with the others \\(the table\\): [0-9.]+.*scaling by the work's balance alone: 0\\.[0-9]+ \\(median; the default World planned for 2 lanes"
        bench spheres-wave --stacks 21 --frames 2 --short --threads 1 --scaling 2)
 # The World's timed routes forced on (OSMesa with the GPU's resolve: the resident route, batched):
 # the default rows warmed until they chose, every frame exact. The image route is some 50x the
