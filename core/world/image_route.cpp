@@ -354,8 +354,10 @@ void World::Impl::resident_image_pairs(const DetectOptions& opt, FrameResult& ou
     peeled_resident[p] = 1;
     if (exhaustive) {  // the tree's candidates: the pair's
       if (!untraversed.empty() && untraversed[p]) {
-        refit_now(bodies[ids[pairs[p].first]]);  // (a refit put off: its single task starts at the roots)
-        refit_now(bodies[ids[pairs[p].second]]);
+        for (const std::size_t i : {pairs[p].first, pairs[p].second}) {
+          refit_now(bodies[ids[i]]);  // (a refit put off: its single task starts at the roots)
+          bodies[ids[i]].ensure_world_tree();  // (a copy drawn only had none made: copy_paired())
+        }
         std::size_t count = 0;
         for (std::size_t k = first_task[p]; k < first_task[p + 1]; ++k) {
           traverse_task(k, 0);

@@ -282,6 +282,7 @@ struct World::Impl {
   std::vector<BvhNodePair> split;
   BvhSplitScratch split_scratch;  // plan_tasks()' bvh_split()
   std::vector<std::size_t> to_copy;     // copy_paired(): the bodies (ids) copied this frame
+  std::vector<char> drawn_only;         // copy_paired(): bodies (ids) whose pairs the resident route draws, all
   std::vector<std::uint32_t> pairs_of;  // plan_tasks(): per body of the frame (ids), its pairs with others
   // Per lane, each on its own cache line (a traversal writes its stack's size at every push).
   template <class T>

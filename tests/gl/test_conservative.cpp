@@ -561,6 +561,57 @@ TEST_CASE("the World's batched image pairs: drawn from resident shapes and movin
                                                  posed(*shapes[p.object_b % 3], pose_of(int(p.object_b), 0.3))));
 }
 
+TEST_CASE("the World's resident image route: small bodies in many pairs are copied without trees, every contact exact", "[conservative][batch][world]") {
+  // A 3x3x2 block of small rigid balls, each overlapping its neighbours (4 pairs or more: copied
+  // into world space each frame they move), turning every frame, Stage::image, batched: their
+  // copies give exact boxes (pairs dropped as on the exact path) but no tree is made (none is
+  // traversed); the contacts are the exact reference's and the pairs the exact path's.
+  auto ball = std::make_shared<const Mesh>(make_uv_sphere(Vec3::Zero(), 0.62, 10, 18));
+  const auto pose_of = [](int i, int frame) {
+    Eigen::Affine3d p = Eigen::Affine3d::Identity();
+    p.translate(Vec3(1.0 * (i % 3) + 0.013 * frame, 1.0 * ((i / 3) % 3), 1.0 * (i / 9)));
+    p.rotate(Eigen::AngleAxisd(0.4 * i + 0.21 * frame, Vec3(1, 2, 3).normalized()));
+    return p;
+  };
+  gl::GlOptions go;
+  go.resolve = Resolve::gpu;
+  World image(make_image_stage(test_backend(), go));
+  image.batch_image_pairs(true);
+  World exact;
+  std::vector<BodyId> ids;
+  for (int i = 0; i < 18; ++i) {
+    ids.push_back(image.add_rigid(ball, pose_of(i, 0)));
+    exact.add_rigid(ball, pose_of(i, 0));
+  }
+  DetectOptions io, eo;
+  io.stage = Stage::image;
+  eo.stage = Stage::exact;
+  std::size_t touching = 0;
+  for (int frame = 1; frame < 4; ++frame) {
+    INFO("frame " << frame);
+    for (int i = 0; i < 18; ++i) {
+      image.set_pose(ids[std::size_t(i)], pose_of(i, frame));
+      exact.set_pose(ids[std::size_t(i)], pose_of(i, frame));
+    }
+    const FrameResult& f = image.collide(io);
+    const FrameResult& e = exact.collide(eo);
+    CHECK(image.stats().node_pairs == 0);  // untraversed
+    REQUIRE(f.pairs.size() == e.pairs.size());  // the copies' exact boxes drop the same pairs
+    for (std::size_t k = 0; k < f.pairs.size(); ++k) {
+      const PairResult& p = f.pairs[k];
+      INFO("pair " << p.object_a << "-" << p.object_b);
+      CHECK(p.object_a == e.pairs[k].object_a);
+      CHECK(p.object_b == e.pairs[k].object_b);
+      CHECK_FALSE(p.exact_stage);
+      CHECK(couples_of(p) == couples_of(e.pairs[k]));
+      CHECK(couples_of(p) ==
+            exact_colliding_pairs(posed(*ball, pose_of(int(p.object_a), frame)), posed(*ball, pose_of(int(p.object_b), frame))));
+      touching += !p.colliding.empty();
+    }
+  }
+  CHECK(touching >= 60);
+}
+
 TEST_CASE("the World's resident image route under random poses, sheared and scaled: every contact", "[conservative][world]") {
   // Two rigid shapes under random affine poses (rotation, non-uniform scale, shear), Stage::image
   // batched: each frame's region (the trees' meeting node pairs) must hold every contact, which
