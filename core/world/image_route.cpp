@@ -322,15 +322,12 @@ void World::Impl::resident_image_pairs(const DetectOptions& opt, FrameResult& ou
     copy_stage_counters(stage->counters, inner);
   }
 
-  // Per pair: its views' PCS united, sorted, unique, as candidates.
+  // Per pair: its views' counters, then (over the lanes) its views' PCS united, sorted, unique,
+  // as candidates; a pair with a view the stage could not resolve is traversed after, here.
   const auto t_pcs = Clock::now();
+  resident_exhaustive.assign(n, 0);
   for (std::size_t i = 0; i < n; ++i) {
-    const std::size_t p = resident_pairs[i];
-    PairResult& r = out.pairs[p];
-    const Body& a = bodies[ids[pairs[p].first]];
-    const Body& b = bodies[ids[pairs[p].second]];
-    resident_pcs.clear();
-    bool exhaustive = false;
+    PairResult& r = out.pairs[resident_pairs[i]];
     for (std::size_t j = resident_job_first[i]; j < resident_job_first[i + 1]; ++j) {
       const PeelResult& one = resident_peeled[j];
       ++inner.rois_peeled;
@@ -339,54 +336,62 @@ void World::Impl::resident_image_pairs(const DetectOptions& opt, FrameResult& ou
       if (one.exhaustive) {
         ++inner.views_exhaustive;
         ++r.views_exhaustive;
-        exhaustive = true;
+        resident_exhaustive[i] = 1;
       }
       r.layers = std::max(r.layers, one.layers);
       r.passes += one.peel_passes;
-      resident_pcs.insert(resident_pcs.end(), one.pcs.begin(), one.pcs.end());
     }
-    resident_keys.clear();
-    for (const IdPair& c : resident_pcs) resident_keys.push_back(pack_pair(c.a, c.b));
-    sort_unique_pairs(resident_keys, resident_scratch);
-    r.pcs_count = resident_keys.size();
+  }
+  parallel("pcs", n, frame_lanes, [&](std::size_t i, unsigned lane) {
+    const std::size_t p = resident_pairs[i];
+    PairResult& r = out.pairs[p];
+    const Body& a = bodies[ids[pairs[p].first]];
+    const Body& b = bodies[ids[pairs[p].second]];
+    LaneScratch& ls = *lane_scratch[lane];
+    std::vector<std::uint64_t>& keys = ls.pcs_keys;
+    keys.clear();
+    for (std::size_t j = resident_job_first[i]; j < resident_job_first[i + 1]; ++j)
+      for (const IdPair& c : resident_peeled[j].pcs) keys.push_back(pack_pair(c.a, c.b));
+    sort_unique_pairs(keys, ls.sorted);
+    r.pcs_count = keys.size();
     r.exact_stage = false;
     to_image[p] = 0;
     peeled_resident[p] = 1;
-    if (exhaustive) {  // the tree's candidates: the pair's
-      if (!untraversed.empty() && untraversed[p]) {
-        for (const std::size_t i : {pairs[p].first, pairs[p].second}) {
-          refit_now(bodies[ids[i]]);  // (a refit put off: its single task starts at the roots)
-          bodies[ids[i]].ensure_world_tree();  // (a copy drawn only had none made: copy_paired())
-        }
-        std::size_t count = 0;
-        for (std::size_t k = first_task[p]; k < first_task[p + 1]; ++k) {
-          traverse_task(k, 0);
-          count += tasks[k].candidates.size();
-        }
-        r.candidates = count;
-      }
-      continue;
-    }
+    if (resident_exhaustive[i]) return;  // (below)
     if (first_task[p] == first_task[p + 1]) {  // no node pair of its trees overlaps: no contact
       r.candidates = 0;
-      continue;
+      return;
     }
     for (std::size_t k = first_task[p] + 1; k < first_task[p + 1]; ++k) tasks[k].candidates.clear();
     std::vector<std::uint64_t>& candidates = tasks[first_task[p]].candidates;
     if (opt.ids == IdMode::unique) {  // an ID is its triangle
-      for (const std::uint64_t k : resident_keys)
+      for (const std::uint64_t k : keys)
         if (pair_a(k) >= a.local().triangles.size() || pair_b(k) >= b.local().triangles.size())
           throw std::out_of_range("peelcd::World: triangle ID out of range");
-      candidates.assign(resident_keys.begin(), resident_keys.end());
+      candidates.assign(keys.begin(), keys.end());
     } else {
-      resident_pcs.clear();
-      for (const std::uint64_t k : resident_keys) resident_pcs.push_back(IdPair{pair_a(k), pair_b(k)});
-      resident_map_a.rebuild(a.local(), opt.ids);
-      resident_map_b.rebuild(b.local(), opt.ids);
+      ls.pcs.clear();
+      for (const std::uint64_t k : keys) ls.pcs.push_back(IdPair{pair_a(k), pair_b(k)});
+      ls.map_a.rebuild(a.local(), opt.ids);
+      ls.map_b.rebuild(b.local(), opt.ids);
       candidates.clear();
-      expand_pcs(resident_pcs, resident_map_a, resident_map_b, candidates, resident_scratch);
+      expand_pcs(ls.pcs, ls.map_a, ls.map_b, candidates, ls.sorted);
     }
     r.candidates = candidates.size();
+  });
+  for (std::size_t i = 0; i < n; ++i) {  // the tree's candidates for a view not resolved
+    const std::size_t p = resident_pairs[i];
+    if (!resident_exhaustive[i] || untraversed.empty() || !untraversed[p]) continue;
+    for (const std::size_t b : {pairs[p].first, pairs[p].second}) {
+      refit_now(bodies[ids[b]]);  // (a refit put off: its single task starts at the roots)
+      bodies[ids[b]].ensure_world_tree();  // (a copy drawn only had none made: copy_paired())
+    }
+    std::size_t count = 0;
+    for (std::size_t k = first_task[p]; k < first_task[p + 1]; ++k) {
+      traverse_task(k, 0);
+      count += tasks[k].candidates.size();
+    }
+    out.pairs[p].candidates = count;
   }
   inner.timings.cpu += ms_since(t_pcs);
   out.add_image_work(inner);

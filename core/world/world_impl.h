@@ -297,6 +297,9 @@ struct World::Impl {
     std::vector<std::uint64_t> sorted;
     ContactSortScratch contacts;  // a pair's contacts sorted (gather_contacts())
     ApartBlock apart;             // the exact path's couples, a block at a time (test_task())
+    std::vector<std::uint64_t> pcs_keys;  // resident_image_pairs(): a pair's PCS as keys
+    std::vector<IdPair> pcs;              // ... as pairs of IDs, for the ID maps
+    IdMap map_a, map_b;
   };
   std::vector<std::unique_ptr<LaneScratch>> lane_scratch;  // per lane: the small pairs' scan
   std::vector<std::uint64_t> candidates;
@@ -496,9 +499,7 @@ struct World::Impl {
   std::vector<int> resident_needs, resident_tiles;
   std::vector<double> frame_edges;  // per body of the frame (ids): its median edge, or -1 (not yet)
   std::vector<double> edge_scratch;  // median_edge()'s
-  std::vector<IdPair> resident_pcs;
-  std::vector<std::uint64_t> resident_keys, resident_scratch;
-  IdMap resident_map_a, resident_map_b;
+  std::vector<char> resident_exhaustive;  // per resident pair: a view the stage could not resolve
   struct ShapeEdge {
     std::weak_ptr<const Mesh> owner;
     double edge = 0.0;
