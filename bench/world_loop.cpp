@@ -142,7 +142,8 @@ int main(int argc, char** argv) {
     FrameResult result;
     std::vector<char> other(cold ? std::size_t(64) << 20 : 0);
     std::vector<std::uint32_t> work(busy ? 200000 : 0);
-    std::vector<double> ms, boxes, exact, one_lane, inside, upload, calls, readback, waits, modelled, modelled_frame;
+    std::vector<double> ms, boxes, exact, one_lane, inside, upload, calls, readback, waits, modelled, modelled_frame, host,
+        host_one_lane, modelled_host;
     struct LoopTimes {  // a loop of the lane model over the frames
       std::string step;
       std::vector<double> items, total, longest, span;
@@ -177,12 +178,18 @@ int main(int argc, char** argv) {
       calls.push_back(result.timings.gpu);
       readback.push_back(result.timings.readback);
       waits.push_back(result.timings.gl_wait);
+      host.push_back(result.timings.total - result.timings.gpu - result.timings.readback);
+      host_one_lane.push_back(world.stats().one_lane_ms - result.timings.gpu - result.timings.readback);
       for (const PairResult& p : result.pairs) contacts += p.colliding.size();
       if (model) {
         modelled.push_back(world.stats().model_ms / result.timings.total);
         double wall = 0.0, span = 0.0;  // the whole frame's loops: set_vertices()'s and collide()'s
         for (const LaneLoop& l : world.lane_loops()) wall += l.wall_ms, span += l.span_ms;
         modelled_frame.push_back((ms.back() - wall + span) / ms.back());
+        double collide_spans = 0.0;  // (this collide()'s loops: those after set_vertices()'s)
+        for (const LaneLoop& l : world.lane_loops())
+          if (std::string(l.step) != "parts") collide_spans += l.span_ms;
+        modelled_host.push_back(host_one_lane.back() + collide_spans);
         // (loops by their step and order within it: a frame's steps may run some loops twice)
         std::vector<int> seen;
         for (const LaneLoop& l : world.lane_loops()) {
@@ -214,8 +221,9 @@ int main(int argc, char** argv) {
     std::printf("frame: median %.4f ms, first quartile %.4f ms; boxes %.4f ms, exact %.4f ms (medians)\n", median(ms),
                 median(ms, 0.25), median(boxes), median(exact));
     if (image)
-      std::printf("image route: views %.4f ms, stage calls %.4f ms (GL waits %.4f), readback %.4f ms (medians)\n",
-                  median(upload), median(calls), median(waits), median(readback));
+      std::printf("image route: views %.4f ms, stage calls %.4f ms (GL waits %.4f), readback %.4f ms; collide() outside "
+                  "the stage's calls and readback %.4f ms, of it outside the lanes' loops %.4f ms (medians)\n",
+                  median(upload), median(calls), median(waits), median(readback), median(host), median(host_one_lane));
     // The share of collide() outside the loops the lanes share (WorldStats::one_lane_ms): with
     // one thread, what bounds the frame of more (Amdahl).
     const double serial = median(one_lane);
@@ -224,6 +232,9 @@ int main(int argc, char** argv) {
                 threads == 1 ? (", so 8 threads take at least " + std::to_string(serial + (1.0 - serial) / 8.0).substr(0, 5) +
                                 "x one").c_str()
                              : "");
+    if (model && image)
+      std::printf("lane model, %ld lanes: collide() outside the stage's calls and readback at best %.4f ms (median; the "
+                  "steps between the loops and the loops' spans)\n", model, median(modelled_host));
     if (model) {
       std::printf("lane model, %ld lanes: by the work's balance, a frame (poses and vertices set, collide()) at best %.3fx "
                   "its one-thread time, collide() %.3fx (medians; the loops' spans and the steps between them)\n",

@@ -113,10 +113,9 @@ Aabb World::Impl::contact_region(std::size_t p, const Aabb& roi, RegionScratch& 
 // kept triangles): of a rigid body's shape computed once per shape, scaled by the pose's volume
 // scale; of a deforming body over at most 1,025 of its triangles, evenly spread, each frame (its
 // edges change; a sample keeps the cost per body, not per triangle).
-double World::Impl::median_edge(const Body& b) {
+double World::Impl::median_edge(const Body& b, std::vector<double>& edges) {
   const auto median = [&](const Mesh& m, std::size_t step) {
-    std::vector<double>& edges = edge_scratch;  // (kept: no allocation per body and frame)
-    edges.clear();
+    edges.clear();  // (kept by the caller: no allocation per body and frame)
     for (std::size_t t = 0; t < m.triangles.size(); t += step) {
       const Tri& f = m.triangles[t];
       edges.push_back((m.vertices[f[1]] - m.vertices[f[0]]).norm());
@@ -246,15 +245,28 @@ void World::Impl::resident_image_pairs(const DetectOptions& opt, FrameResult& ou
   resident_tiles.assign(n, opt.resolution);
   if (opt.resolution == 0 && opt.cull == Cull::contact) {
     const double edge_texels = edge_texels_of(opt);
+    // Each body's median edge, once a frame: a rigid body's from its shape's (kept in a map, here),
+    // a deforming body's measured (over the lanes).
+    frame_edges.assign(ids.size(), -1.0);
+    edge_bodies.clear();
+    for (const std::size_t p : resident_pairs)
+      for (const std::size_t i : {pairs[p].first, pairs[p].second}) {
+        if (frame_edges[i] >= 0.0) continue;
+        const Body& b = bodies[ids[i]];
+        if (b.is_rigid) {
+          frame_edges[i] = median_edge(b, edge_scratch);
+        } else {
+          frame_edges[i] = 0.0;  // (listed once)
+          edge_bodies.push_back(i);
+        }
+      }
+    parallel("edges", edge_bodies.size(), frame_lanes, [&](std::size_t k, unsigned lane) {
+      frame_edges[edge_bodies[k]] = median_edge(bodies[ids[edge_bodies[k]]], lane_scratch[lane]->edges);
+    });
     resident_needs.clear();
-    frame_edges.assign(ids.size(), -1.0);  // each body's median edge, once a frame
-    const auto edge_of = [&](std::size_t i) {
-      if (frame_edges[i] < 0.0) frame_edges[i] = median_edge(bodies[ids[i]]);
-      return frame_edges[i];
-    };
     for (const std::size_t p : resident_pairs) {
-      const double ea = edge_of(pairs[p].first);
-      const double eb = edge_of(pairs[p].second);
+      const double ea = frame_edges[pairs[p].first];
+      const double eb = frame_edges[pairs[p].second];
       resident_needs.push_back(edge_tile_resolution(opt.budget, out.pairs[p].region, std::sqrt(ea * eb), edge_texels));
     }
     allocate_tiles(opt.budget, resident_needs, resident_tiles);
@@ -280,18 +292,19 @@ void World::Impl::resident_image_pairs(const DetectOptions& opt, FrameResult& ou
     }
   }
 
-  // The views: one job per fused view frame.
+  // The views: one job per fused view frame (each pair's over the lanes).
   ViewFrame frames[3];
   const std::size_t frame_count = fused_view_frames(opt, frames);
-  resident_jobs.clear();
-  resident_job_first.assign(n + 1, 0);
-  for (std::size_t i = 0; i < n; ++i) {
+  resident_jobs.resize(n * frame_count);
+  resident_job_first.resize(n + 1);
+  for (std::size_t i = 0; i <= n; ++i) resident_job_first[i] = i * frame_count;
+  parallel("jobs", n, frame_lanes, [&](std::size_t i, unsigned) {
     const std::size_t p = resident_pairs[i];
     PairResult& r = out.pairs[p];
     r.resolution = resident_tiles[i];
-    resident_job_first[i] = resident_jobs.size();
     for (std::size_t v = 0; v < frame_count; ++v) {
-      PeelJob job;
+      PeelJob& job = resident_jobs[i * frame_count + v];
+      job = PeelJob{};
       job.view = make_padded_roi_view(r.region, boxes[pairs[p].first], boxes[pairs[p].second], frames[v], resident_tiles[i]);
       if (v == 0) r.epsilon = opt.epsilon > 0.0 ? opt.epsilon : job.view.texel();
       job.objects[0] = &resident_objects[2 * i];
@@ -304,10 +317,8 @@ void World::Impl::resident_image_pairs(const DetectOptions& opt, FrameResult& ou
       job.epsilon = r.epsilon;
       job.slope = opt.slope;
       job.conservative = true;
-      resident_jobs.push_back(job);
     }
-  }
-  resident_job_first[n] = resident_jobs.size();
+  });
   FrameResult inner;  // the stage's work, added to the frame's at the end
   inner.timings.upload += ms_since(t_views);
 

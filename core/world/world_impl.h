@@ -300,6 +300,7 @@ struct World::Impl {
     std::vector<std::uint64_t> pcs_keys;  // resident_image_pairs(): a pair's PCS as keys
     std::vector<IdPair> pcs;              // ... as pairs of IDs, for the ID maps
     IdMap map_a, map_b;
+    std::vector<double> edges;  // median_edge()'s
   };
   std::vector<std::unique_ptr<LaneScratch>> lane_scratch;  // per lane: the small pairs' scan
   std::vector<std::uint64_t> candidates;
@@ -485,7 +486,7 @@ struct World::Impl {
   bool resident_route(const DetectOptions& opt) const;
   bool resident_pair(std::size_t p) const;
   void mark_untraversed(const DetectOptions& opt);
-  double median_edge(const Body& b);
+  double median_edge(const Body& b, std::vector<double>& edges);  // (a deforming body: on any lane; a rigid one: on the calling thread)
   Aabb contact_region(std::size_t p, const Aabb& roi, RegionScratch& scratch) const;
   std::vector<Aabb> resident_regions;           // per resident pair: where its bodies can meet
   std::vector<RegionScratch> region_stacks;  // per lane
@@ -498,7 +499,8 @@ struct World::Impl {
   std::vector<PeelResult> resident_peeled;
   std::vector<int> resident_needs, resident_tiles;
   std::vector<double> frame_edges;  // per body of the frame (ids): its median edge, or -1 (not yet)
-  std::vector<double> edge_scratch;  // median_edge()'s
+  std::vector<double> edge_scratch;  // median_edge()'s, on the calling thread
+  std::vector<std::size_t> edge_bodies;  // resident_image_pairs(): deforming bodies (ids) whose edges are measured
   std::vector<char> resident_exhaustive;  // per resident pair: a view the stage could not resolve
   struct ShapeEdge {
     std::weak_ptr<const Mesh> owner;
