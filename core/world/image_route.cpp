@@ -389,6 +389,16 @@ void World::Impl::resident_image_pairs(const DetectOptions& opt, FrameResult& ou
       expand_pcs(ls.pcs, ls.map_a, ls.map_b, candidates, ls.sorted);
     }
     r.candidates = candidates.size();
+    // A pair with several tasks (a large one, planned for the lanes): its candidates in as many
+    // contiguous runs, one a task, for the exact tests over the lanes.
+    const std::size_t m = first_task[p + 1] - first_task[p];
+    if (m > 1) {
+      const std::size_t total = candidates.size();
+      for (std::size_t c = 1; c < m; ++c)
+        tasks[first_task[p] + c].candidates.assign(candidates.begin() + std::ptrdiff_t(total * c / m),
+                                                   candidates.begin() + std::ptrdiff_t(total * (c + 1) / m));
+      candidates.resize(total / m);
+    }
   });
   for (std::size_t i = 0; i < n; ++i) {  // the tree's candidates for a view not resolved
     const std::size_t p = resident_pairs[i];
@@ -397,8 +407,16 @@ void World::Impl::resident_image_pairs(const DetectOptions& opt, FrameResult& ou
       refit_now(bodies[ids[b]]);  // (a refit put off: its single task starts at the roots)
       bodies[ids[b]].ensure_world_tree();  // (a copy drawn only had none made: copy_paired())
     }
+    // Tasks that are the lanes' shares of its PCS (all from the roots: plan_tasks()) traverse
+    // once, the others each from its node pair.
+    const std::size_t first = first_task[p], last = first_task[p + 1];
+    const bool shares = last - first > 1 && tasks[first + 1].start == BvhNodePair{0u, 0u};
     std::size_t count = 0;
-    for (std::size_t k = first_task[p]; k < first_task[p + 1]; ++k) {
+    for (std::size_t k = first; k < last; ++k) {
+      if (shares && k > first) {
+        tasks[k].candidates.clear();
+        continue;
+      }
       traverse_task(k, 0);
       count += tasks[k].candidates.size();
     }

@@ -321,7 +321,11 @@ std::size_t World::Impl::plan_tasks(unsigned lanes) {
       kind = TaskKind::small_pair;
       split.assign(1, BvhNodePair{0u, 0u});
     } else if (drawn_only[pairs[p].first] && drawn_only[pairs[p].second]) {
-      split.assign(1, BvhNodePair{0u, 0u});  // the resident route's: not traversed (mark_untraversed())
+      // The resident route's: not traversed (mark_untraversed()); a large pair's PCS shared by
+      // one task a lane for the exact tests (resident_image_pairs()).
+      const bool large = lanes > 1 && pairs.size() < kSplitPairsPerLane * std::size_t(lanes) &&
+                         a.local().triangles.size() + b.local().triangles.size() >= kSplitTriangles;
+      split.assign(large ? lanes : 1, BvhNodePair{0u, 0u});
     } else {
       a.ensure_world_tree();
       b.ensure_world_tree();

@@ -715,6 +715,68 @@ TEST_CASE("the World's resident image route: a view no k-buffer holds is tested 
   }
 }
 
+TEST_CASE("the World's resident image route: a large pair's PCS shared by the lanes' tasks, every contact exact", "[conservative][world]") {
+  // Two bodies of 34k triangles between them or more (a large pair: one task a lane for the exact
+  // tests of its PCS), on 3 threads, rigid and then one deforming: the contacts are the exact
+  // path's; and the stacked quads of the case above with a large sphere far from them in A
+  // (the pair large, its view still one no k-buffer holds on llvmpipe): traversed once from the
+  // roots, the lanes' other tasks left empty, the contacts the exact reference's.
+  const Mesh big = make_uv_sphere(Vec3::Zero(), 1.0, 110, 120);
+  auto shape = std::make_shared<const Mesh>(big);
+  for (const bool deforming : {false, true}) {
+    INFO((deforming ? "A deforming" : "both rigid"));
+    gl::GlOptions go;
+    go.resolve = Resolve::gpu;
+    World world(make_image_stage(test_backend(), go));
+    world.batch_image_pairs(true);
+    World exact;
+    const Eigen::Affine3d at(Eigen::Translation3d(1.2, 0.31, 0.17) * Eigen::AngleAxisd(0.4, Vec3(1, 2, 3).normalized()));
+    if (deforming) {
+      Mesh m = big;
+      for (Vec3& v : m.vertices) v = Vec3(v.x() * 1.1, v.y(), v.z() + 0.05 * std::sin(5.0 * v.x()));
+      world.add_deforming(m);
+      exact.add_deforming(m);
+    } else {
+      world.add_rigid(shape, Eigen::Affine3d::Identity());
+      exact.add_rigid(shape, Eigen::Affine3d::Identity());
+    }
+    world.add_rigid(shape, at);
+    exact.add_rigid(shape, at);
+    DetectOptions opt, eo;
+    opt.stage = Stage::image;
+    opt.threads = 3;
+    eo.stage = Stage::exact;
+    const FrameResult& f = world.collide(opt);
+    const FrameResult& e = exact.collide(eo);
+    REQUIRE(f.pairs.size() == 1);
+    REQUIRE(e.pairs.size() == 1);
+    CHECK_FALSE(f.pairs[0].exact_stage);
+    CHECK(world.stats().node_pairs == 0);
+    CHECK(f.pairs[0].colliding.size() > 100);
+    CHECK(couples_of(f.pairs[0]) == couples_of(e.pairs[0]));
+  }
+  Mesh a, b;
+  stacked_quads(a, b);
+  const Mesh far = make_uv_sphere(Vec3(40, 0, 0), 1.0, 110, 160);
+  const auto base = std::uint32_t(a.vertices.size());
+  a.vertices.insert(a.vertices.end(), far.vertices.begin(), far.vertices.end());
+  for (const Tri& t : far.triangles) a.triangles.push_back({t[0] + base, t[1] + base, t[2] + base});
+  REQUIRE(a.triangles.size() + b.triangles.size() >= 32768);
+  World world(make_image_stage(test_backend()));
+  world.batch_image_pairs(true);
+  world.add_rigid(std::make_shared<const Mesh>(a), Eigen::Affine3d::Identity());
+  world.add_rigid(std::make_shared<const Mesh>(b), Eigen::Affine3d::Identity());
+  DetectOptions opt;
+  opt.stage = Stage::image;
+  opt.resolution = 1024;
+  opt.threads = 3;
+  const FrameResult& f = world.collide(opt);
+  REQUIRE(f.pairs.size() == 1);
+  if (world.stage().renderer().find("llvmpipe") != std::string::npos) CHECK(f.views_exhaustive == 1);
+  CHECK(couples_of(f.pairs[0]) == exact_colliding_pairs(a, b));
+  CHECK(!f.pairs[0].colliding.empty());
+}
+
 TEST_CASE("the World's resident image route puts a deforming body's refit off, and later frames see its vertices", "[conservative][world]") {
   // A waving sheet through a rigid ball, Stage::image batched: the route draws the sheet from its
   // loaded vertices and box without refitting its tree; a later frame on the exact path, a
