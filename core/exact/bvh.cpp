@@ -183,6 +183,14 @@ void Bvh::sync_wide() {
   wide_fresh_ = true;
 }
 
+double Bvh::merge_children(std::uint32_t i) {
+  BvhNode& node = nodes_[i];
+  FBox box = nodes_[i + 1].box;
+  box.merge(nodes_[node.first].box);
+  node.box = box;
+  return extents(box);
+}
+
 void Bvh::refit_node(std::uint32_t i) {
   BvhNode& node = nodes_[i];
   FBox box;
@@ -389,12 +397,7 @@ void Bvh::refit_nodes(const Aabb& exact) {
   // boxes are refit_leaves()').
   double size = 0.0;
   for (std::size_t i = nodes_.size(); i-- > 0;) {
-    BvhNode& node = nodes_[i];
-    if (node.leaf()) continue;
-    FBox box = nodes_[i + 1].box;
-    box.merge(nodes_[node.first].box);
-    node.box = box;
-    size += extents(box);
+    if (!nodes_[i].leaf()) size += merge_children(std::uint32_t(i));
   }
   size_ = size;
   wide_fresh_ = false;
@@ -434,12 +437,7 @@ void Bvh::refit_part(std::size_t k) {
   while (!nodes_[end].leaf()) end = nodes_[end].first;
   double size = 0.0;
   for (std::size_t i = end + 1; i-- > root;) {
-    BvhNode& node = nodes_[i];
-    if (node.leaf()) continue;
-    FBox box = nodes_[i + 1].box;
-    box.merge(nodes_[node.first].box);
-    node.box = box;
-    size += extents(box);
+    if (!nodes_[i].leaf()) size += merge_children(std::uint32_t(i));
   }
   part_sizes_[k] = size;
 }
@@ -448,13 +446,7 @@ void Bvh::refit_top(const Aabb& exact) {
   box_ = exact;
   double size = 0.0;
   for (const double s : part_sizes_) size += s;
-  for (const std::uint32_t i : part_top_) {  // (descending: children first)
-    BvhNode& node = nodes_[i];
-    FBox box = nodes_[i + 1].box;
-    box.merge(nodes_[node.first].box);
-    node.box = box;
-    size += extents(box);
-  }
+  for (const std::uint32_t i : part_top_) size += merge_children(i);  // (descending: children first)
   size_ = size;
   wide_fresh_ = false;
   ++changes_;

@@ -303,8 +303,7 @@ void World::Impl::resident_image_pairs(const DetectOptions& opt, FrameResult& ou
     PairResult& r = out.pairs[p];
     r.resolution = resident_tiles[i];
     for (std::size_t v = 0; v < frame_count; ++v) {
-      PeelJob& job = resident_jobs[i * frame_count + v];
-      job = PeelJob{};
+      PeelJob& job = resident_jobs[i * frame_count + v];  // (every field set: the entries are reused)
       job.view = make_padded_roi_view(r.region, boxes[pairs[p].first], boxes[pairs[p].second], frames[v], resident_tiles[i]);
       if (v == 0) r.epsilon = opt.epsilon > 0.0 ? opt.epsilon : job.view.texel();
       job.objects[0] = &resident_objects[2 * i];
@@ -317,6 +316,9 @@ void World::Impl::resident_image_pairs(const DetectOptions& opt, FrameResult& ou
       job.epsilon = r.epsilon;
       job.slope = opt.slope;
       job.conservative = true;
+      job.first = 1;  // (PeelJob's default)
+      job.capture = false;
+      job.grow = 0.0;
     }
   });
   FrameResult inner;  // the stage's work, added to the frame's at the end

@@ -254,6 +254,7 @@ class Bvh {
   std::uint32_t build_node(std::uint32_t begin, std::uint32_t end, std::uint32_t parent, std::size_t level,
                            std::vector<BuildItem>& items, const std::vector<FBox>& boxes);
   void refit_node(std::uint32_t n);
+  double merge_children(std::uint32_t i);  // an internal node's box from its children's; returns its extents
   std::uint32_t build_wide(std::uint32_t node);  // the wide node for internal `node` and those under it
   static void put_slot(BvhWideNode& w, std::uint32_t slot, const FBox& box) {
     for (int k = 0; k < 3; ++k) w.lo[k][slot] = box.lo[k], w.hi[k][slot] = box.hi[k];
