@@ -2,7 +2,9 @@
 #include "peelcd/core/clock.h"
 
 #include "peelcd/bench/float_peers.h"
+#include "peelcd/bench/plain_bullet.h"
 #include "peelcd/bench/plain_embree.h"
+#include "peelcd/bench/plain_fcl.h"
 #include "peelcd/bench/floor.h"
 #include "peelcd/bench/peers.h"
 #include "peelcd/core/image/id_map.h"
@@ -144,8 +146,13 @@ std::vector<std::unique_ptr<Peer>> make_peers(unsigned threads, bool all, bool a
   // for Moller's published test; not a peer's default.
   if (all) peers.push_back(std::make_unique<EmbreePeer>(EmbreePeer::Update::refit, threads, TriangleTest::scaled));
   peers.push_back(std::make_unique<BulletPeer>(threads));
-  // --audit: Embree as a plain user writes it (bench/plain_embree.cpp), against the rows above.
-  if (audit) peers.push_back(std::make_unique<PlainEmbree>());
+  // --audit: each library as a plain user writes it (bench/plain_embree.cpp, plain_bullet.cpp,
+  // plain_fcl.cpp), against the rows above.
+  if (audit) {
+    peers.push_back(std::make_unique<PlainFcl>());
+    peers.push_back(std::make_unique<PlainEmbree>());
+    peers.push_back(std::make_unique<PlainBullet>());
+  }
   return peers;
 }
 
@@ -554,18 +561,21 @@ void SuiteRun::print_table(bool heap_kept) const {
   print_audit(med);
 }
 
-// --audit: each of the bench's Embree rows against the plain setup, the same frames side by side.
+// --audit: each of the bench's FCL, Embree and Bullet rows against its library's plain setup, the
+// same frames side by side.
 void SuiteRun::print_audit(const std::vector<double>& med) const {
-  std::size_t plain = 0;
-  for (std::size_t m = 0; m < rows_.size(); ++m)
-    if (rows_[m].peer && dynamic_cast<const PlainEmbree*>(rows_[m].peer)) plain = m;
-  if (!plain) return;
-  for (std::size_t m = 0; m < rows_.size(); ++m) {
-    const Peer* p = rows_[m].peer;
-    if (!p || m == plain || p->library() != "Embree" || p->variant()) continue;
-    std::printf("audit: %s / the plain setup: %.2f (medians %.3f / %.3f ms; pairs %zu / %zu over the frames)%s\n",
-                rows_[m].name.c_str(), med[m] / med[plain], med[m], med[plain], rows_[m].score.found,
-                rows_[plain].score.found, threads_ == 1 ? "" : " (the plain setup runs one thread)");
+  for (std::size_t plain = 0; plain < rows_.size(); ++plain) {
+    const Peer* q = rows_[plain].peer;
+    if (!q || !(dynamic_cast<const PlainFcl*>(q) || dynamic_cast<const PlainEmbree*>(q) ||
+                dynamic_cast<const PlainBullet*>(q)))
+      continue;
+    for (std::size_t m = 0; m < rows_.size(); ++m) {
+      const Peer* p = rows_[m].peer;
+      if (!p || m == plain || p->library() != q->library() || p->variant()) continue;
+      std::printf("audit: %s / the plain setup: %.2f (medians %.3f / %.3f ms; pairs %zu / %zu over the frames)%s\n",
+                  rows_[m].name.c_str(), med[m] / med[plain], med[m], med[plain], rows_[m].score.found,
+                  rows_[plain].score.found, threads_ == 1 ? "" : " (the plain setup runs one thread)");
+    }
   }
 }
 

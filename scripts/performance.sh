@@ -30,7 +30,7 @@ scene=fixtures/scenes/bunny_dragon.json
 ./build/peelcd bench spheres --stacks 570 --frames 8 --threads 1 --short --scaling 2 > "$out/bench_spheres_1m.txt"
 ./build/peelcd bench spheres-wave --stacks 570 --frames 8 --threads 1 --short --scaling 2 > "$out/bench_spheres_1m_wave.txt"
 ./build/peelcd bench crowd --objects 1000 --frames 8 --threads 1 --short --scaling 2 > "$out/bench_pile1000.txt"
-# (--audit: Embree as a plain user writes it, beside the bench's Embree rows.)
+# (--audit: FCL, Embree and Bullet as plain users write them, beside the bench's rows of each.)
 # (--scaling 2: the World again with two threads, side by side with the others, then the two
 # World rows alone over the frames, alternating: the threads table's World rows.) The large
 # scenes again with one thread per core, for the peers' two-thread times.

@@ -34,12 +34,16 @@ def simulate_table(path):
 
 
 def bench_methods(path):
-    """{method: [median, stage, miss, false, xCGAL, xFCL, xbest, xfloor]} from a `peelcd bench` table."""
+    """{method: [median, stage, miss, false, xCGAL, xFCL, xbest, xfloor]} from a `peelcd bench` table
+    (its first table only: the tables after it, such as the image work per frame, name the same
+    methods with other columns)."""
     out = {}
     for line in open(path):
         m = re.match(r"^(peelcd .*?|CGAL.*?|FCL .*?|Embree .*?|Bullet .*?|floor: .*?)\s{2,}(\S.*)$", line.rstrip())
         if m:
             out[m.group(1)] = m.group(2).split()
+        elif out and not line.strip():
+            break
     return out
 
 
@@ -77,8 +81,9 @@ def standing_table(d, scenes):
 
 
 def audit_table(d, scenes):
-    """The `audit:` lines of bench runs with --audit: each Embree row against the plain setup."""
-    rows = ["| scene | Embree row | its ms | plain setup ms | row / plain |", "|---|---|---|---|---|"]
+    """The `audit:` lines of bench runs with --audit: each FCL, Embree and Bullet row against
+    its library's plain setup."""
+    rows = ["| scene | peer row | its ms | plain setup ms | row / plain |", "|---|---|---|---|---|"]
     for label, name in scenes:
         for line in open(d + "/" + name + ".txt"):
             m = re.match(r"^audit: (.*?) / the plain setup: (\S+) \(medians (\S+) / (\S+) ms", line)

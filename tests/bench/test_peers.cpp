@@ -5,7 +5,9 @@
 // checked on scenes far from the degenerate cases where double rounding decides.)
 #include "peelcd/bench/float_peers.h"
 #include "peelcd/bench/peers.h"
+#include "peelcd/bench/plain_bullet.h"
 #include "peelcd/bench/plain_embree.h"
+#include "peelcd/bench/plain_fcl.h"
 #include "peelcd/core/broad_phase.h"
 #include "peelcd/core/primitives.h"
 #include "peelcd/core/exact/self.h"
@@ -228,4 +230,90 @@ TEST_CASE("the Bullet peer follows a deforming object beyond its first bounds", 
   }
   CHECK(bullet.builds() > 2);   // built again once it left the first range
   CHECK(bullet.refits() > 0);   // refitted while inside it
+}
+
+// Every exact pair of `want` is among `got`'s (a peer with its own float test may add near pairs);
+// returns how many `got` adds.
+std::size_t require_covers(const bench::PeerFrame& want, const bench::PeerFrame& got) {
+  std::map<std::pair<std::size_t, std::size_t>, std::vector<std::uint64_t>> g;
+  for (std::size_t i = 0; i < got.objects.size(); ++i) g[got.objects[i]] = got.per_pair[i];
+  std::size_t missed = 0, wanted = 0;
+  for (std::size_t i = 0; i < want.objects.size(); ++i)
+    for (std::uint64_t k : want.per_pair[i]) {
+      const auto& have = g[want.objects[i]];
+      missed += !std::binary_search(have.begin(), have.end(), k);
+      ++wanted;
+    }
+  CHECK(missed == 0);
+  CHECK(got.pairs + missed >= wanted);
+  return got.pairs + missed - wanted;
+}
+
+// Bullet as a plain user sets it up (GImpact's own algorithm and triangle test in a collision
+// world, pairs from the contact-added callback): every exact pair of a deforming sphere
+// travelling through another, made again once it leaves its box set's quantization range (a
+// refit clamps to it: without the new shape it finds nothing after the first frames), refitted
+// within it; and of the crowd's frames (rigid balls placed by their transforms, one shape each).
+TEST_CASE("the plain Bullet setup of --audit finds every exact pair, refits within its range, is made again beyond it", "[peers]") {
+  bench::PlainBullet plain;
+  std::vector<Object> objects(2);
+  objects[0].mesh = uv_sphere(Vec3::Zero(), 1.0, 24, 12);
+  std::size_t hits = 0;
+  for (int f = 0; f < 10; ++f) {
+    objects[1].mesh = uv_sphere(Vec3(-3.0 + 0.6 * f, 0.2, 0.1), 0.7, 24, 12);
+    INFO("frame " << f);
+    const bench::PeerFrame want = exact(objects), got = plain.frame(objects);
+    require_covers(want, got);
+    hits += got.pairs;
+  }
+  CHECK(hits > 0);
+  CHECK(plain.builds() > 2);  // made again once it left the first range
+  CHECK(plain.refits() > 0);  // refitted while inside it
+  CHECK(plain.variant());     // never the best peer
+  CHECK_THAT(plain.setup(), Catch::Contains("gContactAddedCallback") && Catch::Contains("GImpact's own"));
+
+  const auto crowd = make_crowd(30, 4);
+  bench::PlainBullet on_crowd;
+  std::vector<Object> balls;
+  for (std::size_t f = 0; f < crowd->frames(); ++f) {
+    crowd->frame(f, balls);
+    INFO("crowd frame " << f);
+    const bench::PeerFrame got = on_crowd.frame(balls);
+    CHECK(got.pairs > 0);
+    require_covers(exact(balls), got);
+  }
+}
+
+// FCL as a plain user sets it up (OBBRSS models, the dynamic AABB tree manager, fcl::collide asking
+// for every contact): every exact pair of a deforming sphere travelling through another (its model
+// updated through FCL's update API, not built again), and of the crowd's frames (rigid balls
+// placed by their transforms, one model per shape).
+TEST_CASE("the plain FCL setup of --audit finds every exact pair, updates a deforming model in place", "[peers]") {
+  bench::PlainFcl plain;
+  std::vector<Object> objects(2);
+  objects[0].mesh = uv_sphere(Vec3::Zero(), 1.0, 24, 12);
+  std::size_t hits = 0;
+  for (int f = 0; f < 10; ++f) {
+    objects[1].mesh = uv_sphere(Vec3(-3.0 + 0.6 * f, 0.2, 0.1), 0.7, 24, 12);
+    INFO("frame " << f);
+    const bench::PeerFrame want = exact(objects), got = plain.frame(objects);
+    CHECK(require_covers(want, got) == 0);  // FCL's test adds no pair here
+    hits += got.pairs;
+  }
+  CHECK(hits > 0);
+  CHECK(plain.builds() == 2);  // each built once
+  CHECK(plain.refits() == 9);  // the moving one updated every later frame; the still one never
+  CHECK(plain.variant());
+  CHECK_THAT(plain.setup(), Catch::Contains("OBBRSS") && Catch::Contains("updateSubModel"));
+
+  const auto crowd = make_crowd(30, 4);
+  bench::PlainFcl on_crowd;
+  std::vector<Object> balls;
+  for (std::size_t f = 0; f < crowd->frames(); ++f) {
+    crowd->frame(f, balls);
+    INFO("crowd frame " << f);
+    const bench::PeerFrame got = on_crowd.frame(balls);
+    CHECK(got.pairs > 0);
+    require_covers(exact(balls), got);
+  }
 }
