@@ -281,9 +281,21 @@ PeerFrame FclPeer::frame(const std::vector<Object>& objects) {
   const auto t0 = Clock::now();
   bool reregister = s.entries.size() != objects.size() || !s.manager;
   if (s.entries.size() != objects.size()) s.entries.resize(objects.size());
-  s.boxes.clear();
-  for (const Object& o : objects) s.boxes.push_back(bounds(o.mesh));
-  for (std::size_t i = 0; i < objects.size(); ++i) reregister |= s.update(i, objects[i]);
+  // The objects' world boxes, for the broad-phase boxes of rebuilt objects and the crops: made
+  // where needed (a rigid object's box would read all its vertices every frame; FCL places it
+  // by its pose).
+  s.boxes.assign(objects.size(), Aabb{});
+  std::vector<char> boxed(objects.size(), 0);
+  auto box = [&](std::size_t i) {
+    if (!boxed[i]) s.boxes[i] = bounds(objects[i].mesh), boxed[i] = 1;
+  };
+  for (std::size_t i = 0; i < objects.size(); ++i) {
+    const auto& r = objects[i].rigid;
+    if (s.deforming == Deforming::rebuild &&
+        !(r && r->shape && (r->pose.matrix().isIdentity(0.0) || Impl::isometry(r->pose))))
+      box(i);  // update() gives it a box of these bounds for the broad phase
+    reregister |= s.update(i, objects[i]);
+  }
   if (reregister) {
     s.manager = std::make_unique<fcl::DynamicAABBTreeCollisionManagerd>();
     std::vector<fcl::CollisionObjectd*> all;
@@ -303,6 +315,8 @@ PeerFrame FclPeer::frame(const std::vector<Object>& objects) {
     return false;  // go on
   });
   std::sort(pairs.begin(), pairs.end());
+  for (const auto& [a, b] : pairs)
+    if (!(s.entries[a].rigid && s.entries[b].rigid) && !(s.entries[a].aligned && s.entries[b].aligned)) box(a), box(b);
   f.objects = std::move(pairs);
   f.per_pair.resize(f.objects.size());
   parallel_for(s.pool.get(), f.objects.size(),
