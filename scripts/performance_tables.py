@@ -82,13 +82,18 @@ def standing_table(d, scenes):
 
 def audit_table(d, scenes):
     """The `audit:` lines of bench runs with --audit: each FCL, Embree and Bullet row against
-    its library's plain setup."""
-    rows = ["| scene | peer row | its ms | plain setup ms | row / plain |", "|---|---|---|---|---|"]
+    its library's plain setup, with the plain setup's misses and false pairs (its own test)."""
+    rows = ["| scene | peer row | its ms | plain setup ms | row / plain | plain setup: miss, false pairs |",
+            "|---|---|---|---|---|---|"]
     for label, name in scenes:
+        b = bench_methods(d + "/" + name + ".txt")
         for line in open(d + "/" + name + ".txt"):
             m = re.match(r"^audit: (.*?) / the plain setup: (\S+) \(medians (\S+) / (\S+) ms", line)
             if m:
-                rows.append("| %s | %s | %s | %s | %s |" % (label, m.group(1), m.group(3), m.group(4), m.group(2)))
+                library = m.group(1).split(" ")[0]
+                plain = [v for k, v in b.items() if k.startswith(library) and k.endswith("plain setup (audit)")][0]
+                rows.append("| %s | %s | %s | %s | %s | %s, %s |" % (label, m.group(1), m.group(3), m.group(4),
+                                                                   m.group(2), plain[2], plain[3]))
     return "\n".join(rows)
 
 
@@ -139,9 +144,9 @@ def main():
         ("rigid spheres, 330k each", "bench_spheres"), ("rigid spheres, 1.3M each", "bench_spheres_1m"),
         ("waving spheres, 330k each", "bench_spheres_wave"), ("waving spheres, 1.3M each", "bench_spheres_1m_wave")])
     tables["audit"] = audit_table(d, [
-        ("default scene (bunny vs dragon)", "bench_default"), ("test1", "bench_test1"), ("test2", "bench_test2"),
-        ("400-ball pile", "bench_crowd"), ("rigid spheres, 330k each", "bench_spheres"),
-        ("waving spheres, 330k each", "bench_spheres_wave")])
+        ("default scene (bunny vs dragon)", "audit_default"), ("test1", "audit_test1"), ("test2", "audit_test2"),
+        ("400-ball pile", "audit_crowd"), ("rigid spheres, 330k each", "audit_spheres"),
+        ("waving spheres, 330k each", "audit_spheres_wave")])
     tables["threads"] = threads_table(d, [
         ("rigid spheres, 1.3M", "bench_spheres_1m", "bench_spheres_1m_2threads"),
         ("waving spheres, 1.3M", "bench_spheres_1m_wave", "bench_spheres_1m_wave_2threads"),
