@@ -301,6 +301,61 @@ void World::Impl::copy_paired(const DetectOptions& opt, unsigned lanes) {
               pairs.end());
 }
 
+namespace {
+// A split's node pair of bodies ida and idb, as a key for its cost from one frame to the next (a
+// collision of two keys only mixes two estimates).
+std::uint64_t split_key(std::size_t ida, std::size_t idb, const BvhNodePair& start) {
+  return (std::uint64_t(ida) * 0x9E3779B97F4A7C15ull) ^ (std::uint64_t(idb) * 0xC2B2AE3D27D4EB4Full) ^
+         (std::uint64_t(start.first) << 32 | start.second);
+}
+}  // namespace
+
+// A split's node pairs ordered for the lanes: by their cost in the last frame (node pairs
+// visited and couples found, from split_costs; a node pair new to the split counts as the
+// split's mean), most first, then dealt: WorkerPool::for_each() starts lane l on the l-th of
+// `lanes` contiguous ranges, so the l-th range gets the ordered items l, l + lanes, ... Each
+// lane starts on its largest items and the small ones are left at the ranges' ends, where the
+// lanes done first take them. (The split lists them level by level, neighbours in space
+// together: the contact region, where the work is, falls in few of them, and a large item
+// started last draws the loop out.)
+void World::Impl::order_split(std::size_t ida, std::size_t idb, unsigned lanes) {
+  split_order.clear();
+  std::uint64_t known = 0, sum = 0;
+  for (const BvhNodePair& start : split) {
+    const std::uint64_t key = split_key(ida, idb, start);
+    const auto it = std::lower_bound(split_costs.begin(), split_costs.end(), std::make_pair(key, std::uint32_t(0)));
+    const bool found = it != split_costs.end() && it->first == key;
+    split_order.push_back({found ? it->second : ~std::uint32_t(0), start});
+    if (found) ++known, sum += it->second;
+  }
+  const std::uint32_t mean = known ? std::uint32_t(sum / known) : 0;
+  for (auto& [cost, start] : split_order)
+    if (cost == ~std::uint32_t(0)) cost = mean;
+  // (std::sort, not std::stable_sort: that one takes a buffer from the heap every call.)
+  std::sort(split_order.begin(), split_order.end(),
+            [](const auto& x, const auto& y) { return x.first != y.first ? x.first > y.first : x.second < y.second; });
+  split.clear();
+  for (unsigned l = 0; l < lanes; ++l)
+    for (std::size_t i = l; i < split_order.size(); i += lanes) split.push_back(split_order[i].second);
+}
+
+// Each split task's cost this frame (node pairs visited, couples found), for order_split() in
+// the next.
+void World::Impl::keep_split_costs(std::size_t used) {
+  split_costs_next.clear();
+  for (std::size_t k = 0; k < used; ++k) {
+    const Task& t = tasks[k];
+    const std::size_t p = t.pair;
+    if (t.kind != TaskKind::nodes || first_task[p + 1] - first_task[p] < 2 || (!untraversed.empty() && untraversed[p]))
+      continue;
+    const std::uint64_t cost = std::uint64_t(t.visited) + t.candidates.size();
+    split_costs_next.emplace_back(split_key(ids[pairs[p].first], ids[pairs[p].second], t.start),
+                                  std::uint32_t(std::min<std::uint64_t>(cost, ~std::uint32_t(0) - 1)));
+  }
+  std::sort(split_costs_next.begin(), split_costs_next.end());
+  split_costs.swap(split_costs_next);
+}
+
 // The traversals' tasks: per pair, one task, or (several lanes) the node pairs of its first
 // levels; a self pair one traversal of the body's own tree (none for a rigid body's cache); two
 // small world-space bodies, one of them moved, one scan when each moved one is in no other pair
@@ -334,9 +389,11 @@ std::size_t World::Impl::plan_tasks(unsigned lanes) {
       // with a refit put off (its tree is last frame's: the task starts at the roots).
       if (lanes > 1 && pairs.size() < kSplitPairsPerLane * std::size_t(lanes) && a.tree_current() && b.tree_current() &&
           a.local().triangles.size() + b.local().triangles.size() >= kSplitTriangles)
+      {
         bvh_split(a.frame_tree(), b.frame_tree(), BvhRelation::between(a.frame_pose(), b.frame_pose()),
                   kSplitNodePairsPerLane * std::size_t(lanes), split, split_scratch);
-      else
+        order_split(ids[pairs[p].first], ids[pairs[p].second], lanes);
+      } else
         split.assign(1, BvhNodePair{0u, 0u});
     }
     for (const BvhNodePair& start : split) {
@@ -479,6 +536,7 @@ void World::Impl::route_pairs(const DetectOptions& opt, std::size_t used, FrameR
     stats.node_pairs += tasks[k].visited;
     stats.candidates += tasks[k].candidates.size();
   }
+  keep_split_costs(used);
 }
 
 // The exact path's tests over the same tasks (a self task's during its traversal).

@@ -281,6 +281,9 @@ struct World::Impl {
   std::vector<Task> tasks;
   std::vector<BvhNodePair> split;
   BvhSplitScratch split_scratch;  // plan_tasks()' bvh_split()
+  // The split tasks' costs in the last frame, by split_key() (sorted), for order_split().
+  std::vector<std::pair<std::uint64_t, std::uint32_t>> split_costs, split_costs_next;
+  std::vector<std::pair<std::uint32_t, BvhNodePair>> split_order;
   std::vector<std::size_t> to_copy;     // copy_paired(): the bodies (ids) copied this frame
   std::vector<char> drawn_only;         // copy_paired(): bodies (ids) whose pairs the resident route draws, all
   std::vector<std::uint32_t> pairs_of;  // plan_tasks(): per body of the frame (ids), its pairs with others
@@ -449,6 +452,8 @@ struct World::Impl {
   void count_pairs();
   void copy_paired(const DetectOptions& opt, unsigned lanes);
   std::size_t plan_tasks(unsigned lanes);
+  void order_split(std::size_t ida, std::size_t idb, unsigned lanes);
+  void keep_split_costs(std::size_t used);
   void keep_wide_views();
   void traverse(std::size_t used, unsigned lanes);
   void traverse_task(std::size_t k, unsigned lane);
