@@ -16,7 +16,7 @@
 // CF_CUSTOM_MATERIAL_CALLBACK: the documented way to learn which triangles touched), a pair per
 // contact point, kept per object pair. Bullet's own triangle test (a clipping test with contact
 // points) decides, so its misses and false pairs are its own. Self pairs are not set up.
-#include "peelcd/bench/plain_bullet.h"
+#include "plain_setups.h"
 
 #include "peelcd/core/clock.h"
 #include "peelcd/core/pairs.h"
@@ -39,7 +39,7 @@ namespace peelcd::bench {
 
 namespace {
 
-// What the contact-added callback appends to (one frame of one PlainBullet at a time: the
+// What the contact-added callback appends to (one frame of one plain Bullet setup at a time: the
 // callback is a global of Bullet's).
 struct Sink {
   std::map<std::pair<int, int>, std::vector<std::uint64_t>>* hits = nullptr;
@@ -55,9 +55,7 @@ bool contact_added(btManifoldPoint&, const btCollisionObjectWrapper* w0, int, in
   return false;  // the contact point is not modified
 }
 
-}  // namespace
-
-struct PlainBullet::Impl {
+struct BulletSetup final : PlainPeer::Impl {
   struct Shape {
     std::vector<float> v;
     std::vector<int> t;
@@ -103,10 +101,9 @@ struct PlainBullet::Impl {
   btCollisionWorld world{&dispatcher, &broadphase, &configuration};
   std::vector<Item> items;
   std::map<const Mesh*, std::pair<std::shared_ptr<const Mesh>, std::shared_ptr<Shape>>> shapes;
-  std::size_t builds = 0, refits = 0;
 
-  Impl() { btGImpactCollisionAlgorithm::registerAlgorithm(&dispatcher); }
-  ~Impl() { clear(); }
+  BulletSetup() { btGImpactCollisionAlgorithm::registerAlgorithm(&dispatcher); }
+  ~BulletSetup() override { clear(); }
 
   void clear() {
     for (Item& it : items)
@@ -185,25 +182,20 @@ struct PlainBullet::Impl {
     }
     place(i, it, it.shape->shape.get(), btTransform::getIdentity());
   }
+
+  std::string setup() const override {
+    return "Bullet " + std::to_string(BT_BULLET_VERSION) +
+           " as written from its documentation and GImpact demo alone (bench/plain_bullet.cpp): a btCollisionWorld "
+           "(btDbvtBroadphase) with btGImpactCollisionAlgorithm registered, one btGImpactMeshShape (margin 0) per rigid "
+           "shape placed by its transform or per other object in world space, refitted when its vertices change (a new shape beyond its quantization range); "
+           "performDiscreteCollisionDetection(), the triangle pairs from gContactAddedCallback; test: GImpact's own; "
+           "threads 1";
+  }
+  PeerFrame frame(const std::vector<Object>& objects) override;
 };
 
-PlainBullet::PlainBullet() : impl_(std::make_unique<Impl>()) {}
-PlainBullet::~PlainBullet() = default;
-std::string PlainBullet::name() const { return "Bullet 3 GImpact, plain setup (audit)"; }
-std::string PlainBullet::column() const { return "Bullet pl"; }
-std::string PlainBullet::setup() const {
-  return "Bullet " + std::to_string(BT_BULLET_VERSION) +
-         " as written from its documentation and GImpact demo alone (bench/plain_bullet.cpp): a btCollisionWorld "
-         "(btDbvtBroadphase) with btGImpactCollisionAlgorithm registered, one btGImpactMeshShape (margin 0) per rigid "
-         "shape placed by its transform or per other object in world space, refitted when its vertices change (a new shape beyond its quantization range); "
-         "performDiscreteCollisionDetection(), the triangle pairs from gContactAddedCallback; test: GImpact's own; "
-         "threads 1";
-}
-std::size_t PlainBullet::builds() const { return impl_->builds; }
-std::size_t PlainBullet::refits() const { return impl_->refits; }
-
-PeerFrame PlainBullet::frame(const std::vector<Object>& objects) {
-  Impl& m = *impl_;
+PeerFrame BulletSetup::frame(const std::vector<Object>& objects) {
+  BulletSetup& m = *this;
   PeerFrame f;
   std::map<std::pair<int, int>, std::vector<std::uint64_t>> hits;
   const auto t0 = Clock::now();
@@ -229,5 +221,9 @@ PeerFrame PlainBullet::frame(const std::vector<Object>& objects) {
   }
   return f;
 }
+
+}  // namespace
+
+std::unique_ptr<PlainPeer::Impl> plain_bullet() { return std::make_unique<BulletSetup>(); }
 
 }  // namespace peelcd::bench

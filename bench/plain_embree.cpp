@@ -9,7 +9,7 @@
 // one object for a rigid pair). Object pairs: every two scenes whose bounds overlap (all pairs
 // compared); rtcCollide on each, Moller's test as published on the reported couples, the hits
 // appended to the pair's list. Self pairs are not set up (the audit's scenes have none).
-#include "peelcd/bench/plain_embree.h"
+#include "plain_setups.h"
 
 #include "peelcd/bench/float_peers.h"
 #include "peelcd/core/clock.h"
@@ -23,7 +23,9 @@
 
 namespace peelcd::bench {
 
-struct PlainEmbree::Impl {
+namespace {
+
+struct EmbreeSetup final : PlainPeer::Impl {
   struct Item {
     std::vector<float> v;
     std::vector<unsigned> t;
@@ -33,7 +35,6 @@ struct PlainEmbree::Impl {
   };
   RTCDevice device = nullptr;
   std::vector<Item> items;
-  std::size_t builds = 0, refits = 0;
 
   // rtcCollide's callback context: the two items, the hits (under a lock: rtcCollide may call
   // back from several of TBB's threads once another device in the process asked for them).
@@ -86,7 +87,7 @@ struct PlainEmbree::Impl {
     it.geometry = rtcNewGeometry(device, RTC_GEOMETRY_TYPE_USER);
     rtcSetGeometryUserPrimitiveCount(it.geometry, unsigned(it.t.size() / 3));
     rtcSetGeometryUserData(it.geometry, &it);
-    rtcSetGeometryBoundsFunction(it.geometry, &Impl::bounds, nullptr);
+    rtcSetGeometryBoundsFunction(it.geometry, &EmbreeSetup::bounds, nullptr);
     if (dynamic) rtcSetGeometryBuildQuality(it.geometry, RTC_BUILD_QUALITY_REFIT);
     rtcCommitGeometry(it.geometry);
     rtcAttachGeometry(it.scene, it.geometry);
@@ -123,37 +124,34 @@ struct PlainEmbree::Impl {
       }
     }
   }
+
+  EmbreeSetup() {
+    device = rtcNewDevice("threads=1");
+    if (!device) throw std::runtime_error("Embree: rtcNewDevice failed");
+  }
+  ~EmbreeSetup() override {
+    for (Item& it : items)
+      if (it.scene) rtcReleaseScene(it.scene);
+    rtcReleaseDevice(device);
+  }
+  std::string setup() const override {
+    return "Embree " + std::to_string(RTC_VERSION_MAJOR) + "." + std::to_string(RTC_VERSION_MINOR) + "." +
+           std::to_string(RTC_VERSION_PATCH) +
+           " rtcCollide as written from its API documentation alone (bench/plain_embree.cpp): world-space float "
+           "vertices, one user geometry per object, a static scene until the vertices change, then a dynamic scene "
+           "of low quality, its geometry refitted at each commit; all object pairs' scene bounds compared; test moller; threads 1";
+  }
+  PeerFrame frame(const std::vector<Object>& objects) override;
 };
 
-PlainEmbree::PlainEmbree() : impl_(std::make_unique<Impl>()) {
-  impl_->device = rtcNewDevice("threads=1");
-  if (!impl_->device) throw std::runtime_error("Embree: rtcNewDevice failed");
-}
-PlainEmbree::~PlainEmbree() {
-  for (Impl::Item& it : impl_->items)
-    if (it.scene) rtcReleaseScene(it.scene);
-  rtcReleaseDevice(impl_->device);
-}
-std::string PlainEmbree::name() const { return "Embree 3 rtcCollide, plain setup (audit)"; }
-std::string PlainEmbree::column() const { return "Embree pl"; }
-std::string PlainEmbree::setup() const {
-  return "Embree " + std::to_string(RTC_VERSION_MAJOR) + "." + std::to_string(RTC_VERSION_MINOR) + "." +
-         std::to_string(RTC_VERSION_PATCH) +
-         " rtcCollide as written from its API documentation alone (bench/plain_embree.cpp): world-space float "
-         "vertices, one user geometry per object, a static scene until the vertices change, then a dynamic scene "
-         "of low quality, its geometry refitted at each commit; all object pairs' scene bounds compared; test moller; threads 1";
-}
-std::size_t PlainEmbree::builds() const { return impl_->builds; }
-std::size_t PlainEmbree::refits() const { return impl_->refits; }
-
-PeerFrame PlainEmbree::frame(const std::vector<Object>& objects) {
-  Impl& m = *impl_;
+PeerFrame EmbreeSetup::frame(const std::vector<Object>& objects) {
+  EmbreeSetup& m = *this;
   PeerFrame f;
   const auto t0 = Clock::now();
   if (m.items.size() != objects.size()) {
-    for (Impl::Item& it : m.items)
+    for (Item& it : m.items)
       if (it.scene) rtcReleaseScene(it.scene);
-    m.items = std::vector<Impl::Item>(objects.size());
+    m.items = std::vector<Item>(objects.size());
   }
   for (std::size_t i = 0; i < objects.size(); ++i) m.sync(m.items[i], objects[i]);
   std::vector<RTCBounds> b(objects.size());
@@ -164,8 +162,8 @@ PeerFrame PlainEmbree::frame(const std::vector<Object>& objects) {
           b[j].lower_y <= b[i].upper_y && b[i].lower_z <= b[j].upper_z && b[j].lower_z <= b[i].upper_z) {
         f.objects.emplace_back(i, j);
         f.per_pair.emplace_back();
-        Impl::Hits hits{&m.items[i], &m.items[j], &f.per_pair.back(), {}};
-        rtcCollide(m.items[i].scene, m.items[j].scene, &Impl::collide, &hits);
+        Hits hits{&m.items[i], &m.items[j], &f.per_pair.back(), {}};
+        rtcCollide(m.items[i].scene, m.items[j].scene, &EmbreeSetup::collide, &hits);
       }
   f.ms = ms_since(t0);
   // The table scores sorted lists: sorted after the clock stops (a user may not sort).
@@ -176,5 +174,9 @@ PeerFrame PlainEmbree::frame(const std::vector<Object>& objects) {
   }
   return f;
 }
+
+}  // namespace
+
+std::unique_ptr<PlainPeer::Impl> plain_embree() { return std::make_unique<EmbreeSetup>(); }
 
 }  // namespace peelcd::bench

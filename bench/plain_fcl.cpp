@@ -13,7 +13,7 @@
 // back with each pair whose boxes overlap, and fcl::collide on the pair with a request for every
 // contact (no contact geometry) gives the triangle pairs (Contact::b1, b2). FCL's own triangle
 // test decides. Self pairs are not set up.
-#include "peelcd/bench/plain_fcl.h"
+#include "plain_setups.h"
 
 #include "peelcd/core/clock.h"
 #include "peelcd/core/pairs.h"
@@ -30,7 +30,9 @@
 
 namespace peelcd::bench {
 
-struct PlainFcl::Impl {
+namespace {
+
+struct FclSetup final : PlainPeer::Impl {
   using Model = fcl::BVHModel<fcl::OBBRSSd>;
   struct Item {
     std::shared_ptr<Model> model;
@@ -41,8 +43,6 @@ struct PlainFcl::Impl {
   std::vector<Item> items;
   std::map<const Mesh*, std::pair<std::shared_ptr<const Mesh>, std::shared_ptr<Model>>> shapes;
   fcl::DynamicAABBTreeCollisionManagerd manager;
-  bool registered = false;
-  std::size_t builds = 0, refits = 0;
   std::vector<fcl::Vector3d> points;
 
   static std::shared_ptr<Model> build(const Mesh& m) {
@@ -105,22 +105,16 @@ struct PlainFcl::Impl {
     it.object->computeAABB();
     return added;
   }
+
+  std::string setup() const override {
+    return "FCL 0.7 as written from its documentation and tests alone (bench/plain_fcl.cpp): one BVHModel<OBBRSS> "
+           "per rigid shape placed by its transform or per other object in world space, updated by "
+           "beginUpdateModel/updateSubModel/endUpdateModel and computeLocalAABB when its vertices change; DynamicAABBTreeCollisionManager, "
+           "fcl::collide on each of its pairs asking for every contact; test: FCL's own; threads 1";
+  }
+  PeerFrame frame(const std::vector<Object>& objects) override;
 };
 
-PlainFcl::PlainFcl() : impl_(std::make_unique<Impl>()) {}
-PlainFcl::~PlainFcl() = default;
-std::string PlainFcl::name() const { return "FCL 0.7, plain setup (audit)"; }
-std::string PlainFcl::column() const { return "FCL pl"; }
-std::string PlainFcl::setup() const {
-  return "FCL 0.7 as written from its documentation and tests alone (bench/plain_fcl.cpp): one BVHModel<OBBRSS> "
-         "per rigid shape placed by its transform or per other object in world space, updated by "
-         "beginUpdateModel/updateSubModel/endUpdateModel when its vertices change; DynamicAABBTreeCollisionManager, "
-         "fcl::collide on each of its pairs asking for every contact; test: FCL's own; threads 1";
-}
-std::size_t PlainFcl::builds() const { return impl_->builds; }
-std::size_t PlainFcl::refits() const { return impl_->refits; }
-
-namespace {
 struct Gather {
   std::map<std::pair<std::size_t, std::size_t>, std::vector<std::uint64_t>>* hits;
   fcl::CollisionRequestd request;
@@ -139,16 +133,15 @@ bool on_pair(fcl::CollisionObjectd* o1, fcl::CollisionObjectd* o2, void* data) {
   }
   return false;  // not done: every pair
 }
-}  // namespace
 
-PeerFrame PlainFcl::frame(const std::vector<Object>& objects) {
-  Impl& m = *impl_;
+PeerFrame FclSetup::frame(const std::vector<Object>& objects) {
+  FclSetup& m = *this;
   PeerFrame f;
   std::map<std::pair<std::size_t, std::size_t>, std::vector<std::uint64_t>> hits;
   const auto t0 = Clock::now();
   if (m.items.size() != objects.size()) {
     m.manager.clear();
-    m.items = std::vector<Impl::Item>(objects.size());
+    m.items = std::vector<Item>(objects.size());
   }
   std::vector<fcl::CollisionObjectd*> added;
   for (std::size_t i = 0; i < objects.size(); ++i)
@@ -168,5 +161,9 @@ PeerFrame PlainFcl::frame(const std::vector<Object>& objects) {
   }
   return f;
 }
+
+}  // namespace
+
+std::unique_ptr<PlainPeer::Impl> plain_fcl() { return std::make_unique<FclSetup>(); }
 
 }  // namespace peelcd::bench

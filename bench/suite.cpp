@@ -2,9 +2,7 @@
 #include "peelcd/core/clock.h"
 
 #include "peelcd/bench/float_peers.h"
-#include "peelcd/bench/plain_bullet.h"
-#include "peelcd/bench/plain_embree.h"
-#include "peelcd/bench/plain_fcl.h"
+#include "peelcd/bench/plain_peers.h"
 #include "peelcd/bench/floor.h"
 #include "peelcd/bench/peers.h"
 #include "peelcd/core/image/id_map.h"
@@ -149,9 +147,8 @@ std::vector<std::unique_ptr<Peer>> make_peers(unsigned threads, bool all, bool a
   // --audit: each library as a plain user writes it (bench/plain_embree.cpp, plain_bullet.cpp,
   // plain_fcl.cpp), against the rows above.
   if (audit) {
-    peers.push_back(std::make_unique<PlainFcl>());
-    peers.push_back(std::make_unique<PlainEmbree>());
-    peers.push_back(std::make_unique<PlainBullet>());
+    for (const PlainPeer::Library l : {PlainPeer::Library::fcl, PlainPeer::Library::embree, PlainPeer::Library::bullet})
+      peers.push_back(std::make_unique<PlainPeer>(l));
   }
   return peers;
 }
@@ -566,9 +563,7 @@ void SuiteRun::print_table(bool heap_kept) const {
 void SuiteRun::print_audit(const std::vector<double>& med) const {
   for (std::size_t plain = 0; plain < rows_.size(); ++plain) {
     const Peer* q = rows_[plain].peer;
-    if (!q || !(dynamic_cast<const PlainFcl*>(q) || dynamic_cast<const PlainEmbree*>(q) ||
-                dynamic_cast<const PlainBullet*>(q)))
-      continue;
+    if (!q || !dynamic_cast<const PlainPeer*>(q)) continue;
     for (std::size_t m = 0; m < rows_.size(); ++m) {
       const Peer* p = rows_[m].peer;
       if (!p || m == plain || p->library() != q->library() || p->variant()) continue;

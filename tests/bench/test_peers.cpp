@@ -5,9 +5,7 @@
 // checked on scenes far from the degenerate cases where double rounding decides.)
 #include "peelcd/bench/float_peers.h"
 #include "peelcd/bench/peers.h"
-#include "peelcd/bench/plain_bullet.h"
-#include "peelcd/bench/plain_embree.h"
-#include "peelcd/bench/plain_fcl.h"
+#include "peelcd/bench/plain_peers.h"
 #include "peelcd/core/broad_phase.h"
 #include "peelcd/core/primitives.h"
 #include "peelcd/core/exact/self.h"
@@ -167,7 +165,7 @@ TEST_CASE("the plain Embree setup of --audit finds the Embree peer's pairs, refi
   // rigid pair), so their pairs are the same, misses and false pairs included.
   const auto crowd = make_crowd(30, 4);
   bench::EmbreePeer embree(bench::EmbreePeer::Update::refit, 1);
-  bench::PlainEmbree plain;
+  bench::PlainPeer plain(bench::PlainPeer::Library::embree);
   std::vector<Object> objects;
   for (std::size_t f = 0; f < crowd->frames(); ++f) {
     crowd->frame(f, objects);
@@ -255,7 +253,7 @@ std::size_t require_covers(const bench::PeerFrame& want, const bench::PeerFrame&
 // refit clamps to it: without the new shape it finds nothing after the first frames), refitted
 // within it; and of the crowd's frames (rigid balls placed by their transforms, one shape each).
 TEST_CASE("the plain Bullet setup of --audit finds every exact pair, refits within its range, is made again beyond it", "[peers]") {
-  bench::PlainBullet plain;
+  bench::PlainPeer plain(bench::PlainPeer::Library::bullet);
   std::vector<Object> objects(2);
   objects[0].mesh = uv_sphere(Vec3::Zero(), 1.0, 24, 12);
   std::size_t hits = 0;
@@ -273,7 +271,7 @@ TEST_CASE("the plain Bullet setup of --audit finds every exact pair, refits with
   CHECK_THAT(plain.setup(), Catch::Contains("gContactAddedCallback") && Catch::Contains("GImpact's own"));
 
   const auto crowd = make_crowd(30, 4);
-  bench::PlainBullet on_crowd;
+  bench::PlainPeer on_crowd(bench::PlainPeer::Library::bullet);
   std::vector<Object> balls;
   for (std::size_t f = 0; f < crowd->frames(); ++f) {
     crowd->frame(f, balls);
@@ -289,7 +287,7 @@ TEST_CASE("the plain Bullet setup of --audit finds every exact pair, refits with
 // updated through FCL's update API, not built again), and of the crowd's frames (rigid balls
 // placed by their transforms, one model per shape).
 TEST_CASE("the plain FCL setup of --audit finds every exact pair, updates a deforming model in place", "[peers]") {
-  bench::PlainFcl plain;
+  bench::PlainPeer plain(bench::PlainPeer::Library::fcl);
   std::vector<Object> objects(2);
   objects[0].mesh = uv_sphere(Vec3::Zero(), 1.0, 24, 12);
   std::size_t hits = 0;
@@ -307,7 +305,7 @@ TEST_CASE("the plain FCL setup of --audit finds every exact pair, updates a defo
   CHECK_THAT(plain.setup(), Catch::Contains("OBBRSS") && Catch::Contains("updateSubModel"));
 
   const auto crowd = make_crowd(30, 4);
-  bench::PlainFcl on_crowd;
+  bench::PlainPeer on_crowd(bench::PlainPeer::Library::fcl);
   std::vector<Object> balls;
   for (std::size_t f = 0; f < crowd->frames(); ++f) {
     crowd->frame(f, balls);

@@ -36,8 +36,8 @@ struct Suite {
   // The World rows' World::time_routes() (unset: timed on a GPU, not on a software renderer).
   std::optional<bool> time_routes;
   bool short_rows = false;
-  // A row of Embree set up as a plain user writes it (PlainEmbree), and each Embree row's ratio
-  // to it printed under the table (docs/performance.md, "The peers").
+  // Rows of FCL, Embree and Bullet each set up as a plain user writes it (PlainPeer), and each
+  // peer row's ratio to its library's printed under the table (docs/performance.md, "The peers").
   bool audit = false;
   // The image stage's GPU passes timed by GL timer queries (the image-work table's raster,
   // compute and transfer columns) in every peelcd row's frames.
