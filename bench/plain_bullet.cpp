@@ -42,7 +42,7 @@ namespace {
 // What the contact-added callback appends to (one frame of one plain Bullet setup at a time: the
 // callback is a global of Bullet's).
 struct Sink {
-  std::map<std::pair<int, int>, std::vector<std::uint64_t>>* hits = nullptr;
+  std::map<std::pair<std::size_t, std::size_t>, std::vector<std::uint64_t>>* hits = nullptr;
 };
 Sink g_sink;
 
@@ -51,7 +51,7 @@ bool contact_added(btManifoldPoint&, const btCollisionObjectWrapper* w0, int, in
   if (!g_sink.hits) return false;
   int a = w0->getCollisionObject()->getUserIndex(), b = w1->getCollisionObject()->getUserIndex();
   if (a > b) std::swap(a, b), std::swap(index0, index1);
-  (*g_sink.hits)[{a, b}].push_back(pack_pair(std::uint32_t(index0), std::uint32_t(index1)));
+  (*g_sink.hits)[{std::size_t(a), std::size_t(b)}].push_back(pack_pair(std::uint32_t(index0), std::uint32_t(index1)));
   return false;  // the contact point is not modified
 }
 
@@ -197,7 +197,7 @@ struct BulletSetup final : PlainPeer::Impl {
 PeerFrame BulletSetup::frame(const std::vector<Object>& objects) {
   BulletSetup& m = *this;
   PeerFrame f;
-  std::map<std::pair<int, int>, std::vector<std::uint64_t>> hits;
+  std::map<std::pair<std::size_t, std::size_t>, std::vector<std::uint64_t>> hits;
   const auto t0 = Clock::now();
   if (m.items.size() != objects.size()) {
     m.clear();
@@ -211,14 +211,7 @@ PeerFrame BulletSetup::frame(const std::vector<Object>& objects) {
   gContactAddedCallback = before;
   g_sink.hits = nullptr;
   f.ms = ms_since(t0);
-  // The table scores sorted lists: sorted after the clock stops (a user may not sort).
-  for (auto& [ab, p] : hits) {
-    std::sort(p.begin(), p.end());
-    p.erase(std::unique(p.begin(), p.end()), p.end());
-    f.objects.emplace_back(std::size_t(ab.first), std::size_t(ab.second));
-    f.pairs += p.size();
-    f.per_pair.push_back(std::move(p));
-  }
+  take_hits(hits, f);
   return f;
 }
 

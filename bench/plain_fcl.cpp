@@ -151,14 +151,7 @@ PeerFrame FclSetup::frame(const std::vector<Object>& objects) {
   Gather g{&hits, fcl::CollisionRequestd(std::numeric_limits<std::size_t>::max(), false)};
   m.manager.collide(&g, &on_pair);
   f.ms = ms_since(t0);
-  // The table scores sorted lists: sorted after the clock stops (a user may not sort).
-  for (auto& [ab, p] : hits) {
-    std::sort(p.begin(), p.end());
-    p.erase(std::unique(p.begin(), p.end()), p.end());
-    f.objects.push_back(ab);
-    f.pairs += p.size();
-    f.per_pair.push_back(std::move(p));
-  }
+  take_hits(hits, f);
   return f;
 }
 

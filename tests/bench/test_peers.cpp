@@ -247,6 +247,21 @@ std::size_t require_covers(const bench::PeerFrame& want, const bench::PeerFrame&
   return got.pairs + missed - wanted;
 }
 
+// A plain setup on the crowd's frames (rigid balls placed by their transforms, deforming ones):
+// every exact pair found in each.
+void covers_on_crowd(bench::PlainPeer::Library library) {
+  const auto crowd = make_crowd(30, 4);
+  bench::PlainPeer plain(library);
+  std::vector<Object> balls;
+  for (std::size_t f = 0; f < crowd->frames(); ++f) {
+    crowd->frame(f, balls);
+    INFO("crowd frame " << f);
+    const bench::PeerFrame got = plain.frame(balls);
+    CHECK(got.pairs > 0);
+    require_covers(exact(balls), got);
+  }
+}
+
 // Bullet as a plain user sets it up (GImpact's own algorithm and triangle test in a collision
 // world, pairs from the contact-added callback): every exact pair of a deforming sphere
 // travelling through another, made again once it leaves its box set's quantization range (a
@@ -270,16 +285,7 @@ TEST_CASE("the plain Bullet setup of --audit finds every exact pair, refits with
   CHECK(plain.variant());     // never the best peer
   CHECK_THAT(plain.setup(), Catch::Contains("gContactAddedCallback") && Catch::Contains("GImpact's own"));
 
-  const auto crowd = make_crowd(30, 4);
-  bench::PlainPeer on_crowd(bench::PlainPeer::Library::bullet);
-  std::vector<Object> balls;
-  for (std::size_t f = 0; f < crowd->frames(); ++f) {
-    crowd->frame(f, balls);
-    INFO("crowd frame " << f);
-    const bench::PeerFrame got = on_crowd.frame(balls);
-    CHECK(got.pairs > 0);
-    require_covers(exact(balls), got);
-  }
+  covers_on_crowd(bench::PlainPeer::Library::bullet);
 }
 
 // FCL as a plain user sets it up (OBBRSS models, the dynamic AABB tree manager, fcl::collide asking
@@ -304,14 +310,5 @@ TEST_CASE("the plain FCL setup of --audit finds every exact pair, updates a defo
   CHECK(plain.variant());
   CHECK_THAT(plain.setup(), Catch::Contains("OBBRSS") && Catch::Contains("updateSubModel"));
 
-  const auto crowd = make_crowd(30, 4);
-  bench::PlainPeer on_crowd(bench::PlainPeer::Library::fcl);
-  std::vector<Object> balls;
-  for (std::size_t f = 0; f < crowd->frames(); ++f) {
-    crowd->frame(f, balls);
-    INFO("crowd frame " << f);
-    const bench::PeerFrame got = on_crowd.frame(balls);
-    CHECK(got.pairs > 0);
-    require_covers(exact(balls), got);
-  }
+  covers_on_crowd(bench::PlainPeer::Library::fcl);
 }
