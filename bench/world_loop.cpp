@@ -19,8 +19,10 @@
 // balance alone, and each loop's items, work, longest item and span (medians over the frames):
 // where the scaling of a frame is lost to uneven work, measurable on a machine with few cores.
 //
-//   peelcd_world_loop SCENE|--spheres STACKS|--wave STACKS|--crowd N [--frames N] [--threads T] [--pairs] [--cold] [--busy] [--image] [--model L]
+//   peelcd_world_loop SCENE|--spheres STACKS|--wave STACKS|--crowd N [--frames N] [--threads T] [--pairs] [--cold] [--busy] [--image] [--model L] [--warmup N]
 //
+// `--warmup N`: N frames first, untimed (the first frames grow the World's buffers and the
+// stage's: on the image route they take up to twice a later frame's exact step).
 // Prints the median frame (and its first quartile), the World's boxes and exact steps
 // (Timings::aabb, Timings::cpu) and the contacts found. Under valgrind --tool=callgrind, the
 // difference of two runs with different --frames is the instructions of that many frames.
@@ -50,7 +52,7 @@ double median(std::vector<double> v, double q = 0.5) {
 
 int usage(const char* why) {
   std::fprintf(stderr, "peelcd_world_loop: %s\nusage: peelcd_world_loop SCENE|--spheres STACKS|--wave STACKS|--crowd N [--frames N] [--threads T] "
-               "[--pairs] [--cold] [--busy] [--image] [--model L]\n",
+               "[--pairs] [--cold] [--busy] [--image] [--model L] [--warmup N]\n",
                why);
   return 2;
 }
@@ -59,7 +61,7 @@ int usage(const char* why) {
 
 int main(int argc, char** argv) {
   std::string path;
-  long frames = 300, stacks = 0, wave = 0, crowd = 0, threads = 1, model = 0;
+  long frames = 300, stacks = 0, wave = 0, crowd = 0, threads = 1, model = 0, warmup = 0;
   bool pairs = false, cold = false, busy = false, image = false;
   struct Count {
     const char* flag;
@@ -72,7 +74,8 @@ int main(int argc, char** argv) {
                           {"--wave", &wave, 3, 2000, "latitude bands from 3 to 2,000"},
                           {"--crowd", &crowd, 2, 5000, "balls from 2 to 5,000"},
                           {"--threads", &threads, 0, 64, "0 (one per core) to 64"},
-                          {"--model", &model, 2, 256, "lanes from 2 to 256"}};
+                          {"--model", &model, 2, 256, "lanes from 2 to 256"},
+                          {"--warmup", &warmup, 0, 1000, "a count from 0 to 1,000"}};
   const auto count_option = [&](const char* arg) -> const Count* {
     for (const Count& c : counts)
       if (!std::strcmp(arg, c.flag)) return &c;
@@ -150,7 +153,7 @@ int main(int argc, char** argv) {
     };
     std::vector<LoopTimes> loops;
     std::size_t contacts = 0;
-    for (long f = 0; f < frames; ++f) {
+    for (long f = -warmup; f < frames; ++f) {
       for (std::size_t i = 0; i < other.size(); i += 64) other[i] = char(other[i] + 1);
       if (busy) {  // other work: a sort of random integers (xorshift, seeded by the frame)
         std::uint32_t x = std::uint32_t(f) * 2654435761u + 1;
@@ -162,13 +165,14 @@ int main(int argc, char** argv) {
         }
         std::sort(work.begin(), work.end());
       }
-      if (sequence) sequence->frame(std::size_t(f) % kSphereFrames, objects);
+      if (sequence) sequence->frame(std::size_t(f + warmup) % kSphereFrames, objects);
       const auto t0 = std::chrono::steady_clock::now();
       for (std::size_t i = 0; i < ids.size(); ++i) {
         if (objects[i].rigid) world.set_pose(ids[i], objects[i].rigid->pose);
         else world.set_vertices(ids[i], objects[i].mesh.vertices);
       }
       world.collide(opt, result);
+      if (f < 0) continue;  // a warm-up frame
       ms.push_back(std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - t0).count());
       boxes.push_back(result.timings.aabb);
       exact.push_back(result.timings.cpu);
@@ -212,7 +216,8 @@ int main(int argc, char** argv) {
     const std::string what = stacks ? "spheres, " + std::to_string(stacks) + " stacks"
                              : wave  ? "waving spheres, " + std::to_string(wave) + " stacks"
                              : crowd ? "crowd, " + std::to_string(crowd) + " balls" : path;
-    std::printf("%s: %ld frames%s%s%s, %s\n", what.c_str(), frames, pairs ? ", pairs only" : "",
+    std::printf("%s: %ld frames%s%s%s%s, %s\n", what.c_str(), frames,
+                warmup ? (" after " + std::to_string(warmup) + " untimed").c_str() : "", pairs ? ", pairs only" : "",
                 image ? ", the image route (EGL, GPU resolve, compute coverage)" : "",
                 busy  ? ", 64 MB written and 200k integers sorted between frames"
                 : cold ? ", 64 MB written between frames"
