@@ -1,6 +1,10 @@
 #include "peelcd/core/worker_pool.h"
 
 #include <algorithm>
+#include <chrono>
+#if defined(__x86_64__) || defined(__i386__)
+#include <immintrin.h>
+#endif
 
 namespace peelcd {
 
@@ -28,9 +32,29 @@ void WorkerPool::call(unsigned lane) {
   }
 }
 
+namespace {
+// Waits up to kSpinFor for ready() before the caller sleeps on the pool's condition: a frame's
+// loops follow one another within microseconds, and a lane asleep needs the scheduler to wake it
+// for the next (and the calling thread, for the last lane's end). Bounded, so a pool idle
+// between frames or sharing its cores with other work sleeps soon.
+template <class Ready>
+bool spin_until(Ready ready) {
+  constexpr auto kSpinFor = std::chrono::microseconds(50);
+  const auto until = std::chrono::steady_clock::now() + kSpinFor;
+  for (unsigned i = 0;; ++i) {
+    if (ready()) return true;
+#if defined(__x86_64__) || defined(__i386__)
+    _mm_pause();
+#endif
+    if ((i & 63) == 63 && std::chrono::steady_clock::now() > until) return ready();
+  }
+}
+}  // namespace
+
 void WorkerPool::work(unsigned lane) {
   std::uint64_t seen = 0;
   for (;;) {
+    spin_until([&] { return stop_.load(std::memory_order_acquire) || generation_.load(std::memory_order_acquire) != seen; });
     {
       std::unique_lock<std::mutex> lock(mutex_);
       start_.wait(lock, [&] { return stop_ || generation_ != seen; });
@@ -57,6 +81,7 @@ void WorkerPool::run_erased(Erased fn, void* context) {
   }
   start_.notify_all();
   call(0);
+  spin_until([&] { return finished_.load(std::memory_order_acquire) == workers_.size(); });
   std::exception_ptr error;
   {
     std::unique_lock<std::mutex> lock(mutex_);
