@@ -204,12 +204,20 @@ PeerFrame BulletSetup::frame(const std::vector<Object>& objects) {
     m.items.resize(objects.size());
   }
   for (std::size_t i = 0; i < objects.size(); ++i) m.sync(i, objects[i]);
-  g_sink.hits = &hits;
-  ContactAddedCallback before = gContactAddedCallback;
-  gContactAddedCallback = &contact_added;
-  m.world.performDiscreteCollisionDetection();
-  gContactAddedCallback = before;
-  g_sink.hits = nullptr;
+  {
+    struct Hook {  // the callback and its sink set for this frame, put back however it ends
+      ContactAddedCallback before = gContactAddedCallback;
+      explicit Hook(std::map<std::pair<std::size_t, std::size_t>, std::vector<std::uint64_t>>* hits) {
+        g_sink.hits = hits;
+        gContactAddedCallback = &contact_added;
+      }
+      ~Hook() {
+        gContactAddedCallback = before;
+        g_sink.hits = nullptr;
+      }
+    } hook(&hits);
+    m.world.performDiscreteCollisionDetection();
+  }
   f.ms = ms_since(t0);
   take_hits(hits, f);
   return f;
