@@ -87,6 +87,7 @@ int run_bench(const BenchArgs& a) {
     self.crumpled = a.scene == "cloth-crumpled";
     self.n = a.cloth ? a.cloth : self.crumpled ? 224 : 130;
     self.frames = a.frames;
+    self.audit = a.audit;
     self.stage = make_image_stage(a.backend, gl::GlOptions{});
     const std::string csv = bench::run_self_suite(self);
     if (!a.csv.empty()) write_output(a.csv, csv);
@@ -171,9 +172,9 @@ std::vector<Command> add_bench_commands(CLI::App& app) {
   benchmark->add_flag("--short", be.short_rows, "Only the World rows, the frame API's router and image stage, the peers "
                                                  "and the floors (for the scale scenes)");
   benchmark->add_flag("--audit", be.audit,
-                      "Add Embree 3 as a plain user writes it from its documentation (bench/plain_embree.cpp: world "
-                      "space, static scenes until their vertices change, then refitted) and print each Embree row's "
-                      "ratio to it");
+                      "Add FCL, Embree and Bullet each as a plain user writes it from its documentation "
+                      "(bench/plain_fcl.cpp, plain_embree.cpp, plain_bullet.cpp) and print each peer row's ratio to its "
+                      "library's (cloth-self, cloth-crumpled: Embree's self rows against its plain setup)");
   benchmark->add_flag("--no-gpu-timers", be.no_gpu_timers,
                       "No GL timer queries around the image stage's passes (the image-work table's raster, compute "
                       "and transfer columns; on by default)");

@@ -8,7 +8,9 @@
 // quality whose geometry is refitted (RTC_BUILD_QUALITY_REFIT) at each commit. All in world space (no frame of
 // one object for a rigid pair). Object pairs: every two scenes whose bounds overlap (all pairs
 // compared); rtcCollide on each, Moller's test as published on the reported couples, the hits
-// appended to the pair's list. Self pairs are not set up (the audit's scenes have none).
+// appended to the pair's list. An object asking for its self pairs (Object::self): its scene
+// against itself, each couple once (rtcCollide reports both orders and a triangle with itself),
+// couples sharing a vertex index left out (neighbours touch by construction), Moller's test.
 #include "plain_setups.h"
 
 #include "peelcd/bench/float_peers.h"
@@ -69,10 +71,20 @@ struct EmbreeSetup final : PlainPeer::Impl {
     std::array<float, 9> ta, tb;
     std::lock_guard<std::mutex> lock(h.mutex);
     for (unsigned i = 0; i < n; ++i) {
+      if (h.a == h.b && (c[i].primID0 >= c[i].primID1 || share_vertex(*h.a, c[i].primID0, c[i].primID1))) continue;
       corners(*h.a, c[i].primID0, ta);
       corners(*h.b, c[i].primID1, tb);
       if (tri_tri_moller(ta, tb)) h.out->push_back(pack_pair(c[i].primID0, c[i].primID1));
     }
+  }
+
+  static bool share_vertex(const Item& it, unsigned x, unsigned y) {
+    const unsigned* p = &it.t[3 * std::size_t(x)];
+    const unsigned* q = &it.t[3 * std::size_t(y)];
+    for (int i = 0; i < 3; ++i)
+      for (int j = 0; j < 3; ++j)
+        if (p[i] == q[j]) return true;
+    return false;
   }
 
   void build(Item& it, bool dynamic) {
@@ -139,7 +151,8 @@ struct EmbreeSetup final : PlainPeer::Impl {
            std::to_string(RTC_VERSION_PATCH) +
            " rtcCollide as written from its API documentation alone (bench/plain_embree.cpp): world-space float "
            "vertices, one user geometry per object, a static scene until the vertices change, then a dynamic scene "
-           "of low quality, its geometry refitted at each commit; all object pairs' scene bounds compared; test moller; threads 1";
+           "of low quality, its geometry refitted at each commit; all object pairs' scene bounds compared; self pairs: "
+           "the scene against itself, couples sharing a vertex index left out; test moller; threads 1";
   }
   PeerFrame frame(const std::vector<Object>& objects) override;
 };
@@ -165,6 +178,13 @@ PeerFrame EmbreeSetup::frame(const std::vector<Object>& objects) {
         Hits hits{&m.items[i], &m.items[j], &f.per_pair.back(), {}};
         rtcCollide(m.items[i].scene, m.items[j].scene, &EmbreeSetup::collide, &hits);
       }
+  for (std::size_t i = 0; i < objects.size(); ++i)
+    if (objects[i].self && objects[i].mesh.triangles.size() >= 2) {
+      f.objects.emplace_back(i, i);
+      f.per_pair.emplace_back();
+      Hits hits{&m.items[i], &m.items[i], &f.per_pair.back(), {}};
+      rtcCollide(m.items[i].scene, m.items[i].scene, &EmbreeSetup::collide, &hits);
+    }
   f.ms = ms_since(t0);
   // The table scores sorted lists: sorted after the clock stops (a user may not sort).
   for (std::vector<std::uint64_t>& p : f.per_pair) {

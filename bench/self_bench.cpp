@@ -3,6 +3,7 @@
 
 #include "exact/bvh_traverse.h"  // the library's own self traversal (core/ on the bench's path)
 #include "peelcd/bench/float_peers.h"
+#include "peelcd/bench/plain_peers.h"
 #include "peelcd/bench/suite.h"
 #include "peelcd/core/exact/bvh.h"
 #include "peelcd/core/image/detector.h"
@@ -64,6 +65,7 @@ struct SelfState {
   EmbreePeer embree{EmbreePeer::Update::refit, 1};
   EmbreePeer embree_morton{EmbreePeer::Update::rebuild_low, 1};
   BulletPeer bullet{1};
+  PlainPeer plain_embree{PlainPeer::Library::embree};  // --audit
   Bvh tree;
   std::vector<std::uint32_t> rep;
   std::vector<BvhNodePair> stack;
@@ -109,7 +111,7 @@ void add_peelcd_methods(SelfState& st, std::vector<Method>& methods) {
 // The peers: Embree and Bullet (the cloth as one deforming object against itself, their trees
 // refitted; Embree's also rebuilt at low quality, its Morton builder: the faster of the two is
 // the one an Embree user would pick), a bare BVH self-test with peelcd's tree and test, CGAL's self_intersections.
-void add_peer_methods(SelfState& st, std::vector<Method>& methods) {
+void add_peer_methods(SelfState& st, std::vector<Method>& methods, bool audit) {
   st.peer_objects[0].name = "cloth";
   st.peer_objects[0].self = true;
   const auto peer = [&st](auto& p) {
@@ -125,6 +127,7 @@ void add_peer_methods(SelfState& st, std::vector<Method>& methods) {
   methods.push_back({"Embree 3 rtcCollide, self, refit", peer(st.embree)});
   methods.push_back({"Embree 3 rtcCollide, self, Morton rebuild", peer(st.embree_morton)});
   methods.push_back({"Bullet 3 GImpact, self, refit", peer(st.bullet)});
+  if (audit) methods.push_back({"Embree 3 rtcCollide, self, plain setup (audit)", peer(st.plain_embree)});
   // A BVH self-test with its tree kept: refit, traverse against itself, drop adjacent couples,
   // the exact test (peelcd's Bvh and test, no World around them).
   st.tree.build(st.meshes[0].vertices, st.meshes[0].triangles);
@@ -198,7 +201,7 @@ std::string run_self_suite(const SelfSuite& suite) {
   for (const Mesh& m : st.meshes) exact.push_back(exact_self_pairs(m));
   std::vector<Method> methods;
   add_peelcd_methods(st, methods);
-  add_peer_methods(st, methods);
+  add_peer_methods(st, methods, suite.audit);
 
   std::printf("peelcd bench: %s (%s; %zu triangles, %zu frames, %zu exact self pairs in the first); "
               "median ms per frame after an untimed pass, the methods taking turns on each frame, one thread\n",
@@ -223,6 +226,16 @@ std::string run_self_suite(const SelfSuite& suite) {
   }
   std::printf("(ratio: to the first row. exact: the exact self pairs summed over the frames (docs/design.md's "
               "definition; CGAL's own adjacent-face reports are left out of its count).)\n");
+  // --audit: the Embree self rows against Embree's scene against itself as a plain user sets it up.
+  std::size_t plain = methods.size();
+  for (std::size_t k = 0; k < methods.size(); ++k)
+    if (methods[k].name.find("(audit)") != std::string::npos) plain = k;
+  if (plain < methods.size())
+    for (std::size_t k = 0; k < methods.size(); ++k)
+      if (k != plain && methods[k].name.rfind("Embree", 0) == 0)
+        std::printf("audit: %s / the plain setup: %.2f (medians %.3f / %.3f ms; pairs %zu / %zu over the frames)\n",
+                    methods[k].name.c_str(), median(tally[k].ms) / median(tally[plain].ms), median(tally[k].ms),
+                    median(tally[plain].ms), tally[k].found, tally[plain].found);
   return csv;
 }
 

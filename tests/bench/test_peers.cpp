@@ -158,6 +158,13 @@ TEST_CASE("the Embree and Bullet peers find the exact pairs on the crowd, a rigi
   REQUIRE_FALSE(want.per_pair[0].empty());
   require_same(want, bench::EmbreePeer(bench::EmbreePeer::Update::refit, 1, sc).frame(sheet));
   require_same(want, bench::BulletPeer(1, sc).frame(sheet));
+  // The plain Embree setup of --audit: the scene against itself, each couple once, neighbours
+  // (a shared vertex index) left out, Moller's test: the Embree row's pairs with the same test.
+  bench::PlainPeer plain(bench::PlainPeer::Library::embree);
+  const bench::PeerFrame self_plain = plain.frame(sheet);
+  REQUIRE(self_plain.objects == want.objects);
+  require_same(bench::EmbreePeer(bench::EmbreePeer::Update::refit, 1).frame(sheet), self_plain);
+  CHECK(self_plain.pairs > 0);
 }
 
 TEST_CASE("the plain Embree setup of --audit finds the Embree peer's pairs, refits what moves, keeps what does not", "[peers]") {

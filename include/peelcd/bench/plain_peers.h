@@ -2,7 +2,8 @@
 // The audit of peelcd bench's peer rows (`peelcd bench --audit`): FCL 0.7, Embree 3 and Bullet 3
 // each set up as a plain user writes it from the library's own documentation alone, each in a
 // file of its own that shares no setup code with the bench's rows (bench/plain_fcl.cpp,
-// plain_embree.cpp, plain_bullet.cpp say the setups). One thread; no self pairs. Labelled variant
+// plain_embree.cpp, plain_bullet.cpp say the setups). One thread; self pairs in the Embree setup
+// only (Bullet's collision world and FCL's manager pair distinct objects). Labelled variant
 // rows: never the "best" peer.
 #include "peelcd/bench/peers.h"
 

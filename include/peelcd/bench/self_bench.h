@@ -22,6 +22,9 @@ struct SelfSuite {
   int n = 130;
   std::size_t frames = 8;
   std::shared_ptr<ImageStage> stage;  // the frame API's image stage
+  // A row of Embree's scene against itself as a plain user sets it up (PlainPeer), and each
+  // Embree self row's ratio to it under the table (docs/performance.md, "The audit").
+  bool audit = false;
 };
 
 // Prints the table on stdout; returns the CSV (method,frame,ms,exact,found,missed).
