@@ -137,11 +137,7 @@ struct BulletSetup final : PlainPeer::Impl {
 
   void sync(std::size_t i, const Object& o) {
     Item& it = items[i];
-    const bool rigid = o.rigid && o.rigid->shape &&
-                       (o.rigid->pose.linear().transpose() * o.rigid->pose.linear() - Eigen::Matrix3d::Identity())
-                               .cwiseAbs()
-                               .maxCoeff() < 1e-12;
-    if (rigid) {
+    if (placed_rigid(o)) {
       auto& slot = shapes[o.rigid->shape.get()];
       if (slot.first != o.rigid->shape) {
         slot.first = o.rigid->shape;

@@ -61,11 +61,7 @@ struct FclSetup final : PlainPeer::Impl {
   bool sync(Item& it, const Object& o, std::size_t index) {
     std::shared_ptr<Model> model = it.model;
     fcl::Transform3d pose = fcl::Transform3d::Identity();
-    const bool rigid = o.rigid && o.rigid->shape &&
-                       (o.rigid->pose.linear().transpose() * o.rigid->pose.linear() - Eigen::Matrix3d::Identity())
-                               .cwiseAbs()
-                               .maxCoeff() < 1e-12;
-    if (rigid) {
+    if (placed_rigid(o)) {
       auto& slot = shapes[o.rigid->shape.get()];
       if (slot.first != o.rigid->shape) {
         slot.first = o.rigid->shape;

@@ -11,6 +11,14 @@ std::unique_ptr<PlainPeer::Impl> plain_fcl();     // bench/plain_fcl.cpp
 std::unique_ptr<PlainPeer::Impl> plain_embree();  // bench/plain_embree.cpp
 std::unique_ptr<PlainPeer::Impl> plain_bullet();  // bench/plain_bullet.cpp
 
+// An object the plain setups place by its pose: rigid with a shape and a pose of rotation and
+// translation only (the libraries' transforms are isometries); the others in world space.
+inline bool placed_rigid(const Object& o) {
+  return o.rigid && o.rigid->shape &&
+         (o.rigid->pose.linear().transpose() * o.rigid->pose.linear() - Eigen::Matrix3d::Identity()).cwiseAbs().maxCoeff() <
+             1e-12;
+}
+
 // A frame's hits gathered per object pair into f, each list sorted and distinct: the table scores
 // sorted lists, and they are sorted after the clock stops (a user may not sort).
 inline void take_hits(std::map<std::pair<std::size_t, std::size_t>, std::vector<std::uint64_t>>& hits, PeerFrame& f) {

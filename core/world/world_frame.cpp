@@ -145,6 +145,7 @@ void World::Impl::collide_frame(const DetectOptions& opt, FrameResult& out) {
   out.timings.aabb = ms_since(t0);
 
   route_pairs(opt, used, out);
+  keep_split_costs(used);  // (the tasks' costs, for the next frame's splits; first_task set)
   resident_image_pairs(opt, out);  // its pairs' candidates: their PCS, tested below
   t0 = Clock::now();
   test_candidates(opt, used, lanes);
@@ -388,13 +389,13 @@ std::size_t World::Impl::plan_tasks(unsigned lanes) {
       // (under kSplitTriangles between its bodies) is one task whatever the lanes; so is a pair
       // with a refit put off (its tree is last frame's: the task starts at the roots).
       if (lanes > 1 && pairs.size() < kSplitPairsPerLane * std::size_t(lanes) && a.tree_current() && b.tree_current() &&
-          a.local().triangles.size() + b.local().triangles.size() >= kSplitTriangles)
-      {
+          a.local().triangles.size() + b.local().triangles.size() >= kSplitTriangles) {
         bvh_split(a.frame_tree(), b.frame_tree(), BvhRelation::between(a.frame_pose(), b.frame_pose()),
                   kSplitNodePairsPerLane * std::size_t(lanes), split, split_scratch);
         order_split(ids[pairs[p].first], ids[pairs[p].second], lanes);
-      } else
+      } else {
         split.assign(1, BvhNodePair{0u, 0u});
+      }
     }
     for (const BvhNodePair& start : split) {
       if (used == tasks.size()) tasks.emplace_back();
@@ -536,7 +537,6 @@ void World::Impl::route_pairs(const DetectOptions& opt, std::size_t used, FrameR
     stats.node_pairs += tasks[k].visited;
     stats.candidates += tasks[k].candidates.size();
   }
-  keep_split_costs(used);
 }
 
 // The exact path's tests over the same tasks (a self task's during its traversal).
