@@ -28,7 +28,9 @@ Simplex simplex(const TriangleCorners& t);
 bool crossing_segment(const TriangleCorners& a, const TriangleCorners& b, const int sa[3], const int sb[3], Vec3& p,
                       Vec3& q);
 // Two proper triangles in two planes, each straddling the other's plane, that meet in one point
-// only (the planes' line leaves one where it enters the other): decided exactly.
+// only (the planes' line leaves one where it enters the other): decided by exact constructions,
+// for classify_contact(); the narrow phase decides the same from its predicates' signs
+// (crossing_intersect() in narrow_phase.cpp), and the adversarial tests hold the two together.
 bool meet_in_one_point(const TriangleCorners& a, const TriangleCorners& b, const int sa[3], const int sb[3]);
 // Their segment constructed exactly and rounded once; false when they do not meet.
 bool exact_crossing_segment(const TriangleCorners& a, const TriangleCorners& b, const int sa[3], const int sb[3],

@@ -71,10 +71,20 @@ constexpr LoneCorners kLoneCorners = lone_corners();
 
 Cut lone_corner(const int d[3]) { return kLoneCorners.cut[(d[0] + 1) * 9 + (d[1] + 1) * 3 + d[2] + 1]; }
 
-bool crossing_intersect(const TriangleCorners& a, const TriangleCorners& b, const int sa[3], const int sb[3]) {
+// Each of the two predicates compares an end of one triangle's interval with an end of the
+// other's, and is 0 exactly when those ends coincide: the lines through the two edges it takes
+// (each from a lone corner, off the other's plane, to a corner across it) are coplanar iff they
+// meet, and two such lines in two distinct planes can meet only on the planes' common line. So
+// two triangles whose intervals are proper segments (each with corners strictly on both sides of
+// the other's plane) meet in one point iff they meet and one predicate is 0 (`end_to_end`).
+bool crossing_intersect(const TriangleCorners& a, const TriangleCorners& b, const int sa[3], const int sb[3],
+                        bool& end_to_end) {
   const Cut c1 = lone_corner(sa), c2 = lone_corner(sb);
-  return orientation_sign(a[c1.s_min], a[c1.t_min], b[c2.s_min], b[c2.t_min]) <= 0 &&
-         orientation_sign(a[c1.s_max], a[c1.t_max], b[c2.t_max], b[c2.s_max]) <= 0;
+  const int lo = orientation_sign(a[c1.s_min], a[c1.t_min], b[c2.s_min], b[c2.t_min]);
+  if (lo > 0) return false;
+  const int hi = orientation_sign(a[c1.s_max], a[c1.t_max], b[c2.t_max], b[c2.s_max]);
+  end_to_end = lo == 0 || hi == 0;
+  return hi <= 0;
 }
 
 }  // namespace
@@ -133,24 +143,18 @@ PEELCD_ALWAYS_INLINE bool test_pair(const TriangleCorners& ca, const TriangleCor
   // Two proper triangles in two planes (a zero-area triangle has every sign 0 against its own
   // plane): Guigue-Devillers on the signs, the kind from them, the segment in double where it
   // is well conditioned.
-  if (!crossing_intersect(ca, cb, side_a, side_b)) return false;
+  bool end_to_end = false;
+  if (!crossing_intersect(ca, cb, side_a, side_b, end_to_end)) return false;
   if (!kClassify) return true;
   const auto both = [](const int s[3]) {
     return (s[0] < 0 || s[1] < 0 || s[2] < 0) && (s[0] > 0 || s[1] > 0 || s[2] > 0);
   };
-  contact.kind = both(side_a) && both(side_b) ? ContactKind::crossing : ContactKind::touching;
+  // Crossing: each straddles the other's plane and they share more than one point (two
+  // intervals end to end meet at their boundaries only: touching). From the signs alone.
+  contact.kind = both(side_a) && both(side_b) && !end_to_end ? ContactKind::crossing : ContactKind::touching;
   if (!crossing_segment(ca, cb, side_a, side_b, contact.p, contact.q) &&
       !exact_crossing_segment(ca, cb, side_a, side_b, contact.p, contact.q))
     std::tie(contact.p, contact.q) = exact_segment(ca, cb, simplex(ca), simplex(cb));
-  // A crossing whose segment is (near) a point may be two triangles meeting at one point of
-  // their boundaries: decided exactly (meet_in_one_point()) only then, so crossings pay nothing.
-  if (contact.kind == ContactKind::crossing) {
-    const double scale = std::max({ca[0].cwiseAbs().maxCoeff(), ca[1].cwiseAbs().maxCoeff(), ca[2].cwiseAbs().maxCoeff(),
-                                   cb[0].cwiseAbs().maxCoeff(), cb[1].cwiseAbs().maxCoeff(), cb[2].cwiseAbs().maxCoeff()});
-    if ((contact.p - contact.q).cwiseAbs().maxCoeff() <= 1e-9 * scale + 1e-300 &&
-        meet_in_one_point(ca, cb, side_a, side_b))
-      contact.kind = ContactKind::touching;
-  }
   return true;
 }
 

@@ -373,3 +373,26 @@ TEST_CASE("contact kinds tell touching from penetrating", "[narrow]") {
   CHECK(classify_contact(a, {Vec3(0.5, 0.5, 0), Vec3(3, 0.5, 0), Vec3(0.5, 3, 0)}) == ContactKind::coplanar);
   CHECK(classify_contact(a, {Vec3(0.5, 0.5, -1), Vec3(0.5, 0.5, 0), Vec3(0.5, 0.5, 1)}) == ContactKind::degenerate);
 }
+
+TEST_CASE("two triangles straddling each other's planes that meet in one point are touching", "[narrow]") {
+  // A in the plane y = 0 and B in x = 0, each with corners on both sides of the other's plane:
+  // they cut the z axis in [-1, 1] and [1, 3], end to end at (0, 0, 1). B moved down by 0.5
+  // overlaps A's interval over [0.5, 1]: crossing. The narrow phase decides it from its signs,
+  // classify_contact() from the exact constructions; both, in every order of the two.
+  const TriangleCorners a = {Vec3(1, 0, 0), Vec3(-1, 0, 2), Vec3(-1, 0, -2)};
+  const TriangleCorners end_to_end = {Vec3(0, -1, 2), Vec3(0, 1, 0), Vec3(0, 1, 4)};
+  const TriangleCorners overlapping = {Vec3(0, -1, 1.5), Vec3(0, 1, -0.5), Vec3(0, 1, 3.5)};
+  for (const auto& [b, kind] : {std::pair{end_to_end, ContactKind::touching}, std::pair{overlapping, ContactKind::crossing}}) {
+    CHECK(classify_contact(a, b) == kind);
+    CHECK(classify_contact(b, a) == kind);
+    Contact ab, ba;
+    REQUIRE(test_triangle_pair(a, b, ab));
+    REQUIRE(test_triangle_pair(b, a, ba));
+    CHECK(ab.kind == kind);
+    CHECK(ba.kind == kind);
+  }
+  Contact c;
+  REQUIRE(test_triangle_pair(a, end_to_end, c));
+  CHECK(c.p == Vec3(0, 0, 1));
+  CHECK(c.q == Vec3(0, 0, 1));
+}
