@@ -9,7 +9,9 @@
 // (two crossing rigid spheres, turning: the posed traversal), its frames over and over; `--crowd N`
 // the pile of `peelcd bench crowd --objects N` (rigid balls by set_pose, every fifth ball deforming
 // by set_vertices); `--wave S` `peelcd bench spheres-wave --stacks S` (the spheres deforming:
-// set_vertices and refits). One thread, or `--threads T` (DetectOptions::threads). `--image`:
+// set_vertices and refits); `--cloth N` the crumpled cloth of `peelcd bench cloth-crumpled
+// --cloth N` (2 N^2 triangles, one deforming body colliding with itself, its 6 frames over and
+// over: refits, rebuilds and the self traversal). One thread, or `--threads T` (DetectOptions::threads). `--image`:
 // every pair on the resident image route (Stage::image) of the GL stage on EGL with the GPU's
 // resolve and the compute coverage, as `peelcd bench ... --backend egl --resolve gpu --coverage
 // compute` times its "World, image stage" row; it also prints the host steps around the stage
@@ -19,7 +21,7 @@
 // balance alone, and each loop's items, work, longest item and span (medians over the frames):
 // where the scaling of a frame is lost to uneven work, measurable on a machine with few cores.
 //
-//   peelcd_world_loop SCENE|--spheres STACKS|--wave STACKS|--crowd N [--frames N] [--threads T] [--pairs] [--cold] [--busy] [--image] [--model L] [--warmup N]
+//   peelcd_world_loop SCENE|--spheres STACKS|--wave STACKS|--crowd N|--cloth N [--frames N] [--threads T] [--pairs] [--cold] [--busy] [--image] [--model L] [--warmup N]
 //
 // `--warmup N`: N frames first, untimed (the first frames grow the World's buffers and the
 // stage's: on the image route they take up to twice a later frame's exact step).
@@ -27,6 +29,7 @@
 // (Timings::aabb, Timings::cpu) and the contacts found. Under valgrind --tool=callgrind, the
 // difference of two runs with different --frames is the instructions of that many frames.
 #include "peelcd/backends.h"
+#include "peelcd/core/primitives.h"
 #include "peelcd/core/world/world.h"
 #include "peelcd/eval/scenes.h"
 #include "peelcd/io/scene.h"
@@ -51,7 +54,7 @@ double median(std::vector<double> v, double q = 0.5) {
 }
 
 int usage(const char* why) {
-  std::fprintf(stderr, "peelcd_world_loop: %s\nusage: peelcd_world_loop SCENE|--spheres STACKS|--wave STACKS|--crowd N [--frames N] [--threads T] "
+  std::fprintf(stderr, "peelcd_world_loop: %s\nusage: peelcd_world_loop SCENE|--spheres STACKS|--wave STACKS|--crowd N|--cloth N [--frames N] [--threads T] "
                "[--pairs] [--cold] [--busy] [--image] [--model L] [--warmup N]\n",
                why);
   return 2;
@@ -61,7 +64,7 @@ int usage(const char* why) {
 
 int main(int argc, char** argv) {
   std::string path;
-  long frames = 300, stacks = 0, wave = 0, crowd = 0, threads = 1, model = 0, warmup = 0;
+  long frames = 300, stacks = 0, wave = 0, crowd = 0, cloth = 0, threads = 1, model = 0, warmup = 0;
   bool pairs = false, cold = false, busy = false, image = false;
   struct Count {
     const char* flag;
@@ -73,6 +76,7 @@ int main(int argc, char** argv) {
                           {"--spheres", &stacks, 3, 2000, "latitude bands from 3 to 2,000"},
                           {"--wave", &wave, 3, 2000, "latitude bands from 3 to 2,000"},
                           {"--crowd", &crowd, 2, 5000, "balls from 2 to 5,000"},
+                          {"--cloth", &cloth, 2, 1000, "the cloth's resolution from 2 to 1,000"},
                           {"--threads", &threads, 0, 64, "0 (one per core) to 64"},
                           {"--model", &model, 2, 256, "lanes from 2 to 256"},
                           {"--warmup", &warmup, 0, 1000, "a count from 0 to 1,000"}};
@@ -101,15 +105,22 @@ int main(int argc, char** argv) {
       return usage((std::string("unknown argument '") + argv[i] + "'").c_str());
     }
   }
-  if (int(!path.empty()) + int(stacks != 0) + int(wave != 0) + int(crowd != 0) != 1)
-    return usage("a scene file, --spheres, --wave or --crowd, one of them");
+  if (int(!path.empty()) + int(stacks != 0) + int(wave != 0) + int(crowd != 0) + int(cloth != 0) != 1)
+    return usage("a scene file, --spheres, --wave, --crowd or --cloth, one of them");
   try {
     // The frames: a scene file's one frame (its objects as rigid shapes at the identity), or
     // the spheres' sequence (kSphereFrames frames, played over and over).
     constexpr std::size_t kSphereFrames = 12;
     std::unique_ptr<Sequence> sequence;
     std::vector<Object> objects;
-    if (stacks || wave || crowd) {
+    constexpr std::size_t kClothFrames = 6;  // (as `peelcd bench cloth-crumpled`'s default)
+    std::vector<Mesh> cloth_frames;
+    if (cloth) {
+      for (std::size_t f = 0; f < kClothFrames; ++f) cloth_frames.push_back(make_crumpled_cloth(int(cloth), 0.15 * double(f)));
+      objects.resize(1);
+      objects[0].name = "cloth";
+      objects[0].mesh = cloth_frames[0];
+    } else if (stacks || wave || crowd) {
       sequence = stacks ? make_crossing_spheres(int(stacks), kSphereFrames, /*wave=*/false)
                  : wave ? make_crossing_spheres(int(wave), kSphereFrames, /*wave=*/true)
                         : make_crowd(std::size_t(crowd), kSphereFrames);
@@ -138,6 +149,7 @@ int main(int argc, char** argv) {
     std::vector<BodyId> ids;
     for (const Object& o : objects)
       ids.push_back(o.rigid ? world.add_rigid(o.rigid->shape, o.rigid->pose, o.name) : world.add_deforming(o.mesh, o.name));
+    if (cloth) world.set_self(ids[0], true);
     DetectOptions opt;
     opt.threads = unsigned(threads);
     if (pairs) opt.contacts = ContactDetail::pairs;
@@ -166,6 +178,7 @@ int main(int argc, char** argv) {
         std::sort(work.begin(), work.end());
       }
       if (sequence) sequence->frame(std::size_t(f + warmup) % kSphereFrames, objects);
+      if (cloth) objects[0].mesh.vertices = cloth_frames[std::size_t(f + warmup) % kClothFrames].vertices;
       const auto t0 = std::chrono::steady_clock::now();
       for (std::size_t i = 0; i < ids.size(); ++i) {
         if (objects[i].rigid) world.set_pose(ids[i], objects[i].rigid->pose);
@@ -215,7 +228,8 @@ int main(int argc, char** argv) {
     }
     const std::string what = stacks ? "spheres, " + std::to_string(stacks) + " stacks"
                              : wave  ? "waving spheres, " + std::to_string(wave) + " stacks"
-                             : crowd ? "crowd, " + std::to_string(crowd) + " balls" : path;
+                             : crowd ? "crowd, " + std::to_string(crowd) + " balls"
+                             : cloth ? "crumpled cloth, " + std::to_string(2 * cloth * cloth) + " triangles, self" : path;
     std::printf("%s: %ld frames%s%s%s%s, %s\n", what.c_str(), frames,
                 warmup ? (" after " + std::to_string(warmup) + " untimed").c_str() : "", pairs ? ", pairs only" : "",
                 image ? ", the image route (EGL, GPU resolve, compute coverage)" : "",

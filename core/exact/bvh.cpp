@@ -12,16 +12,25 @@ double extents(const FBox& b) { return (double(b.hi[0]) - b.lo[0]) + (double(b.h
 
 }  // namespace
 
+// A range of n triangles makes ceil(n / kBvhLeafSize) leaves (each split gives the left child
+// whole leaves) and twice as many nodes less one: where each subtree's nodes and leaves go in
+// depth-first order is known before it is built, so subtrees can be built apart.
+namespace {
+std::uint32_t leaves_for(std::uint32_t n) { return (n + kBvhLeafSize - 1) / kBvhLeafSize; }
+std::uint32_t nodes_for(std::uint32_t n) { return 2 * leaves_for(n) - 1; }
+}  // namespace
+
+void Bvh::build(const std::vector<Vec3>& vertices, const std::vector<Tri>& triangles) {
+  const std::size_t parts = plan_build(vertices, triangles, 1);
+  for (std::size_t k = 0; k < parts; ++k) build_part(k);
+  finish_build(triangles);
+}
+
 // The partitions move each triangle's centroid with its index (no indirection in the centroid
 // box's pass or in nth_element's comparisons): the same comparisons as on indices, so the same
 // order and tree, faster (a 100k-triangle build: 31-32 ms against 37-39 ms through the indices).
 // order_ is written at the leaves.
-struct Bvh::BuildItem {
-  double c[3];
-  std::uint32_t t;
-};
-
-void Bvh::build(const std::vector<Vec3>& vertices, const std::vector<Tri>& triangles) {
+std::size_t Bvh::plan_build(const std::vector<Vec3>& vertices, const std::vector<Tri>& triangles, std::size_t want) {
   const std::size_t n = triangles.size();
   nodes_.clear();
   leaves_.clear();
@@ -31,6 +40,8 @@ void Bvh::build(const std::vector<Vec3>& vertices, const std::vector<Tri>& trian
   leaf_node_.clear();
   corners_.clear();
   parents_.clear();
+  build_parts_.clear();
+  build_top_.clear();
   depth_ = 0;
   size_ = size_at_build_ = 0.0;
   order_.resize(n);
@@ -41,8 +52,8 @@ void Bvh::build(const std::vector<Vec3>& vertices, const std::vector<Tri>& trian
   vertex_boxes_.resize(vertices.size());
   unused_.clear();
   ++changes_;
-  wide_fresh_ = true;  // (empty, or synced below)
-  if (n == 0) return;
+  wide_fresh_ = true;  // (empty, or synced by finish_build())
+  if (n == 0) return 0;
   std::vector<std::uint8_t> used(vertices.size(), 0);
   for (const Tri& f : triangles)
     for (const std::uint32_t v : f) used[v] = 1;
@@ -50,22 +61,64 @@ void Bvh::build(const std::vector<Vec3>& vertices, const std::vector<Tri>& trian
     unused_.resize(used.size());
     for (std::size_t v = 0; v < used.size(); ++v) unused_[v] = !used[v];
   }
-  std::vector<BuildItem> items(n);
-  std::vector<FBox> boxes(n);
+  build_items_.resize(n);
+  build_boxes_.resize(n);
   for (std::size_t t = 0; t < n; ++t) {
     const Aabb b = triangle_bounds(vertices, triangles[t]);
-    boxes[t] = FBox::enclosing(b);
+    build_boxes_[t] = FBox::enclosing(b);
     const Vec3 c = b.center();
-    items[t] = BuildItem{{c.x(), c.y(), c.z()}, std::uint32_t(t)};
+    build_items_[t] = BuildItem{{c.x(), c.y(), c.z()}, std::uint32_t(t)};
     box_.extend(b.lo);
     box_.extend(b.hi);
   }
-  nodes_.reserve(2 * ((n + kBvhLeafSize - 1) / kBvhLeafSize));
-  parents_.reserve(nodes_.capacity());
-  leaves_.reserve(nodes_.capacity() / 2 + 1);
-  leaf_first_.clear();
-  leaf_first_.reserve(leaves_.capacity());
-  build_node(0, std::uint32_t(n), 0, 1, items, boxes);
+  const std::uint32_t count = std::uint32_t(n);
+  nodes_.resize(nodes_for(count));
+  parents_.resize(nodes_.size());
+  leaves_.resize(leaves_for(count));
+  leaf_node_.resize(leaves_.size());
+  leaf_first_.resize(leaves_.size());
+  // Level by level from the root: each subtree of the frontier with more than one leaf is split
+  // (its node joins the top, its children the frontier) while the frontier holds fewer than `want`.
+  build_parts_.push_back(BuildPart{0, count, 0, 0, 0, 1, 1});
+  for (bool grew = true; grew && build_parts_.size() < want;) {
+    grew = false;
+    const std::size_t level = build_parts_.size();
+    for (std::size_t k = 0; k < level && build_parts_.size() < want; ++k) {
+      const BuildPart at = build_parts_[k];
+      if (at.end - at.begin <= kBvhLeafSize) continue;
+      const std::uint32_t mid = split_range(at.begin, at.end);
+      const std::uint32_t right = at.node + 1 + nodes_for(mid - at.begin);
+      nodes_[at.node].first = right;
+      nodes_[at.node].count = 0;
+      parents_[at.node] = at.parent;
+      build_top_.push_back(at.node);
+      build_parts_[k] = BuildPart{at.begin, mid, at.node + 1, at.node, at.leaf, at.level + 1, at.level + 1};
+      build_parts_.push_back(
+          BuildPart{mid, at.end, right, at.node, at.leaf + leaves_for(mid - at.begin), at.level + 1, at.level + 1});
+      grew = true;
+    }
+  }
+  std::sort(build_parts_.begin(), build_parts_.end(), [](const BuildPart& a, const BuildPart& b) { return a.node < b.node; });
+  std::sort(build_top_.begin(), build_top_.end(), std::greater<>());  // children before parents
+  return build_parts_.size();
+}
+
+void Bvh::build_part(std::size_t k) {
+  BuildPart& at = build_parts_[k];
+  std::size_t depth = at.level;
+  build_node(at, depth);
+  at.depth = depth;
+}
+
+void Bvh::finish_build(const std::vector<Tri>& triangles) {
+  const std::size_t n = triangles.size();
+  if (n == 0) return;
+  for (const BuildPart& at : build_parts_) depth_ = std::max(depth_, at.depth);
+  for (const std::uint32_t i : build_top_) {
+    FBox box = nodes_[i + 1].box;
+    box.merge(nodes_[nodes_[i].first].box);
+    nodes_[i].box = box;
+  }
   corners_.resize(n);
   for (std::size_t k = 0; k < n; ++k) corners_[k] = triangles[order_[k]];
   dirty_.assign(nodes_.size(), 0);
@@ -80,56 +133,61 @@ void Bvh::build(const std::vector<Vec3>& vertices, const std::vector<Tri>& trian
   size_at_build_ = size_;
 }
 
-std::uint32_t Bvh::build_node(std::uint32_t begin, std::uint32_t end, std::uint32_t parent, std::size_t level,
-                              std::vector<BuildItem>& items, const std::vector<FBox>& boxes) {
-  const std::uint32_t index = std::uint32_t(nodes_.size());
-  nodes_.emplace_back();
-  parents_.push_back(parent);
-  depth_ = std::max(depth_, level);
-  if (end - begin <= kBvhLeafSize) {
-    BvhLeaf& leaf = leaves_.emplace_back();
-    const FBox empty;
-    FBox box;
-    for (std::uint32_t lane = 0; lane < kBvhLeafSize; ++lane) {
-      const bool used = begin + lane < end;
-      const std::uint32_t t = used ? items[begin + lane].t : 0u;
-      if (used) order_[begin + lane] = t;
-      leaf.tri[lane] = t;
-      leaf.set(lane, used ? boxes[t] : empty);
-      if (!used) continue;
-      box.merge(boxes[t]);
-      leaf_of_[t] = index;
-      lane_of_[t] = std::uint8_t(lane);
-    }
-    nodes_[index].box = box;
-    nodes_[index].first = std::uint32_t(leaves_.size() - 1);
-    nodes_[index].count = end - begin;
-    leaf_node_.push_back(index);
-    leaf_first_.push_back(begin);
-    return index;
-  }
+// The split of a range of more than one leaf: along its centroids' widest axis, at the median
+// that leaves the left child whole leaves (half of those the range needs, rounded up).
+std::uint32_t Bvh::split_range(std::uint32_t begin, std::uint32_t end) {
+  std::vector<BuildItem>& items = build_items_;
   double lo[3] = {items[begin].c[0], items[begin].c[1], items[begin].c[2]}, hi[3] = {lo[0], lo[1], lo[2]};
   for (std::uint32_t i = begin + 1; i < end; ++i)
     for (int k = 0; k < 3; ++k) lo[k] = std::min(lo[k], items[i].c[k]), hi[k] = std::max(hi[k], items[i].c[k]);
   int axis = 0;
   Vec3(hi[0] - lo[0], hi[1] - lo[1], hi[2] - lo[2]).maxCoeff(&axis);
-  // Full leaves: the left child takes half of the leaves a count needs, kBvhLeafSize triangles each.
-  const std::uint32_t leaves = (end - begin + kBvhLeafSize - 1) / kBvhLeafSize;
-  const std::uint32_t mid = begin + (leaves + 1) / 2 * kBvhLeafSize;
+  const std::uint32_t mid = begin + (leaves_for(end - begin) + 1) / 2 * kBvhLeafSize;
   // Ties broken by index: the same tree on every machine.
   std::nth_element(items.begin() + begin, items.begin() + mid, items.begin() + end,
                    [axis](const BuildItem& a, const BuildItem& b) {
                      const double ca = a.c[axis], cb = b.c[axis];
                      return ca < cb || (ca == cb && a.t < b.t);
                    });
-  build_node(begin, mid, index, level + 1, items, boxes);  // the left child: index + 1
-  const std::uint32_t right = build_node(mid, end, index, level + 1, items, boxes);
+  return mid;
+}
+
+void Bvh::build_node(const BuildPart& at, std::size_t& depth) {
+  const std::uint32_t index = at.node, begin = at.begin, end = at.end;
+  parents_[index] = at.parent;
+  depth = std::max(depth, at.level);
+  if (end - begin <= kBvhLeafSize) {
+    BvhLeaf& leaf = leaves_[at.leaf];
+    leaf = BvhLeaf{};
+    const FBox empty;
+    FBox box;
+    for (std::uint32_t lane = 0; lane < kBvhLeafSize; ++lane) {
+      const bool used = begin + lane < end;
+      const std::uint32_t t = used ? build_items_[begin + lane].t : 0u;
+      if (used) order_[begin + lane] = t;
+      leaf.tri[lane] = t;
+      leaf.set(lane, used ? build_boxes_[t] : empty);
+      if (!used) continue;
+      box.merge(build_boxes_[t]);
+      leaf_of_[t] = index;
+      lane_of_[t] = std::uint8_t(lane);
+    }
+    nodes_[index].box = box;
+    nodes_[index].first = at.leaf;
+    nodes_[index].count = end - begin;
+    leaf_node_[at.leaf] = index;
+    leaf_first_[at.leaf] = begin;
+    return;
+  }
+  const std::uint32_t mid = split_range(begin, end);
+  const std::uint32_t right = index + 1 + nodes_for(mid - begin);
+  build_node(BuildPart{begin, mid, index + 1, index, at.leaf, at.level + 1, 0}, depth);  // the left child: index + 1
+  build_node(BuildPart{mid, end, right, index, at.leaf + leaves_for(mid - begin), at.level + 1, 0}, depth);
   nodes_[index].first = right;
   nodes_[index].count = 0;
   FBox box = nodes_[index + 1].box;
   box.merge(nodes_[right].box);
   nodes_[index].box = box;
-  return index;
 }
 
 // Depth first, as the binary nodes: a wide node's children after it.
@@ -593,6 +651,45 @@ void bvh_split(const Bvh& a, const Bvh& b, const BvhRelation& rel, std::size_t t
       } else if (y.leaf()) {
         next.emplace_back(i + 1, j), next.emplace_back(x.first, j);
       } else {  // both split: four children pairs
+        for (const std::uint32_t ci : {i + 1, x.first})
+          for (const std::uint32_t cj : {j + 1, y.first}) next.emplace_back(ci, cj);
+      }
+    }
+    level.swap(next);
+  }
+  out.insert(out.end(), level.begin(), level.end());
+}
+
+void bvh_self_split(const Bvh& tree, std::size_t tasks, std::vector<BvhNodePair>& out, BvhSplitScratch& scratch) {
+  out.clear();
+  if (tree.empty()) return;
+  std::vector<BvhNodePair>& level = scratch.level;
+  std::vector<BvhNodePair>& next = scratch.next;
+  level.assign(1, BvhNodePair{0u, 0u});
+  const auto& n = tree.nodes();
+  while (!level.empty() && out.size() + level.size() < tasks) {
+    next.clear();
+    for (const auto& [i, j] : level) {
+      const BvhNode& x = n[i];
+      const BvhNode& y = n[j];
+      if (i == j) {
+        if (x.leaf()) {
+          out.emplace_back(i, i);
+          continue;
+        }
+        const std::uint32_t l = i + 1, r = x.first;
+        next.emplace_back(l, l), next.emplace_back(r, r);
+        if (n[l].box.overlaps(n[r].box)) next.emplace_back(l, r);
+        continue;
+      }
+      if (!x.box.overlaps(y.box)) continue;
+      if (x.leaf() && y.leaf()) {
+        out.emplace_back(i, j);
+      } else if (x.leaf()) {
+        next.emplace_back(i, j + 1), next.emplace_back(i, y.first);
+      } else if (y.leaf()) {
+        next.emplace_back(i + 1, j), next.emplace_back(x.first, j);
+      } else {
         for (const std::uint32_t ci : {i + 1, x.first})
           for (const std::uint32_t cj : {j + 1, y.first}) next.emplace_back(ci, cj);
       }

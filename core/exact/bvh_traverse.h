@@ -722,6 +722,13 @@ std::size_t bvh_self_traverse_apart(const Bvh& tree, const std::uint32_t* rep, s
                                     Fn&& fn) {
   return bvh_detail::traverse_pairs(bvh_detail::Self{tree, true, rep}, tree, tree, BvhNodePair{0u, 0u}, stack, fn);
 }
+// The same under one node pair of bvh_self_split() (a node against itself, or two nodes, the
+// first's subtree before the second's).
+template <class Fn>
+std::size_t bvh_self_traverse_apart(const Bvh& tree, const std::uint32_t* rep, BvhNodePair start,
+                                    std::vector<BvhNodePair>& stack, Fn&& fn) {
+  return bvh_detail::traverse_pairs(bvh_detail::Self{tree, true, rep}, tree, tree, start, stack, fn);
+}
 
 // Every candidate self couple of `mesh` (two triangles whose closed boxes overlap and that are
 // not adjacent) through the kept tree `st`, brought to `mesh` first and traversed against itself

@@ -60,14 +60,33 @@ void World::Impl::refit_pending(unsigned lanes, bool all) {
       exact.lo = exact.lo.cwiseMin(refit_chunks[c].exact.lo), exact.hi = exact.hi.cwiseMax(refit_chunks[c].exact.hi);
     r.body->tree.refit_top(exact);
     r.body->refit_pending = r.body->points_loaded = false;
-    if (r.body->tree.growth() > kBvhRebuildGrowth) refit_grown.push_back(k);
+    if (r.body->tree.grown()) refit_grown.push_back(k);
   }
-  parallel("rebuild", refit_grown.size(), lanes, [&](std::size_t k, unsigned) {  // grown past the limit: built again
-    RefitBody& r = refit_bodies[refit_grown[k]];
-    r.rebuilt = r.body->tree.rebuild_if_grown(r.body->mesh.vertices, r.body->mesh.triangles);
-  });
+  if (!refit_grown.empty()) rebuild_grown(lanes);
   stats.full_refits += refit_bodies.size();
   for (const RefitBody& r : refit_bodies) stats.builds += r.rebuilt;
+}
+
+// The trees refits grew past the limit, built again: a large tree's subtrees over the lanes (the
+// same tree as one build: Bvh::plan_build()). Its top splits and its boxes' and corners' passes
+// stay one lane's: a 100k-triangle build takes about 0.3x its one-lane time in 8 parts.
+void World::Impl::rebuild_grown(unsigned lanes) {
+  parallel("rebuild plan", refit_grown.size(), lanes, [&](std::size_t k, unsigned) {
+    RefitBody& r = refit_bodies[refit_grown[k]];
+    const bool large = r.body->mesh.triangles.size() >= kSplitRefitTriangles;
+    r.parts = r.body->tree.plan_build(r.body->mesh.vertices, r.body->mesh.triangles, lanes > 1 && large ? lanes : 1);
+    r.rebuilt = true;
+  });
+  build_parts.clear();
+  for (const std::size_t k : refit_grown)
+    for (std::size_t j = 0; j < refit_bodies[k].parts; ++j) build_parts.push_back({k, j});
+  parallel("rebuild", build_parts.size(), lanes, [&](std::size_t k, unsigned) {
+    refit_bodies[build_parts[k].body].body->tree.build_part(build_parts[k].part);
+  });
+  parallel("rebuild finish", refit_grown.size(), lanes, [&](std::size_t k, unsigned) {
+    Body& b = *refit_bodies[refit_grown[k]].body;
+    b.tree.finish_build(b.mesh.triangles);
+  });
 }
 
 void World::Impl::self_pair(Body& a, std::size_t first, std::size_t last, PairResult& r, ContactSortScratch& scratch) {
@@ -347,9 +366,10 @@ void World::Impl::keep_split_costs(std::size_t used) {
   for (std::size_t k = 0; k < used; ++k) {
     const Task& t = tasks[k];
     const std::size_t p = t.pair;
-    if (t.kind != TaskKind::nodes || first_task[p + 1] - first_task[p] < 2 || (!untraversed.empty() && untraversed[p]))
+    if (t.kind == TaskKind::small_pair || first_task[p + 1] - first_task[p] < 2 || (!untraversed.empty() && untraversed[p]))
       continue;
-    const std::uint64_t cost = std::uint64_t(t.visited) + t.candidates.size();
+    // (A self task's couples are tested as its traversal finds them: `tested`, no candidates.)
+    const std::uint64_t cost = std::uint64_t(t.visited) + t.candidates.size() + t.tested;
     split_costs_next.emplace_back(split_key(ids[pairs[p].first], ids[pairs[p].second], t.start),
                                   std::uint32_t(std::min<std::uint64_t>(cost, ~std::uint32_t(0) - 1)));
   }
@@ -371,7 +391,17 @@ std::size_t World::Impl::plan_tasks(unsigned lanes) {
     if (&a == &b) {
       kind = TaskKind::self;
       split.clear();
-      if (!(a.is_rigid && a.self_cached)) split.assign(1, BvhNodePair{0u, 0u});
+      // A large body's self traversal split into node pairs for the lanes, as a pair's (when
+      // few pairs share the lanes); its contacts are sorted once gathered (self_pair()).
+      if (!(a.is_rigid && a.self_cached)) {
+        if (lanes > 1 && pairs.size() < kSplitPairsPerLane * std::size_t(lanes) &&
+            a.local().triangles.size() >= kSplitTriangles) {
+          bvh_self_split(a.tree, kSplitNodePairsPerLane * std::size_t(lanes), split, split_scratch);
+          order_split(ids[pairs[p].first], ids[pairs[p].second], lanes);
+        } else {
+          split.assign(1, BvhNodePair{0u, 0u});
+        }
+      }
     } else if (a.small() && b.small() && a.world_mesh() && b.world_mesh() && (a.moved || b.moved) &&
                (!a.moved || pairs_of[pairs[p].first] == 1) && (!b.moved || pairs_of[pairs[p].second] == 1)) {
       kind = TaskKind::small_pair;
@@ -451,7 +481,7 @@ void World::Impl::traverse_task(std::size_t k, unsigned lane) {
     // Couples sharing a corner dropped in the traversal, eight at once; the rest tested a block
     // at a time (as test_task_as()).
     ApartBlock& block = lane_scratch[lane]->apart;
-    t.visited = bvh_self_traverse_apart(a.tree, rep, self_stacks[lane].v, [&](std::uint32_t x, std::uint32_t y) {
+    t.visited = bvh_self_traverse_apart(a.tree, rep, t.start, self_stacks[lane].v, [&](std::uint32_t x, std::uint32_t y) {
       ++t.tested;
       if (y < x) std::swap(x, y);
       block.put(x, y, corners(m, x), corners(m, y));

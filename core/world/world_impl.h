@@ -419,14 +419,17 @@ struct World::Impl {
     Body* body;
     std::size_t first, last;  // its chunks in refit_chunks
     bool rebuilt;             // its tree grew past kBvhRebuildGrowth: built again
+    std::size_t parts = 0;    // then its build's subtrees (Bvh::plan_build)
   };
   std::vector<RefitChunk> refit_chunks;
   std::vector<RefitBody> refit_bodies;
   std::vector<RefitPart> refit_parts;
   std::vector<std::size_t> refit_grown;  // refit_bodies whose trees grew past kBvhRebuildGrowth
+  std::vector<RefitPart> build_parts;     // their builds' subtrees (Bvh::plan_build), over the lanes
   // The pending refits of the bodies that need their trees this frame (`all`: every body; else
   // those not refit_deferred).
   void refit_pending(unsigned lanes, bool all = true);
+  void rebuild_grown(unsigned lanes);
   bool may_defer_refit(const Body& b, const DetectOptions& opt) const;
   void defer_refits(unsigned lanes);
   // One body's pending refit now (World::tree() asked for it between frames).

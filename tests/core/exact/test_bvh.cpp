@@ -294,6 +294,58 @@ TEST_CASE("Bvh: a refit of the nodes by subtrees (plan_parts, refit_part, refit_
   CHECK(growth_of_64 > 0.0);  // (set: the check above ran)
 }
 
+TEST_CASE("Bvh: a build by subtrees (plan_build, build_part, finish_build) is the whole build, whatever the parts", "[bvh]") {
+  // A crumpled cloth (every axis splits somewhere), a small sheet, a one-leaf mesh, a mesh of
+  // one leaf and one more triangle, and an empty one.
+  const Mesh cloth = make_crumpled_cloth(40, 0.3);
+  const auto first_triangles = [](Mesh m, std::size_t n) {
+    m.triangles.resize(n);
+    return m;
+  };
+  const Mesh one_leaf = first_triangles(make_crumpled_cloth(2, 0.1), kBvhLeafSize);
+  const Mesh nine = first_triangles(make_crumpled_cloth(3, 0.1), kBvhLeafSize + 1);
+  const Mesh empty_mesh{make_crumpled_cloth(2, 0.1).vertices, {}};
+  const Mesh other = make_uv_sphere(Vec3(0, 0, 0), 1.0, 8, 9);
+  for (const Mesh* m : {&cloth, &one_leaf, &nine, &empty_mesh}) {
+    Bvh whole;
+    whole.build(m->vertices, m->triangles);
+    for (const std::size_t want : {std::size_t(0), std::size_t(2), std::size_t(3), std::size_t(8), std::size_t(100000)}) {
+      CAPTURE(m->triangles.size(), want);
+      Bvh split;
+      split.build(other.vertices, other.triangles);  // (a tree to replace)
+      const std::size_t parts = split.plan_build(m->vertices, m->triangles, want);
+      CHECK(parts <= std::max<std::size_t>(want, 1));
+      CHECK((parts == 0) == m->triangles.empty());
+      if (want > 1) CHECK(parts >= std::min(want, whole.leaves()) / 2);  // a level at a time: at least half
+      for (std::size_t k = parts; k-- > 0;) split.build_part(k);  // (any order)
+      split.finish_build(m->triangles);
+      REQUIRE(split.nodes().size() == whole.nodes().size());
+      REQUIRE(split.leaves() == whole.leaves());
+      CHECK(split.depth() == whole.depth());
+      CHECK(split.order() == whole.order());
+      CHECK(split.growth() == 1.0);
+      for (std::uint32_t i = 0; i < whole.nodes().size(); ++i) {
+        const BvhNode &a = split.nodes()[i], &b = whole.nodes()[i];
+        REQUIRE((a.first == b.first && a.count == b.count && split.parent(i) == whole.parent(i)));
+        REQUIRE(a.box.aabb().lo == b.box.aabb().lo);
+        REQUIRE(a.box.aabb().hi == b.box.aabb().hi);
+      }
+      for (std::uint32_t l = 0; l < whole.leaves(); ++l) {
+        const BvhLeaf &a = split.leaf_at(l), &b = whole.leaf_at(l);
+        REQUIRE(std::memcmp(a.lo, b.lo, sizeof(a.lo)) == 0);
+        REQUIRE(std::memcmp(a.hi, b.hi, sizeof(a.hi)) == 0);
+        REQUIRE(std::memcmp(a.tri, b.tri, sizeof(a.tri)) == 0);
+        REQUIRE(a.bound.aabb().lo == b.bound.aabb().lo);
+        REQUIRE(a.bound.aabb().hi == b.bound.aabb().hi);
+      }
+      for (std::uint32_t t = 0; t < m->triangles.size(); ++t)
+        REQUIRE(split.triangle_box(t).aabb().lo == whole.triangle_box(t).aabb().lo);
+      if (!m->triangles.empty()) check_wide(split);
+      CHECK(split.box().lo == whole.box().lo);
+    }
+  }
+}
+
 TEST_CASE("Bvh: vertices loaded in ranges (checked, rounded, copied: the World's set_vertices) refit as a whole refit does", "[bvh]") {
   // Large enough (past 65,536 vertices) for the streamed stores and the prefetches.
   Mesh m = make_uv_sphere(Vec3(0, 0, 0), 1.0, 200, 400);
@@ -599,6 +651,34 @@ TEST_CASE("Bvh: the self traversal without adjacent couples drops exactly those 
       CHECK(!want.empty());
       CHECK(got == want);
     }
+}
+
+TEST_CASE("Bvh: the self traversal split into node pairs (bvh_self_split) gives the whole traversal's couples, each once", "[bvh][self]") {
+  const Mesh m = make_crumpled_cloth(24, 0.4);
+  Bvh t;
+  t.build(m.vertices, m.triangles);
+  std::vector<BvhNodePair> stack;
+  std::set<std::pair<std::uint32_t, std::uint32_t>> want;
+  bvh_self_traverse_apart(t, nullptr, stack, [&](std::uint32_t x, std::uint32_t y) {
+    want.emplace(std::min(x, y), std::max(x, y));
+  });
+  REQUIRE(want.size() > 100);
+  BvhSplitScratch scratch;
+  for (const std::size_t tasks : {std::size_t(1), std::size_t(2), std::size_t(16), std::size_t(64), std::size_t(100000)}) {
+    CAPTURE(tasks);
+    std::vector<BvhNodePair> split;
+    bvh_self_split(t, tasks, split, scratch);
+    REQUIRE(!split.empty());
+    if (tasks > 1) CHECK(split.size() >= std::min<std::size_t>(tasks, 64) / 4);
+    std::set<std::pair<std::uint32_t, std::uint32_t>> got;
+    for (const BvhNodePair& start : split) {
+      CHECK(start.first <= start.second);
+      bvh_self_traverse_apart(t, nullptr, start, stack, [&](std::uint32_t x, std::uint32_t y) {
+        REQUIRE(got.emplace(std::min(x, y), std::max(x, y)).second);  // once
+      });
+    }
+    CHECK(got == want);
+  }
 }
 
 TEST_CASE("Bvh: two trees in one frame, traversed on float boxes, give every couple of overlapping boxes", "[bvh]") {

@@ -210,7 +210,8 @@ TEST_CASE("World: the same contacts on 1, 2 and 5 threads", "[world]") {
 
 TEST_CASE("World: a large deforming body refitted by subtrees gives the same contacts and builds on 1 and 3 threads", "[world]") {
   // Over kSplitRefitTriangles: its tree is refitted in subtrees over the lanes (Bvh::plan_parts),
-  // its vertices loaded in parts; a wave grows its tree until it is built again.
+  // its vertices loaded in parts; a wave grows its tree until it is built again, in subtrees over
+  // the lanes (Bvh::plan_build) on 3 threads.
   const Mesh sphere = make_uv_sphere(Vec3::Zero(), 1.0, 130, 132);
   REQUIRE(sphere.triangles.size() >= 32768);
   auto ball = std::make_shared<const Mesh>(make_uv_sphere(Vec3::Zero(), 0.4, 16, 24));

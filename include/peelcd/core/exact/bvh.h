@@ -161,6 +161,15 @@ class Bvh {
  public:
   // Builds over `triangles` of `vertices` (indices checked by the caller: validate_mesh).
   void build(const std::vector<Vec3>& vertices, const std::vector<Tri>& triangles);
+  // The same build split for threads: plan_build() takes the triangles' boxes and centroids and
+  // splits the nodes above about `want` disjoint subtrees (one, the whole tree, for want <= 1),
+  // returning their count; build_part(k) builds subtree k (parts may run concurrently);
+  // finish_build() the boxes of the nodes above them, the leaves' corners and the wide view.
+  // The tree is build()'s whatever `want` (each range is split as the whole build splits it).
+  // `vertices` and `triangles` must stay as they are until finish_build() returns.
+  std::size_t plan_build(const std::vector<Vec3>& vertices, const std::vector<Tri>& triangles, std::size_t want);
+  void build_part(std::size_t k);
+  void finish_build(const std::vector<Tri>& triangles);
   // Every box again from `vertices` (the same triangles, moved).
   void refit(const std::vector<Vec3>& vertices, const std::vector<Tri>& triangles);
   // The same in three steps, for callers that split the first two over threads (ranges of one
@@ -239,10 +248,11 @@ class Bvh {
   // After a whole refit: builds the tree again when refits grew it past kBvhRebuildGrowth (the
   // one rule of every tree that refits keep); returns whether it did.
   bool rebuild_if_grown(const std::vector<Vec3>& vertices, const std::vector<Tri>& triangles) {
-    if (growth() <= kBvhRebuildGrowth) return false;
+    if (!grown()) return false;
     build(vertices, triangles);
     return true;
   }
+  bool grown() const { return growth() > kBvhRebuildGrowth; }  // rebuild_if_grown() would build
 
   // The triangles whose (float, outward-rounded) boxes touch `box` (closed, in the tree's frame),
   // ascending, into `out`: every triangle whose exact box touches it, and possibly some within
@@ -250,9 +260,19 @@ class Bvh {
   void query(const Aabb& box, std::vector<std::uint32_t>& out) const;
 
  private:
-  struct BuildItem;  // a triangle's centroid and index, moved as one by the build's partitions
-  std::uint32_t build_node(std::uint32_t begin, std::uint32_t end, std::uint32_t parent, std::size_t level,
-                           std::vector<BuildItem>& items, const std::vector<FBox>& boxes);
+  struct BuildItem {  // a triangle's centroid and index, moved as one by the build's partitions
+    double c[3];
+    std::uint32_t t;
+  };
+  // A subtree of a build: its triangles' range of build_items_, its root's node, parent and level,
+  // its first leaf (each node's place in depth-first order follows from the counts before it);
+  // `depth` the deepest level under it, once built.
+  struct BuildPart {
+    std::uint32_t begin, end, node, parent, leaf;
+    std::size_t level, depth;
+  };
+  std::uint32_t split_range(std::uint32_t begin, std::uint32_t end);  // sorts a range about its split; returns it
+  void build_node(const BuildPart& at, std::size_t& depth);
   void refit_node(std::uint32_t n);
   double merge_children(std::uint32_t i);  // an internal node's box from its children's; returns its extents
   std::uint32_t build_wide(std::uint32_t node);  // the wide node for internal `node` and those under it
@@ -298,6 +318,11 @@ class Bvh {
   // them (descending).
   std::vector<std::uint32_t> part_roots_, part_top_;
   std::vector<double> part_sizes_;
+  // plan_build(): the items and boxes (kept between builds), the subtrees, the nodes above them.
+  std::vector<BuildItem> build_items_;
+  std::vector<FBox> build_boxes_;
+  std::vector<BuildPart> build_parts_;
+  std::vector<std::uint32_t> build_top_;
 };
 
 // B's frame into A's, for the traversal of two trees: p_a = linear * p_b + translation. With
@@ -383,6 +408,11 @@ struct BvhSplitScratch {
 };
 void bvh_split(const Bvh& a, const Bvh& b, const BvhRelation& rel, std::size_t tasks,
                std::vector<BvhNodePair>& tasks_out, BvhSplitScratch& scratch);
+// The same for the self traversal of one tree (bvh_self_traverse()): a node against itself gives
+// its two children each against itself and, where their boxes overlap, the one against the other;
+// two nodes as bvh_split() on one frame. Every couple of the whole self traversal is under
+// exactly one of the node pairs given.
+void bvh_self_split(const Bvh& tree, std::size_t tasks, std::vector<BvhNodePair>& tasks_out, BvhSplitScratch& scratch);
 
 // The pair traversals over these trees (bvh_traverse(), bvh_traverse_same_frame(),
 // bvh_self_traverse()) are the library's own: core/exact/bvh_traverse.h.
