@@ -623,6 +623,23 @@ BvhRelation BvhRelation::between(const Eigen::Affine3d& pose_a, const Eigen::Aff
   return r;
 }
 
+namespace {
+
+// The node pairs under two nodes i (x) and j (y), not both leaves, for a split's next level: an
+// internal node gives its two children, both internal their four pairs.
+void split_pair(std::uint32_t i, const BvhNode& x, std::uint32_t j, const BvhNode& y, std::vector<BvhNodePair>& next) {
+  if (x.leaf()) {
+    next.emplace_back(i, j + 1), next.emplace_back(i, y.first);
+  } else if (y.leaf()) {
+    next.emplace_back(i + 1, j), next.emplace_back(x.first, j);
+  } else {
+    for (const std::uint32_t ci : {i + 1, x.first})
+      for (const std::uint32_t cj : {j + 1, y.first}) next.emplace_back(ci, cj);
+  }
+}
+
+}  // namespace
+
 void bvh_split(const Bvh& a, const Bvh& b, const BvhRelation& rel, std::size_t tasks,
                std::vector<BvhNodePair>& out) {
   BvhSplitScratch scratch;
@@ -644,16 +661,10 @@ void bvh_split(const Bvh& a, const Bvh& b, const BvhRelation& rel, std::size_t t
       const BvhNode& x = na[i];
       const BvhNode& y = nb[j];
       if (!rel.overlap(x.box.aabb(), rel.to_a(y.box.aabb()), y.box.aabb())) continue;
-      if (x.leaf() && y.leaf()) {
+      if (x.leaf() && y.leaf())
         out.emplace_back(i, j);
-      } else if (x.leaf()) {
-        next.emplace_back(i, j + 1), next.emplace_back(i, y.first);
-      } else if (y.leaf()) {
-        next.emplace_back(i + 1, j), next.emplace_back(x.first, j);
-      } else {  // both split: four children pairs
-        for (const std::uint32_t ci : {i + 1, x.first})
-          for (const std::uint32_t cj : {j + 1, y.first}) next.emplace_back(ci, cj);
-      }
+      else
+        split_pair(i, x, j, y, next);
     }
     level.swap(next);
   }
@@ -683,16 +694,10 @@ void bvh_self_split(const Bvh& tree, std::size_t tasks, std::vector<BvhNodePair>
         continue;
       }
       if (!x.box.overlaps(y.box)) continue;
-      if (x.leaf() && y.leaf()) {
+      if (x.leaf() && y.leaf())
         out.emplace_back(i, j);
-      } else if (x.leaf()) {
-        next.emplace_back(i, j + 1), next.emplace_back(i, y.first);
-      } else if (y.leaf()) {
-        next.emplace_back(i + 1, j), next.emplace_back(x.first, j);
-      } else {
-        for (const std::uint32_t ci : {i + 1, x.first})
-          for (const std::uint32_t cj : {j + 1, y.first}) next.emplace_back(ci, cj);
-      }
+      else
+        split_pair(i, x, j, y, next);
     }
     level.swap(next);
   }
