@@ -191,6 +191,62 @@ void time_frame(Method& m, std::size_t f, const std::vector<std::uint64_t>& exac
   csv += line;
 }
 
+// --scaling N: the World's default (a kept body) and the frame API's exact path, each on one and
+// on N threads, the two alone over the frames after an untimed pass, alternating frame by frame.
+void print_scaling(const SelfSuite& suite, const std::vector<Mesh>& meshes,
+                   const std::vector<std::vector<std::uint64_t>>& exact) {
+  const unsigned threads[2] = {1u, suite.scaling};
+  World worlds[2] = {World(suite.stage), World(suite.stage)};
+  BodyId cloth[2];
+  std::vector<std::unique_ptr<Detector>> detectors;
+  std::vector<Object> objects[2];
+  for (int k = 0; k < 2; ++k) {
+    cloth[k] = worlds[k].add_deforming(meshes[0], "cloth");
+    worlds[k].set_self(cloth[k], true);
+    detectors.push_back(std::make_unique<Detector>(suite.stage));
+    objects[k].resize(1);
+    objects[k][0].name = "cloth";
+    objects[k][0].self = true;
+    objects[k][0].mesh = meshes[0];
+  }
+  FrameResult frame;
+  // One frame of row r (0, 1: the World; 2, 3: the frame API; even: one thread): its pairs.
+  const auto run = [&](int r, std::size_t f) {
+    const int k = r % 2;
+    DetectOptions opt;
+    opt.threads = threads[k];
+    if (r < 2) {
+      worlds[k].set_vertices(cloth[k], meshes[f].vertices);
+      const FrameResult& res = worlds[k].collide(opt);
+      return res.pairs.empty() ? std::vector<std::uint64_t>{} : keys_of(res.pairs[0].colliding);
+    }
+    opt.stage = Stage::exact;
+    objects[k][0].mesh.vertices = meshes[f].vertices;
+    detectors[std::size_t(k)]->detect(objects[k], opt, frame);
+    return frame.pairs.empty() ? std::vector<std::uint64_t>{} : keys_of(frame.pairs[0].colliding);
+  };
+  const char* names[2] = {"peelcd World (default)", "peelcd frame API, exact path"};
+  for (int api = 0; api < 2; ++api) {
+    std::vector<double> ms[2];
+    std::size_t missed[2] = {0, 0};
+    for (int pass = 0; pass < 2; ++pass)
+      for (std::size_t f = 0; f < meshes.size(); ++f)
+        for (int k = 0; k < 2; ++k) {
+          const auto t0 = Clock::now();
+          const std::vector<std::uint64_t> got = run(2 * api + k, f);
+          if (pass == 0) continue;  // (untimed)
+          ms[k].push_back(ms_since(t0));
+          std::vector<std::uint64_t> both;
+          std::set_intersection(got.begin(), got.end(), exact[f].begin(), exact[f].end(), std::back_inserter(both));
+          missed[k] += exact[f].size() - both.size();
+        }
+    std::printf("scaling: %s, %u threads / 1 thread, the two alone, alternating frame by frame: %.2f (medians %.3f / "
+                "%.3f ms; missed %zu / %zu)\n",
+                names[api], suite.scaling, median(ms[1]) / median(ms[0]), median(ms[1]), median(ms[0]), missed[1],
+                missed[0]);
+  }
+}
+
 }  // namespace
 
 std::string run_self_suite(const SelfSuite& suite) {
@@ -236,6 +292,7 @@ std::string run_self_suite(const SelfSuite& suite) {
         std::printf("audit: %s / the plain setup: %.2f (medians %.3f / %.3f ms; pairs %zu / %zu over the frames)\n",
                     methods[k].name.c_str(), median(tally[k].ms) / median(tally[plain].ms), median(tally[k].ms),
                     median(tally[plain].ms), tally[k].found, tally[plain].found);
+  if (suite.scaling) print_scaling(suite, st.meshes, exact);
   return csv;
 }
 

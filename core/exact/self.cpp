@@ -39,16 +39,9 @@ const std::uint32_t* representatives_or_null(const std::vector<std::uint32_t>& r
 }
 
 bool SelfTree::update(const Mesh& mesh) {
-  bool build = builds == 0 || tree.empty() != mesh.triangles.empty() || triangles != mesh.triangles;
-  if (build) {
-    tree.build(mesh.vertices, mesh.triangles);
-    if (triangles != mesh.triangles) triangles = mesh.triangles;
-  } else {
-    tree.refit(mesh.vertices, mesh.triangles);
-    build = tree.rebuild_if_grown(mesh.vertices, mesh.triangles);
-  }
-  builds += build;
-  return build;
+  return update(mesh, 1, [](std::size_t n, const auto& fn) {
+    for (std::size_t k = 0; k < n; ++k) fn(k);
+  });
 }
 
 std::size_t self_overlap_pairs(const Mesh& mesh, SelfTree& st, const std::vector<std::uint32_t>& rep,

@@ -64,16 +64,26 @@ void FramePlan::plan(const ObjectRefs& objects, const DetectOptions& opt, PairLo
   if (self_trees_.size() < objects.size()) self_trees_.resize(objects.size());
   const int equal = opt.resolution > 0 ? opt.resolution : tile_resolution(opt.budget, pairs.size());
   const int first_rounds = opt.stage == Stage::image ? kMaxCullRounds : 1;
+  // A self pair of a large mesh whose couples are tested while planning is planned after the
+  // pair loop, its traversal spread over the lanes (as the World's, docs/performance.md).
+  spread_self_.clear();
+  if (opt.threads != 1 && opt.stage != Stage::image && opt.max_contacts == 0)
+    for (std::size_t i = 0; i < pairs.size(); ++i)
+      if (pairs[i].first == pairs[i].second && objects[pairs[i].first].mesh.triangles.size() >= kSpreadSelfTriangles)
+        spread_self_.push_back(i);
+  if (!spread_self_.empty() && loop.lanes(opt) == 1) spread_self_.clear();  // (threads 0 on one core)
   loop.run(pairs.size(), opt, [&](std::size_t i, PairLane& lane) {
     reset(i, objects, equal);
     PairPlan& p = plans[i];
-    if (p.a == p.b)
-      plan_self(objects[p.a].mesh, opt, p, self_trees_[p.a]);
-    else if (opt.cull != Cull::contact)
+    if (p.a == p.b) {
+      if (!std::binary_search(spread_self_.begin(), spread_self_.end(), i)) plan_self(objects[p.a].mesh, opt, p, self_trees_[p.a]);
+    } else if (opt.cull != Cull::contact) {
       plan_box(objects, opt, p);
-    else
+    } else {
       cull_pair(objects, p, first_rounds, opt.margin, lane.cull);
+    }
   });
+  for (const std::size_t i : spread_self_) plan_self(objects[plans[i].a].mesh, opt, plans[i], self_trees_[plans[i].a], &loop);
   share_budget(opt);
   route(opt);
   if (opt.stage != Stage::automatic || opt.cull != Cull::contact) return;
@@ -104,7 +114,7 @@ void FramePlan::plan_box(const ObjectRefs& objects, const DetectOptions& opt, Pa
 // itself (self_overlap_pairs(); the tree kept for the object's next frames, SelfTree), which is
 // its culling too: the triangles kept are those in some candidate, the region their box. The
 // image stage peels them as both objects.
-void FramePlan::plan_self(const Mesh& mesh, const DetectOptions& opt, PairPlan& p, SelfTree& tree) {
+void FramePlan::plan_self(const Mesh& mesh, const DetectOptions& opt, PairPlan& p, SelfTree& tree, PairLoop* spread) {
   p.scanned = p.in_roi_a = p.in_roi_b = mesh.triangles.size();
   vertex_representatives(mesh, opt.self_adjacency, p.rep);
   p.self_candidates.clear();
@@ -117,7 +127,40 @@ void FramePlan::plan_self(const Mesh& mesh, const DetectOptions& opt, PairPlan& 
   // contacts). A limit on the contacts keeps the first in (tri_a, tri_b) order, as every path
   // gives them: the candidates are listed and sorted first.
   p.self_tested = opt.stage != Stage::image && opt.max_contacts == 0;
-  if (p.self_tested) {
+  if (p.self_tested && spread) {
+    // The traversal split into node pairs (bvh_self_split()) over the lanes, each lane's contacts,
+    // marks and count merged after (the contacts are sorted on the exact path).
+    const unsigned lanes = spread->lanes(opt);
+    tree.update(mesh, lanes, [&](std::size_t n, const auto& fn) {  // a build in subtrees over the lanes
+      spread->run(n, opt, [&](std::size_t k, PairLane&) { fn(k); });
+    });
+    const std::uint32_t* rep = representatives_or_null(p.rep);
+    bvh_self_split(tree.tree, kSelfNodePairsPerLane * lanes, self_split_, self_split_scratch_);
+    spread->each_lane([&](PairLane& l) {
+      l.self_contacts.clear();
+      l.self_marks.assign(mesh.triangles.size(), 0);
+      l.self_count = 0;
+    });
+    spread->run(self_split_.size(), opt, [&](std::size_t k, PairLane& lane) {
+      ContactTest test{opt.contacts};  // (one run of tests a node pair, as the World's tasks)
+      const exact_detail::TestInto test_left{test, lane.self_contacts};
+      exact_detail::ApartBlock block;
+      bvh_self_traverse_apart(tree.tree, rep, self_split_[k], lane.self_stack, [&](std::uint32_t t, std::uint32_t u) {
+        if (u < t) std::swap(t, u);
+        lane.self_marks[t] = lane.self_marks[u] = 1;
+        ++lane.self_count;
+        block.put(t, u, corners(mesh, t), corners(mesh, u));
+        if (block.full()) block.drain(test_left);
+      });
+      block.drain(test_left);
+    });
+    p.self_count = 0;
+    spread->each_lane([&](PairLane& l) {
+      p.self_contacts.insert(p.self_contacts.end(), l.self_contacts.begin(), l.self_contacts.end());
+      for (std::size_t t = 0; t < l.self_marks.size(); ++t) p.marks[t] |= l.self_marks[t];
+      p.self_count += l.self_count;
+    });
+  } else if (p.self_tested) {
     p.self_count = 0;
     ContactTest test{opt.contacts};
     const exact_detail::TestInto test_left{test, p.self_contacts};

@@ -51,11 +51,23 @@ struct PairPlan {
   bool peeled() const { return !(culled_out || route.exact); }
 };
 
+// A self pair of this many triangles or more has its traversal spread over the lanes when the
+// frame asks for threads (FramePlan::plan_self()), in kSelfNodePairsPerLane node pairs a lane:
+// as the World's (kSplitTriangles, kSplitNodePairsPerLane in core/world/world_impl.h).
+constexpr std::size_t kSpreadSelfTriangles = 32768;
+constexpr std::size_t kSelfNodePairsPerLane = 32;
+
 // Per lane of the object-pair loops (lane 0: the calling thread): culling and exact-path scratch.
 struct PairLane {
   ContactCull cull;
   std::vector<std::uint64_t> candidates, candidate_scratch;
   BoxScratch boxes;
+  // A large self pair's traversal spread over the lanes (FramePlan::plan_self()): this lane's
+  // contacts, kept triangles and couples, merged after.
+  std::vector<Contact> self_contacts;
+  std::vector<std::uint8_t> self_marks;
+  std::size_t self_count = 0;
+  std::vector<BvhNodePair> self_stack;
 };
 
 // body(i, lane) for every i in [0, n): on the calling thread, or spread over a pool's lanes
@@ -77,6 +89,22 @@ class PairLoop {
       return;
     }
     pool_->for_each(n, [&](std::size_t i, unsigned lane) { body(i, *lanes_[lane]); });
+  }
+  // The lanes run() has made so far (lane 0: the calling thread's scratch).
+  template <class Fn>
+  void each_lane(Fn&& fn) {
+    for (const auto& l : lanes_) fn(*l);
+  }
+  // How many lanes run() gives `opt` for more than one item (1: the calling thread alone), each
+  // lane's scratch made.
+  unsigned lanes(const DetectOptions& opt) {
+    unsigned threads = 1;
+    if (opt.threads != 1) {
+      if (!pool_ || (opt.threads != 0 && pool_->lanes() != opt.threads)) pool_ = std::make_unique<WorkerPool>(opt.threads);
+      threads = pool_->lanes();
+    }
+    while (lanes_.size() < threads) lanes_.push_back(std::make_unique<PairLane>());
+    return threads;
   }
 
  private:
@@ -111,7 +139,12 @@ class FramePlan {
   std::vector<int> needs_, tiles_;
   void reset(std::size_t i, const ObjectRefs& objects, int tile);
   std::vector<SelfTree> self_trees_;  // per object asking for self-collision (self_overlap_pairs())
-  void plan_self(const Mesh& mesh, const DetectOptions& opt, PairPlan& p, SelfTree& tree);
+  // `spread`: the pair's traversal over the loop's lanes (a large mesh, planned after the pair
+  // loop); null: on the calling lane.
+  void plan_self(const Mesh& mesh, const DetectOptions& opt, PairPlan& p, SelfTree& tree, PairLoop* spread = nullptr);
+  std::vector<std::size_t> spread_self_;  // plan(): the self pairs planned after the pair loop
+  std::vector<BvhNodePair> self_split_;
+  BvhSplitScratch self_split_scratch_;
   void plan_box(const ObjectRefs& objects, const DetectOptions& opt, PairPlan& p);
   void share_budget(const DetectOptions& opt);
   void route(const DetectOptions& opt);

@@ -427,7 +427,10 @@ expect("bench --time-routes" 0
        bench crowd --objects 12 --frames 3 --short --resolve gpu --time-routes --threads 1)
 expect("bench: routes not timed on a software renderer" 0 "on the image route in 0 of 2 timed frames"
        bench crowd --objects 12 --frames 2 --short --resolve gpu --threads 1)
-expect("bench --scaling: not for self" 2 "--scaling times the World rows of the pair scenes, not cloth-self" bench cloth-self --scaling 2)
+expect("bench --scaling: not for the queries" 2 "--scaling times the World rows of the pair and self scenes, not volume" bench volume --scaling 2)
+expect("bench cloth-crumpled --scaling" 0
+       "scaling: peelcd World .default., 2 threads / 1 thread, the two alone, alternating frame by frame: [0-9.]+ .medians [0-9.]+ / [0-9.]+ ms; missed 0 / 0.*scaling: peelcd frame API, exact path, 2 threads / 1 thread, [^)]*missed 0 / 0"
+       bench cloth-crumpled --cloth 20 --frames 2 --scaling 2)
 expect("calibrate help" 0 "cost models" calibrate --help)
 expect("calibrate: large meshes" 0 "large meshes.*stacks +triangles.*\n +10 +720 .*\n +16 +1920 .*ratio: measured / predicted" calibrate --backend cpu --repeat 1 --budgets 16 --large 10 16)
 # The coverage compared on the GL stage (OSMesa here): the frame API's one-pair scenes and the

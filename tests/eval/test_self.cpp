@@ -240,14 +240,36 @@ TEST_CASE("the crumpled cloth: self pairs exist and the World finds exactly them
 }
 
 TEST_CASE("a large cloth's self traversal split over the lanes: the same contacts and couples on 1, 2 and 3 threads", "[self][world]") {
-  // Over kSplitTriangles: on several lanes its self traversal is split into node pairs
-  // (bvh_self_split) and its rebuilt tree built in subtrees (Bvh::plan_build); each couple is
-  // still tested once, every contact found, kinds and segments as on one lane.
+  // Over kSplitTriangles: on several lanes the World's self traversal is split into node pairs
+  // (bvh_self_split) and its rebuilt tree built in subtrees (Bvh::plan_build), and so is the
+  // frame API's traversal (kSpreadSelfTriangles); each couple is still tested once, every contact
+  // found, kinds and segments as on one lane, in both APIs.
   const Mesh first = make_crumpled_cloth(130, 0.0);
   REQUIRE(first.triangles.size() >= 32768);
   std::vector<std::vector<Contact>> got;
   std::vector<std::size_t> tested;
-  for (const unsigned threads : {1u, 2u, 3u}) {
+  for (const unsigned threads : {1u, 2u, 3u}) {  // the frame API
+    Detector d(std::make_shared<CpuImageStage>());
+    std::vector<Object> objects(1);
+    objects[0].name = "cloth";
+    objects[0].self = true;
+    objects[0].mesh = first;
+    DetectOptions opt;
+    opt.stage = Stage::exact;
+    opt.threads = threads;
+    std::vector<Contact> all;
+    std::size_t candidates = 0;
+    for (int f = 0; f < 3; ++f) {
+      objects[0].mesh.vertices = make_crumpled_cloth(130, 0.3 * f).vertices;
+      const FrameResult r = d.detect(objects, opt);
+      REQUIRE(r.pairs.size() == 1);
+      all.insert(all.end(), r.pairs[0].colliding.begin(), r.pairs[0].colliding.end());
+      candidates += r.pairs[0].candidates;
+    }
+    got.push_back(all);
+    tested.push_back(candidates);
+  }
+  for (const unsigned threads : {1u, 2u, 3u}) {  // the World
     World world;
     const BodyId cloth = world.add_deforming(first, "cloth");
     world.set_self(cloth, true);
@@ -276,7 +298,7 @@ TEST_CASE("a large cloth's self traversal split over the lanes: the same contact
   }
   REQUIRE(got[0].size() > 1000);
   for (std::size_t k = 1; k < got.size(); ++k) {
-    INFO("run " << k);
+    INFO("run " << k << " (0-2: the frame API on 1, 2, 3 threads; 3-5: the World)");
     CHECK(tested[k] == tested[0]);  // no couple tested twice or left out
     REQUIRE(got[k].size() == got[0].size());
     bool same = true;

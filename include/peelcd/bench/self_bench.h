@@ -25,6 +25,9 @@ struct SelfSuite {
   // A row of Embree's scene against itself as a plain user sets it up (PlainPeer), and each
   // Embree self row's ratio to it under the table (docs/performance.md, "The audit").
   bool audit = false;
+  // > 0: after the table, the World's default and the frame API's exact path with this many
+  // threads against one thread, each pair of rows alone, alternating frame by frame.
+  unsigned scaling = 0;
 };
 
 // Prints the table on stdout; returns the CSV (method,frame,ms,exact,found,missed).

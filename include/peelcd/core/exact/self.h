@@ -62,6 +62,24 @@ struct SelfTree {
   // the refit grew it past kBvhRebuildGrowth (as the World's deforming bodies). Returns true
   // when it was built.
   bool update(const Mesh& mesh);
+  // The same with a build in `parts` subtrees (Bvh::plan_build(): the same tree) run by
+  // for_each(n, fn), which calls fn(k) for every k < n, possibly concurrently.
+  template <class ForEach>
+  bool update(const Mesh& mesh, std::size_t parts, ForEach&& for_each) {
+    bool build = builds == 0 || tree.empty() != mesh.triangles.empty() || triangles != mesh.triangles;
+    if (!build) {
+      tree.refit(mesh.vertices, mesh.triangles);
+      build = tree.grown();
+    }
+    if (build) {
+      const std::size_t n = tree.plan_build(mesh.vertices, mesh.triangles, parts);
+      for_each(n, [this](std::size_t k) { tree.build_part(k); });
+      tree.finish_build(mesh.triangles);
+      if (triangles != mesh.triangles) triangles = mesh.triangles;
+    }
+    builds += build;
+    return build;
+  }
 };
 
 
