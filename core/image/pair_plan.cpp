@@ -110,6 +110,32 @@ void FramePlan::plan_box(const ObjectRefs& objects, const DetectOptions& opt, Pa
   p.culled_out = p.kept_a.empty() || p.kept_b.empty();
 }
 
+namespace {
+
+// The self couples under node pair `start` of `tree`'s traversal against itself (adjacent ones
+// dropped), each tested as the traversal finds it (the planes' test a block at a time first, as
+// narrow_phase()): the contacts appended to `contacts` (one run of tests: ContactTest), both
+// triangles of each couple marked. Returns the couples.
+std::size_t test_self_couples(const Mesh& mesh, const Bvh& tree, const std::uint32_t* rep, BvhNodePair start,
+                              std::vector<BvhNodePair>& stack, ContactDetail detail, std::vector<Contact>& contacts,
+                              std::vector<std::uint8_t>& marks) {
+  ContactTest test{detail};
+  const exact_detail::TestInto test_left{test, contacts};
+  exact_detail::ApartBlock block;
+  std::size_t count = 0;
+  bvh_self_traverse_apart(tree, rep, start, stack, [&](std::uint32_t t, std::uint32_t u) {
+    if (u < t) std::swap(t, u);
+    marks[t] = marks[u] = 1;
+    ++count;
+    block.put(t, u, corners(mesh, t), corners(mesh, u));
+    if (block.full()) block.drain(test_left);
+  });
+  block.drain(test_left);
+  return count;
+}
+
+}  // namespace
+
 // A self pair's plan: its ROI is the object's box; its candidates are found by its tree against
 // itself (self_overlap_pairs(); the tree kept for the object's next frames, SelfTree), which is
 // its culling too: the triangles kept are those in some candidate, the region their box. The
@@ -142,17 +168,8 @@ void FramePlan::plan_self(const Mesh& mesh, const DetectOptions& opt, PairPlan& 
       l.self_count = 0;
     });
     spread->run(self_split_.size(), opt, [&](std::size_t k, PairLane& lane) {
-      ContactTest test{opt.contacts};  // (one run of tests a node pair, as the World's tasks)
-      const exact_detail::TestInto test_left{test, lane.self_contacts};
-      exact_detail::ApartBlock block;
-      bvh_self_traverse_apart(tree.tree, rep, self_split_[k], lane.self_stack, [&](std::uint32_t t, std::uint32_t u) {
-        if (u < t) std::swap(t, u);
-        lane.self_marks[t] = lane.self_marks[u] = 1;
-        ++lane.self_count;
-        block.put(t, u, corners(mesh, t), corners(mesh, u));
-        if (block.full()) block.drain(test_left);
-      });
-      block.drain(test_left);
+      lane.self_count += test_self_couples(mesh, tree.tree, rep, self_split_[k], lane.self_stack, opt.contacts,
+                                           lane.self_contacts, lane.self_marks);
     });
     p.self_count = 0;
     spread->each_lane([&](PairLane& l) {
@@ -161,17 +178,9 @@ void FramePlan::plan_self(const Mesh& mesh, const DetectOptions& opt, PairPlan& 
       p.self_count += l.self_count;
     });
   } else if (p.self_tested) {
-    p.self_count = 0;
-    ContactTest test{opt.contacts};
-    const exact_detail::TestInto test_left{test, p.self_contacts};
-    exact_detail::ApartBlock block;  // the planes' test a block at a time first (narrow_phase())
-    self_overlap_visit(mesh, tree, p.rep, [&](std::uint32_t t, std::uint32_t u) {
-      p.marks[t] = p.marks[u] = 1;
-      ++p.self_count;
-      block.put(t, u, corners(mesh, t), corners(mesh, u));
-      if (block.full()) block.drain(test_left);
-    });
-    block.drain(test_left);
+    tree.update(mesh);
+    p.self_count = test_self_couples(mesh, tree.tree, representatives_or_null(p.rep), BvhNodePair{0u, 0u}, tree.stack,
+                                     opt.contacts, p.self_contacts, p.marks);
   } else {
     self_overlap_pairs(mesh, tree, p.rep, p.self_candidates);
     if (opt.max_contacts) std::sort(p.self_candidates.begin(), p.self_candidates.end());
